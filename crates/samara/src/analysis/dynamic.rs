@@ -1,0 +1,445 @@
+//! Time integration with the Lie-group generalized-α method on (R³ × SO(3))ᴺ, scaled
+//! index-3 constraints, Newton–Raphson per step, and step cutting on Newton failure.
+
+use super::generalized_alpha::GeneralizedAlpha;
+use super::initial::consistent_accelerations;
+use super::{AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics, singular_hint};
+use crate::elements::EvalContext;
+use crate::math::tangent_operator;
+use crate::model::{DynamicSettings, FormulationType, JacobianUpdate};
+use crate::solve::condition::condition_number;
+use crate::solve::newton::{NewtonWork, newton};
+use crate::solve::{BlockMatrix, LinearError, LinearSolver, NewtonFailure, NewtonReport, NewtonSettings, NewtonSystem};
+use crate::system::{Assembler, Coefficients, Formulation, State, System};
+use nalgebra::{Matrix3, Vector3};
+use std::time::Instant;
+
+/// Consecutive successful steps after a cut before the step is doubled again.
+const REGROW_AFTER: usize = 4;
+
+/// The nonlinear problem of one step, from `prev` (at t_n) to `cur` (at t_{n+1}).
+struct StepProblem<'a> {
+    sys: &'a System,
+    asm: &'a mut Assembler,
+    prev: &'a State,
+    cur: &'a mut State,
+    /// hΔq_n per configuration unknown (6 per node).
+    hdq: &'a mut [f64],
+    t_ops: &'a mut [Matrix3<f64>],
+    phi: &'a mut [f64],
+    /// Configuration change of the current correction (Δx + Bᵀ Δν).
+    change: &'a mut [f64],
+    ctx: EvalContext,
+    coef: Coefficients,
+    beta_p: f64,
+    gamma_p: f64,
+    atol: f64,
+    rtol: f64,
+}
+
+impl StepProblem<'_> {
+    fn update_configuration(&mut self) {
+        for (i, (n, p)) in self.cur.nodes.iter_mut().zip(&self.prev.nodes).enumerate() {
+            let d = &self.hdq[6 * i..6 * i + 6];
+            n.x = p.x + Vector3::new(d[0], d[1], d[2]);
+            n.rot = p.rot.compose_exp(&Vector3::new(d[3], d[4], d[5]));
+        }
+    }
+}
+
+impl NewtonSystem for StepProblem<'_> {
+    fn evaluate(&mut self, residual: &mut [f64], matrix: Option<&mut BlockMatrix>) {
+        if matrix.is_some() {
+            for (i, t) in self.t_ops.iter_mut().enumerate() {
+                *t = tangent_operator(&Vector3::new(self.hdq[6 * i + 3], self.hdq[6 * i + 4], self.hdq[6 * i + 5]));
+            }
+        }
+        self.asm
+            .assemble(self.sys, self.cur, &self.ctx, &self.coef, self.t_ops, residual, matrix);
+    }
+
+    fn apply(&mut self, delta: &[f64]) -> f64 {
+        let (bp, gp) = (self.beta_p, self.gamma_p);
+        let n_cfg = self.sys.n_config();
+        let n_mult = self.sys.n_multipliers;
+        self.change.copy_from_slice(&delta[..n_cfg]);
+        if self.asm.formulation() == Formulation::StabilizedIndex2 {
+            self.asm.add_projection(self.sys, &delta[n_cfg + n_mult..], self.change);
+        }
+        for (i, n) in self.cur.nodes.iter_mut().enumerate() {
+            let d = &delta[6 * i..6 * i + 6];
+            let dx = Vector3::new(d[0], d[1], d[2]);
+            let dth = Vector3::new(d[3], d[4], d[5]);
+            n.v += dx * gp;
+            n.w += dth * gp;
+            n.a += dx * bp;
+            n.wd += dth * bp;
+        }
+        let mut worst: f64 = 0.0;
+        for (q, c) in self.hdq.iter_mut().zip(self.change.iter()) {
+            *q += c;
+            worst = worst.max(c.abs() / (self.atol + self.rtol * q.abs()));
+        }
+        self.update_configuration();
+        let s = 1.0 / self.coef.multiplier_scale;
+        for (l, d) in self.cur.lambda.iter_mut().zip(&delta[n_cfg..n_cfg + n_mult]) {
+            *l += d * s;
+        }
+        worst
+    }
+
+    fn constraint_violation(&mut self) -> f64 {
+        self.sys.constraint_values(&self.ctx, self.cur, self.phi);
+        self.phi.iter().fold(0.0, |m, x| m.max(x.abs()))
+    }
+}
+
+/// Mutable integrator state carried between steps.
+struct Integrator<'a> {
+    sys: &'a System,
+    settings: &'a DynamicSettings,
+    ga: GeneralizedAlpha,
+    asm: Assembler,
+    lin: LinearSolver,
+    matrix: BlockMatrix,
+    work: NewtonWork,
+    state: State,
+    trial: State,
+    /// Algorithmic accelerations a_n (6 per node).
+    acc: Vec<f64>,
+    hdq: Vec<f64>,
+    t_ops: Vec<Matrix3<f64>>,
+    phi: Vec<f64>,
+    change: Vec<f64>,
+    mu: Vec<f64>,
+    /// Matrix assembled for a different step size than the current factorization.
+    factored_h: f64,
+}
+
+impl Integrator<'_> {
+    fn penalty(&self, h: f64) -> f64 {
+        self.settings.solver.penalty * self.sys.characteristic_mass / (self.ga.beta * h * h)
+    }
+
+    /// One generalized-α step of size h from `self.state` into `self.trial`.
+    fn step(&mut self, h: f64) -> Result<NewtonReport, NewtonFailure> {
+        let ga = self.ga;
+        let t1 = self.state.time + h;
+        self.trial.clone_from(&self.state);
+        self.trial.time = t1;
+        // Predictor: v̇_{n+1} = v̇_n, λ_{n+1} = λ_n.
+        for (i, (n, p)) in self.trial.nodes.iter_mut().zip(&self.state.nodes).enumerate() {
+            let vd = [p.a.x, p.a.y, p.a.z, p.wd.x, p.wd.y, p.wd.z];
+            let v = [p.v.x, p.v.y, p.v.z, p.w.x, p.w.y, p.w.z];
+            let mut v1 = [0.0; 6];
+            for k in 0..6 {
+                let an = self.acc[6 * i + k];
+                let a1 = ga.algorithmic_acceleration(an, vd[k], vd[k]);
+                v1[k] = v[k] + h * (1.0 - ga.gamma) * an + h * ga.gamma * a1;
+                self.hdq[6 * i + k] = h * (v[k] + h * (0.5 - ga.beta) * an + h * ga.beta * a1);
+            }
+            n.v = Vector3::new(v1[0], v1[1], v1[2]);
+            n.w = Vector3::new(v1[3], v1[4], v1[5]);
+        }
+        let scaling = self.settings.solver.scaling;
+        let scale = if scaling { ga.beta * h * h } else { 1.0 };
+        let coef = Coefficients {
+            mass: ga.beta_prime(h),
+            damping: ga.gamma_prime(h),
+            stiffness: 1.0,
+            row_scale: scale,
+            multiplier_scale: scale,
+            velocity_scale: if scaling { ga.beta * h / ga.gamma } else { 1.0 },
+            penalty: self.penalty(h),
+        };
+        if h != self.factored_h {
+            self.lin.invalidate();
+        }
+        let settings = NewtonSettings {
+            max_iterations: self.settings.solver.max_iterations,
+            constraint_tolerance: self.settings.solver.tolerance,
+            reuse_jacobian: self.settings.jacobian == JacobianUpdate::Modified,
+        };
+        let mut problem = StepProblem {
+            sys: self.sys,
+            asm: &mut self.asm,
+            prev: &self.state,
+            cur: &mut self.trial,
+            hdq: &mut self.hdq,
+            t_ops: &mut self.t_ops,
+            phi: &mut self.phi,
+            change: &mut self.change,
+            ctx: self.sys.context(t1, 1.0),
+            coef,
+            beta_p: coef.mass,
+            gamma_p: coef.damping,
+            atol: self.settings.solver.tolerance,
+            rtol: self.settings.solver.relative_tolerance,
+        };
+        problem.update_configuration();
+        let result = newton(&mut problem, &mut self.lin, &mut self.matrix, &mut self.work, &settings);
+        if result.as_ref().is_ok_and(|r| r.factorizations > 0) || self.lin.is_factored() {
+            self.factored_h = h;
+        }
+        let report = result?;
+        // Augmented multipliers at the converged state (Φ was evaluated by the last check).
+        let rho = coef.penalty;
+        for ((m, l), p) in self.mu.iter_mut().zip(&self.trial.lambda).zip(&self.phi) {
+            *m = l + rho * p;
+        }
+        Ok(report)
+    }
+
+    /// Accepts the trial step: updates the algorithmic accelerations and swaps states.
+    fn accept(&mut self) {
+        let ga = self.ga;
+        for (i, (n, p)) in self.trial.nodes.iter().zip(&self.state.nodes).enumerate() {
+            let vd1 = [n.a.x, n.a.y, n.a.z, n.wd.x, n.wd.y, n.wd.z];
+            let vd0 = [p.a.x, p.a.y, p.a.z, p.wd.x, p.wd.y, p.wd.z];
+            for k in 0..6 {
+                let an = self.acc[6 * i + k];
+                self.acc[6 * i + k] = ga.algorithmic_acceleration(an, vd0[k], vd1[k]);
+            }
+        }
+        std::mem::swap(&mut self.state, &mut self.trial);
+    }
+}
+
+/// Integrates from `initial` over `[t_start, t_end]`.
+pub fn run_dynamic(
+    sys: &System,
+    name: &str,
+    settings: &DynamicSettings,
+    mut initial: State,
+    recorder: &mut dyn Recorder,
+    progress: Progress,
+) -> Result<AnalysisSummary, crate::Error> {
+    let clock = Instant::now();
+    let t0 = settings.t_start;
+    initial.time = t0;
+    let formulation = match settings.formulation {
+        FormulationType::Index3 => Formulation::Index3,
+        FormulationType::StabilizedIndex2 => Formulation::StabilizedIndex2,
+    };
+    let asm = Assembler::new(sys, formulation);
+    let n = asm.n_unknowns();
+    let mut it = Integrator {
+        sys,
+        settings,
+        ga: GeneralizedAlpha::from_rho_inf(settings.rho_inf),
+        lin: LinearSolver::new(asm.structure(), settings.solver.linear_solver),
+        matrix: BlockMatrix::zeros(asm.structure().clone()),
+        asm,
+        work: NewtonWork::new(n),
+        trial: initial.clone(),
+        state: initial,
+        acc: vec![0.0; sys.n_config()],
+        hdq: vec![0.0; sys.n_config()],
+        t_ops: vec![Matrix3::identity(); sys.n_nodes()],
+        phi: vec![0.0; sys.n_multipliers],
+        change: vec![0.0; sys.n_config()],
+        mu: vec![0.0; sys.n_multipliers],
+        factored_h: f64::NAN,
+    };
+    let mut summary = AnalysisSummary {
+        name: name.to_string(),
+        kind: "dynamic",
+        steps: 0,
+        newton_iterations: 0,
+        rejected_steps: 0,
+        factorizations: 0,
+        fallbacks: 0,
+        wall_time: Default::default(),
+        final_state: State::default(),
+        max_constraint_violation: 0.0,
+        warnings: Vec::new(),
+        failure: None,
+    };
+    let fail = |summary: &mut AnalysisSummary, time: f64, reason: String, hint: Option<String>| {
+        summary.failure = Some(SolverFailure {
+            analysis: name.to_string(),
+            time,
+            reason,
+            hint,
+        });
+    };
+
+    // Initial constraint violation and consistent accelerations.
+    let ctx0 = sys.context(t0, 1.0);
+    sys.constraint_values(&ctx0, &it.state, &mut it.phi);
+    let viol0 = it.phi.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if viol0 > settings.solver.tolerance {
+        summary.warnings.push(format!(
+            "the initial configuration violates the joints by up to {viol0:.3e} (more than the tolerance {:.1e}); the first step will pull the nodes onto the constraints",
+            settings.solver.tolerance
+        ));
+    }
+    // The initial-acceleration problem has the index-3 layout in either formulation.
+    let mut init_asm = Assembler::new(sys, Formulation::Index3);
+    let mut init_lin = LinearSolver::new(init_asm.structure(), settings.solver.linear_solver);
+    let mut init_matrix = BlockMatrix::zeros(init_asm.structure().clone());
+    let mut res0 = vec![0.0; init_asm.n_unknowns()];
+    let init = consistent_accelerations(sys, &mut it.state, &ctx0, &mut init_asm, &mut init_lin, &mut init_matrix, &mut res0);
+    summary.factorizations += init_lin.stats.factorizations;
+    drop((init_asm, init_lin, init_matrix));
+    let finite = it.state.nodes.iter().all(|nd| nd.a.iter().chain(nd.wd.iter()).all(|x| x.is_finite()))
+        && it.state.lambda.iter().all(|x| x.is_finite());
+    match init {
+        Err(LinearError::Singular { block }) => {
+            fail(
+                &mut summary,
+                t0,
+                "cannot compute consistent initial accelerations: the mass matrix with the constraints is singular".into(),
+                Some(singular_hint(sys, block)),
+            );
+        }
+        Ok(()) if !finite => fail(
+            &mut summary,
+            t0,
+            "consistent initial accelerations are not finite (singular mass matrix)".into(),
+            Some("every node in a dynamic analysis needs mass in each direction that is not constrained".into()),
+        ),
+        Ok(()) => {}
+    }
+    if summary.failure.is_some() {
+        summary.final_state = it.state.clone();
+        summary.wall_time = clock.elapsed();
+        return Ok(summary);
+    }
+    for (i, nd) in it.state.nodes.iter().enumerate() {
+        let v = [nd.a.x, nd.a.y, nd.a.z, nd.wd.x, nd.wd.y, nd.wd.z];
+        it.acc[6 * i..6 * i + 6].copy_from_slice(&v);
+    }
+    it.mu.copy_from_slice(&it.state.lambda);
+
+    let mut energy = Energy {
+        kinetic: sys.kinetic_energy(&it.state),
+        potential: sys.potential_energy(&ctx0, &it.state),
+        external_work: 0.0,
+        dissipated: 0.0,
+    };
+    let mut p_ext = sys.external_power(&ctx0, &it.state);
+    let mut p_dis = sys.dissipated_power(&it.state);
+    let record = |it: &Integrator, energy: Energy, viol: f64, diag: Option<StepDiagnostics>, rec: &mut dyn Recorder| {
+        rec.record(
+            sys,
+            &OutputFrame {
+                time: it.state.time,
+                state: &it.state,
+                mu: &it.mu,
+                energy,
+                constraint_violation: viol,
+                load_factor: 1.0,
+                diagnostics: diag,
+            },
+        )
+    };
+    let diag0 = settings.solver.diagnostics.then_some(StepDiagnostics {
+        newton_iterations: 0,
+        residual_norm: 0.0,
+        correction_norm: 0.0,
+        condition: f64::NAN,
+        condition_kind: crate::solve::condition::ConditionKind::Exact2Norm,
+        step_size: 0.0,
+    });
+    record(&it, energy, viol0, diag0, recorder)?;
+    summary.max_constraint_violation = viol0;
+
+    let span = settings.t_end - t0;
+    let mut h = settings.step;
+    let mut good_since_cut = usize::MAX;
+    let mut step_index: usize = 0;
+    // Steps on the nominal grid are placed at t0 + k·step, so long runs do not drift.
+    let mut grid_k: u64 = 0;
+    let mut on_grid = true;
+    while it.state.time < settings.t_end - 1e-12 * span.max(1.0) {
+        let t = it.state.time;
+        let mut target = if on_grid && h == settings.step {
+            t0 + (grid_k + 1) as f64 * settings.step
+        } else {
+            t + h
+        };
+        if target > settings.t_end || settings.t_end - target < 1e-9 * h {
+            target = settings.t_end;
+        }
+        let h_try = target - t;
+        match it.step(h_try) {
+            Ok(report) => {
+                it.accept();
+                step_index += 1;
+                summary.steps += 1;
+                summary.newton_iterations += report.iterations;
+                if on_grid && h == settings.step {
+                    grid_k += 1;
+                }
+                let ctx = sys.context(it.state.time, 1.0);
+                let p_ext1 = sys.external_power(&ctx, &it.state);
+                let p_dis1 = sys.dissipated_power(&it.state);
+                energy.external_work += 0.5 * h_try * (p_ext + p_ext1);
+                energy.dissipated += 0.5 * h_try * (p_dis + p_dis1);
+                p_ext = p_ext1;
+                p_dis = p_dis1;
+                let viol = report.constraint_violation;
+                summary.max_constraint_violation = summary.max_constraint_violation.max(viol);
+                let last = it.state.time >= settings.t_end - 1e-12 * span.max(1.0);
+                if step_index.is_multiple_of(settings.output_every) || last {
+                    energy.kinetic = sys.kinetic_energy(&it.state);
+                    energy.potential = sys.potential_energy(&ctx, &it.state);
+                    let diag = if settings.solver.diagnostics {
+                        let (c, kind) = if it.lin.is_factored() {
+                            condition_number(&it.matrix, &mut it.lin)
+                        } else {
+                            (f64::NAN, crate::solve::condition::ConditionKind::Exact2Norm)
+                        };
+                        Some(StepDiagnostics {
+                            newton_iterations: report.iterations,
+                            residual_norm: report.last_residual,
+                            correction_norm: report.last_correction,
+                            condition: c,
+                            condition_kind: kind,
+                            step_size: h_try,
+                        })
+                    } else {
+                        None
+                    };
+                    record(&it, energy, viol, diag, recorder)?;
+                }
+                progress(((it.state.time - t0) / span).clamp(0.0, 1.0));
+                if h < settings.step {
+                    good_since_cut = good_since_cut.saturating_add(1);
+                    if good_since_cut >= REGROW_AFTER {
+                        h = (2.0 * h).min(settings.step);
+                        good_since_cut = 0;
+                    }
+                }
+            }
+            Err(failure) => {
+                summary.rejected_steps += 1;
+                it.lin.invalidate();
+                on_grid = false;
+                let next = h_try / 2.0;
+                if next < settings.min_step {
+                    let hint = match &failure {
+                        NewtonFailure::Singular { block } => Some(singular_hint(sys, *block)),
+                        NewtonFailure::NotFinite { .. } => Some(
+                            "the solution blew up: check units, masses and stiffnesses, or reduce `step`".into(),
+                        ),
+                        _ => Some(format!(
+                            "the step was cut down to {:.3e} s (min_step {:.3e}); a smaller `step`, more dissipation (lower rho_inf) or a larger `tolerance` may help",
+                            h_try, settings.min_step
+                        )),
+                    };
+                    fail(&mut summary, t, format!("{failure} with step {h_try:.3e} s"), hint);
+                    break;
+                }
+                h = next;
+                good_since_cut = 0;
+            }
+        }
+    }
+    summary.factorizations += it.lin.stats.factorizations;
+    summary.fallbacks = it.lin.stats.fallbacks;
+    summary.final_state = it.state;
+    summary.wall_time = clock.elapsed();
+    Ok(summary)
+}

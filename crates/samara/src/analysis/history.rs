@@ -1,0 +1,62 @@
+//! In-memory recorder: keeps every output frame, for the library API and the tests.
+
+use super::{Energy, OutputFrame, Recorder, StepDiagnostics};
+use crate::system::{State, System};
+use nalgebra::Vector3;
+
+/// One recorded output time.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub time: f64,
+    pub state: State,
+    pub energy: Energy,
+    pub constraint_violation: f64,
+    pub load_factor: f64,
+    /// Per joint: (force, moment) on B by A, frame-A components.
+    pub reactions: Vec<(Vector3<f64>, Vector3<f64>)>,
+    pub diagnostics: Option<StepDiagnostics>,
+}
+
+/// All frames of one analysis.
+#[derive(Clone, Debug, Default)]
+pub struct History {
+    pub frames: Vec<Frame>,
+}
+
+impl History {
+    pub fn last(&self) -> Option<&Frame> {
+        self.frames.last()
+    }
+
+    /// The frame whose time is closest to `t`.
+    pub fn at(&self, t: f64) -> Option<&Frame> {
+        self.frames
+            .iter()
+            .min_by(|a, b| (a.time - t).abs().total_cmp(&(b.time - t).abs()))
+    }
+
+    pub fn times(&self) -> Vec<f64> {
+        self.frames.iter().map(|f| f.time).collect()
+    }
+}
+
+impl Recorder for History {
+    fn record(&mut self, sys: &System, frame: &OutputFrame) -> Result<(), crate::Error> {
+        let reactions = sys
+            .constraints
+            .iter()
+            .zip(&sys.multiplier_offsets)
+            .map(|(c, &off)| c.reactions(&frame.state.nodes, &frame.mu[off..off + c.n_equations()]))
+            .collect();
+        self.frames.push(Frame {
+            time: frame.time,
+            state: frame.state.clone(),
+            energy: frame.energy,
+            constraint_violation: frame.constraint_violation,
+            load_factor: frame.load_factor,
+            reactions,
+            diagnostics: frame.diagnostics,
+        });
+        Ok(())
+    }
+}

@@ -1,0 +1,152 @@
+//! Analyses: each owns its Newton loop and, for dynamics, the integrator.
+//!
+//! Analyses see the system only through the assembler (residual and iteration matrix) and
+//! the state; they never know element types. Results leave through a [`Recorder`].
+
+mod dynamic;
+pub mod generalized_alpha;
+mod history;
+mod initial;
+mod statics;
+
+pub use dynamic::run_dynamic;
+pub use generalized_alpha::GeneralizedAlpha;
+pub use history::{Frame, History};
+pub use initial::consistent_accelerations;
+pub use statics::run_static;
+
+use crate::model::{AnalysisDef, AnalysisKind, Model};
+use crate::solve::condition::ConditionKind;
+use crate::system::{State, System};
+use std::time::Duration;
+
+/// Energy bookkeeping at one output time.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Energy {
+    pub kinetic: f64,
+    /// Gravity and springs.
+    pub potential: f64,
+    /// Work done by applied loads since the start of the analysis.
+    pub external_work: f64,
+    /// Energy dissipated by dampers since the start of the analysis.
+    pub dissipated: f64,
+}
+
+/// Per-step solver diagnostics.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepDiagnostics {
+    pub newton_iterations: usize,
+    /// Euclidean norm of the (scaled) residual at the last Newton evaluation.
+    pub residual_norm: f64,
+    /// Weighted correction norm of the last Newton iteration (≤ 1 at convergence).
+    pub correction_norm: f64,
+    pub condition: f64,
+    pub condition_kind: ConditionKind,
+    pub step_size: f64,
+}
+
+/// Everything written at one output time.
+pub struct OutputFrame<'a> {
+    pub time: f64,
+    pub state: &'a State,
+    /// Augmented multipliers μ = λ + ρΦ in physical units, per constraint row.
+    pub mu: &'a [f64],
+    pub energy: Energy,
+    /// max |Φ| over all constraint equations.
+    pub constraint_violation: f64,
+    /// Static analyses: the load factor; dynamics: 1.
+    pub load_factor: f64,
+    pub diagnostics: Option<StepDiagnostics>,
+}
+
+/// Receives the results of an analysis as they are computed.
+pub trait Recorder {
+    fn record(&mut self, sys: &System, frame: &OutputFrame) -> Result<(), crate::Error>;
+}
+
+/// Why an analysis stopped early.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("analysis '{analysis}' failed at t = {time}: {reason}")]
+pub struct SolverFailure {
+    pub analysis: String,
+    pub time: f64,
+    pub reason: String,
+    pub hint: Option<String>,
+}
+
+/// What an analysis did.
+#[derive(Clone, Debug)]
+pub struct AnalysisSummary {
+    pub name: String,
+    pub kind: &'static str,
+    /// Accepted steps (load steps for statics).
+    pub steps: usize,
+    pub newton_iterations: usize,
+    pub rejected_steps: usize,
+    pub factorizations: usize,
+    /// Factorizations that needed the pivoting sparse LU.
+    pub fallbacks: usize,
+    pub wall_time: Duration,
+    pub final_state: State,
+    pub max_constraint_violation: f64,
+    pub warnings: Vec<String>,
+    /// Set when the analysis stopped before its end.
+    pub failure: Option<SolverFailure>,
+}
+
+/// Progress callback: fraction of the analysis done, in [0, 1].
+pub type Progress<'a> = &'a mut dyn FnMut(f64);
+
+/// Runs one analysis of `model` from `initial`.
+pub fn run_analysis(
+    sys: &System,
+    def: &AnalysisDef,
+    initial: State,
+    recorder: &mut dyn Recorder,
+    progress: Progress,
+) -> Result<AnalysisSummary, crate::Error> {
+    match &def.kind {
+        AnalysisKind::Dynamic(s) => run_dynamic(sys, &def.name, s, initial, recorder, progress),
+        AnalysisKind::Static(s) => run_static(sys, &def.name, s, initial, recorder, progress),
+    }
+}
+
+/// Runs every analysis of a model in order, chaining `start_from`. `make_recorder` is
+/// called once per analysis.
+pub fn run_all<R: Recorder>(
+    model: &Model,
+    sys: &System,
+    mut make_recorder: impl FnMut(&AnalysisDef) -> Result<R, crate::Error>,
+    mut progress: impl FnMut(&AnalysisDef, f64),
+) -> Result<Vec<(AnalysisSummary, R)>, crate::Error> {
+    let mut out: Vec<(AnalysisSummary, R)> = Vec::new();
+    for def in &model.analyses {
+        let initial = match def.start_from {
+            Some(i) => out[i].0.final_state.clone(),
+            None => State::initial(model, sys.n_multipliers),
+        };
+        let mut rec = make_recorder(def)?;
+        let mut p = |f: f64| progress(def, f);
+        let summary = run_analysis(sys, def, initial, &mut rec, &mut p)?;
+        let failed = summary.failure.is_some();
+        out.push((summary, rec));
+        if failed {
+            break;
+        }
+    }
+    Ok(out)
+}
+
+/// A hint for a Newton failure, naming the block where the matrix is singular.
+pub(crate) fn singular_hint(sys: &System, block: usize) -> String {
+    let what = sys.block_name(block);
+    if block < sys.n_nodes() {
+        format!(
+            "the iteration matrix is singular at {what}: some direction of that node has no mass, stiffness or constraint (a free massless node, or a mechanism in a static analysis)"
+        )
+    } else {
+        format!(
+            "the iteration matrix is singular at {what}: its constraint equations are dependent (redundant joints) or its nodes cannot move in the constrained directions"
+        )
+    }
+}

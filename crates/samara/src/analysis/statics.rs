@@ -1,0 +1,212 @@
+//! Static equilibrium `r(q) + Bᵀμ = 0`, `Φ(q) = 0` with load continuation: loads and
+//! gravity are scaled by the load factor λ_k = k/n, k = 1…n, each increment solved by
+//! Newton from the previous equilibrium; an increment that fails is bisected.
+
+use super::{AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics, singular_hint};
+use crate::elements::EvalContext;
+use crate::model::StaticSettings;
+use crate::solve::condition::condition_number;
+use crate::solve::newton::{NewtonWork, newton};
+use crate::solve::{BlockMatrix, LinearSolver, NewtonFailure, NewtonSettings, NewtonSystem};
+use crate::system::{Assembler, Coefficients, Formulation, State, System};
+use nalgebra::Vector3;
+use std::time::Instant;
+
+/// Smallest load increment, as a fraction of the nominal one, before giving up.
+const MIN_INCREMENT_FRACTION: f64 = 1.0 / 1024.0;
+
+struct StaticProblem<'a> {
+    sys: &'a System,
+    asm: &'a mut Assembler,
+    state: &'a mut State,
+    /// Accumulated configuration increment in this load step (reference for rtol).
+    total: &'a mut [f64],
+    phi: &'a mut [f64],
+    ctx: EvalContext,
+    coef: Coefficients,
+    atol: f64,
+    rtol: f64,
+}
+
+impl NewtonSystem for StaticProblem<'_> {
+    fn evaluate(&mut self, residual: &mut [f64], matrix: Option<&mut BlockMatrix>) {
+        self.asm
+            .assemble(self.sys, self.state, &self.ctx, &self.coef, &[], residual, matrix);
+    }
+
+    fn apply(&mut self, delta: &[f64]) -> f64 {
+        for (i, n) in self.state.nodes.iter_mut().enumerate() {
+            let d = &delta[6 * i..6 * i + 6];
+            n.x += Vector3::new(d[0], d[1], d[2]);
+            n.rot = n.rot.compose_exp(&Vector3::new(d[3], d[4], d[5]));
+        }
+        let n_cfg = self.sys.n_config();
+        let mut worst: f64 = 0.0;
+        for (t, d) in self.total.iter_mut().zip(delta) {
+            *t += d;
+            worst = worst.max(d.abs() / (self.atol + self.rtol * t.abs()));
+        }
+        for (l, d) in self.state.lambda.iter_mut().zip(&delta[n_cfg..]) {
+            *l += d;
+        }
+        worst
+    }
+
+    fn constraint_violation(&mut self) -> f64 {
+        self.sys.constraint_values(&self.ctx, self.state, self.phi);
+        self.phi.iter().fold(0.0, |m, x| m.max(x.abs()))
+    }
+}
+
+/// Characteristic stiffness: mean |diagonal| of the unconstrained stiffness at `state`.
+fn characteristic_stiffness(sys: &System, asm: &mut Assembler, state: &State, ctx: &EvalContext, matrix: &mut BlockMatrix) -> f64 {
+    let mut r = vec![0.0; asm.n_unknowns()];
+    asm.assemble(sys, state, ctx, &Coefficients::statics(0.0), &[], &mut r, Some(matrix));
+    let mut sum = 0.0;
+    let mut count = 0;
+    for i in 0..sys.n_nodes() {
+        if let Some(b) = matrix.block(i, i) {
+            for k in 0..6 {
+                sum += b[7 * k].abs();
+                count += 1;
+            }
+        }
+    }
+    if count > 0 && sum > 0.0 { sum / count as f64 } else { 1.0 }
+}
+
+/// Solves the static equilibrium in `settings.load_steps` increments.
+pub fn run_static(
+    sys: &System,
+    name: &str,
+    settings: &StaticSettings,
+    mut state: State,
+    recorder: &mut dyn Recorder,
+    progress: Progress,
+) -> Result<AnalysisSummary, crate::Error> {
+    let clock = Instant::now();
+    for nd in &mut state.nodes {
+        nd.v = Vector3::zeros();
+        nd.w = Vector3::zeros();
+        nd.a = Vector3::zeros();
+        nd.wd = Vector3::zeros();
+    }
+    state.time = settings.time;
+    let mut asm = Assembler::new(sys, Formulation::Index3);
+    let mut lin = LinearSolver::new(asm.structure(), settings.solver.linear_solver);
+    let mut matrix = BlockMatrix::zeros(asm.structure().clone());
+    let mut work = NewtonWork::new(asm.n_unknowns());
+    let mut phi = vec![0.0; sys.n_multipliers];
+    let mut total = vec![0.0; sys.n_config()];
+    let mut mu = vec![0.0; sys.n_multipliers];
+    let mut summary = AnalysisSummary {
+        name: name.to_string(),
+        kind: "static",
+        steps: 0,
+        newton_iterations: 0,
+        rejected_steps: 0,
+        factorizations: 0,
+        fallbacks: 0,
+        wall_time: Default::default(),
+        final_state: State::default(),
+        max_constraint_violation: 0.0,
+        warnings: Vec::new(),
+        failure: None,
+    };
+    let ctx_full = sys.context(settings.time, 1.0);
+    let penalty = settings.solver.penalty * characteristic_stiffness(sys, &mut asm, &state, &ctx_full, &mut matrix);
+    let newton_settings = NewtonSettings {
+        max_iterations: settings.solver.max_iterations,
+        constraint_tolerance: settings.solver.tolerance,
+        reuse_jacobian: false,
+    };
+    let nominal = 1.0 / settings.load_steps as f64;
+    let mut lf = 0.0;
+    let mut inc = nominal;
+    let mut saved = state.clone();
+    while lf < 1.0 - 1e-12 {
+        let target = (lf + inc).min(1.0);
+        let ctx = sys.context(settings.time, target);
+        saved.clone_from(&state);
+        total.fill(0.0);
+        let mut problem = StaticProblem {
+            sys,
+            asm: &mut asm,
+            state: &mut state,
+            total: &mut total,
+            phi: &mut phi,
+            ctx,
+            coef: Coefficients::statics(penalty),
+            atol: settings.solver.tolerance,
+            rtol: settings.solver.relative_tolerance,
+        };
+        match newton(&mut problem, &mut lin, &mut matrix, &mut work, &newton_settings) {
+            Ok(report) => {
+                lf = target;
+                summary.steps += 1;
+                summary.newton_iterations += report.iterations;
+                summary.max_constraint_violation = summary.max_constraint_violation.max(report.constraint_violation);
+                for ((m, l), p) in mu.iter_mut().zip(&state.lambda).zip(&phi) {
+                    *m = l + penalty * p;
+                }
+                let diag = settings.solver.diagnostics.then(|| {
+                    let (c, kind) = condition_number(&matrix, &mut lin);
+                    StepDiagnostics {
+                        newton_iterations: report.iterations,
+                        residual_norm: report.last_residual,
+                        correction_norm: report.last_correction,
+                        condition: c,
+                        condition_kind: kind,
+                        step_size: target - (target - inc).max(0.0),
+                    }
+                });
+                let energy = Energy {
+                    kinetic: 0.0,
+                    potential: sys.potential_energy(&ctx, &state),
+                    external_work: 0.0,
+                    dissipated: 0.0,
+                };
+                state.time = settings.time;
+                recorder.record(
+                    sys,
+                    &OutputFrame {
+                        time: lf,
+                        state: &state,
+                        mu: &mu,
+                        energy,
+                        constraint_violation: report.constraint_violation,
+                        load_factor: lf,
+                        diagnostics: diag,
+                    },
+                )?;
+                progress(lf);
+                inc = (2.0 * inc).min(nominal);
+            }
+            Err(failure) => {
+                summary.rejected_steps += 1;
+                state.clone_from(&saved);
+                inc /= 2.0;
+                if inc < nominal * MIN_INCREMENT_FRACTION {
+                    let hint = match &failure {
+                        NewtonFailure::Singular { block } => Some(singular_hint(sys, *block)),
+                        _ => Some(
+                            "more `load_steps`, a larger `tolerance`, or a check of the model's stiffness may help".into(),
+                        ),
+                    };
+                    summary.failure = Some(SolverFailure {
+                        analysis: name.to_string(),
+                        time: lf,
+                        reason: format!("{failure} (load factor {lf:.4} → {target:.4})"),
+                        hint,
+                    });
+                    break;
+                }
+            }
+        }
+    }
+    summary.factorizations = lin.stats.factorizations;
+    summary.fallbacks = lin.stats.fallbacks;
+    summary.final_state = state;
+    summary.wall_time = clock.elapsed();
+    Ok(summary)
+}

@@ -1,0 +1,56 @@
+//! samara — flexible multibody dynamics.
+//!
+//! The flow of data reads top to bottom:
+//! [`model`] (file → validated model) → [`system`] (elements, joints, DOF layout, assembly)
+//! → [`analysis`] (static, dynamic; Newton and the integrator, using [`solve`]) →
+//! [`output`] (results files). [`math`] holds the rotation kernel; [`elements`] and
+//! [`joints`] the element library.
+//!
+//! ```no_run
+//! use samara::model::Model;
+//! use samara::system::System;
+//! use samara::analysis::{History, run_analysis};
+//!
+//! let loaded = Model::from_file("examples/pendulum.toml")?;
+//! let sys = System::new(&loaded.model);
+//! let def = &loaded.model.analyses[0];
+//! let initial = samara::system::State::initial(&loaded.model, sys.n_multipliers);
+//! let mut history = History::default();
+//! let summary = run_analysis(&sys, def, initial, &mut history, &mut |_| {})?;
+//! println!("{} steps, final time {}", summary.steps, history.last().unwrap().time);
+//! # Ok::<(), samara::Error>(())
+//! ```
+
+pub mod analysis;
+pub mod elements;
+pub mod joints;
+pub mod math;
+pub mod model;
+pub mod output;
+pub mod solve;
+pub mod system;
+pub mod tangent_check;
+
+use std::path::PathBuf;
+
+/// Version written into results files.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// Everything that can go wrong in the library.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The model file is invalid (file, line, column, hint in each diagnostic).
+    #[error(transparent)]
+    Model(#[from] model::ModelError),
+    /// A file could not be read or written.
+    #[error("cannot {action} '{}': {source}", path.display())]
+    Io {
+        path: PathBuf,
+        action: &'static str,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A results file could not be written.
+    #[error("results file '{}': {message}", path.display())]
+    Output { path: PathBuf, message: String },
+}

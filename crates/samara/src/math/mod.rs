@@ -1,0 +1,9 @@
+//! Rotation and small linear-algebra kernels.
+//!
+//! Pure functions only; everything here is independent of the model and of the analyses.
+
+pub mod so3;
+
+pub use so3::{
+    Rotation, exp_map, log_map, quaternion_from_matrix, skew, tangent_inverse, tangent_operator,
+};

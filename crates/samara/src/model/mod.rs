@@ -1,0 +1,252 @@
+//! The model: what the engineer describes, checked and with every reference resolved.
+//!
+//! `input` is the file schema; `validate` turns it into a [`Model`] or a list of
+//! diagnostics with file, line and column. Everything downstream (system, analyses) reads
+//! only the validated [`Model`].
+
+pub mod error;
+pub mod input;
+pub mod located;
+pub mod time_function;
+mod validate;
+
+pub use error::{Diagnostic, ModelError, Severity, SourceFile};
+pub use input::{FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame, ModelInput};
+pub use located::Located;
+pub use time_function::TimeFunction;
+pub use validate::validate;
+
+use crate::math::Rotation;
+use nalgebra::{Matrix3, Vector3};
+use std::path::Path;
+
+/// Either the fixed inertial frame or one of the model's nodes (by index).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NodeRef {
+    Ground,
+    Node(usize),
+}
+
+impl NodeRef {
+    pub fn index(self) -> Option<usize> {
+        match self {
+            NodeRef::Ground => None,
+            NodeRef::Node(i) => Some(i),
+        }
+    }
+}
+
+/// A 6-DOF node and its initial state.
+#[derive(Clone, Debug)]
+pub struct NodeDef {
+    pub name: String,
+    pub position: Vector3<f64>,
+    pub orientation: Rotation,
+    /// Global frame.
+    pub velocity: Vector3<f64>,
+    /// Global frame.
+    pub angular_velocity: Vector3<f64>,
+}
+
+/// A rigid body on a node.
+#[derive(Clone, Debug)]
+pub struct BodyDef {
+    pub name: String,
+    pub node: usize,
+    pub mass: f64,
+    /// About the CG, node-frame components.
+    pub inertia: Matrix3<f64>,
+    /// CG relative to the node, node-frame components.
+    pub cg_offset: Vector3<f64>,
+}
+
+/// A joint; its frame is given in the initial configuration, global components.
+#[derive(Clone, Debug)]
+pub struct JointDef {
+    pub name: String,
+    pub kind: JointType,
+    pub node_a: NodeRef,
+    pub node_b: NodeRef,
+    pub position: Vector3<f64>,
+    /// Columns are the joint axes e₁, e₂, e₃ in global components.
+    pub axes: Matrix3<f64>,
+}
+
+/// A point-to-point spring-damper.
+#[derive(Clone, Debug)]
+pub struct SpringDef {
+    pub name: String,
+    pub node_a: NodeRef,
+    pub node_b: NodeRef,
+    /// Global attachment points in the initial configuration.
+    pub point_a: Vector3<f64>,
+    pub point_b: Vector3<f64>,
+    pub stiffness: f64,
+    pub damping: f64,
+    pub rest_length: f64,
+}
+
+/// An applied force and moment on a node.
+#[derive(Clone, Debug)]
+pub struct LoadDef {
+    pub name: String,
+    pub node: usize,
+    pub force: Vector3<f64>,
+    pub moment: Vector3<f64>,
+    pub frame: LoadFrame,
+    /// Global point of application in the initial configuration.
+    pub point: Vector3<f64>,
+    pub function: TimeFunction,
+}
+
+/// Newton and constraint settings shared by all analyses.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolverSettings {
+    pub scaling: bool,
+    pub penalty: f64,
+    pub tolerance: f64,
+    pub relative_tolerance: f64,
+    pub max_iterations: usize,
+    pub diagnostics: bool,
+    pub linear_solver: LinearSolverType,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self {
+            scaling: true,
+            penalty: 1.0,
+            tolerance: 1e-8,
+            relative_tolerance: 1e-6,
+            max_iterations: 20,
+            diagnostics: false,
+            linear_solver: LinearSolverType::Auto,
+        }
+    }
+}
+
+/// Time integration settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DynamicSettings {
+    pub t_start: f64,
+    pub t_end: f64,
+    pub step: f64,
+    pub rho_inf: f64,
+    pub min_step: f64,
+    pub output_every: usize,
+    pub jacobian: JacobianUpdate,
+    pub formulation: FormulationType,
+    pub solver: SolverSettings,
+}
+
+impl DynamicSettings {
+    pub fn new(t_end: f64, step: f64, rho_inf: f64) -> Self {
+        Self {
+            t_start: 0.0,
+            t_end,
+            step,
+            rho_inf,
+            min_step: step / 1024.0,
+            output_every: 1,
+            jacobian: JacobianUpdate::Full,
+            formulation: if rho_inf >= 1.0 { FormulationType::StabilizedIndex2 } else { FormulationType::Index3 },
+            solver: SolverSettings::default(),
+        }
+    }
+}
+
+/// Static analysis settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StaticSettings {
+    pub load_steps: usize,
+    pub time: f64,
+    pub solver: SolverSettings,
+}
+
+impl Default for StaticSettings {
+    fn default() -> Self {
+        Self {
+            load_steps: 1,
+            time: 0.0,
+            solver: SolverSettings::default(),
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum AnalysisKind {
+    Dynamic(DynamicSettings),
+    Static(StaticSettings),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct AnalysisDef {
+    pub name: String,
+    /// Index of an earlier analysis whose final state is the initial state of this one.
+    pub start_from: Option<usize>,
+    pub kind: AnalysisKind,
+}
+
+impl AnalysisDef {
+    pub fn type_name(&self) -> &'static str {
+        match self.kind {
+            AnalysisKind::Dynamic(_) => "dynamic",
+            AnalysisKind::Static(_) => "static",
+        }
+    }
+}
+
+/// A validated model.
+#[derive(Clone, Debug, Default)]
+pub struct Model {
+    pub name: String,
+    pub description: Option<String>,
+    pub gravity: Vector3<f64>,
+    pub nodes: Vec<NodeDef>,
+    pub bodies: Vec<BodyDef>,
+    pub joints: Vec<JointDef>,
+    pub springs: Vec<SpringDef>,
+    pub loads: Vec<LoadDef>,
+    pub analyses: Vec<AnalysisDef>,
+}
+
+/// A validated model and the warnings found while checking it.
+#[derive(Clone, Debug)]
+pub struct LoadedModel {
+    pub model: Model,
+    pub source: SourceFile,
+    pub warnings: Vec<Diagnostic>,
+}
+
+impl Model {
+    /// Index of a node by name.
+    pub fn node_index(&self, name: &str) -> Option<usize> {
+        self.nodes.iter().position(|n| n.name == name)
+    }
+
+    /// Parses and validates model text; `path` is used in diagnostics only.
+    pub fn from_toml_str(text: &str, path: impl AsRef<Path>) -> Result<LoadedModel, ModelError> {
+        let source = SourceFile::new(path.as_ref(), text);
+        let input: ModelInput = match toml::from_str(text) {
+            Ok(i) => i,
+            Err(e) => {
+                return Err(ModelError {
+                    source,
+                    diagnostics: vec![validate::parse_error_diagnostic(&e)],
+                });
+            }
+        };
+        validate(&input, source)
+    }
+
+    /// Reads, parses and validates a model file.
+    pub fn from_file(path: impl AsRef<Path>) -> Result<LoadedModel, crate::Error> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| crate::Error::Io {
+            path: path.to_path_buf(),
+            action: "read the model file",
+            source: e,
+        })?;
+        Ok(Self::from_toml_str(&text, path)?)
+    }
+}

@@ -1,0 +1,116 @@
+//! The linear-solver facade used by the analyses.
+//!
+//! `Auto` factorizes with the block LU (no inter-block pivoting, symbolic analysis reused)
+//! and falls back to faer's pivoting sparse LU for a factorization whose pivot block is
+//! singular; `Block` and `SparseLu` force one of them.
+
+use super::block_lu::{BlockLu, BlockLuSymbolic};
+use super::sparse_lu::SparseLu;
+use super::{BlockMatrix, BlockStructure};
+use crate::model::LinearSolverType;
+use std::sync::Arc;
+
+/// Why a factorization failed.
+#[derive(Clone, Debug, thiserror::Error)]
+pub enum LinearError {
+    /// The pivot block of this block (node or constraint) is singular, and the fallback
+    /// (if any) failed too.
+    #[error("the iteration matrix is singular at block {block}")]
+    Singular { block: usize },
+}
+
+/// Counters for the run summary.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LinearStats {
+    pub factorizations: usize,
+    pub fallbacks: usize,
+    pub solves: usize,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Active {
+    None,
+    Block,
+    Sparse,
+}
+
+pub struct LinearSolver {
+    kind: LinearSolverType,
+    block: BlockLu,
+    sparse: SparseLu,
+    active: Active,
+    pub stats: LinearStats,
+}
+
+impl LinearSolver {
+    /// Performs the symbolic analysis of `structure` (once per topology).
+    pub fn new(structure: &BlockStructure, kind: LinearSolverType) -> Self {
+        let symbolic = Arc::new(BlockLuSymbolic::new(structure).expect("structure built by the system is valid"));
+        Self {
+            kind,
+            block: BlockLu::new(symbolic),
+            sparse: SparseLu::default(),
+            active: Active::None,
+            stats: LinearStats::default(),
+        }
+    }
+
+    pub fn is_factored(&self) -> bool {
+        self.active != Active::None
+    }
+
+    /// Forgets the current factorization (the next solve needs a new one).
+    pub fn invalidate(&mut self) {
+        self.active = Active::None;
+    }
+
+    pub fn factor(&mut self, a: &BlockMatrix) -> Result<(), LinearError> {
+        self.stats.factorizations += 1;
+        self.active = Active::None;
+        let block_err = match self.kind {
+            LinearSolverType::SparseLu => None,
+            LinearSolverType::Block | LinearSolverType::Auto => match self.block.factor(a) {
+                Ok(()) => {
+                    self.active = Active::Block;
+                    return Ok(());
+                }
+                Err(e) => Some(e.block),
+            },
+        };
+        if self.kind == LinearSolverType::Block {
+            return Err(LinearError::Singular {
+                block: block_err.unwrap_or(0),
+            });
+        }
+        if block_err.is_some() {
+            self.stats.fallbacks += 1;
+        }
+        if self.sparse.factor(a) {
+            self.active = Active::Sparse;
+            Ok(())
+        } else {
+            Err(LinearError::Singular {
+                block: block_err.unwrap_or(0),
+            })
+        }
+    }
+
+    /// Solves `A x = b` in place with the current factorization.
+    pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
+        self.stats.solves += 1;
+        match self.active {
+            Active::Block => self.block.solve_in_place(rhs),
+            Active::Sparse => self.sparse.solve_in_place(rhs),
+            Active::None => rhs.fill(f64::NAN),
+        }
+    }
+
+    /// Solves `Aᵀ x = b` in place.
+    pub fn solve_transpose_in_place(&mut self, rhs: &mut [f64]) {
+        match self.active {
+            Active::Block => self.block.solve_transpose_in_place(rhs),
+            Active::Sparse => self.sparse.solve_transpose_in_place(rhs),
+            Active::None => rhs.fill(f64::NAN),
+        }
+    }
+}

@@ -1,0 +1,21 @@
+//! Linear and nonlinear solvers.
+//!
+//! - `block_matrix`, `block_lu`: the block-sparse iteration matrix and its LU without
+//!   inter-block pivoting (constrained ordering: multipliers after their nodes), symbolic
+//!   analysis once per topology;
+//! - `sparse_lu`: faer's general sparse LU with partial pivoting, the fallback;
+//! - `linear`: the facade the analyses use;
+//! - `condition`: condition-number estimates of the factorized matrix;
+//! - `newton`: the Newton–Raphson driver with convergence control.
+
+mod block_lu;
+mod block_matrix;
+pub mod condition;
+mod linear;
+pub mod newton;
+mod sparse_lu;
+
+pub use block_lu::{BlockLu, BlockLuSymbolic, SingularBlock};
+pub use block_matrix::{BlockKind, BlockMatrix, BlockStructure, StructureError};
+pub use linear::{LinearError, LinearSolver, LinearStats};
+pub use newton::{NewtonFailure, NewtonReport, NewtonSettings, NewtonSystem, newton};

@@ -1,0 +1,148 @@
+//! Newton–Raphson with convergence control.
+//!
+//! Each iteration solves `J Δ = −r` and applies `Δ`. It has converged when
+//! 1. the weighted norm `max_i |δq_i| / (atol + rtol |ref_i|)` of the configuration change
+//!    made by the correction is ≤ 1 (the problem computes it: configuration unknowns only,
+//!    in m and rad, so the test does not depend on the scaling of the equations), and
+//! 2. the constraint violation `max |Φ|` at the updated iterate is ≤ the tolerance.
+//!
+//! With `reuse_jacobian` (modified Newton) the factorization is kept while the correction
+//! norm contracts by at least [`SLOW_CONTRACTION`] per iteration.
+
+use super::{BlockMatrix, LinearError, LinearSolver};
+
+/// Contraction rate above which modified Newton refactorizes.
+pub const SLOW_CONTRACTION: f64 = 0.25;
+
+/// A nonlinear problem `r(y) = 0` with iteration matrix `J ≈ ∂r/∂y`.
+pub trait NewtonSystem {
+    /// Residual at the current iterate; the iteration matrix too if `matrix` is given.
+    fn evaluate(&mut self, residual: &mut [f64], matrix: Option<&mut BlockMatrix>);
+    /// Applies the correction `Δ` and returns the weighted norm of the configuration
+    /// change it made (≤ 1 means small enough).
+    fn apply(&mut self, delta: &[f64]) -> f64;
+    /// `max |Φ|` at the current iterate.
+    fn constraint_violation(&mut self) -> f64;
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NewtonSettings {
+    pub max_iterations: usize,
+    /// Tolerance on `max |Φ|`.
+    pub constraint_tolerance: f64,
+    /// Modified Newton: keep the factorization while convergence is fast.
+    pub reuse_jacobian: bool,
+}
+
+/// How a converged solve went.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NewtonReport {
+    pub iterations: usize,
+    pub factorizations: usize,
+    /// Euclidean norm of the residual at the first and last evaluation.
+    pub first_residual: f64,
+    pub last_residual: f64,
+    /// Weighted correction norm of the last iteration.
+    pub last_correction: f64,
+    pub constraint_violation: f64,
+}
+
+/// Why Newton stopped without converging.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum NewtonFailure {
+    #[error("Newton did not converge in {iterations} iterations (last correction norm {correction:.3e}, constraint violation {violation:.3e})")]
+    NotConverged { iterations: usize, correction: f64, violation: f64 },
+    #[error("Newton diverged at iteration {iteration} (correction norm grew from {previous:.3e} to {correction:.3e})")]
+    Diverged { iteration: usize, previous: f64, correction: f64 },
+    #[error("the residual or the correction became NaN or infinite at iteration {iteration}")]
+    NotFinite { iteration: usize },
+    #[error("the iteration matrix is singular at block {block}")]
+    Singular { block: usize },
+}
+
+/// Reusable Newton buffers.
+pub struct NewtonWork {
+    pub residual: Vec<f64>,
+    pub delta: Vec<f64>,
+}
+
+impl NewtonWork {
+    pub fn new(n: usize) -> Self {
+        Self {
+            residual: vec![0.0; n],
+            delta: vec![0.0; n],
+        }
+    }
+}
+
+fn norm2(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// Solves the problem from its current iterate.
+pub fn newton(
+    problem: &mut dyn NewtonSystem,
+    lin: &mut LinearSolver,
+    matrix: &mut BlockMatrix,
+    work: &mut NewtonWork,
+    settings: &NewtonSettings,
+) -> Result<NewtonReport, NewtonFailure> {
+    let mut report = NewtonReport::default();
+    let mut previous = f64::INFINITY;
+    let mut refactor = !settings.reuse_jacobian || !lin.is_factored();
+    for it in 1..=settings.max_iterations {
+        report.iterations = it;
+        let fresh = refactor;
+        if refactor {
+            problem.evaluate(&mut work.residual, Some(matrix));
+        } else {
+            problem.evaluate(&mut work.residual, None);
+        }
+        let rn = norm2(&work.residual);
+        if !rn.is_finite() {
+            return Err(NewtonFailure::NotFinite { iteration: it });
+        }
+        if it == 1 {
+            report.first_residual = rn;
+        }
+        report.last_residual = rn;
+        if refactor {
+            lin.factor(matrix).map_err(|e| match e {
+                LinearError::Singular { block } => NewtonFailure::Singular { block },
+            })?;
+            report.factorizations += 1;
+        }
+        for (d, r) in work.delta.iter_mut().zip(&work.residual) {
+            *d = -r;
+        }
+        lin.solve_in_place(&mut work.delta);
+        if !work.delta.iter().all(|x| x.is_finite()) {
+            return Err(NewtonFailure::NotFinite { iteration: it });
+        }
+        let eps = problem.apply(&work.delta);
+        report.last_correction = eps;
+        if eps <= 1.0 {
+            let viol = problem.constraint_violation();
+            report.constraint_violation = viol;
+            if viol <= settings.constraint_tolerance {
+                return Ok(report);
+            }
+        }
+        let rate = eps / previous;
+        if fresh && it >= 3 && rate > 2.0 {
+            return Err(NewtonFailure::Diverged {
+                iteration: it,
+                previous,
+                correction: eps,
+            });
+        }
+        refactor = !settings.reuse_jacobian || rate > SLOW_CONTRACTION;
+        previous = eps;
+    }
+    let violation = problem.constraint_violation();
+    Err(NewtonFailure::NotConverged {
+        iterations: settings.max_iterations,
+        correction: report.last_correction,
+        violation,
+    })
+}

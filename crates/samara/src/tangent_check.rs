@@ -1,0 +1,197 @@
+//! The generic tangent check: every element's `K, C, M` and every constraint's `B`,
+//! `∂(Bᵀμ)/∂q` and convective acceleration against central finite differences taken on
+//! the configuration manifold (`x + ε e_k`, `R exp(ε ẽ_k)`).
+//!
+//! Central differences with step ε have truncation error O(ε²) and round-off error
+//! O(u/ε) relative to the residual's magnitude (u = 2.2e-16); ε = 1e-6 balances them at
+//! about 1e-10, so a relative mismatch above 1e-6 is a wrong tangent, not noise.
+
+use crate::elements::{Element, EvalContext, LocalTerms, Need};
+use crate::joints::Constraint;
+use crate::system::NodeState;
+use nalgebra::{DMatrix, Vector3};
+
+/// Finite-difference step.
+pub const EPS: f64 = 1e-6;
+
+/// What is perturbed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Slot {
+    Configuration,
+    Velocity,
+    Acceleration,
+}
+
+fn perturb(nodes: &mut [NodeState], node: usize, dof: usize, h: f64, slot: Slot) {
+    let n = &mut nodes[node];
+    let mut e = Vector3::zeros();
+    e[dof % 3] = h;
+    match (slot, dof < 3) {
+        (Slot::Configuration, true) => n.x += e,
+        (Slot::Configuration, false) => n.rot = n.rot.compose_exp(&e),
+        (Slot::Velocity, true) => n.v += e,
+        (Slot::Velocity, false) => n.w += e,
+        (Slot::Acceleration, true) => n.a += e,
+        (Slot::Acceleration, false) => n.wd += e,
+    }
+}
+
+/// Largest entry-wise mismatch between two matrices, relative to the larger of 1 and the
+/// largest analytic entry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mismatch {
+    pub relative: f64,
+    pub row: usize,
+    pub col: usize,
+}
+
+fn compare(analytic: &DMatrix<f64>, fd: &DMatrix<f64>) -> Mismatch {
+    let scale = analytic.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+    let mut worst = Mismatch {
+        relative: 0.0,
+        row: 0,
+        col: 0,
+    };
+    for j in 0..analytic.ncols() {
+        for i in 0..analytic.nrows() {
+            let r = (analytic[(i, j)] - fd[(i, j)]).abs() / scale;
+            if r > worst.relative || r.is_nan() {
+                worst = Mismatch {
+                    relative: r,
+                    row: i,
+                    col: j,
+                };
+            }
+        }
+    }
+    worst
+}
+
+/// Mismatches of an element's K, C and M.
+#[derive(Clone, Copy, Debug)]
+pub struct ElementReport {
+    pub k: Mismatch,
+    pub c: Mismatch,
+    pub m: Mismatch,
+}
+
+impl ElementReport {
+    pub fn worst(&self) -> f64 {
+        self.k.relative.max(self.c.relative).max(self.m.relative)
+    }
+}
+
+/// Checks an element's tangents at the given node states.
+pub fn check_element(e: &dyn Element, ctx: &EvalContext, nodes: &[NodeState]) -> ElementReport {
+    let en = e.nodes().to_vec();
+    let n = 6 * en.len();
+    let mut t = LocalTerms::new(en.len());
+    t.clear(Need::ResidualAndTangents);
+    e.evaluate(ctx, nodes, Need::ResidualAndTangents, &mut t);
+    let mut work = nodes.to_vec();
+    let mut fd = |slot: Slot| -> DMatrix<f64> {
+        let mut out = DMatrix::zeros(n, n);
+        let mut tp = LocalTerms::new(en.len());
+        for (b, &node) in en.iter().enumerate() {
+            for dof in 0..6 {
+                let mut r = [None, None];
+                for (k, s) in [1.0, -1.0].iter().enumerate() {
+                    work.clone_from_slice(nodes);
+                    perturb(&mut work, node, dof, s * EPS, slot);
+                    tp.clear(Need::Residual);
+                    e.evaluate(ctx, &work, Need::Residual, &mut tp);
+                    r[k] = Some(tp.r.clone());
+                }
+                let col = (r[0].take().unwrap_or_default() - r[1].take().unwrap_or_default()) / (2.0 * EPS);
+                out.set_column(6 * b + dof, &col);
+            }
+        }
+        out
+    };
+    let k = fd(Slot::Configuration);
+    let c = fd(Slot::Velocity);
+    let m = fd(Slot::Acceleration);
+    ElementReport {
+        k: compare(&t.k, &k),
+        c: compare(&t.c, &c),
+        m: compare(&t.m, &m),
+    }
+}
+
+/// Mismatches of a constraint's B, ∂(Bᵀμ)/∂q and convective acceleration.
+#[derive(Clone, Copy, Debug)]
+pub struct ConstraintReport {
+    pub b: Mismatch,
+    pub k: Mismatch,
+    /// Relative error of Φ̈ − Bv̇ against the second difference along the motion.
+    pub convective: f64,
+}
+
+impl ConstraintReport {
+    pub fn worst(&self) -> f64 {
+        self.b.relative.max(self.k.relative).max(self.convective)
+    }
+}
+
+/// Checks a constraint at the given node states with multipliers `mu`; the convective term
+/// is checked along the motion with the nodes' velocities.
+pub fn check_constraint(c: &dyn Constraint, ctx: &EvalContext, nodes: &[NodeState], mu: &[f64]) -> ConstraintReport {
+    let cn = c.nodes().to_vec();
+    let m = c.n_equations();
+    let n = 6 * cn.len();
+    let mut phi = vec![0.0; m];
+    let mut b = DMatrix::zeros(m, n);
+    c.evaluate(ctx, nodes, &mut phi, Some(&mut b));
+    let mut k = DMatrix::zeros(n, n);
+    c.reaction_tangent(ctx, nodes, mu, &mut k);
+
+    let mut work = nodes.to_vec();
+    let mut b_fd = DMatrix::zeros(m, n);
+    let mut k_fd = DMatrix::zeros(n, n);
+    let mut bp = DMatrix::zeros(m, n);
+    let mut pp = vec![0.0; m];
+    let mu_v = nalgebra::DVector::from_column_slice(mu);
+    for (blk, &node) in cn.iter().enumerate() {
+        for dof in 0..6 {
+            let mut vals = Vec::new();
+            let mut forces = Vec::new();
+            for s in [1.0, -1.0] {
+                work.clone_from_slice(nodes);
+                perturb(&mut work, node, dof, s * EPS, Slot::Configuration);
+                c.evaluate(ctx, &work, &mut pp, Some(&mut bp));
+                vals.push(nalgebra::DVector::from_column_slice(&pp));
+                forces.push(bp.transpose() * &mu_v);
+            }
+            b_fd.set_column(6 * blk + dof, &((&vals[0] - &vals[1]) / (2.0 * EPS)));
+            k_fd.set_column(6 * blk + dof, &((&forces[0] - &forces[1]) / (2.0 * EPS)));
+        }
+    }
+
+    // Second difference of Φ along x(s) = x + s v, R(s) = R exp(s Ω̃) (zero accelerations).
+    let mut conv = vec![0.0; m];
+    c.acceleration_term(ctx, nodes, &mut conv);
+    let eps2 = 1e-4;
+    let mut along = |s: f64| -> Vec<f64> {
+        work.clone_from_slice(nodes);
+        for &node in &cn {
+            let nd = &mut work[node];
+            nd.x += nd.v * s;
+            nd.rot = nd.rot.compose_exp(&(nd.w * s));
+        }
+        let mut p = vec![0.0; m];
+        c.evaluate(ctx, &work, &mut p, None);
+        p
+    };
+    let (pp1, pm1) = (along(eps2), along(-eps2));
+    let scale = conv.iter().fold(1.0f64, |a, x| a.max(x.abs()));
+    let mut conv_err: f64 = 0.0;
+    for i in 0..m {
+        let fd = (pp1[i] - 2.0 * phi[i] + pm1[i]) / (eps2 * eps2);
+        conv_err = conv_err.max((fd - conv[i]).abs() / scale);
+    }
+    ConstraintReport {
+        b: compare(&b, &b_fd),
+        k: compare(&k, &k_fd),
+        convective: conv_err,
+    }
+}

@@ -1,0 +1,78 @@
+//! Helpers shared by the verification tests.
+#![allow(dead_code)]
+
+use samara::analysis::{AnalysisSummary, History, run_analysis};
+use samara::model::{AnalysisKind, Model};
+use samara::system::{State, System};
+
+/// Parses and validates a model from TOML text (panics with the diagnostics otherwise).
+pub fn model(toml: &str) -> Model {
+    match Model::from_toml_str(toml, "test.toml") {
+        Ok(l) => l.model,
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// Loads a model file relative to the workspace root.
+pub fn model_file(rel: &str) -> Model {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel);
+    match Model::from_file(&path) {
+        Ok(l) => l.model,
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// Overrides the step (and optionally ρ∞, end time) of the first analysis.
+pub fn with_step(mut m: Model, step: f64) -> Model {
+    if let AnalysisKind::Dynamic(d) = &mut m.analyses[0].kind {
+        d.step = step;
+        d.min_step = step / 1024.0;
+    }
+    m
+}
+
+/// Runs the first analysis of the model and returns the summary and all frames.
+pub fn run(m: &Model) -> (AnalysisSummary, History) {
+    run_nth(m, 0)
+}
+
+pub fn run_nth(m: &Model, k: usize) -> (AnalysisSummary, History) {
+    let sys = System::new(m);
+    let mut h = History::default();
+    let s = run_analysis(&sys, &m.analyses[k], State::initial(m, sys.n_multipliers), &mut h, &mut |_| {})
+        .expect("recording to memory cannot fail");
+    assert!(s.failure.is_none(), "analysis failed: {:?}", s.failure);
+    (s, h)
+}
+
+/// Observed order of convergence from errors at steps h, h/2, h/4, …
+pub fn orders(errors: &[f64]) -> Vec<f64> {
+    errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
+}
+
+/// Least-squares slope of log(y) against log(x).
+pub fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
+    let lx: Vec<f64> = x.iter().map(|v| v.ln()).collect();
+    let ly: Vec<f64> = y.iter().map(|v| v.ln()).collect();
+    let n = lx.len() as f64;
+    let mx = lx.iter().sum::<f64>() / n;
+    let my = ly.iter().sum::<f64>() / n;
+    let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = lx.iter().map(|a| (a - mx) * (a - mx)).sum();
+    sxy / sxx
+}
+
+/// Complete elliptic integral of the first kind K(k) by the arithmetic–geometric mean,
+/// K = π / (2 AGM(1, √(1 − k²))), exact to machine precision.
+pub fn elliptic_k(k: f64) -> f64 {
+    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
+    for _ in 0..60 {
+        let an = 0.5 * (a + b);
+        b = (a * b).sqrt();
+        a = an;
+        if (a - b).abs() < 1e-16 * a {
+            break;
+        }
+    }
+    std::f64::consts::PI / (2.0 * a)
+}
