@@ -117,7 +117,13 @@ struct Integrator<'a> {
 }
 
 impl Integrator<'_> {
+    /// Augmented-Lagrangian penalty ρ = p m̄ / (βh²), index 3 only: in the stabilized
+    /// formulation Φ is enforced by the projection ν, and a ρΦ term in the equilibrium rows
+    /// would couple them to ν by an O(1) block (ρ s_r BᵀB Bᵀ) the matrix does not carry.
     fn penalty(&self, h: f64) -> f64 {
+        if self.asm.formulation() == Formulation::StabilizedIndex2 {
+            return 0.0;
+        }
         self.settings.solver.penalty * self.sys.characteristic_mass / (self.ga.beta * h * h)
     }
 

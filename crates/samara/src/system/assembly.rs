@@ -21,8 +21,13 @@
 //!           [ Φ             ]            [ B T             0              B T Bᵀ ]
 //! ```
 //!
-//! The couplings through `∂(Bv)/∂q` and `K Bᵀ` are left out of the matrix (they are O(h)
-//! and O(h²) relative to the kept terms; Newton still converges, see the tests).
+//! (`B T Bᵀ` couples the ν of every two constraints that share a node.)
+//! ```text
+//! ```
+//!
+//! The λ rows carry `s_v (γ' B + ∂(Bv)/∂q T)`. The couplings of the projection `Bᵀν`
+//! into the other rows (`K T Bᵀ`, `∂(Bv)/∂q T Bᵀ`) are left out of the matrix: they are
+//! O(h²) and O(h) relative to the kept terms, and Newton still converges (see the tests).
 //!
 //! `T` is the block-diagonal tangent operator of the configuration update (identity for
 //! statics). With the scaling on, `s_r = s_λ = βh²` and `s_v = βh/γ`, which keeps every
@@ -87,6 +92,10 @@ struct ConstraintWork {
     /// B T.
     bt: DMatrix<f64>,
     k: DMatrix<f64>,
+    /// Scratch: ∂(B_r · v)/∂q of one row r (stabilized only), and the unit multiplier e_r.
+    kr: DMatrix<f64>,
+    unit: Vec<f64>,
+    dbv: DMatrix<f64>,
     /// Value offsets of the (node a, node b) blocks, row-major over local nodes.
     node_slots: Vec<usize>,
     /// Offsets of (node, λ) and (λ, node) blocks.
@@ -105,6 +114,9 @@ pub struct Assembler {
     terms: Vec<LocalTerms>,
     element_slots: Vec<Vec<usize>>,
     constraints: Vec<ConstraintWork>,
+    /// Stabilized only: (ν_k, ν_l) couplings of constraints k ≠ l sharing a node, as
+    /// (k, l, value offset, local node index in k, local node index in l).
+    nu_pairs: Vec<(usize, usize, usize, usize, usize)>,
 }
 
 impl Assembler {
@@ -123,6 +135,27 @@ impl Assembler {
                         couplings.push((a, b));
                     }
                 }
+            }
+        }
+        // Constraints sharing a node: (k, l, local index in k, local index in l).
+        let mut shared = Vec::new();
+        if stabilized {
+            for (k, ck) in sys.constraints.iter().enumerate() {
+                for (l, cl) in sys.constraints.iter().enumerate() {
+                    if k == l {
+                        continue;
+                    }
+                    for (a, na) in ck.nodes().iter().enumerate() {
+                        for (b, nb) in cl.nodes().iter().enumerate() {
+                            if na == nb {
+                                shared.push((k, l, a, b));
+                            }
+                        }
+                    }
+                }
+            }
+            for &(k, l, _, _) in &shared {
+                couplings.push((n + nc + k, n + nc + l));
             }
         }
         let groups = if stabilized { 2 } else { 1 };
@@ -171,6 +204,9 @@ impl Assembler {
                     b: DMatrix::zeros(m, 6 * cn.len()),
                     bt: DMatrix::zeros(m, 6 * cn.len()),
                     k: DMatrix::zeros(6 * cn.len(), 6 * cn.len()),
+                    kr: DMatrix::zeros(6 * cn.len(), 6 * cn.len()),
+                    unit: vec![0.0; m],
+                    dbv: DMatrix::zeros(m, 6 * cn.len()),
                     node_slots: cn.iter().flat_map(|&a| cn.iter().map(move |&b| (a, b))).map(|(a, b)| slot(a, b)).collect(),
                     lam_col: cn.iter().map(|&a| slot(a, lam)).collect(),
                     lam_row: cn.iter().map(|&a| slot(lam, a)).collect(),
@@ -179,12 +215,17 @@ impl Assembler {
                 }
             })
             .collect();
+        let nu_pairs = shared
+            .iter()
+            .map(|&(k, l, a, b)| (k, l, slot(n + nc + k, n + nc + l), a, b))
+            .collect();
         Self {
             formulation,
             structure,
             terms,
             element_slots,
             constraints,
+            nu_pairs,
         }
     }
 
@@ -330,14 +371,34 @@ impl Assembler {
                     }
                 }
             }
-            // (λ, node): B T (index 3) or s_v γ' B (stabilized), m × 6 row-major.
+            if stabilized {
+                // ∂(B v)/∂q, row r = vᵀ ∂(B_rᵀ)/∂q = vᵀ K(e_r), then times T.
+                for r in 0..m {
+                    w.unit.fill(0.0);
+                    w.unit[r] = 1.0;
+                    w.kr.fill(0.0);
+                    c.reaction_tangent(ctx, &state.nodes, &w.unit, &mut w.kr);
+                    for j in 0..6 * n {
+                        let mut acc = 0.0;
+                        for (a, &na) in cn.iter().enumerate() {
+                            let nd = &state.nodes[na];
+                            for i in 0..3 {
+                                acc += nd.v[i] * w.kr[(6 * a + i, j)] + nd.w[i] * w.kr[(6 * a + 3 + i, j)];
+                            }
+                        }
+                        w.dbv[(r, j)] = acc;
+                    }
+                }
+                apply_tangent_ops(&mut w.dbv, cn, tangent_ops);
+            }
+            // (λ, node): B T (index 3) or s_v (γ' B + ∂(Bv)/∂q T) (stabilized), m × 6 row-major.
             for a in 0..n {
                 let o = w.lam_row[a];
                 let dst = &mut mat.values[o..o + 6 * m];
                 for r in 0..m {
                     for j in 0..6 {
                         dst[6 * r + j] += if stabilized {
-                            coef.velocity_scale * coef.damping * w.b[(r, 6 * a + j)]
+                            coef.velocity_scale * (coef.damping * w.b[(r, 6 * a + j)] + w.dbv[(r, 6 * a + j)])
                         } else {
                             w.bt[(r, 6 * a + j)]
                         };
@@ -365,6 +426,29 @@ impl Assembler {
                         }
                         dst[m * r + s] += acc;
                     }
+                }
+            }
+        }
+        if let Some(mat) = matrix
+            && stabilized
+        {
+            self.add_projection_couplings(sys, mat);
+        }
+    }
+
+    /// Couplings `(ν_k, ν_l) = B_k T B_lᵀ` through the nodes constraints k and l share.
+    fn add_projection_couplings(&self, sys: &System, matrix: &mut BlockMatrix) {
+        for &(k, l, o, a, b) in &self.nu_pairs {
+            let (wk, wl) = (&self.constraints[k], &self.constraints[l]);
+            let (mk, ml) = (sys.constraints[k].n_equations(), sys.constraints[l].n_equations());
+            let dst = &mut matrix.values[o..o + mk * ml];
+            for r in 0..mk {
+                for s in 0..ml {
+                    let mut acc = 0.0;
+                    for j in 0..6 {
+                        acc += wk.bt[(r, 6 * a + j)] * wl.b[(s, 6 * b + j)];
+                    }
+                    dst[ml * r + s] += acc;
                 }
             }
         }
