@@ -1,1 +1,194 @@
-fn main() {}
+//! `samara`: run, check and describe multibody models.
+
+mod report;
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use samara::analysis::run_analysis;
+use samara::model::{AnalysisKind, LoadedModel, Model, ModelInput};
+use samara::output::ResultsFile;
+use samara::system::{State, System};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+/// Exit status: the model (or an input/output file) is unusable.
+const EXIT_MODEL: u8 = 1;
+/// Exit status: an analysis stopped before its end.
+const EXIT_SOLVER: u8 = 2;
+
+#[derive(Parser)]
+#[command(name = "samara", version, about = "Flexible multibody dynamics", long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run every analysis of a model; one results file (NetCDF) per analysis.
+    Run {
+        /// Model file (TOML).
+        model: PathBuf,
+        /// Results directory [default: out/ beside the model].
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// No progress bar.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Validate a model without running it.
+    Check {
+        /// Model file (TOML).
+        model: PathBuf,
+    },
+    /// Print the JSON Schema of the model file.
+    Schema,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    report::install_hook();
+    match cli.command {
+        Command::Run { model, out, quiet } => run(&model, out, quiet),
+        Command::Check { model } => check(&model),
+        Command::Schema => {
+            let schema = schemars::schema_for!(ModelInput);
+            println!("{}", serde_json::to_string_pretty(&schema).expect("a schema serializes"));
+            ExitCode::SUCCESS
+        }
+    }
+}
+
+/// Loads a model, printing its diagnostics; `None` if it has errors.
+fn load(path: &Path) -> Option<LoadedModel> {
+    match Model::from_file(path) {
+        Ok(loaded) => {
+            report::diagnostics(&loaded.source, &loaded.warnings);
+            Some(loaded)
+        }
+        Err(samara::Error::Model(e)) => {
+            report::diagnostics(&e.source, &e.diagnostics);
+            let n = e.errors().count();
+            eprintln!(
+                "{}: {n} error{} — nothing was run",
+                e.source.path.display(),
+                if n == 1 { "" } else { "s" }
+            );
+            None
+        }
+        Err(e) => {
+            report::error(&e, None);
+            None
+        }
+    }
+}
+
+fn check(path: &Path) -> ExitCode {
+    let Some(loaded) = load(path) else {
+        return ExitCode::from(EXIT_MODEL);
+    };
+    let m = &loaded.model;
+    let sys = System::new(m);
+    println!(
+        "{}: ok — model '{}': {} nodes, {} bodies, {} joints ({} constraint equations), {} springs, {} loads, {} analyses",
+        path.display(),
+        m.name,
+        m.nodes.len(),
+        m.bodies.len(),
+        m.joints.len(),
+        sys.n_multipliers,
+        m.springs.len(),
+        m.loads.len(),
+        m.analyses.len()
+    );
+    ExitCode::SUCCESS
+}
+
+fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
+    let Some(loaded) = load(path) else {
+        return ExitCode::from(EXIT_MODEL);
+    };
+    let model = &loaded.model;
+    let out_dir = out.unwrap_or_else(|| path.parent().unwrap_or(Path::new(".")).join("out"));
+    let sys = System::new(model);
+    let show_progress = !quiet && std::io::stderr().is_terminal();
+    let clock = Instant::now();
+    let mut rows = Vec::new();
+    let mut finals: Vec<State> = Vec::new();
+    let mut failed = false;
+    for def in &model.analyses {
+        let initial = match def.start_from {
+            Some(i) => finals[i].clone(),
+            None => State::initial(model, sys.n_multipliers),
+        };
+        let mut file = match ResultsFile::create(&out_dir, model, Some(path), &sys, def) {
+            Ok(f) => f,
+            Err(e) => {
+                report::error(
+                    &e,
+                    Some("choose a writable results directory with --out DIR"),
+                );
+                return ExitCode::from(EXIT_MODEL);
+            }
+        };
+        if let Some(b) = &file.backup {
+            eprintln!("note: an earlier {} was kept as {}", file.path().display(), b.display());
+        }
+        let bar = if show_progress {
+            let b = ProgressBar::new(1000);
+            b.set_style(
+                ProgressStyle::with_template("{prefix:>12} [{bar:40}] {percent:>3}% {elapsed_precise} (eta {eta})")
+                    .expect("valid template")
+                    .progress_chars("=> "),
+            );
+            b.set_prefix(def.name.clone());
+            b.enable_steady_tick(Duration::from_millis(200));
+            b
+        } else {
+            ProgressBar::hidden()
+        };
+        let mut progress = |f: f64| bar.set_position((f * 1000.0).round() as u64);
+        let result = run_analysis(&sys, def, initial, &mut file, &mut progress);
+        bar.finish_and_clear();
+        let summary = match result {
+            Ok(s) => s,
+            Err(e) => {
+                report::error(&e, None);
+                return ExitCode::from(EXIT_MODEL);
+            }
+        };
+        let records = file.records();
+        let written = match file.finish(&summary) {
+            Ok(p) => p,
+            Err(e) => {
+                report::error(&e, None);
+                return ExitCode::from(EXIT_MODEL);
+            }
+        };
+        for w in &summary.warnings {
+            eprintln!("warning: {}: {w}", def.name);
+        }
+        if let Some(f) = &summary.failure {
+            report::solver_failure(f, &written, records);
+            failed = true;
+        }
+        let end_time = match &def.kind {
+            AnalysisKind::Dynamic(d) => d.t_end,
+            AnalysisKind::Static(s) => s.time,
+        };
+        rows.push(report::Row {
+            summary: summary.clone(),
+            path: written,
+            records,
+            end_time,
+        });
+        finals.push(summary.final_state);
+        if failed {
+            break;
+        }
+    }
+    report::summary(&model.name, &rows, clock.elapsed());
+    if failed { ExitCode::from(EXIT_SOLVER) } else { ExitCode::SUCCESS }
+}

@@ -1,0 +1,385 @@
+//! The results file of one analysis: NetCDF-3 (64-bit offset), written one output time at
+//! a time, so an interrupted run keeps every completed record. The layout is documented in
+//! `docs/results.md`; [`FORMAT_VERSION`] changes whenever it changes incompatibly.
+
+use super::netcdf::{AttrValue, Definition, DimId, NcError, NcType, VarId, Writer};
+use crate::analysis::{AnalysisSummary, OutputFrame, Recorder};
+use crate::model::{AnalysisDef, Model};
+use crate::system::System;
+use std::path::{Path, PathBuf};
+
+/// Version of the results layout (global attribute `format_version`).
+pub const FORMAT_VERSION: i32 = 1;
+
+/// Header bytes kept free so the closing attributes (status, counts, failure reason) can
+/// be written when the analysis ends.
+const HEADER_RESERVE: usize = 4096;
+
+struct Vars {
+    time: VarId,
+    load_factor: Option<VarId>,
+    position: VarId,
+    orientation: VarId,
+    velocity: VarId,
+    angular_velocity: VarId,
+    joint_force: Option<VarId>,
+    joint_moment: Option<VarId>,
+    kinetic: VarId,
+    potential: VarId,
+    external_work: VarId,
+    dissipated: VarId,
+    violation: VarId,
+    diagnostics: Option<DiagnosticVars>,
+}
+
+struct DiagnosticVars {
+    iterations: VarId,
+    residual: VarId,
+    condition: VarId,
+    step: VarId,
+}
+
+/// Writes one analysis's results as they are computed (a [`Recorder`]).
+pub struct ResultsFile {
+    writer: Writer,
+    vars: Vars,
+    /// Per-record scratch (no allocation per record).
+    buf3: Vec<f64>,
+    buf4: Vec<f64>,
+    jf: Vec<f64>,
+    jm: Vec<f64>,
+    /// An earlier file of the same name, moved aside.
+    pub backup: Option<PathBuf>,
+}
+
+fn nc_err(path: &Path, e: NcError) -> crate::Error {
+    crate::Error::Output {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+/// The first free numbered backup name `stem.~k~.nc` beside `path`.
+fn backup_name(path: &Path) -> PathBuf {
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("results");
+    let dir = path.parent().unwrap_or(Path::new("."));
+    (1..)
+        .map(|k| dir.join(format!("{stem}.~{k}~.nc")))
+        .find(|p| !p.exists())
+        .expect("some backup name is free")
+}
+
+impl ResultsFile {
+    /// Results file path of an analysis in `dir`.
+    pub fn path_for(dir: &Path, analysis: &AnalysisDef) -> PathBuf {
+        dir.join(format!("{}.nc", analysis.name))
+    }
+
+    /// Creates `dir/<analysis>.nc`. An existing file of that name is never overwritten: it
+    /// is renamed to the first free `<analysis>.~k~.nc`, reported in [`Self::backup`].
+    pub fn create(
+        dir: &Path,
+        model: &Model,
+        model_file: Option<&Path>,
+        sys: &System,
+        analysis: &AnalysisDef,
+    ) -> Result<Self, crate::Error> {
+        std::fs::create_dir_all(dir).map_err(|e| crate::Error::Io {
+            path: dir.to_path_buf(),
+            action: "create the results directory",
+            source: e,
+        })?;
+        let path = Self::path_for(dir, analysis);
+        let mut backup = None;
+        if path.exists() {
+            let b = backup_name(&path);
+            std::fs::rename(&path, &b).map_err(|e| crate::Error::Io {
+                path: path.clone(),
+                action: "move the earlier results file aside",
+                source: e,
+            })?;
+            backup = Some(b);
+        }
+        let diagnostics = match &analysis.kind {
+            crate::model::AnalysisKind::Dynamic(d) => d.solver.diagnostics,
+            crate::model::AnalysisKind::Static(s) => s.solver.diagnostics,
+        };
+        let is_static = analysis.type_name() == "static";
+        let n_nodes = sys.n_nodes();
+        let n_joints = model.joints.len();
+
+        let mut d = Definition::new();
+        let time = d.add_record_dim("time");
+        let node = d.add_dim("node", n_nodes);
+        let vec3 = d.add_dim("vec3", 3);
+        let quat = d.add_dim("quat", 4);
+        let longest = model
+            .nodes
+            .iter()
+            .map(|n| n.name.len())
+            .chain(model.joints.iter().map(|j| j.name.len()))
+            .max()
+            .unwrap_or(1)
+            .max(1);
+        let strlen = d.add_dim("name_strlen", longest);
+        let joint = (n_joints > 0).then(|| d.add_dim("joint", n_joints));
+
+        let text = |s: &str| AttrValue::Text(s.to_string());
+        let var = |d: &mut Definition, name: &str, ty: NcType, dims: &[DimId], units: &str, long: &str| {
+            let v = d.add_var(name, ty, dims);
+            if !units.is_empty() {
+                d.add_var_attr(v, "units", text(units));
+            }
+            d.add_var_attr(v, "long_name", text(long));
+            if ty == NcType::Double {
+                d.add_var_attr(v, "_FillValue", AttrValue::Double(vec![f64::NAN]));
+            }
+            v
+        };
+        let time_v = var(
+            &mut d,
+            "time",
+            NcType::Double,
+            &[time],
+            "s",
+            if is_static { "time at which the loads are evaluated" } else { "time" },
+        );
+        let node_name = var(&mut d, "node_name", NcType::Char, &[node, strlen], "", "node name");
+        let joint_name = joint.map(|j| var(&mut d, "joint_name", NcType::Char, &[j, strlen], "", "joint name"));
+        let load_factor =
+            is_static.then(|| var(&mut d, "load_factor", NcType::Double, &[time], "1", "load factor of the increment"));
+        let position = var(&mut d, "position", NcType::Double, &[time, node, vec3], "m", "node position, global frame");
+        let orientation = var(
+            &mut d,
+            "orientation",
+            NcType::Double,
+            &[time, node, quat],
+            "1",
+            "node orientation as a unit quaternion (w, x, y, z), node frame to global",
+        );
+        let velocity = var(&mut d, "velocity", NcType::Double, &[time, node, vec3], "m s-1", "node velocity, global frame");
+        let angular_velocity = var(
+            &mut d,
+            "angular_velocity",
+            NcType::Double,
+            &[time, node, vec3],
+            "rad s-1",
+            "node angular velocity, global frame",
+        );
+        let (joint_force, joint_moment) = match joint {
+            Some(j) => (
+                Some(var(
+                    &mut d,
+                    "joint_force",
+                    NcType::Double,
+                    &[time, j, vec3],
+                    "N",
+                    "reaction force on side B by side A, joint frame A",
+                )),
+                Some(var(
+                    &mut d,
+                    "joint_moment",
+                    NcType::Double,
+                    &[time, j, vec3],
+                    "N m",
+                    "reaction moment on side B by side A about the joint point, joint frame A",
+                )),
+            ),
+            None => (None, None),
+        };
+        let kinetic = var(&mut d, "kinetic_energy", NcType::Double, &[time], "J", "kinetic energy");
+        let potential = var(
+            &mut d,
+            "potential_energy",
+            NcType::Double,
+            &[time],
+            "J",
+            "potential energy of gravity and springs",
+        );
+        let external_work = var(
+            &mut d,
+            "external_work",
+            NcType::Double,
+            &[time],
+            "J",
+            "work done by applied loads since the start of the analysis",
+        );
+        let dissipated = var(
+            &mut d,
+            "dissipated_energy",
+            NcType::Double,
+            &[time],
+            "J",
+            "energy dissipated by dampers since the start of the analysis",
+        );
+        let violation = var(
+            &mut d,
+            "constraint_violation",
+            NcType::Double,
+            &[time],
+            "m",
+            "largest position-level constraint violation max|Phi| (m or rad)",
+        );
+        let diagnostics = diagnostics.then(|| DiagnosticVars {
+            iterations: var(&mut d, "newton_iterations", NcType::Int, &[time], "1", "Newton iterations of the step"),
+            residual: var(
+                &mut d,
+                "residual_norm",
+                NcType::Double,
+                &[time],
+                "1",
+                "Euclidean norm of the scaled residual at the last Newton evaluation",
+            ),
+            condition: var(
+                &mut d,
+                "condition_estimate",
+                NcType::Double,
+                &[time],
+                "1",
+                "condition number of the iteration matrix (exact 2-norm up to 400 unknowns, 1-norm estimate above)",
+            ),
+            step: var(&mut d, "step_size", NcType::Double, &[time], "s", "size of the accepted step"),
+        });
+
+        d.add_global_attr("title", text(&format!("samara results: {} / {}", model.name, analysis.name)));
+        d.add_global_attr("Conventions", text("CF-1.8"));
+        d.add_global_attr("source", text(&format!("samara {}", crate::VERSION)));
+        d.add_global_attr("format_version", AttrValue::Int(vec![FORMAT_VERSION]));
+        d.add_global_attr("model", text(&model.name));
+        if let Some(desc) = &model.description {
+            d.add_global_attr("model_description", text(desc));
+        }
+        if let Some(f) = model_file {
+            d.add_global_attr("model_file", text(&f.display().to_string()));
+        }
+        d.add_global_attr("analysis", text(&analysis.name));
+        d.add_global_attr("analysis_type", text(analysis.type_name()));
+        d.add_global_attr("gravity", AttrValue::Double(model.gravity.iter().copied().collect()));
+        d.add_global_attr("status", text("running"));
+        d.reserve_header(HEADER_RESERVE);
+
+        let mut writer = d.create(&path).map_err(|e| nc_err(&path, e))?;
+        let names: Vec<&str> = model.nodes.iter().map(|n| n.name.as_str()).collect();
+        writer.put_fixed_text(node_name, &names).map_err(|e| nc_err(&path, e))?;
+        if let Some(jn) = joint_name {
+            let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
+            writer.put_fixed_text(jn, &names).map_err(|e| nc_err(&path, e))?;
+        }
+        Ok(Self {
+            writer,
+            vars: Vars {
+                time: time_v,
+                load_factor,
+                position,
+                orientation,
+                velocity,
+                angular_velocity,
+                joint_force,
+                joint_moment,
+                kinetic,
+                potential,
+                external_work,
+                dissipated,
+                violation,
+                diagnostics,
+            },
+            buf3: vec![0.0; 3 * n_nodes],
+            buf4: vec![0.0; 4 * n_nodes],
+            jf: vec![0.0; 3 * n_joints],
+            jm: vec![0.0; 3 * n_joints],
+            backup,
+        })
+    }
+
+    pub fn path(&self) -> &Path {
+        self.writer.path()
+    }
+
+    /// Number of output times written so far.
+    pub fn records(&self) -> u64 {
+        self.writer.num_records()
+    }
+
+    /// Writes the closing attributes (status, counts, failure) and closes the file.
+    pub fn finish(mut self, summary: &AnalysisSummary) -> Result<PathBuf, crate::Error> {
+        let path = self.writer.path().to_path_buf();
+        let e = |err| nc_err(&path, err);
+        let status = if summary.failure.is_some() { "failed" } else { "completed" };
+        self.writer.set_global_attr("status", AttrValue::Text(status.into())).map_err(e)?;
+        let counts = [
+            ("steps", summary.steps),
+            ("newton_iterations", summary.newton_iterations),
+            ("rejected_steps", summary.rejected_steps),
+            ("factorizations", summary.factorizations),
+        ];
+        for (name, v) in counts {
+            let v = i32::try_from(v).unwrap_or(i32::MAX);
+            self.writer.set_global_attr(name, AttrValue::Int(vec![v])).map_err(e)?;
+        }
+        self.writer
+            .set_global_attr("wall_time", AttrValue::Double(vec![summary.wall_time.as_secs_f64()]))
+            .map_err(e)?;
+        self.writer
+            .set_global_attr(
+                "max_constraint_violation",
+                AttrValue::Double(vec![summary.max_constraint_violation]),
+            )
+            .map_err(e)?;
+        if let Some(f) = &summary.failure {
+            let mut reason = format!("t = {}: {}", f.time, f.reason);
+            reason.truncate(1500);
+            self.writer.set_global_attr("failure", AttrValue::Text(reason)).map_err(e)?;
+        }
+        self.writer.finish().map_err(e)?;
+        Ok(path)
+    }
+}
+
+impl Recorder for ResultsFile {
+    fn record(&mut self, sys: &System, frame: &OutputFrame) -> Result<(), crate::Error> {
+        let v = &self.vars;
+        let w = &mut self.writer;
+        let path = w.path().to_path_buf();
+        let e = |err| nc_err(&path, err);
+        let nodes = &frame.state.nodes;
+        w.set_record_f64(v.time, &[frame.time]).map_err(e)?;
+        if let Some(lf) = v.load_factor {
+            w.set_record_f64(lf, &[frame.load_factor]).map_err(e)?;
+        }
+        let mut put3 = |w: &mut Writer, var: VarId, f: &dyn Fn(usize) -> [f64; 3]| {
+            for i in 0..nodes.len() {
+                self.buf3[3 * i..3 * i + 3].copy_from_slice(&f(i));
+            }
+            w.set_record_f64(var, &self.buf3)
+        };
+        put3(w, v.position, &|i| nodes[i].x.into()).map_err(e)?;
+        put3(w, v.velocity, &|i| nodes[i].v.into()).map_err(e)?;
+        put3(w, v.angular_velocity, &|i| nodes[i].omega_global().into()).map_err(e)?;
+        for (i, n) in nodes.iter().enumerate() {
+            self.buf4[4 * i..4 * i + 4].copy_from_slice(&n.rot.wxyz());
+        }
+        w.set_record_f64(v.orientation, &self.buf4).map_err(e)?;
+        if let (Some(fv), Some(mv)) = (v.joint_force, v.joint_moment) {
+            for (k, (c, &off)) in sys.constraints.iter().zip(&sys.multiplier_offsets).enumerate() {
+                let (f, m) = c.reactions(nodes, &frame.mu[off..off + c.n_equations()]);
+                self.jf[3 * k..3 * k + 3].copy_from_slice(f.as_slice());
+                self.jm[3 * k..3 * k + 3].copy_from_slice(m.as_slice());
+            }
+            w.set_record_f64(fv, &self.jf).map_err(e)?;
+            w.set_record_f64(mv, &self.jm).map_err(e)?;
+        }
+        let en = frame.energy;
+        w.set_record_f64(v.kinetic, &[en.kinetic]).map_err(e)?;
+        w.set_record_f64(v.potential, &[en.potential]).map_err(e)?;
+        w.set_record_f64(v.external_work, &[en.external_work]).map_err(e)?;
+        w.set_record_f64(v.dissipated, &[en.dissipated]).map_err(e)?;
+        w.set_record_f64(v.violation, &[frame.constraint_violation]).map_err(e)?;
+        if let (Some(dv), Some(dg)) = (&v.diagnostics, frame.diagnostics) {
+            w.set_record_i32(dv.iterations, &[dg.newton_iterations as i32]).map_err(e)?;
+            w.set_record_f64(dv.residual, &[dg.residual_norm]).map_err(e)?;
+            w.set_record_f64(dv.condition, &[dg.condition]).map_err(e)?;
+            w.set_record_f64(dv.step, &[dg.step_size]).map_err(e)?;
+        }
+        w.commit_record().map_err(e)
+    }
+}
