@@ -75,6 +75,54 @@ fn characteristic_stiffness(sys: &System, asm: &mut Assembler, state: &State, ct
     if count > 0 && sum > 0.0 { sum / count as f64 } else { 1.0 }
 }
 
+/// Multipliers that best balance the current residual, `λ = argmin |r + Bᵀλ|` under
+/// `B δq = 0` (the projection with the identity metric): solves
+/// `[I Bᵀ; B 0] [δq; Δλ] = [−(r + Bᵀλ); 0]` and keeps Δλ.
+///
+/// Newton for statics starts every increment from these, so the geometric stiffness of
+/// loaded joints (`∂(Bᵀλ)/∂q`, e.g. a pendulum's restoring stiffness m g L) is present from
+/// the first iteration; with λ = 0 the iteration matrix of a hanging mechanism is singular.
+fn least_squares_multipliers(
+    sys: &System,
+    asm: &mut Assembler,
+    state: &mut State,
+    ctx: &EvalContext,
+    lin: &mut LinearSolver,
+    matrix: &mut BlockMatrix,
+    work: &mut NewtonWork,
+) {
+    if sys.n_multipliers == 0 {
+        return;
+    }
+    let coef = Coefficients {
+        stiffness: 0.0,
+        ..Coefficients::statics(0.0)
+    };
+    asm.assemble(sys, state, ctx, &coef, &[], &mut work.residual, Some(matrix));
+    let s = matrix.structure.clone();
+    for i in 0..sys.n_nodes() {
+        let o = s.entry(i, i).expect("diagonal blocks exist");
+        for k in 0..6 {
+            matrix.values[o + 7 * k] += 1.0;
+        }
+    }
+    let n_cfg = sys.n_config();
+    for (d, r) in work.delta.iter_mut().zip(&work.residual) {
+        *d = -r;
+    }
+    work.delta[n_cfg..].fill(0.0);
+    if lin.factor(matrix).is_err() {
+        return; // dependent constraints: Newton reports the singular block
+    }
+    lin.solve_in_place(&mut work.delta);
+    if work.delta.iter().all(|x| x.is_finite()) {
+        for (l, d) in state.lambda.iter_mut().zip(&work.delta[n_cfg..]) {
+            *l += d;
+        }
+    }
+    lin.invalidate();
+}
+
 /// Solves the static equilibrium in `settings.load_steps` increments.
 pub fn run_static(
     sys: &System,
@@ -129,6 +177,7 @@ pub fn run_static(
         let ctx = sys.context(settings.time, target);
         saved.clone_from(&state);
         total.fill(0.0);
+        least_squares_multipliers(sys, &mut asm, &mut state, &ctx, &mut lin, &mut matrix, &mut work);
         let mut problem = StaticProblem {
             sys,
             asm: &mut asm,

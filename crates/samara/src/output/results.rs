@@ -142,7 +142,7 @@ impl ResultsFile {
             NcType::Double,
             &[time],
             "s",
-            if is_static { "time at which the loads are evaluated" } else { "time" },
+            if is_static { "load factor (pseudo-time of the load increments)" } else { "time" },
         );
         let node_name = var(&mut d, "node_name", NcType::Char, &[node, strlen], "", "node name");
         let joint_name = joint.map(|j| var(&mut d, "joint_name", NcType::Char, &[j, strlen], "", "joint name"));
