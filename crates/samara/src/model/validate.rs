@@ -102,7 +102,14 @@ impl<'a> Validator<'a> {
     /// Span of `key = value` inside an entry, pointing at the value; the entry's span if
     /// the key cannot be found (e.g. the model was built in code).
     fn key(&self, entry: &Entry, key: &str) -> Option<Range<usize>> {
-        let span = entry.span.clone()?;
+        let mut span = entry.span.clone()?;
+        // An array-of-tables entry may be spanned by its header only: extend the search to
+        // the next table header.
+        let full = &self.source.text;
+        if let Some(rest) = full.get(span.end..) {
+            let next = rest.find("\n[").map_or(full.len(), |i| span.end + i);
+            span.end = span.end.max(next);
+        }
         let text = self.source.text.get(span.clone())?;
         let bytes = text.as_bytes();
         let mut from = 0;

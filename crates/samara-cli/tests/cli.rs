@@ -1,0 +1,277 @@
+//! The `samara` command end to end: runs, results files, exit codes, and clear errors for
+//! bad input (issue #2, verification 8).
+
+use netcdf3::FileReader;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn samara(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_samara"))
+        .args(args)
+        .output()
+        .expect("the samara binary runs")
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+const PENDULUM: &str = r#"[model]
+name = "pendulum"
+gravity = [0.0, 0.0, -9.81]
+
+[[nodes]]
+name = "bob"
+position = [1.0, 0.0, 0.0]
+
+[[bodies]]
+name = "bob"
+node = "bob"
+mass = 1.0
+inertia = [[1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]
+
+[[joints]]
+name = "pivot"
+type = "revolute"
+node_a = "ground"
+node_b = "bob"
+position = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+
+[[analyses]]
+name = "swing"
+type = "dynamic"
+t_end = 0.5
+step = 1e-3
+rho_inf = 0.9
+diagnostics = true
+"#;
+
+/// Writes `text` as `name` in a fresh directory and runs `samara check` on it.
+fn check_text(name: &str, text: &str) -> (Output, PathBuf, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, text).unwrap();
+    let o = samara(&["check", path.to_str().unwrap()]);
+    (o, path, dir)
+}
+
+/// `text` with the first occurrence of `from` replaced by `to` fails `samara check` with
+/// exit status 1 and an error at `line:col` (of the replaced text) containing `message`
+/// (and `hint`, if given).
+fn assert_bad(from: &str, to: &str, message: &str, hint: Option<&str>) {
+    assert_bad_at(from, to, to, message, hint)
+}
+
+/// As [`assert_bad`], with the error expected on the line of the last occurrence of `at`.
+fn assert_bad_at(from: &str, to: &str, at: &str, message: &str, hint: Option<&str>) {
+    assert!(PENDULUM.contains(from), "{from}");
+    let text = PENDULUM.replacen(from, to, 1);
+    let (o, path, _dir) = check_text("bad.toml", &text);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let offset = text.rfind(at).unwrap();
+    let line = text[..offset].matches('\n').count() + 1;
+    let first = err.lines().find(|l| l.contains(": error: ")).unwrap_or_else(|| panic!("{err}"));
+    let prefix = format!("{}:{line}:", path.display());
+    assert!(first.starts_with(&prefix), "expected the error on line {line}:\n{err}");
+    assert!(first.contains(message), "expected '{message}' in:\n{err}");
+    if let Some(h) = hint {
+        assert!(err.contains(h), "expected hint '{h}' in:\n{err}");
+    }
+}
+
+#[test]
+fn run_writes_a_complete_results_file_and_keeps_earlier_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("pendulum.toml");
+    std::fs::write(&model, PENDULUM).unwrap();
+    let out = dir.path().join("results");
+    let o = samara(&["run", model.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary = String::from_utf8_lossy(&o.stdout);
+    assert!(summary.contains("swing") && summary.contains("500"), "{summary}");
+
+    let path = out.join("swing.nc");
+    let mut rd = FileReader::open(&path).unwrap();
+    let ds = rd.data_set();
+    assert_eq!(ds.num_records(), Some(501));
+    assert_eq!(ds.get_global_attr_as_string("status").as_deref(), Some("completed"));
+    assert_eq!(ds.get_global_attr_as_string("analysis").as_deref(), Some("swing"));
+    assert_eq!(ds.get_global_attr_i32("format_version"), Some(&[1][..]));
+    assert_eq!(ds.get_global_attr_i32("steps"), Some(&[500][..]));
+    for v in [
+        "time",
+        "node_name",
+        "position",
+        "orientation",
+        "velocity",
+        "angular_velocity",
+        "joint_name",
+        "joint_force",
+        "joint_moment",
+        "kinetic_energy",
+        "potential_energy",
+        "external_work",
+        "dissipated_energy",
+        "constraint_violation",
+        "newton_iterations",
+        "condition_estimate",
+        "residual_norm",
+        "step_size",
+    ] {
+        assert!(ds.has_var(v), "missing variable {v}");
+    }
+    let t = rd.read_var_f64("time").unwrap();
+    assert_eq!(t.len(), 501);
+    assert!((t[500] - 0.5).abs() < 1e-12);
+    let names = rd.read_var_u8("node_name").unwrap();
+    assert_eq!(&names[..3], b"bob");
+    let x = rd.read_var_f64("position").unwrap();
+    let q = rd.read_var_f64("orientation").unwrap();
+    let ke = rd.read_var_f64("kinetic_energy").unwrap();
+    let pe = rd.read_var_f64("potential_energy").unwrap();
+    let viol = rd.read_var_f64("constraint_violation").unwrap();
+    let iters = rd.read_var_i32("newton_iterations").unwrap();
+    let kappa = rd.read_var_f64("condition_estimate").unwrap();
+    let f = rd.read_var_f64("joint_force").unwrap();
+    for k in 0..501 {
+        let r = (x[3 * k].powi(2) + x[3 * k + 1].powi(2) + x[3 * k + 2].powi(2)).sqrt();
+        assert!((r - 1.0).abs() < 1e-8, "bob off the circle at record {k}: {r}");
+        let qn: f64 = q[4 * k..4 * k + 4].iter().map(|v| v * v).sum();
+        assert!((qn - 1.0).abs() < 1e-12);
+        assert!(viol[k] <= 1e-8);
+        if k > 0 {
+            assert!(iters[k] >= 1 && kappa[k].is_finite() && kappa[k] > 1.0);
+        }
+    }
+    // Energy is nearly conserved with ρ∞ = 0.9 over 0.5 s (mild numerical dissipation).
+    let e0 = ke[0] + pe[0];
+    assert!((ke[500] + pe[500] - e0).abs() < 1e-3 * 9.81);
+    // Pivot force magnitude at the start: m g I/(I + m L²) (released from rest, horizontal).
+    let f0 = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+    let expected = 9.81 * 1e-3 / (1e-3 + 1.0);
+    assert!((f0 - expected).abs() < 1e-9, "{f0} vs {expected}");
+
+    // A second run moves the first file aside instead of overwriting it.
+    let o = samara(&["run", model.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(o.status.success());
+    assert!(out.join("swing.~1~.nc").exists());
+    assert!(stderr(&o).contains("swing.~1~.nc"));
+    assert!(FileReader::open(out.join("swing.nc")).is_ok());
+}
+
+#[test]
+fn examples_check_clean() {
+    for m in [
+        "examples/pendulum.toml",
+        "examples/double_pendulum.toml",
+        "examples/heavy_top.toml",
+        "examples/verification/heavy_top.toml",
+    ] {
+        let o = samara(&["check", root().join(m).to_str().unwrap()]);
+        assert!(o.status.success(), "{m}: {}", stderr(&o));
+        assert!(String::from_utf8_lossy(&o.stdout).contains("ok"));
+    }
+}
+
+#[test]
+fn schema_is_json_describing_the_model_file() {
+    let o = samara(&["schema"]);
+    assert!(o.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("valid JSON");
+    let props = &v["properties"];
+    for key in ["model", "nodes", "bodies", "joints", "springs", "forces", "analyses"] {
+        assert!(props.get(key).is_some(), "schema lacks '{key}'");
+    }
+}
+
+#[test]
+fn unknown_node_suggests_the_closest_name() {
+    assert_bad(r#"node_b = "bob""#, r#"node_b = "bobb""#, "unknown node 'bobb'", Some("did you mean 'bob'"));
+}
+
+#[test]
+fn duplicate_names_are_rejected() {
+    assert_bad_at(
+        "[[analyses]]",
+        "[[nodes]]\nname = \"bob\"\nposition = [2.0, 0.0, 0.0]\n\n[[analyses]]",
+        "name = \"bob\"",
+        "duplicate",
+        None,
+    );
+}
+
+#[test]
+fn non_positive_mass_is_rejected() {
+    assert_bad("mass = 1.0", "mass = -2.0", "mass", None);
+    assert_bad("mass = 1.0", "mass = 0.0", "mass", None);
+}
+
+#[test]
+fn inertia_must_be_symmetric_positive_definite() {
+    assert_bad("[0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]", "[0.0, -1e-3, 0.0], [0.0, 0.0, 1e-3]]", "positive definite", None);
+    assert_bad("[[1e-3, 0.0, 0.0], [0.0, 1e-3", "[[1e-3, 5e-4, 0.0], [0.0, 1e-3", "symmetric", None);
+}
+
+#[test]
+fn zero_axis_is_rejected() {
+    assert_bad("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 0.0, 0.0]", "axis", None);
+}
+
+#[test]
+fn unknown_keys_are_named_with_a_suggestion() {
+    assert_bad("mass = 1.0", "mas = 1.0", "unknown", Some("mass"));
+}
+
+#[test]
+fn malformed_numbers_are_located() {
+    assert_bad("step = 1e-3", "step = 1e-3.5", "", None);
+    assert_bad("t_end = 0.5", "t_end = \"half\"", "", None);
+}
+
+#[test]
+fn a_missing_model_file_is_a_clear_error() {
+    let o = samara(&["check", "/nonexistent/model.toml"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("/nonexistent/model.toml") && e.contains("cannot read"), "{e}");
+}
+
+#[test]
+fn an_unwritable_results_directory_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("pendulum.toml");
+    std::fs::write(&model, PENDULUM).unwrap();
+    // A regular file where the results directory should be.
+    let blocker = dir.path().join("blocker");
+    std::fs::write(&blocker, "x").unwrap();
+    let out = blocker.join("results");
+    let o = samara(&["run", model.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("results directory") && e.contains("--out"), "{e}");
+}
+
+#[test]
+fn a_solver_failure_exits_with_status_2_and_keeps_the_partial_results() {
+    // A node with no mass, held only by a spring, cannot be accelerated consistently.
+    let text = PENDULUM.replace(
+        "[[analyses]]",
+        "[[nodes]]\nname = \"loose\"\nposition = [3.0, 0.0, 0.0]\n\n[[springs]]\nname = \"s\"\nnode_a = \"bob\"\nnode_b = \"loose\"\nstiffness = 10.0\n\n[[analyses]]",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("m.toml");
+    std::fs::write(&model, text).unwrap();
+    let out = dir.path().join("out");
+    let o = samara(&["run", model.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("swing") && e.contains("help:"), "{e}");
+    let rd = FileReader::open(out.join("swing.nc")).unwrap();
+    assert_eq!(rd.data_set().get_global_attr_as_string("status").as_deref(), Some("failed"));
+}
