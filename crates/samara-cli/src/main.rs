@@ -55,7 +55,10 @@ fn main() -> ExitCode {
         Command::Check { model } => check(&model),
         Command::Schema => {
             let schema = schemars::schema_for!(ModelInput);
-            println!("{}", serde_json::to_string_pretty(&schema).expect("a schema serializes"));
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&schema).expect("a schema serializes")
+            );
             ExitCode::SUCCESS
         }
     }
@@ -134,14 +137,20 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
             }
         };
         if let Some(b) = &file.backup {
-            eprintln!("note: an earlier {} was kept as {}", file.path().display(), b.display());
+            eprintln!(
+                "note: an earlier {} was kept as {}",
+                file.path().display(),
+                b.display()
+            );
         }
         let bar = if show_progress {
             let b = ProgressBar::new(1000);
             b.set_style(
-                ProgressStyle::with_template("{prefix:>12} [{bar:40}] {percent:>3}% {elapsed_precise} (eta {eta})")
-                    .expect("valid template")
-                    .progress_chars("=> "),
+                ProgressStyle::with_template(
+                    "{prefix:>12} [{bar:40}] {percent:>3}% {elapsed_precise} (eta {eta})",
+                )
+                .expect("valid template")
+                .progress_chars("=> "),
             );
             b.set_prefix(def.name.clone());
             b.enable_steady_tick(Duration::from_millis(200));
@@ -190,5 +199,9 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
         }
     }
     report::summary(&model.name, &rows, clock.elapsed());
-    if failed { ExitCode::from(EXIT_SOLVER) } else { ExitCode::SUCCESS }
+    if failed {
+        ExitCode::from(EXIT_SOLVER)
+    } else {
+        ExitCode::SUCCESS
+    }
 }

@@ -46,10 +46,14 @@ pub fn diagnostics(source: &SourceFile, diags: &[Diagnostic]) {
             md = md.with_help(h.clone());
         }
         if let Some(s) = &d.span {
-            let len = (s.end - s.start).max(1).min(source.text.len().saturating_sub(s.start).max(1));
+            let len = (s.end - s.start)
+                .max(1)
+                .min(source.text.len().saturating_sub(s.start).max(1));
             md = md.with_label(LabeledSpan::at(s.start..s.start + len, "here"));
-            let report = Report::new(md)
-                .with_source_code(NamedSource::new(source.path.display().to_string(), source.text.to_string()));
+            let report = Report::new(md).with_source_code(NamedSource::new(
+                source.path.display().to_string(),
+                source.text.to_string(),
+            ));
             eprintln!("{report:?}");
         } else if let Some(h) = &d.hint {
             eprintln!("  help: {h}\n");
@@ -66,7 +70,10 @@ pub fn error(e: &samara::Error, hint: Option<&str>) {
 }
 
 pub fn solver_failure(f: &SolverFailure, path: &std::path::Path, records: u64) {
-    eprintln!("error: analysis '{}' stopped at t = {:.6e}: {}", f.analysis, f.time, f.reason);
+    eprintln!(
+        "error: analysis '{}' stopped at t = {:.6e}: {}",
+        f.analysis, f.time, f.reason
+    );
     if let Some(h) = &f.hint {
         eprintln!("  help: {h}");
     }
@@ -88,11 +95,23 @@ pub fn summary(model: &str, rows: &[Row], total: Duration) {
     println!("model '{model}'");
     println!(
         "  {:<14} {:<8} {:>8} {:>8} {:>7} {:>8} {:>10} {:>10}  {}",
-        "analysis", "type", "steps", "newton", "it/step", "rejected", "max |Φ|", "wall [s]", "results"
+        "analysis",
+        "type",
+        "steps",
+        "newton",
+        "it/step",
+        "rejected",
+        "max |Φ|",
+        "wall [s]",
+        "results"
     );
     for r in rows {
         let s = &r.summary;
-        let per = if s.steps > 0 { s.newton_iterations as f64 / s.steps as f64 } else { 0.0 };
+        let per = if s.steps > 0 {
+            s.newton_iterations as f64 / s.steps as f64
+        } else {
+            0.0
+        };
         let status = if s.failure.is_some() { " (FAILED)" } else { "" };
         println!(
             "  {:<14} {:<8} {:>8} {:>8} {:>7.2} {:>8} {:>10.2e} {:>10.3}  {} ({} records){status}",

@@ -76,9 +76,15 @@ fn assert_bad_at(from: &str, to: &str, at: &str, message: &str, hint: Option<&st
     assert_eq!(o.status.code(), Some(1), "{err}");
     let offset = text.rfind(at).unwrap();
     let line = text[..offset].matches('\n').count() + 1;
-    let first = err.lines().find(|l| l.contains(": error: ")).unwrap_or_else(|| panic!("{err}"));
+    let first = err
+        .lines()
+        .find(|l| l.contains(": error: "))
+        .unwrap_or_else(|| panic!("{err}"));
     let prefix = format!("{}:{line}:", path.display());
-    assert!(first.starts_with(&prefix), "expected the error on line {line}:\n{err}");
+    assert!(
+        first.starts_with(&prefix),
+        "expected the error on line {line}:\n{err}"
+    );
     assert!(first.contains(message), "expected '{message}' in:\n{err}");
     if let Some(h) = hint {
         assert!(err.contains(h), "expected hint '{h}' in:\n{err}");
@@ -91,17 +97,31 @@ fn run_writes_a_complete_results_file_and_keeps_earlier_ones() {
     let model = dir.path().join("pendulum.toml");
     std::fs::write(&model, PENDULUM).unwrap();
     let out = dir.path().join("results");
-    let o = samara(&["run", model.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = samara(&[
+        "run",
+        model.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let summary = String::from_utf8_lossy(&o.stdout);
-    assert!(summary.contains("swing") && summary.contains("500"), "{summary}");
+    assert!(
+        summary.contains("swing") && summary.contains("500"),
+        "{summary}"
+    );
 
     let path = out.join("swing.nc");
     let mut rd = FileReader::open(&path).unwrap();
     let ds = rd.data_set();
     assert_eq!(ds.num_records(), Some(501));
-    assert_eq!(ds.get_global_attr_as_string("status").as_deref(), Some("completed"));
-    assert_eq!(ds.get_global_attr_as_string("analysis").as_deref(), Some("swing"));
+    assert_eq!(
+        ds.get_global_attr_as_string("status").as_deref(),
+        Some("completed")
+    );
+    assert_eq!(
+        ds.get_global_attr_as_string("analysis").as_deref(),
+        Some("swing")
+    );
     assert_eq!(ds.get_global_attr_i32("format_version"), Some(&[1][..]));
     assert_eq!(ds.get_global_attr_i32("steps"), Some(&[500][..]));
     for v in [
@@ -141,7 +161,10 @@ fn run_writes_a_complete_results_file_and_keeps_earlier_ones() {
     let f = rd.read_var_f64("joint_force").unwrap();
     for k in 0..501 {
         let r = (x[3 * k].powi(2) + x[3 * k + 1].powi(2) + x[3 * k + 2].powi(2)).sqrt();
-        assert!((r - 1.0).abs() < 1e-8, "bob off the circle at record {k}: {r}");
+        assert!(
+            (r - 1.0).abs() < 1e-8,
+            "bob off the circle at record {k}: {r}"
+        );
         let qn: f64 = q[4 * k..4 * k + 4].iter().map(|v| v * v).sum();
         assert!((qn - 1.0).abs() < 1e-12);
         assert!(viol[k] <= 1e-8);
@@ -158,7 +181,12 @@ fn run_writes_a_complete_results_file_and_keeps_earlier_ones() {
     assert!((f0 - expected).abs() < 1e-9, "{f0} vs {expected}");
 
     // A second run moves the first file aside instead of overwriting it.
-    let o = samara(&["run", model.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = samara(&[
+        "run",
+        model.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success());
     assert!(out.join("swing.~1~.nc").exists());
     assert!(stderr(&o).contains("swing.~1~.nc"));
@@ -185,14 +213,21 @@ fn schema_is_json_describing_the_model_file() {
     assert!(o.status.success());
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("valid JSON");
     let props = &v["properties"];
-    for key in ["model", "nodes", "bodies", "joints", "springs", "forces", "analyses"] {
+    for key in [
+        "model", "nodes", "bodies", "joints", "springs", "forces", "analyses",
+    ] {
         assert!(props.get(key).is_some(), "schema lacks '{key}'");
     }
 }
 
 #[test]
 fn unknown_node_suggests_the_closest_name() {
-    assert_bad(r#"node_b = "bob""#, r#"node_b = "bobb""#, "unknown node 'bobb'", Some("did you mean 'bob'"));
+    assert_bad(
+        r#"node_b = "bob""#,
+        r#"node_b = "bobb""#,
+        "unknown node 'bobb'",
+        Some("did you mean 'bob'"),
+    );
 }
 
 #[test]
@@ -214,13 +249,28 @@ fn non_positive_mass_is_rejected() {
 
 #[test]
 fn inertia_must_be_symmetric_positive_definite() {
-    assert_bad("[0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]", "[0.0, -1e-3, 0.0], [0.0, 0.0, 1e-3]]", "positive definite", None);
-    assert_bad("[[1e-3, 0.0, 0.0], [0.0, 1e-3", "[[1e-3, 5e-4, 0.0], [0.0, 1e-3", "symmetric", None);
+    assert_bad(
+        "[0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]",
+        "[0.0, -1e-3, 0.0], [0.0, 0.0, 1e-3]]",
+        "positive definite",
+        None,
+    );
+    assert_bad(
+        "[[1e-3, 0.0, 0.0], [0.0, 1e-3",
+        "[[1e-3, 5e-4, 0.0], [0.0, 1e-3",
+        "symmetric",
+        None,
+    );
 }
 
 #[test]
 fn zero_axis_is_rejected() {
-    assert_bad("axis = [0.0, 1.0, 0.0]", "axis = [0.0, 0.0, 0.0]", "axis", None);
+    assert_bad(
+        "axis = [0.0, 1.0, 0.0]",
+        "axis = [0.0, 0.0, 0.0]",
+        "axis",
+        None,
+    );
 }
 
 #[test]
@@ -239,7 +289,10 @@ fn a_missing_model_file_is_a_clear_error() {
     let o = samara(&["check", "/nonexistent/model.toml"]);
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
-    assert!(e.contains("/nonexistent/model.toml") && e.contains("cannot read"), "{e}");
+    assert!(
+        e.contains("/nonexistent/model.toml") && e.contains("cannot read"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -251,10 +304,18 @@ fn an_unwritable_results_directory_is_a_clear_error() {
     let blocker = dir.path().join("blocker");
     std::fs::write(&blocker, "x").unwrap();
     let out = blocker.join("results");
-    let o = samara(&["run", model.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = samara(&[
+        "run",
+        model.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
-    assert!(e.contains("results directory") && e.contains("--out"), "{e}");
+    assert!(
+        e.contains("results directory") && e.contains("--out"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -268,10 +329,18 @@ fn a_solver_failure_exits_with_status_2_and_keeps_the_partial_results() {
     let model = dir.path().join("m.toml");
     std::fs::write(&model, text).unwrap();
     let out = dir.path().join("out");
-    let o = samara(&["run", model.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = samara(&[
+        "run",
+        model.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{e}");
     assert!(e.contains("swing") && e.contains("help:"), "{e}");
     let rd = FileReader::open(out.join("swing.nc")).unwrap();
-    assert_eq!(rd.data_set().get_global_attr_as_string("status").as_deref(), Some("failed"));
+    assert_eq!(
+        rd.data_set().get_global_attr_as_string("status").as_deref(),
+        Some("failed")
+    );
 }

@@ -102,7 +102,8 @@ pub fn check_element(e: &dyn Element, ctx: &EvalContext, nodes: &[NodeState]) ->
                     e.evaluate(ctx, &work, Need::Residual, &mut tp);
                     r[k] = Some(tp.r.clone());
                 }
-                let col = (r[0].take().unwrap_or_default() - r[1].take().unwrap_or_default()) / (2.0 * EPS);
+                let col = (r[0].take().unwrap_or_default() - r[1].take().unwrap_or_default())
+                    / (2.0 * EPS);
                 out.set_column(6 * b + dof, &col);
             }
         }
@@ -135,7 +136,12 @@ impl ConstraintReport {
 
 /// Checks a constraint at the given node states with multipliers `mu`; the convective term
 /// is checked along the motion with the nodes' velocities.
-pub fn check_constraint(c: &dyn Constraint, ctx: &EvalContext, nodes: &[NodeState], mu: &[f64]) -> ConstraintReport {
+pub fn check_constraint(
+    c: &dyn Constraint,
+    ctx: &EvalContext,
+    nodes: &[NodeState],
+    mu: &[f64],
+) -> ConstraintReport {
     let cn = c.nodes().to_vec();
     let m = c.n_equations();
     let n = 6 * cn.len();

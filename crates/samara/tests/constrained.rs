@@ -29,7 +29,10 @@ fn double_pendulum_conserves_energy_and_converges_at_second_order() {
         set_dynamic(&mut m, |d| d.solver.tolerance = 1e-11);
         let (s, hist) = run(&m);
         let per_step = s.newton_iterations as f64 / s.steps as f64;
-        assert!(per_step < 2.5, "h = {h}: {per_step} Newton iterations per step");
+        assert!(
+            per_step < 2.5,
+            "h = {h}: {per_step} Newton iterations per step"
+        );
         let e0 = hist.frames[0].energy.kinetic + hist.frames[0].energy.potential;
         let de: Vec<(f64, f64)> = hist
             .frames
@@ -43,10 +46,15 @@ fn double_pendulum_conserves_energy_and_converges_at_second_order() {
                 .fold(f64::INFINITY, |m, &(_, e)| m.min(e))
         };
         let (first, last) = (floor(0.5, 2.5), floor(8.0, 10.0));
-        eprintln!("h = {h}: max |ΔE| = {max:.3e} J, min |ΔE| on [0.5,2.5] {first:.2e}, on [8,10] {last:.2e}");
+        eprintln!(
+            "h = {h}: max |ΔE| = {max:.3e} J, min |ΔE| on [0.5,2.5] {first:.2e}, on [8,10] {last:.2e}"
+        );
         // No drift: after 10 s the error still returns to the level it had at the start
         // (a drifting scheme would have accumulated at least its per-period loss, ~max).
-        assert!(last < 0.05 * max, "h = {h}: energy error floor grew to {last:e} (max {max:e})");
+        assert!(
+            last < 0.05 * max,
+            "h = {h}: energy error floor grew to {last:e} (max {max:e})"
+        );
         max_errors.push(max);
         tips.push(hist.at(1.0).unwrap().state.nodes[1].x);
     }
@@ -86,7 +94,10 @@ fn constraint_violation_is_within_tolerance_at_every_step() {
         d.solver.tolerance = 1e-9;
     });
     let (s, hist) = run(&m);
-    let worst = hist.frames.iter().fold(0.0f64, |a, f| a.max(f.constraint_violation));
+    let worst = hist
+        .frames
+        .iter()
+        .fold(0.0f64, |a, f| a.max(f.constraint_violation));
     eprintln!("max |Φ| over {} steps: {worst:.3e}", s.steps);
     assert!(worst <= 1e-9, "{worst:e}");
     assert_eq!(worst, s.max_constraint_violation);
@@ -132,23 +143,57 @@ fn scaling_keeps_the_condition_number_independent_of_the_step() {
 /// 5e-4 at h = 2e-4, which we must meet.
 #[test]
 fn heavy_top_matches_the_kynema_reference() {
-    let csv = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../../shared/reference/kynema_verification/heavy_top_kynema_material_0pt000002s.csv"),
-    );
+    let csv = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(
+        "../../../shared/reference/kynema_verification/heavy_top_kynema_material_0pt000002s.csv",
+    ));
     // The reference values, as printed in that file (kept here so the test runs without it).
     let reference: Vec<(f64, [f64; 7])> = vec![
-        (1.0, [0.1733440435722807, -0.3599112987333657, -0.7484906793466106, 0.7329439942283007, -0.2782856278135421, 0.5318246439927058, -0.3201761370231893]),
-        (2.0, [-0.1504168894608856, -1.7241654846852867, -0.6730223697288009, 0.1229471344095339, -0.4910798717314375, 0.3504301068655838, -0.7879868665928781]),
+        (
+            1.0,
+            [
+                0.1733440435722807,
+                -0.3599112987333657,
+                -0.7484906793466106,
+                0.7329439942283007,
+                -0.2782856278135421,
+                0.5318246439927058,
+                -0.3201761370231893,
+            ],
+        ),
+        (
+            2.0,
+            [
+                -0.1504168894608856,
+                -1.7241654846852867,
+                -0.6730223697288009,
+                0.1229471344095339,
+                -0.4910798717314375,
+                0.3504301068655838,
+                -0.7879868665928781,
+            ],
+        ),
     ];
     if let Ok(text) = csv {
         for (t, v) in &reference {
             let line = text
                 .lines()
-                .find(|l| l.split(',').next().and_then(|s| s.trim().parse::<f64>().ok()) == Some(*t))
+                .find(|l| {
+                    l.split(',')
+                        .next()
+                        .and_then(|s| s.trim().parse::<f64>().ok())
+                        == Some(*t)
+                })
                 .expect("reference row");
-            let vals: Vec<f64> = line.split(',').skip(1).map(|s| s.trim().parse().unwrap()).collect();
-            assert_eq!(&vals[..], &v[..], "the copy of the reference differs from the file");
+            let vals: Vec<f64> = line
+                .split(',')
+                .skip(1)
+                .map(|s| s.trim().parse().unwrap())
+                .collect();
+            assert_eq!(
+                &vals[..],
+                &v[..],
+                "the copy of the reference differs from the file"
+            );
         }
     }
     let base = model_file("examples/verification/heavy_top.toml");
@@ -163,16 +208,29 @@ fn heavy_top_matches_the_kynema_reference() {
             let u = f.state.nodes[0].x - x0;
             let q = f.state.nodes[0].rot.wxyz();
             // q and −q are the same rotation.
-            let dq_plus: f64 = (0..4).map(|i| (q[i] - r[3 + i]).powi(2)).sum::<f64>().sqrt();
-            let dq_minus: f64 = (0..4).map(|i| (q[i] + r[3 + i]).powi(2)).sum::<f64>().sqrt();
+            let dq_plus: f64 = (0..4)
+                .map(|i| (q[i] - r[3 + i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            let dq_minus: f64 = (0..4)
+                .map(|i| (q[i] + r[3 + i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
             let du = ((u.x - r[0]).powi(2) + (u.y - r[1]).powi(2) + (u.z - r[2]).powi(2)).sqrt();
             errors[k].push(du.max(dq_plus.min(dq_minus)));
         }
     }
     for (k, (t, _)) in reference.iter().enumerate() {
         let p = orders(&errors[k]);
-        eprintln!("t = {t}: errors {:?} at h = {steps:?}; orders {p:?}", errors[k]);
-        assert!(errors[k][1] < 5e-4, "t = {t}: error {} at h = 2e-4", errors[k][1]);
+        eprintln!(
+            "t = {t}: errors {:?} at h = {steps:?}; orders {p:?}",
+            errors[k]
+        );
+        assert!(
+            errors[k][1] < 5e-4,
+            "t = {t}: error {} at h = 2e-4",
+            errors[k][1]
+        );
         for o in &p {
             assert!((o - 2.0).abs() < 0.25, "t = {t}: orders {p:?}");
         }

@@ -62,7 +62,10 @@ fn zero_crossings(h: &samara::analysis::History) -> Vec<f64> {
         let dt = b.time - a.time;
         let herm = |s: f64| {
             let (s2, s3) = (s * s, s * s * s);
-            (2.0 * s3 - 3.0 * s2 + 1.0) * x0 + (s3 - 2.0 * s2 + s) * dt * v0 + (-2.0 * s3 + 3.0 * s2) * x1 + (s3 - s2) * dt * v1
+            (2.0 * s3 - 3.0 * s2 + 1.0) * x0
+                + (s3 - 2.0 * s2 + s) * dt * v0
+                + (-2.0 * s3 + 3.0 * s2) * x1
+                + (s3 - s2) * dt * v1
         };
         let (mut lo, mut hi) = (0.0, 1.0);
         for _ in 0..80 {
@@ -92,9 +95,18 @@ fn period_at_170_degrees_converges_at_second_order() {
         let period = c[2] - c[0];
         errors.push((period - exact).abs() / exact);
         // Verification 6: every step's |Φ| within the Newton tolerance.
-        assert!(summary.max_constraint_violation <= 1e-12, "violation {}", summary.max_constraint_violation);
+        assert!(
+            summary.max_constraint_violation <= 1e-12,
+            "violation {}",
+            summary.max_constraint_violation
+        );
         for f in &hist.frames {
-            assert!(f.constraint_violation <= 1e-12, "t = {}: {}", f.time, f.constraint_violation);
+            assert!(
+                f.constraint_violation <= 1e-12,
+                "t = {}: {}",
+                f.time,
+                f.constraint_violation
+            );
         }
     }
     let p = orders(&errors);

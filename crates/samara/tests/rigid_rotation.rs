@@ -155,10 +155,15 @@ tolerance = 1e-12
         }
         // Flips: the spin axis reverses, so the test covers the whole separatrix motion.
         let w_end = hist.frames[n - 1].state.nodes[0].w;
-        eprintln!("step {step}: max |ΔE|/E by thirds {max_e:?}, max |Δh|/|h| {max_h:e}, Ω(T) {w_end:?}");
+        eprintln!(
+            "step {step}: max |ΔE|/E by thirds {max_e:?}, max |Δh|/|h| {max_h:e}, Ω(T) {w_end:?}"
+        );
         // No drift: the last third's worst error is not larger than the first third's
         // worst by more than the oscillation's own variation (factor 2).
-        assert!(max_e[2] < 2.0 * max_e[0].max(max_e[1]), "energy drifts: {max_e:?}");
+        assert!(
+            max_e[2] < 2.0 * max_e[0].max(max_e[1]),
+            "energy drifts: {max_e:?}"
+        );
         e_err.push(max_e.iter().cloned().fold(0.0, f64::max));
         h_err.push(max_h);
     }
@@ -166,6 +171,9 @@ tolerance = 1e-12
     let ph = orders(&h_err);
     eprintln!("energy errors {e_err:?} orders {pe:?}; momentum errors {h_err:?} orders {ph:?}");
     for o in pe.iter().chain(&ph) {
-        assert!((o - 2.0).abs() < 0.3, "orders: energy {pe:?}, momentum {ph:?}");
+        assert!(
+            (o - 2.0).abs() < 0.3,
+            "orders: energy {pe:?}, momentum {ph:?}"
+        );
     }
 }

@@ -51,7 +51,8 @@ tolerance = 1e-12
     assert_eq!(s.steps, 10);
     // Closed form by bisection on dV/dθ.
     let len = |t: f64| ((l - l * t.cos()).powi(2) + (h + l * t.sin()).powi(2)).sqrt();
-    let dlen = |t: f64| ((l - l * t.cos()) * l * t.sin() + (h + l * t.sin()) * l * t.cos()) / len(t);
+    let dlen =
+        |t: f64| ((l - l * t.cos()) * l * t.sin() + (h + l * t.sin()) * l * t.cos()) / len(t);
     let dv = |t: f64| -m * g * l * t.cos() + k * (len(t) - h) * dlen(t);
     let (mut a, mut b) = (0.0, 1.5);
     for _ in 0..200 {

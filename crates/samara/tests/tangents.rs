@@ -19,7 +19,10 @@ const TOL: f64 = 1e-6;
 struct Lcg(u64);
 impl Lcg {
     fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((self.0 >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
     }
     fn vec3(&mut self, scale: f64) -> Vector3<f64> {
@@ -52,7 +55,13 @@ fn elements(rng: &mut Lcg) -> Vec<Box<dyn Element>> {
     let inertia = Matrix3::new(2.0, 0.1, -0.2, 0.1, 3.0, 0.3, -0.2, 0.3, 4.0);
     vec![
         Box::new(RigidBody::new("body", 0, 2.5, inertia, rng.vec3(0.5))),
-        Box::new(RigidBody::new("body_at_cg", 1, 1.5, Matrix3::identity(), Vector3::zeros())),
+        Box::new(RigidBody::new(
+            "body_at_cg",
+            1,
+            1.5,
+            Matrix3::identity(),
+            Vector3::zeros(),
+        )),
         Box::new(SpringDamper::new(
             "spring",
             Some((0, rng.vec3(0.3))),
@@ -78,7 +87,13 @@ fn elements(rng: &mut Lcg) -> Vec<Box<dyn Element>> {
             rng.vec3(3.0),
             LoadFrame::Global,
             rng.vec3(0.4),
-            TimeFunction::Sine { amplitude: 1.0, frequency: 2.0, phase: 0.3, offset: 0.5, start: 0.0 },
+            TimeFunction::Sine {
+                amplitude: 1.0,
+                frequency: 2.0,
+                phase: 0.3,
+                offset: 0.5,
+                start: 0.0,
+            },
         )),
         Box::new(AppliedLoad::new(
             "follower",
@@ -95,9 +110,21 @@ fn elements(rng: &mut Lcg) -> Vec<Box<dyn Element>> {
 fn joints(rng: &mut Lcg, nodes: &[NodeState]) -> Vec<Box<dyn Constraint>> {
     let mut out: Vec<Box<dyn Constraint>> = Vec::new();
     for kind in [JointType::Fixed, JointType::Spherical, JointType::Revolute] {
-        for (a, b) in [(NodeRef::Node(0), NodeRef::Node(1)), (NodeRef::Ground, NodeRef::Node(2)), (NodeRef::Node(1), NodeRef::Ground)] {
+        for (a, b) in [
+            (NodeRef::Node(0), NodeRef::Node(1)),
+            (NodeRef::Ground, NodeRef::Node(2)),
+            (NodeRef::Node(1), NodeRef::Ground),
+        ] {
             let axes = *Rotation::exp(&rng.vec3(1.0)).matrix();
-            out.push(Box::new(Joint::new(format!("{kind:?}"), kind, a, b, rng.vec3(1.0), axes, nodes)));
+            out.push(Box::new(Joint::new(
+                format!("{kind:?}"),
+                kind,
+                a,
+                b,
+                rng.vec3(1.0),
+                axes,
+                nodes,
+            )));
         }
     }
     out
@@ -110,7 +137,11 @@ fn every_element_tangent_matches_finite_differences() {
         let nodes = random_nodes(&mut rng, 3);
         for e in elements(&mut rng) {
             let rep = check_element(e.as_ref(), &ctx(), &nodes);
-            assert!(rep.worst() < TOL, "trial {trial}, element {}: {rep:?}", e.name());
+            assert!(
+                rep.worst() < TOL,
+                "trial {trial}, element {}: {rep:?}",
+                e.name()
+            );
         }
     }
 }
@@ -125,9 +156,17 @@ fn every_constraint_tangent_matches_finite_differences() {
         for c in joints(&mut rng, &reference) {
             let mu: Vec<f64> = (0..c.n_equations()).map(|_| 10.0 * rng.next()).collect();
             let rep = check_constraint(c.as_ref(), &ctx(), &nodes, &mu);
-            assert!(rep.b.relative < TOL && rep.k.relative < TOL, "trial {trial}, {}: {rep:?}", c.name());
+            assert!(
+                rep.b.relative < TOL && rep.k.relative < TOL,
+                "trial {trial}, {}: {rep:?}",
+                c.name()
+            );
             // Second difference at ε = 1e-4: O(ε²) truncation and O(u/ε²) round-off ≈ 1e-8.
-            assert!(rep.convective < 1e-5, "trial {trial}, {}: {rep:?}", c.name());
+            assert!(
+                rep.convective < 1e-5,
+                "trial {trial}, {}: {rep:?}",
+                c.name()
+            );
         }
     }
 }
@@ -144,7 +183,13 @@ fn checker_detects_a_wrong_tangent() {
         fn nodes(&self) -> &[usize] {
             self.0.nodes()
         }
-        fn evaluate(&self, ctx: &EvalContext, nodes: &[NodeState], need: samara::elements::Need, out: &mut samara::elements::LocalTerms) {
+        fn evaluate(
+            &self,
+            ctx: &EvalContext,
+            nodes: &[NodeState],
+            need: samara::elements::Need,
+            out: &mut samara::elements::LocalTerms,
+        ) {
             // Residual from one spring, tangents from a slightly stiffer one.
             if need == samara::elements::Need::Residual {
                 self.0.evaluate(ctx, nodes, need, out);
@@ -153,7 +198,17 @@ fn checker_detects_a_wrong_tangent() {
             }
         }
     }
-    let mk = |k: f64| SpringDamper::new("s", Some((0, Vector3::zeros())), Some((1, Vector3::zeros())), [Vector3::zeros(); 2], k, 0.0, 0.5);
+    let mk = |k: f64| {
+        SpringDamper::new(
+            "s",
+            Some((0, Vector3::zeros())),
+            Some((1, Vector3::zeros())),
+            [Vector3::zeros(); 2],
+            k,
+            0.0,
+            0.5,
+        )
+    };
     let mut rng = Lcg(3);
     let nodes = random_nodes(&mut rng, 2);
     let rep = check_element(&Wrong(mk(100.0), mk(100.5)), &ctx(), &nodes);

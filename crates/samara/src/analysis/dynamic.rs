@@ -3,13 +3,19 @@
 
 use super::generalized_alpha::GeneralizedAlpha;
 use super::initial::consistent_accelerations;
-use super::{AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics, singular_hint};
+use super::{
+    AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
+    singular_hint,
+};
 use crate::elements::EvalContext;
 use crate::math::tangent_operator;
 use crate::model::{DynamicSettings, FormulationType, JacobianUpdate};
 use crate::solve::condition::condition_number;
 use crate::solve::newton::{NewtonWork, newton};
-use crate::solve::{BlockMatrix, LinearError, LinearSolver, NewtonFailure, NewtonReport, NewtonSettings, NewtonSystem};
+use crate::solve::{
+    BlockMatrix, LinearError, LinearSolver, NewtonFailure, NewtonReport, NewtonSettings,
+    NewtonSystem,
+};
 use crate::system::{Assembler, Coefficients, Formulation, State, System};
 use nalgebra::{Matrix3, Vector3};
 use std::time::Instant;
@@ -51,11 +57,16 @@ impl NewtonSystem for StepProblem<'_> {
     fn evaluate(&mut self, residual: &mut [f64], matrix: Option<&mut BlockMatrix>) {
         if matrix.is_some() {
             for (i, t) in self.t_ops.iter_mut().enumerate() {
-                *t = tangent_operator(&Vector3::new(self.hdq[6 * i + 3], self.hdq[6 * i + 4], self.hdq[6 * i + 5]));
+                *t = tangent_operator(&Vector3::new(
+                    self.hdq[6 * i + 3],
+                    self.hdq[6 * i + 4],
+                    self.hdq[6 * i + 5],
+                ));
             }
         }
-        self.asm
-            .assemble(self.sys, self.cur, &self.ctx, &self.coef, self.t_ops, residual, matrix);
+        self.asm.assemble(
+            self.sys, self.cur, &self.ctx, &self.coef, self.t_ops, residual, matrix,
+        );
     }
 
     fn apply(&mut self, delta: &[f64]) -> f64 {
@@ -64,7 +75,8 @@ impl NewtonSystem for StepProblem<'_> {
         let n_mult = self.sys.n_multipliers;
         self.change.copy_from_slice(&delta[..n_cfg]);
         if self.asm.formulation() == Formulation::StabilizedIndex2 {
-            self.asm.add_projection(self.sys, &delta[n_cfg + n_mult..], self.change);
+            self.asm
+                .add_projection(self.sys, &delta[n_cfg + n_mult..], self.change);
         }
         for (i, n) in self.cur.nodes.iter_mut().enumerate() {
             let d = &delta[6 * i..6 * i + 6];
@@ -82,7 +94,12 @@ impl NewtonSystem for StepProblem<'_> {
         }
         self.update_configuration();
         let s = 1.0 / self.coef.multiplier_scale;
-        for (l, d) in self.cur.lambda.iter_mut().zip(&delta[n_cfg..n_cfg + n_mult]) {
+        for (l, d) in self
+            .cur
+            .lambda
+            .iter_mut()
+            .zip(&delta[n_cfg..n_cfg + n_mult])
+        {
             *l += d * s;
         }
         worst
@@ -134,7 +151,13 @@ impl Integrator<'_> {
         self.trial.clone_from(&self.state);
         self.trial.time = t1;
         // Predictor: v̇_{n+1} = v̇_n, λ_{n+1} = λ_n.
-        for (i, (n, p)) in self.trial.nodes.iter_mut().zip(&self.state.nodes).enumerate() {
+        for (i, (n, p)) in self
+            .trial
+            .nodes
+            .iter_mut()
+            .zip(&self.state.nodes)
+            .enumerate()
+        {
             let vd = [p.a.x, p.a.y, p.a.z, p.wd.x, p.wd.y, p.wd.z];
             let v = [p.v.x, p.v.y, p.v.z, p.w.x, p.w.y, p.w.z];
             let mut v1 = [0.0; 6];
@@ -183,7 +206,13 @@ impl Integrator<'_> {
             rtol: self.settings.solver.relative_tolerance,
         };
         problem.update_configuration();
-        let result = newton(&mut problem, &mut self.lin, &mut self.matrix, &mut self.work, &settings);
+        let result = newton(
+            &mut problem,
+            &mut self.lin,
+            &mut self.matrix,
+            &mut self.work,
+            &settings,
+        );
         if result.as_ref().is_ok_and(|r| r.factorizations > 0) || self.lin.is_factored() {
             self.factored_h = h;
         }
@@ -285,10 +314,22 @@ pub fn run_dynamic(
     let mut init_lin = LinearSolver::new(init_asm.structure(), settings.solver.linear_solver);
     let mut init_matrix = BlockMatrix::zeros(init_asm.structure().clone());
     let mut res0 = vec![0.0; init_asm.n_unknowns()];
-    let init = consistent_accelerations(sys, &mut it.state, &ctx0, &mut init_asm, &mut init_lin, &mut init_matrix, &mut res0);
+    let init = consistent_accelerations(
+        sys,
+        &mut it.state,
+        &ctx0,
+        &mut init_asm,
+        &mut init_lin,
+        &mut init_matrix,
+        &mut res0,
+    );
     summary.factorizations += init_lin.stats.factorizations;
     drop((init_asm, init_lin, init_matrix));
-    let finite = it.state.nodes.iter().all(|nd| nd.a.iter().chain(nd.wd.iter()).all(|x| x.is_finite()))
+    let finite = it
+        .state
+        .nodes
+        .iter()
+        .all(|nd| nd.a.iter().chain(nd.wd.iter()).all(|x| x.is_finite()))
         && it.state.lambda.iter().all(|x| x.is_finite());
     match init {
         Err(LinearError::Singular { block }) => {
@@ -326,7 +367,11 @@ pub fn run_dynamic(
     };
     let mut p_ext = sys.external_power(&ctx0, &it.state);
     let mut p_dis = sys.dissipated_power(&it.state);
-    let record = |it: &Integrator, energy: Energy, viol: f64, diag: Option<StepDiagnostics>, rec: &mut dyn Recorder| {
+    let record = |it: &Integrator,
+                  energy: Energy,
+                  viol: f64,
+                  diag: Option<StepDiagnostics>,
+                  rec: &mut dyn Recorder| {
         rec.record(
             sys,
             &OutputFrame {
@@ -435,7 +480,12 @@ pub fn run_dynamic(
                             h_try, settings.min_step
                         )),
                     };
-                    fail(&mut summary, t, format!("{failure} with step {h_try:.3e} s"), hint);
+                    fail(
+                        &mut summary,
+                        t,
+                        format!("{failure} with step {h_try:.3e} s"),
+                        hint,
+                    );
                     break;
                 }
                 h = next;

@@ -52,7 +52,8 @@ impl GeneralizedAlpha {
     /// Algorithmic acceleration from the recurrence.
     #[inline]
     pub fn algorithmic_acceleration(&self, a_n: f64, vdot_n: f64, vdot_np1: f64) -> f64 {
-        (self.alpha_f * vdot_n - self.alpha_m * a_n + (1.0 - self.alpha_f) * vdot_np1) / (1.0 - self.alpha_m)
+        (self.alpha_f * vdot_n - self.alpha_m * a_n + (1.0 - self.alpha_f) * vdot_np1)
+            / (1.0 - self.alpha_m)
     }
 }
 
@@ -92,9 +93,16 @@ mod tests {
                     a[(i, j)] = col[i];
                 }
             }
-            let radius = a.complex_eigenvalues().iter().map(|z| z.norm()).fold(0.0, f64::max);
+            let radius = a
+                .complex_eigenvalues()
+                .iter()
+                .map(|z| z.norm())
+                .fold(0.0, f64::max);
             // ρ(ωh) → ρ∞ with an O((ωh)⁻¹) deviation; ωh = 1e4 here.
-            assert!((radius - rho).abs() < 1e-3, "rho_inf {rho}: spectral radius {radius}");
+            assert!(
+                (radius - rho).abs() < 1e-3,
+                "rho_inf {rho}: spectral radius {radius}"
+            );
         }
     }
 }

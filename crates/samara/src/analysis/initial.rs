@@ -49,7 +49,11 @@ pub fn consistent_accelerations(
     lin.solve_in_place(residual);
     for (i, n) in state.nodes.iter_mut().enumerate() {
         n.a = Vector3::new(residual[6 * i], residual[6 * i + 1], residual[6 * i + 2]);
-        n.wd = Vector3::new(residual[6 * i + 3], residual[6 * i + 4], residual[6 * i + 5]);
+        n.wd = Vector3::new(
+            residual[6 * i + 3],
+            residual[6 * i + 4],
+            residual[6 * i + 5],
+        );
     }
     let n_cfg = sys.n_config();
     state.lambda.copy_from_slice(&residual[n_cfg..]);

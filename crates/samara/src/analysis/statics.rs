@@ -2,7 +2,10 @@
 //! gravity are scaled by the load factor λ_k = k/n, k = 1…n, each increment solved by
 //! Newton from the previous equilibrium; an increment that fails is bisected.
 
-use super::{AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics, singular_hint};
+use super::{
+    AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
+    singular_hint,
+};
 use crate::elements::EvalContext;
 use crate::model::StaticSettings;
 use crate::solve::condition::condition_number;
@@ -30,8 +33,15 @@ struct StaticProblem<'a> {
 
 impl NewtonSystem for StaticProblem<'_> {
     fn evaluate(&mut self, residual: &mut [f64], matrix: Option<&mut BlockMatrix>) {
-        self.asm
-            .assemble(self.sys, self.state, &self.ctx, &self.coef, &[], residual, matrix);
+        self.asm.assemble(
+            self.sys,
+            self.state,
+            &self.ctx,
+            &self.coef,
+            &[],
+            residual,
+            matrix,
+        );
     }
 
     fn apply(&mut self, delta: &[f64]) -> f64 {
@@ -59,9 +69,23 @@ impl NewtonSystem for StaticProblem<'_> {
 }
 
 /// Characteristic stiffness: mean |diagonal| of the unconstrained stiffness at `state`.
-fn characteristic_stiffness(sys: &System, asm: &mut Assembler, state: &State, ctx: &EvalContext, matrix: &mut BlockMatrix) -> f64 {
+fn characteristic_stiffness(
+    sys: &System,
+    asm: &mut Assembler,
+    state: &State,
+    ctx: &EvalContext,
+    matrix: &mut BlockMatrix,
+) -> f64 {
     let mut r = vec![0.0; asm.n_unknowns()];
-    asm.assemble(sys, state, ctx, &Coefficients::statics(0.0), &[], &mut r, Some(matrix));
+    asm.assemble(
+        sys,
+        state,
+        ctx,
+        &Coefficients::statics(0.0),
+        &[],
+        &mut r,
+        Some(matrix),
+    );
     let mut sum = 0.0;
     let mut count = 0;
     for i in 0..sys.n_nodes() {
@@ -72,7 +96,11 @@ fn characteristic_stiffness(sys: &System, asm: &mut Assembler, state: &State, ct
             }
         }
     }
-    if count > 0 && sum > 0.0 { sum / count as f64 } else { 1.0 }
+    if count > 0 && sum > 0.0 {
+        sum / count as f64
+    } else {
+        1.0
+    }
 }
 
 /// Multipliers that best balance the current residual, `λ = argmin |r + Bᵀλ|` under
@@ -98,7 +126,15 @@ fn least_squares_multipliers(
         stiffness: 0.0,
         ..Coefficients::statics(0.0)
     };
-    asm.assemble(sys, state, ctx, &coef, &[], &mut work.residual, Some(matrix));
+    asm.assemble(
+        sys,
+        state,
+        ctx,
+        &coef,
+        &[],
+        &mut work.residual,
+        Some(matrix),
+    );
     let s = matrix.structure.clone();
     for i in 0..sys.n_nodes() {
         let o = s.entry(i, i).expect("diagonal blocks exist");
@@ -162,7 +198,8 @@ pub fn run_static(
         failure: None,
     };
     let ctx_full = sys.context(settings.time, 1.0);
-    let penalty = settings.solver.penalty * characteristic_stiffness(sys, &mut asm, &state, &ctx_full, &mut matrix);
+    let penalty = settings.solver.penalty
+        * characteristic_stiffness(sys, &mut asm, &state, &ctx_full, &mut matrix);
     let newton_settings = NewtonSettings {
         max_iterations: settings.solver.max_iterations,
         constraint_tolerance: settings.solver.tolerance,
@@ -177,7 +214,15 @@ pub fn run_static(
         let ctx = sys.context(settings.time, target);
         saved.clone_from(&state);
         total.fill(0.0);
-        least_squares_multipliers(sys, &mut asm, &mut state, &ctx, &mut lin, &mut matrix, &mut work);
+        least_squares_multipliers(
+            sys,
+            &mut asm,
+            &mut state,
+            &ctx,
+            &mut lin,
+            &mut matrix,
+            &mut work,
+        );
         let mut problem = StaticProblem {
             sys,
             asm: &mut asm,
@@ -189,12 +234,20 @@ pub fn run_static(
             atol: settings.solver.tolerance,
             rtol: settings.solver.relative_tolerance,
         };
-        match newton(&mut problem, &mut lin, &mut matrix, &mut work, &newton_settings) {
+        match newton(
+            &mut problem,
+            &mut lin,
+            &mut matrix,
+            &mut work,
+            &newton_settings,
+        ) {
             Ok(report) => {
                 lf = target;
                 summary.steps += 1;
                 summary.newton_iterations += report.iterations;
-                summary.max_constraint_violation = summary.max_constraint_violation.max(report.constraint_violation);
+                summary.max_constraint_violation = summary
+                    .max_constraint_violation
+                    .max(report.constraint_violation);
                 for ((m, l), p) in mu.iter_mut().zip(&state.lambda).zip(&phi) {
                     *m = l + penalty * p;
                 }

@@ -8,7 +8,7 @@
 //! follower:  r_x = −R F,    r_θ = −s̃ F − M
 //! ```
 
-use super::{EvalContext, Element, LocalTerms, Need, add_block};
+use super::{Element, EvalContext, LocalTerms, Need, add_block};
 use crate::math::skew;
 use crate::model::{LoadFrame, TimeFunction};
 use crate::system::NodeState;

@@ -12,7 +12,7 @@
 //! with `J_O = J_c − m s̃ s̃` the inertia about the node. The mass matrix
 //! `[[m I, −m R s̃], [m s̃ Rᵀ, J_O]]` is symmetric.
 
-use super::{EvalContext, Element, LocalTerms, Need, add_block};
+use super::{Element, EvalContext, LocalTerms, Need, add_block};
 use crate::math::skew;
 use crate::system::NodeState;
 use nalgebra::{Matrix3, Vector3};
@@ -30,7 +30,13 @@ pub struct RigidBody {
 }
 
 impl RigidBody {
-    pub fn new(name: impl Into<String>, node: usize, mass: f64, inertia_cg: Matrix3<f64>, cg_offset: Vector3<f64>) -> Self {
+    pub fn new(
+        name: impl Into<String>,
+        node: usize,
+        mass: f64,
+        inertia_cg: Matrix3<f64>,
+        cg_offset: Vector3<f64>,
+    ) -> Self {
         let st = skew(&cg_offset);
         Self {
             name: name.into(),

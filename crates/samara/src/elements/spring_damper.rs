@@ -5,7 +5,7 @@
 //! points. With `G = ∂p/∂(x, θ) = [I, −R s̃]` the residual of end X (σ_B = +1, σ_A = −1)
 //! is `r_X = σ_X Gₓᵀ (T n)`.
 
-use super::{EvalContext, Element, LocalTerms, Need, add_block};
+use super::{Element, EvalContext, LocalTerms, Need, add_block};
 use crate::math::skew;
 use crate::system::NodeState;
 use nalgebra::{Matrix3, Vector3};

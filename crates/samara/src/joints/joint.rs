@@ -41,7 +41,13 @@ impl Component {
                 Rotation(1),
                 Rotation(2),
             ],
-            JointType::Revolute => vec![Displacement(0), Displacement(1), Displacement(2), Rotation(0), Rotation(1)],
+            JointType::Revolute => vec![
+                Displacement(0),
+                Displacement(1),
+                Displacement(2),
+                Rotation(0),
+                Rotation(1),
+            ],
             JointType::Spherical => vec![Displacement(0), Displacement(1), Displacement(2)],
         }
     }
@@ -174,7 +180,13 @@ impl Constraint for Joint {
         self.components.len()
     }
 
-    fn evaluate(&self, _ctx: &EvalContext, nodes: &[NodeState], phi: &mut [f64], b: Option<&mut DMatrix<f64>>) {
+    fn evaluate(
+        &self,
+        _ctx: &EvalContext,
+        nodes: &[NodeState],
+        phi: &mut [f64],
+        b: Option<&mut DMatrix<f64>>,
+    ) {
         let f = self.frames(nodes);
         let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
         let mut b = b;
@@ -203,7 +215,13 @@ impl Constraint for Joint {
         }
     }
 
-    fn reaction_tangent(&self, _ctx: &EvalContext, nodes: &[NodeState], mu: &[f64], k: &mut DMatrix<f64>) {
+    fn reaction_tangent(
+        &self,
+        _ctx: &EvalContext,
+        nodes: &[NodeState],
+        mu: &[f64],
+        k: &mut DMatrix<f64>,
+    ) {
         let f = self.frames(nodes);
         let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
         let mut k12 = Mat12::zeros();
@@ -226,7 +244,9 @@ impl Constraint for Joint {
                     continue;
                 }
                 let cy = 6 * sy.local;
-                let blk = |r: usize, c: usize| -> Matrix3<f64> { k12.fixed_view::<3, 3>(6 * x + r, 6 * y + c).into_owned() };
+                let blk = |r: usize, c: usize| -> Matrix3<f64> {
+                    k12.fixed_view::<3, 3>(6 * x + r, 6 * y + c).into_owned()
+                };
                 let tt = blk(0, 0);
                 let tr = blk(0, 3) * rots[y];
                 let rt = rots[x].transpose() * blk(3, 0);

@@ -23,9 +23,21 @@ pub trait Constraint: Send + Sync {
     /// Number of scalar equations (multipliers).
     fn n_equations(&self) -> usize;
     /// `Φ` and, if given, `B` (`n_equations × 6·nodes`, overwritten).
-    fn evaluate(&self, ctx: &EvalContext, nodes: &[NodeState], phi: &mut [f64], b: Option<&mut DMatrix<f64>>);
+    fn evaluate(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        phi: &mut [f64],
+        b: Option<&mut DMatrix<f64>>,
+    );
     /// Adds `∂(Bᵀμ)/∂q` at fixed `μ` into `k` (`6·nodes` square).
-    fn reaction_tangent(&self, ctx: &EvalContext, nodes: &[NodeState], mu: &[f64], k: &mut DMatrix<f64>);
+    fn reaction_tangent(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        mu: &[f64],
+        k: &mut DMatrix<f64>,
+    );
     /// `Φ̈ − B v̇`: the part of the constraint acceleration independent of accelerations.
     fn acceleration_term(&self, ctx: &EvalContext, nodes: &[NodeState], out: &mut [f64]);
     /// Force and moment exerted on side B by side A (about B's frame origin), in frame-A

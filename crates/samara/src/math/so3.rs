@@ -75,12 +75,7 @@ pub fn exp_map(psi: &Vector3<f64>) -> UnitQuaternion<f64> {
     let angle = psi.norm();
     let half = 0.5 * angle;
     let s = 0.5 * sinc(half);
-    UnitQuaternion::new_unchecked(Quaternion::new(
-        half.cos(),
-        s * psi.x,
-        s * psi.y,
-        s * psi.z,
-    ))
+    UnitQuaternion::new_unchecked(Quaternion::new(half.cos(), s * psi.x, s * psi.y, s * psi.z))
 }
 
 /// Logarithmic map: the rotation vector ψ with `|ψ| ≤ π` such that `exp(ψ̃) = R(q)`.
@@ -298,7 +293,10 @@ mod tests {
                 let psi = d * angle;
                 let back = log_map(&exp_map(&psi));
                 let err = (back - psi).norm() / angle;
-                assert!(err < 1e-13 * (1.0 + 1e-10 / (std::f64::consts::PI - angle).max(1e-16)), "angle {angle}: rel err {err}");
+                assert!(
+                    err < 1e-13 * (1.0 + 1e-10 / (std::f64::consts::PI - angle).max(1e-16)),
+                    "angle {angle}: rel err {err}"
+                );
             }
         }
         // Exactly π: either ±ψ is correct.
@@ -363,7 +361,10 @@ mod tests {
         let d = Vector3::new(-0.05, 0.3, 0.2);
         let b = a.compose_exp(&d);
         assert!((a.relative_log(&b) - d).norm() < 1e-14);
-        assert!((b.matrix() - a.matrix() * exp_map(&d).to_rotation_matrix().into_inner()).norm() < 1e-14);
+        assert!(
+            (b.matrix() - a.matrix() * exp_map(&d).to_rotation_matrix().into_inner()).norm()
+                < 1e-14
+        );
         assert!((a.inverse().compose(&a).matrix() - Matrix3::identity()).norm() < 1e-15);
     }
 }

@@ -11,7 +11,9 @@ pub mod time_function;
 mod validate;
 
 pub use error::{Diagnostic, ModelError, Severity, SourceFile};
-pub use input::{FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame, ModelInput};
+pub use input::{
+    FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame, ModelInput,
+};
 pub use located::Located;
 pub use time_function::TimeFunction;
 pub use validate::validate;
@@ -149,7 +151,11 @@ impl DynamicSettings {
             min_step: step / 1024.0,
             output_every: 1,
             jacobian: JacobianUpdate::Full,
-            formulation: if rho_inf >= 1.0 { FormulationType::StabilizedIndex2 } else { FormulationType::Index3 },
+            formulation: if rho_inf >= 1.0 {
+                FormulationType::StabilizedIndex2
+            } else {
+                FormulationType::Index3
+            },
             solver: SolverSettings::default(),
         }
     }

@@ -44,7 +44,10 @@ pub(crate) fn parse_error_diagnostic(e: &toml::de::Error) -> Diagnostic {
             d.message = format!("unknown key `{field}`");
             d = match did_you_mean(field, candidates.iter().map(|s| s.as_str())) {
                 Some(best) => d.with_hint(format!("did you mean `{best}`?")),
-                None => d.with_hint(format!("the keys allowed here are: {}", candidates.join(", "))),
+                None => d.with_hint(format!(
+                    "the keys allowed here are: {}",
+                    candidates.join(", ")
+                )),
             };
         }
     } else if let Some(rest) = msg.strip_prefix("unknown variant `") {
@@ -59,7 +62,9 @@ pub(crate) fn parse_error_diagnostic(e: &toml::de::Error) -> Diagnostic {
     } else if let Some(rest) = msg.strip_prefix("missing field `") {
         if let Some((field, _)) = rest.split_once('`') {
             d.message = format!("missing required key `{field}`");
-            d = d.with_hint(format!("add `{field} = …` to this table (see docs/model-reference.md)"));
+            d = d.with_hint(format!(
+                "add `{field} = …` to this table (see docs/model-reference.md)"
+            ));
         }
     } else if msg.contains("invalid type") || msg.contains("expected") {
         d = d.with_hint("check the value's type: numbers are written like 1.0 or 2e-3, vectors like [0.0, 1.0, 0.0], names in quotes");
@@ -87,13 +92,23 @@ struct Entry {
 }
 
 impl<'a> Validator<'a> {
-    fn error(&mut self, message: impl Into<String>, span: Option<Range<usize>>, hint: Option<String>) {
+    fn error(
+        &mut self,
+        message: impl Into<String>,
+        span: Option<Range<usize>>,
+        hint: Option<String>,
+    ) {
         let mut d = Diagnostic::error(message, span);
         d.hint = hint;
         self.diags.push(d);
     }
 
-    fn warning(&mut self, message: impl Into<String>, span: Option<Range<usize>>, hint: Option<String>) {
+    fn warning(
+        &mut self,
+        message: impl Into<String>,
+        span: Option<Range<usize>>,
+        hint: Option<String>,
+    ) {
         let mut d = Diagnostic::warning(message, span);
         d.hint = hint;
         self.diags.push(d);
@@ -151,30 +166,51 @@ impl<'a> Validator<'a> {
         }
     }
 
-    fn unique_names<T>(&mut self, items: &[Located<T>], name: impl Fn(&T) -> &Located<String>, kind: &str) {
+    fn unique_names<T>(
+        &mut self,
+        items: &[Located<T>],
+        name: impl Fn(&T) -> &Located<String>,
+        kind: &str,
+    ) {
         let mut seen: HashMap<&str, Option<Range<usize>>> = HashMap::new();
         for it in items {
             let n = name(&it.value);
             if n.value.trim().is_empty() {
-                self.error(format!("{kind} name is empty"), n.span.clone(), Some("give every entry a unique, non-empty name".into()));
+                self.error(
+                    format!("{kind} name is empty"),
+                    n.span.clone(),
+                    Some("give every entry a unique, non-empty name".into()),
+                );
                 continue;
             }
             if let Some(first) = seen.get(n.value.as_str()) {
                 let hint = match first {
                     Some(s) => {
                         let (l, c) = self.source.line_col(s.start);
-                        format!("the first {kind} named '{}' is at line {l}, column {c}; names must be unique", n.value)
+                        format!(
+                            "the first {kind} named '{}' is at line {l}, column {c}; names must be unique",
+                            n.value
+                        )
                     }
                     None => "names must be unique".to_string(),
                 };
-                self.error(format!("duplicate {kind} name '{}'", n.value), n.span.clone(), Some(hint));
+                self.error(
+                    format!("duplicate {kind} name '{}'", n.value),
+                    n.span.clone(),
+                    Some(hint),
+                );
             } else {
                 seen.insert(n.value.as_str(), n.span.clone());
             }
         }
     }
 
-    fn node_ref(&mut self, r: &Located<String>, nodes: &HashMap<String, usize>, what: &str) -> Option<NodeRef> {
+    fn node_ref(
+        &mut self,
+        r: &Located<String>,
+        nodes: &HashMap<String, usize>,
+        what: &str,
+    ) -> Option<NodeRef> {
         if r.value == GROUND {
             return Some(NodeRef::Ground);
         }
@@ -191,7 +227,11 @@ impl<'a> Validator<'a> {
                 format!("known nodes: {} (and 'ground')", names.join(", "))
             }
         };
-        self.error(format!("{what}: unknown node '{}'", r.value), r.span.clone(), Some(hint));
+        self.error(
+            format!("{what}: unknown node '{}'", r.value),
+            r.span.clone(),
+            Some(hint),
+        );
         None
     }
 
@@ -222,12 +262,18 @@ impl<'a> Validator<'a> {
                 );
                 return None;
             }
-            let uq = nalgebra::UnitQuaternion::new_normalize(nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]));
+            let uq = nalgebra::UnitQuaternion::new_normalize(nalgebra::Quaternion::new(
+                q[0], q[1], q[2], q[3],
+            ));
             return Some(Rotation::from_quaternion(uq));
         }
         if let Some(p) = o.rotation_vector {
             if !p.iter().all(|x| x.is_finite()) {
-                self.error(format!("{what}: rotation vector must be finite"), span, None);
+                self.error(
+                    format!("{what}: rotation vector must be finite"),
+                    span,
+                    None,
+                );
                 return None;
             }
             return Some(Rotation::exp(&Vector3::from(p)));
@@ -250,7 +296,10 @@ impl<'a> Validator<'a> {
         let given: Vec<usize> = (0..3).filter(|&i| axes[i].is_some()).collect();
         if given.len() != 2 {
             self.error(
-                format!("{what}: give exactly two of `x_axis`, `y_axis`, `z_axis` (found {})", given.len()),
+                format!(
+                    "{what}: give exactly two of `x_axis`, `y_axis`, `z_axis` (found {})",
+                    given.len()
+                ),
                 span,
                 None,
             );
@@ -270,8 +319,14 @@ impl<'a> Validator<'a> {
         Some(Rotation::from_matrix(&m))
     }
 
-    fn time_function(&mut self, f: &Located<TimeFunctionInput>, what: &str) -> Option<TimeFunction> {
-        let entry = Entry { span: f.span.clone() };
+    fn time_function(
+        &mut self,
+        f: &Located<TimeFunctionInput>,
+        what: &str,
+    ) -> Option<TimeFunction> {
+        let entry = Entry {
+            span: f.span.clone(),
+        };
         let t = &f.value;
         let given: [(&str, bool); 13] = [
             ("value", t.value.is_some()),
@@ -290,7 +345,11 @@ impl<'a> Validator<'a> {
         ];
         let (kind, allowed, required): (&str, &[&str], &[&str]) = match t.kind {
             TimeFunctionType::Constant => ("constant", &["value"], &["value"]),
-            TimeFunctionType::Ramp => ("ramp", &["start", "end", "from", "to"], &["start", "end", "to"]),
+            TimeFunctionType::Ramp => (
+                "ramp",
+                &["start", "end", "from", "to"],
+                &["start", "end", "to"],
+            ),
             TimeFunctionType::Step => ("step", &["time", "before", "after"], &["time", "after"]),
             TimeFunctionType::Sine => (
                 "sine",
@@ -321,7 +380,17 @@ impl<'a> Validator<'a> {
             }
         }
         let nums: Vec<f64> = [
-            t.value, t.start, t.end, t.from, t.to, t.time, t.before, t.after, t.amplitude, t.frequency, t.phase,
+            t.value,
+            t.start,
+            t.end,
+            t.from,
+            t.to,
+            t.time,
+            t.before,
+            t.after,
+            t.amplitude,
+            t.frequency,
+            t.phase,
             t.offset,
         ]
         .iter()
@@ -329,7 +398,11 @@ impl<'a> Validator<'a> {
         .copied()
         .collect();
         if !nums.iter().all(|x| x.is_finite()) {
-            self.error(format!("{what}: time-function values must be finite"), f.span.clone(), None);
+            self.error(
+                format!("{what}: time-function values must be finite"),
+                f.span.clone(),
+                None,
+            );
             ok = false;
         }
         if !ok {
@@ -370,7 +443,11 @@ impl<'a> Validator<'a> {
                 let pts = t.points.clone().unwrap_or_default();
                 let span = self.key(&entry, "points");
                 if pts.is_empty() {
-                    self.error(format!("{what}: table needs at least one point"), span, None);
+                    self.error(
+                        format!("{what}: table needs at least one point"),
+                        span,
+                        None,
+                    );
                     return None;
                 }
                 if !pts.iter().flatten().all(|x| x.is_finite()) {
@@ -410,14 +487,18 @@ impl<'a> Validator<'a> {
         self.unique_names(&input.nodes, |n| &n.name, "node");
         let mut node_map = HashMap::new();
         for n in &input.nodes {
-            let e = Entry { span: n.span.clone() };
+            let e = Entry {
+                span: n.span.clone(),
+            };
             let ni = &n.value;
             let what = format!("node '{}'", ni.name.value);
             if ni.name.value == GROUND {
                 self.error(
                     "the node name 'ground' is reserved for the fixed inertial frame",
                     ni.name.span.clone(),
-                    Some("rename the node; refer to the inertial frame as 'ground' in joints".into()),
+                    Some(
+                        "rename the node; refer to the inertial frame as 'ground' in joints".into(),
+                    ),
                 );
             }
             self.finite(&e, "position", &ni.position, &what);
@@ -429,7 +510,9 @@ impl<'a> Validator<'a> {
                 Some(o) => self.orientation(o, &e, &what).unwrap_or_default(),
                 None => Rotation::identity(),
             };
-            node_map.entry(ni.name.value.clone()).or_insert(model.nodes.len());
+            node_map
+                .entry(ni.name.value.clone())
+                .or_insert(model.nodes.len());
             model.nodes.push(NodeDef {
                 name: ni.name.value.clone(),
                 position: Vector3::from(ni.position),
@@ -442,7 +525,9 @@ impl<'a> Validator<'a> {
         // Bodies.
         self.unique_names(&input.bodies, |b| &b.name, "body");
         for b in &input.bodies {
-            let e = Entry { span: b.span.clone() };
+            let e = Entry {
+                span: b.span.clone(),
+            };
             let bi = &b.value;
             let what = format!("body '{}'", bi.name.value);
             let node = self.node_ref(&bi.node, &node_map, &what);
@@ -474,7 +559,9 @@ impl<'a> Validator<'a> {
         // Joints.
         self.unique_names(&input.joints, |j| &j.name, "joint");
         for j in &input.joints {
-            let e = Entry { span: j.span.clone() };
+            let e = Entry {
+                span: j.span.clone(),
+            };
             let ji = &j.value;
             let what = format!("joint '{}'", ji.name.value);
             let a = self.node_ref(&ji.node_a, &node_map, &what);
@@ -486,7 +573,11 @@ impl<'a> Validator<'a> {
                 } else {
                     format!("{what} connects node '{}' to itself", ji.node_a.value)
                 };
-                self.error(msg, ji.node_b.span.clone(), Some("a joint needs two different nodes (or a node and 'ground')".into()));
+                self.error(
+                    msg,
+                    ji.node_b.span.clone(),
+                    Some("a joint needs two different nodes (or a node and 'ground')".into()),
+                );
                 continue;
             }
             let position = match ji.position {
@@ -514,7 +605,10 @@ impl<'a> Validator<'a> {
                     self.error(
                         format!("{what}: `axis` must be a non-zero vector (got {axis:?})"),
                         self.key(&e, "axis"),
-                        Some("the axis is a direction in global components, e.g. [0.0, 1.0, 0.0]".into()),
+                        Some(
+                            "the axis is a direction in global components, e.g. [0.0, 1.0, 0.0]"
+                                .into(),
+                        ),
                     );
                     continue;
                 }
@@ -548,33 +642,65 @@ impl<'a> Validator<'a> {
         // Springs.
         self.unique_names(&input.springs, |s| &s.name, "spring");
         for s in &input.springs {
-            let e = Entry { span: s.span.clone() };
+            let e = Entry {
+                span: s.span.clone(),
+            };
             let si = &s.value;
             let what = format!("spring '{}'", si.name.value);
             let a = self.node_ref(&si.node_a, &node_map, &what);
             let b = self.node_ref(&si.node_b, &node_map, &what);
             let (Some(a), Some(b)) = (a, b) else { continue };
             if a == b {
-                self.error(format!("{what} connects a node to itself"), si.node_b.span.clone(), Some("a spring needs two different nodes (or a node and 'ground')".into()));
+                self.error(
+                    format!("{what} connects a node to itself"),
+                    si.node_b.span.clone(),
+                    Some("a spring needs two different nodes (or a node and 'ground')".into()),
+                );
                 continue;
             }
-            let default_point = |r: NodeRef| r.index().map(|i| model.nodes[i].position).unwrap_or_default();
-            let pa = si.point_a.map(Vector3::from).unwrap_or_else(|| default_point(a));
-            let pb = si.point_b.map(Vector3::from).unwrap_or_else(|| default_point(b));
+            let default_point = |r: NodeRef| {
+                r.index()
+                    .map(|i| model.nodes[i].position)
+                    .unwrap_or_default()
+            };
+            let pa = si
+                .point_a
+                .map(Vector3::from)
+                .unwrap_or_else(|| default_point(a));
+            let pb = si
+                .point_b
+                .map(Vector3::from)
+                .unwrap_or_else(|| default_point(b));
             if a == NodeRef::Ground && si.point_a.is_none() {
-                self.error(format!("{what}: the ground end needs `point_a`"), e.span.clone(), Some("give the global position of the anchor point".into()));
+                self.error(
+                    format!("{what}: the ground end needs `point_a`"),
+                    e.span.clone(),
+                    Some("give the global position of the anchor point".into()),
+                );
             }
             if b == NodeRef::Ground && si.point_b.is_none() {
-                self.error(format!("{what}: the ground end needs `point_b`"), e.span.clone(), Some("give the global position of the anchor point".into()));
+                self.error(
+                    format!("{what}: the ground end needs `point_b`"),
+                    e.span.clone(),
+                    Some("give the global position of the anchor point".into()),
+                );
             }
             self.finite(&e, "point_a", pa.as_slice(), &what);
             self.finite(&e, "point_b", pb.as_slice(), &what);
             if !(si.stiffness.is_finite() && si.stiffness >= 0.0) {
-                self.error(format!("{what}: stiffness must be ≥ 0 (got {})", si.stiffness), self.key(&e, "stiffness"), None);
+                self.error(
+                    format!("{what}: stiffness must be ≥ 0 (got {})", si.stiffness),
+                    self.key(&e, "stiffness"),
+                    None,
+                );
             }
             let damping = si.damping.unwrap_or(0.0);
             if !(damping.is_finite() && damping >= 0.0) {
-                self.error(format!("{what}: damping must be ≥ 0 (got {damping})"), self.key(&e, "damping"), None);
+                self.error(
+                    format!("{what}: damping must be ≥ 0 (got {damping})"),
+                    self.key(&e, "damping"),
+                    None,
+                );
             }
             let l0 = (pb - pa).norm();
             if l0 < 1e-12 {
@@ -586,7 +712,11 @@ impl<'a> Validator<'a> {
             }
             let rest = si.rest_length.unwrap_or(l0);
             if !(rest.is_finite() && rest >= 0.0) {
-                self.error(format!("{what}: rest_length must be ≥ 0 (got {rest})"), self.key(&e, "rest_length"), None);
+                self.error(
+                    format!("{what}: rest_length must be ≥ 0 (got {rest})"),
+                    self.key(&e, "rest_length"),
+                    None,
+                );
             }
             model.springs.push(SpringDef {
                 name: si.name.value.clone(),
@@ -603,12 +733,18 @@ impl<'a> Validator<'a> {
         // Applied loads.
         self.unique_names(&input.forces, |f| &f.name, "force");
         for f in &input.forces {
-            let e = Entry { span: f.span.clone() };
+            let e = Entry {
+                span: f.span.clone(),
+            };
             let fi = &f.value;
             let what = format!("force '{}'", fi.name.value);
             let node = self.node_ref(&fi.node, &node_map, &what);
             if fi.force.is_none() && fi.moment.is_none() {
-                self.error(format!("{what}: give `force`, `moment`, or both"), e.span.clone(), None);
+                self.error(
+                    format!("{what}: give `force`, `moment`, or both"),
+                    e.span.clone(),
+                    None,
+                );
             }
             let force = fi.force.unwrap_or([0.0; 3]);
             let moment = fi.moment.unwrap_or([0.0; 3]);
@@ -620,7 +756,10 @@ impl<'a> Validator<'a> {
             };
             match node {
                 Some(NodeRef::Node(n)) => {
-                    let point = fi.point.map(Vector3::from).unwrap_or(model.nodes[n].position);
+                    let point = fi
+                        .point
+                        .map(Vector3::from)
+                        .unwrap_or(model.nodes[n].position);
                     self.finite(&e, "point", point.as_slice(), &what);
                     model.loads.push(LoadDef {
                         name: fi.name.value.clone(),
@@ -633,7 +772,11 @@ impl<'a> Validator<'a> {
                     });
                 }
                 Some(NodeRef::Ground) => {
-                    self.error(format!("{what}: a load on the ground has no effect"), fi.node.span.clone(), Some("apply it to a node".into()));
+                    self.error(
+                        format!("{what}: a load on the ground has no effect"),
+                        fi.node.span.clone(),
+                        Some("apply it to a node".into()),
+                    );
                 }
                 None => {}
             }
@@ -695,7 +838,10 @@ impl<'a> Validator<'a> {
             self.error(
                 format!("{what}: inertia is not symmetric (largest |Jᵢⱼ − Jⱼᵢ| = {asym:.3e})"),
                 span,
-                Some("give the full symmetric tensor about the CG; products of inertia appear twice".into()),
+                Some(
+                    "give the full symmetric tensor about the CG; products of inertia appear twice"
+                        .into(),
+                ),
             );
             return;
         }
@@ -720,8 +866,14 @@ impl<'a> Validator<'a> {
         }
     }
 
-    fn analysis(&mut self, a: &Located<AnalysisInput>, earlier: &[Located<AnalysisInput>]) -> Option<AnalysisDef> {
-        let e = Entry { span: a.span.clone() };
+    fn analysis(
+        &mut self,
+        a: &Located<AnalysisInput>,
+        earlier: &[Located<AnalysisInput>],
+    ) -> Option<AnalysisDef> {
+        let e = Entry {
+            span: a.span.clone(),
+        };
         let ai = &a.value;
         let what = format!("analysis '{}'", ai.name.value);
         let kind = ai.kind.value;
@@ -735,7 +887,10 @@ impl<'a> Validator<'a> {
             ("output_every", ai.output_every.is_some()),
             ("jacobian", ai.jacobian.is_some()),
         ];
-        let static_keys: [(&str, bool); 2] = [("load_steps", ai.load_steps.is_some()), ("time", ai.time.is_some())];
+        let static_keys: [(&str, bool); 2] = [
+            ("load_steps", ai.load_steps.is_some()),
+            ("time", ai.time.is_some()),
+        ];
         let (wrong, tname): (&[(&str, bool)], &str) = match kind {
             AnalysisType::Dynamic => (&static_keys, "dynamic"),
             AnalysisType::Static => (&dynamic_keys, "static"),
@@ -756,11 +911,18 @@ impl<'a> Validator<'a> {
             Some(s) => match earlier.iter().position(|x| x.value.name.value == s.value) {
                 Some(i) => Some(i),
                 None => {
-                    let hint = match did_you_mean(&s.value, earlier.iter().map(|x| x.value.name.value.as_str())) {
+                    let hint = match did_you_mean(
+                        &s.value,
+                        earlier.iter().map(|x| x.value.name.value.as_str()),
+                    ) {
                         Some(b) => format!("did you mean '{b}'?"),
                         None => "`start_from` names an analysis listed before this one".to_string(),
                     };
-                    self.error(format!("{what}: unknown earlier analysis '{}'", s.value), s.span.clone(), Some(hint));
+                    self.error(
+                        format!("{what}: unknown earlier analysis '{}'", s.value),
+                        s.span.clone(),
+                        Some(hint),
+                    );
                     ok = false;
                     None
                 }
@@ -772,28 +934,44 @@ impl<'a> Validator<'a> {
         }
         if let Some(p) = ai.penalty {
             if !(p.is_finite() && p >= 0.0) {
-                self.error(format!("{what}: penalty must be ≥ 0 (got {p})"), self.key(&e, "penalty"), None);
+                self.error(
+                    format!("{what}: penalty must be ≥ 0 (got {p})"),
+                    self.key(&e, "penalty"),
+                    None,
+                );
                 ok = false;
             }
             solver.penalty = p;
         }
         if let Some(t) = ai.tolerance {
             if !(t.is_finite() && t > 0.0) {
-                self.error(format!("{what}: tolerance must be positive (got {t})"), self.key(&e, "tolerance"), None);
+                self.error(
+                    format!("{what}: tolerance must be positive (got {t})"),
+                    self.key(&e, "tolerance"),
+                    None,
+                );
                 ok = false;
             }
             solver.tolerance = t;
         }
         if let Some(t) = ai.relative_tolerance {
             if !(t.is_finite() && t >= 0.0) {
-                self.error(format!("{what}: relative_tolerance must be ≥ 0 (got {t})"), self.key(&e, "relative_tolerance"), None);
+                self.error(
+                    format!("{what}: relative_tolerance must be ≥ 0 (got {t})"),
+                    self.key(&e, "relative_tolerance"),
+                    None,
+                );
                 ok = false;
             }
             solver.relative_tolerance = t;
         }
         if let Some(m) = ai.max_iterations {
             if m == 0 {
-                self.error(format!("{what}: max_iterations must be at least 1"), self.key(&e, "max_iterations"), None);
+                self.error(
+                    format!("{what}: max_iterations must be at least 1"),
+                    self.key(&e, "max_iterations"),
+                    None,
+                );
                 ok = false;
             }
             solver.max_iterations = m;
@@ -805,23 +983,42 @@ impl<'a> Validator<'a> {
             AnalysisType::Dynamic => {
                 let t_start = ai.t_start.unwrap_or(0.0);
                 let Some(t_end) = ai.t_end else {
-                    self.error(format!("{what}: a dynamic analysis needs `t_end`"), e.span.clone(), Some("add e.g. `t_end = 1.0` (seconds)".into()));
+                    self.error(
+                        format!("{what}: a dynamic analysis needs `t_end`"),
+                        e.span.clone(),
+                        Some("add e.g. `t_end = 1.0` (seconds)".into()),
+                    );
                     return None;
                 };
                 let Some(step) = ai.step else {
-                    self.error(format!("{what}: a dynamic analysis needs `step`"), e.span.clone(), Some("add e.g. `step = 1e-3` (seconds)".into()));
+                    self.error(
+                        format!("{what}: a dynamic analysis needs `step`"),
+                        e.span.clone(),
+                        Some("add e.g. `step = 1e-3` (seconds)".into()),
+                    );
                     return None;
                 };
                 if !(t_start.is_finite() && t_end.is_finite() && t_end > t_start) {
-                    self.error(format!("{what}: `t_end` ({t_end}) must be after `t_start` ({t_start})"), self.key(&e, "t_end"), None);
+                    self.error(
+                        format!("{what}: `t_end` ({t_end}) must be after `t_start` ({t_start})"),
+                        self.key(&e, "t_end"),
+                        None,
+                    );
                     ok = false;
                 }
                 if !(step.is_finite() && step > 0.0) {
-                    self.error(format!("{what}: `step` must be positive (got {step})"), self.key(&e, "step"), None);
+                    self.error(
+                        format!("{what}: `step` must be positive (got {step})"),
+                        self.key(&e, "step"),
+                        None,
+                    );
                     ok = false;
                 } else if step > t_end - t_start {
                     self.error(
-                        format!("{what}: `step` ({step}) is longer than the analysis ({})", t_end - t_start),
+                        format!(
+                            "{what}: `step` ({step}) is longer than the analysis ({})",
+                            t_end - t_start
+                        ),
                         self.key(&e, "step"),
                         None,
                     );
@@ -838,12 +1035,20 @@ impl<'a> Validator<'a> {
                 }
                 let min_step = ai.min_step.unwrap_or(step / 1024.0);
                 if !(min_step.is_finite() && min_step > 0.0 && min_step <= step) {
-                    self.error(format!("{what}: `min_step` must be in (0, step] (got {min_step})"), self.key(&e, "min_step"), None);
+                    self.error(
+                        format!("{what}: `min_step` must be in (0, step] (got {min_step})"),
+                        self.key(&e, "min_step"),
+                        None,
+                    );
                     ok = false;
                 }
                 let output_every = ai.output_every.unwrap_or(1);
                 if output_every == 0 {
-                    self.error(format!("{what}: `output_every` must be at least 1"), self.key(&e, "output_every"), None);
+                    self.error(
+                        format!("{what}: `output_every` must be at least 1"),
+                        self.key(&e, "output_every"),
+                        None,
+                    );
                     ok = false;
                 }
                 AnalysisKind::Dynamic(DynamicSettings {
@@ -865,15 +1070,27 @@ impl<'a> Validator<'a> {
             AnalysisType::Static => {
                 let load_steps = ai.load_steps.unwrap_or(1);
                 if load_steps == 0 {
-                    self.error(format!("{what}: `load_steps` must be at least 1"), self.key(&e, "load_steps"), None);
+                    self.error(
+                        format!("{what}: `load_steps` must be at least 1"),
+                        self.key(&e, "load_steps"),
+                        None,
+                    );
                     ok = false;
                 }
                 let time = ai.time.unwrap_or(0.0);
                 if !time.is_finite() {
-                    self.error(format!("{what}: `time` must be finite"), self.key(&e, "time"), None);
+                    self.error(
+                        format!("{what}: `time` must be finite"),
+                        self.key(&e, "time"),
+                        None,
+                    );
                     ok = false;
                 }
-                AnalysisKind::Static(StaticSettings { load_steps, time, solver })
+                AnalysisKind::Static(StaticSettings {
+                    load_steps,
+                    time,
+                    solver,
+                })
             }
         };
         ok.then(|| AnalysisDef {
@@ -896,7 +1113,12 @@ pub fn frame_from_axis(e3: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 /// Frame from two of its axes (indices i < j); the first is kept, the second orthogonalized.
-fn frame_from_two_axes(i: usize, a: &Vector3<f64>, j: usize, b: &Vector3<f64>) -> Option<Matrix3<f64>> {
+fn frame_from_two_axes(
+    i: usize,
+    a: &Vector3<f64>,
+    j: usize,
+    b: &Vector3<f64>,
+) -> Option<Matrix3<f64>> {
     let na = a.norm();
     if !(na.is_finite() && na > 1e-12) {
         return None;
@@ -913,7 +1135,11 @@ fn frame_from_two_axes(i: usize, a: &Vector3<f64>, j: usize, b: &Vector3<f64>) -
     cols[j] = eb;
     let k = 3 - i - j;
     // Right-handed: e_k = e_i × e_j for cyclic (i, j, k), otherwise reversed.
-    cols[k] = if (j + 3 - i) % 3 == 1 { ea.cross(&eb) } else { eb.cross(&ea) };
+    cols[k] = if (j + 3 - i) % 3 == 1 {
+        ea.cross(&eb)
+    } else {
+        eb.cross(&ea)
+    };
     Some(Matrix3::from_columns(&cols))
 }
 
@@ -923,16 +1149,32 @@ mod tests {
 
     #[test]
     fn frames_are_right_handed() {
-        for ax in [Vector3::new(0.0, 1.0, 0.0), Vector3::new(1.0, 1.0, 1.0).normalize(), Vector3::new(0.0, 0.0, -1.0)] {
+        for ax in [
+            Vector3::new(0.0, 1.0, 0.0),
+            Vector3::new(1.0, 1.0, 1.0).normalize(),
+            Vector3::new(0.0, 0.0, -1.0),
+        ] {
             let f = frame_from_axis(&ax);
             assert!((f.transpose() * f - Matrix3::identity()).norm() < 1e-14);
             assert!((f.determinant() - 1.0).abs() < 1e-14);
             assert!((f.column(2) - ax).norm() < 1e-15);
         }
-        let f = frame_from_two_axes(0, &Vector3::new(0.0, 1.0, 0.0), 2, &Vector3::new(1.0, 0.0, 0.1)).unwrap();
+        let f = frame_from_two_axes(
+            0,
+            &Vector3::new(0.0, 1.0, 0.0),
+            2,
+            &Vector3::new(1.0, 0.0, 0.1),
+        )
+        .unwrap();
         assert!((f.determinant() - 1.0).abs() < 1e-14);
         assert!((f.column(0) - Vector3::new(0.0, 1.0, 0.0)).norm() < 1e-15);
-        let g = frame_from_two_axes(1, &Vector3::new(0.0, 0.0, 1.0), 2, &Vector3::new(1.0, 0.0, 0.0)).unwrap();
+        let g = frame_from_two_axes(
+            1,
+            &Vector3::new(0.0, 0.0, 1.0),
+            2,
+            &Vector3::new(1.0, 0.0, 0.0),
+        )
+        .unwrap();
         assert!((g.determinant() - 1.0).abs() < 1e-14);
     }
 }

@@ -61,7 +61,10 @@ fn nc_err(path: &Path, e: NcError) -> crate::Error {
 
 /// The first free numbered backup name `stem.~k~.nc` beside `path`.
 fn backup_name(path: &Path) -> PathBuf {
-    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("results");
+    let stem = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("results");
     let dir = path.parent().unwrap_or(Path::new("."));
     (1..)
         .map(|k| dir.join(format!("{stem}.~{k}~.nc")))
@@ -125,7 +128,12 @@ impl ResultsFile {
         let joint = (n_joints > 0).then(|| d.add_dim("joint", n_joints));
 
         let text = |s: &str| AttrValue::Text(s.to_string());
-        let var = |d: &mut Definition, name: &str, ty: NcType, dims: &[DimId], units: &str, long: &str| {
+        let var = |d: &mut Definition,
+                   name: &str,
+                   ty: NcType,
+                   dims: &[DimId],
+                   units: &str,
+                   long: &str| {
             let v = d.add_var(name, ty, dims);
             if !units.is_empty() {
                 d.add_var_attr(v, "units", text(units));
@@ -142,13 +150,48 @@ impl ResultsFile {
             NcType::Double,
             &[time],
             "s",
-            if is_static { "load factor (pseudo-time of the load increments)" } else { "time" },
+            if is_static {
+                "load factor (pseudo-time of the load increments)"
+            } else {
+                "time"
+            },
         );
-        let node_name = var(&mut d, "node_name", NcType::Char, &[node, strlen], "", "node name");
-        let joint_name = joint.map(|j| var(&mut d, "joint_name", NcType::Char, &[j, strlen], "", "joint name"));
-        let load_factor =
-            is_static.then(|| var(&mut d, "load_factor", NcType::Double, &[time], "1", "load factor of the increment"));
-        let position = var(&mut d, "position", NcType::Double, &[time, node, vec3], "m", "node position, global frame");
+        let node_name = var(
+            &mut d,
+            "node_name",
+            NcType::Char,
+            &[node, strlen],
+            "",
+            "node name",
+        );
+        let joint_name = joint.map(|j| {
+            var(
+                &mut d,
+                "joint_name",
+                NcType::Char,
+                &[j, strlen],
+                "",
+                "joint name",
+            )
+        });
+        let load_factor = is_static.then(|| {
+            var(
+                &mut d,
+                "load_factor",
+                NcType::Double,
+                &[time],
+                "1",
+                "load factor of the increment",
+            )
+        });
+        let position = var(
+            &mut d,
+            "position",
+            NcType::Double,
+            &[time, node, vec3],
+            "m",
+            "node position, global frame",
+        );
         let orientation = var(
             &mut d,
             "orientation",
@@ -157,7 +200,14 @@ impl ResultsFile {
             "1",
             "node orientation as a unit quaternion (w, x, y, z), node frame to global",
         );
-        let velocity = var(&mut d, "velocity", NcType::Double, &[time, node, vec3], "m s-1", "node velocity, global frame");
+        let velocity = var(
+            &mut d,
+            "velocity",
+            NcType::Double,
+            &[time, node, vec3],
+            "m s-1",
+            "node velocity, global frame",
+        );
         let angular_velocity = var(
             &mut d,
             "angular_velocity",
@@ -187,7 +237,14 @@ impl ResultsFile {
             ),
             None => (None, None),
         };
-        let kinetic = var(&mut d, "kinetic_energy", NcType::Double, &[time], "J", "kinetic energy");
+        let kinetic = var(
+            &mut d,
+            "kinetic_energy",
+            NcType::Double,
+            &[time],
+            "J",
+            "kinetic energy",
+        );
         let potential = var(
             &mut d,
             "potential_energy",
@@ -241,7 +298,13 @@ impl ResultsFile {
             step: var(&mut d, "step_size", NcType::Double, &[time], "s", "size of the accepted step"),
         });
 
-        d.add_global_attr("title", text(&format!("samara results: {} / {}", model.name, analysis.name)));
+        d.add_global_attr(
+            "title",
+            text(&format!(
+                "samara results: {} / {}",
+                model.name, analysis.name
+            )),
+        );
         d.add_global_attr("Conventions", text("CF-1.8"));
         d.add_global_attr("source", text(&format!("samara {}", crate::VERSION)));
         d.add_global_attr("format_version", AttrValue::Int(vec![FORMAT_VERSION]));
@@ -254,16 +317,23 @@ impl ResultsFile {
         }
         d.add_global_attr("analysis", text(&analysis.name));
         d.add_global_attr("analysis_type", text(analysis.type_name()));
-        d.add_global_attr("gravity", AttrValue::Double(model.gravity.iter().copied().collect()));
+        d.add_global_attr(
+            "gravity",
+            AttrValue::Double(model.gravity.iter().copied().collect()),
+        );
         d.add_global_attr("status", text("running"));
         d.reserve_header(HEADER_RESERVE);
 
         let mut writer = d.create(&path).map_err(|e| nc_err(&path, e))?;
         let names: Vec<&str> = model.nodes.iter().map(|n| n.name.as_str()).collect();
-        writer.put_fixed_text(node_name, &names).map_err(|e| nc_err(&path, e))?;
+        writer
+            .put_fixed_text(node_name, &names)
+            .map_err(|e| nc_err(&path, e))?;
         if let Some(jn) = joint_name {
             let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
-            writer.put_fixed_text(jn, &names).map_err(|e| nc_err(&path, e))?;
+            writer
+                .put_fixed_text(jn, &names)
+                .map_err(|e| nc_err(&path, e))?;
         }
         Ok(Self {
             writer,
@@ -304,8 +374,14 @@ impl ResultsFile {
     pub fn finish(mut self, summary: &AnalysisSummary) -> Result<PathBuf, crate::Error> {
         let path = self.writer.path().to_path_buf();
         let e = |err| nc_err(&path, err);
-        let status = if summary.failure.is_some() { "failed" } else { "completed" };
-        self.writer.set_global_attr("status", AttrValue::Text(status.into())).map_err(e)?;
+        let status = if summary.failure.is_some() {
+            "failed"
+        } else {
+            "completed"
+        };
+        self.writer
+            .set_global_attr("status", AttrValue::Text(status.into()))
+            .map_err(e)?;
         let counts = [
             ("steps", summary.steps),
             ("newton_iterations", summary.newton_iterations),
@@ -314,10 +390,15 @@ impl ResultsFile {
         ];
         for (name, v) in counts {
             let v = i32::try_from(v).unwrap_or(i32::MAX);
-            self.writer.set_global_attr(name, AttrValue::Int(vec![v])).map_err(e)?;
+            self.writer
+                .set_global_attr(name, AttrValue::Int(vec![v]))
+                .map_err(e)?;
         }
         self.writer
-            .set_global_attr("wall_time", AttrValue::Double(vec![summary.wall_time.as_secs_f64()]))
+            .set_global_attr(
+                "wall_time",
+                AttrValue::Double(vec![summary.wall_time.as_secs_f64()]),
+            )
             .map_err(e)?;
         self.writer
             .set_global_attr(
@@ -328,7 +409,9 @@ impl ResultsFile {
         if let Some(f) = &summary.failure {
             let mut reason = format!("t = {}: {}", f.time, f.reason);
             reason.truncate(1500);
-            self.writer.set_global_attr("failure", AttrValue::Text(reason)).map_err(e)?;
+            self.writer
+                .set_global_attr("failure", AttrValue::Text(reason))
+                .map_err(e)?;
         }
         self.writer.finish().map_err(e)?;
         Ok(path)
@@ -360,7 +443,12 @@ impl Recorder for ResultsFile {
         }
         w.set_record_f64(v.orientation, &self.buf4).map_err(e)?;
         if let (Some(fv), Some(mv)) = (v.joint_force, v.joint_moment) {
-            for (k, (c, &off)) in sys.constraints.iter().zip(&sys.multiplier_offsets).enumerate() {
+            for (k, (c, &off)) in sys
+                .constraints
+                .iter()
+                .zip(&sys.multiplier_offsets)
+                .enumerate()
+            {
                 let (f, m) = c.reactions(nodes, &frame.mu[off..off + c.n_equations()]);
                 self.jf[3 * k..3 * k + 3].copy_from_slice(f.as_slice());
                 self.jm[3 * k..3 * k + 3].copy_from_slice(m.as_slice());
@@ -371,12 +459,17 @@ impl Recorder for ResultsFile {
         let en = frame.energy;
         w.set_record_f64(v.kinetic, &[en.kinetic]).map_err(e)?;
         w.set_record_f64(v.potential, &[en.potential]).map_err(e)?;
-        w.set_record_f64(v.external_work, &[en.external_work]).map_err(e)?;
-        w.set_record_f64(v.dissipated, &[en.dissipated]).map_err(e)?;
-        w.set_record_f64(v.violation, &[frame.constraint_violation]).map_err(e)?;
+        w.set_record_f64(v.external_work, &[en.external_work])
+            .map_err(e)?;
+        w.set_record_f64(v.dissipated, &[en.dissipated])
+            .map_err(e)?;
+        w.set_record_f64(v.violation, &[frame.constraint_violation])
+            .map_err(e)?;
         if let (Some(dv), Some(dg)) = (&v.diagnostics, frame.diagnostics) {
-            w.set_record_i32(dv.iterations, &[dg.newton_iterations as i32]).map_err(e)?;
-            w.set_record_f64(dv.residual, &[dg.residual_norm]).map_err(e)?;
+            w.set_record_i32(dv.iterations, &[dg.newton_iterations as i32])
+                .map_err(e)?;
+            w.set_record_f64(dv.residual, &[dg.residual_norm])
+                .map_err(e)?;
             w.set_record_f64(dv.condition, &[dg.condition]).map_err(e)?;
             w.set_record_f64(dv.step, &[dg.step_size]).map_err(e)?;
         }

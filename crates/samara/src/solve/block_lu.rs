@@ -39,13 +39,19 @@ impl BlockLu {
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
         let n = rhs.len();
         if let Some(lu) = &self.lu {
-            lu.solve_in_place_with_conj(faer::Conj::No, faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
+            lu.solve_in_place_with_conj(
+                faer::Conj::No,
+                faer::MatMut::from_column_major_slice_mut(rhs, n, 1),
+            );
         }
     }
     pub fn solve_transpose_in_place(&mut self, rhs: &mut [f64]) {
         let n = rhs.len();
         if let Some(lu) = &self.lu {
-            lu.solve_transpose_in_place_with_conj(faer::Conj::No, faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
+            lu.solve_transpose_in_place_with_conj(
+                faer::Conj::No,
+                faer::MatMut::from_column_major_slice_mut(rhs, n, 1),
+            );
         }
     }
 }

@@ -24,7 +24,11 @@ pub struct BlockStructure {
 }
 
 impl BlockStructure {
-    pub fn new(sizes: Vec<usize>, kinds: Vec<BlockKind>, couplings: &[(usize, usize)]) -> Result<Self, StructureError> {
+    pub fn new(
+        sizes: Vec<usize>,
+        kinds: Vec<BlockKind>,
+        couplings: &[(usize, usize)],
+    ) -> Result<Self, StructureError> {
         let mut offsets = Vec::with_capacity(sizes.len());
         let mut o = 0;
         for s in &sizes {
@@ -51,7 +55,14 @@ impl BlockStructure {
             add(i, j, &mut entries);
             add(j, i, &mut entries);
         }
-        Ok(Self { sizes, kinds, offsets, entries, list, nnz })
+        Ok(Self {
+            sizes,
+            kinds,
+            offsets,
+            entries,
+            list,
+            nnz,
+        })
     }
     pub fn n_blocks(&self) -> usize {
         self.sizes.len()
@@ -84,7 +95,10 @@ pub struct BlockMatrix {
 impl BlockMatrix {
     pub fn zeros(s: Arc<BlockStructure>) -> Self {
         let n = s.nnz_values();
-        Self { structure: s, values: vec![0.0; n] }
+        Self {
+            structure: s,
+            values: vec![0.0; n],
+        }
     }
     pub fn fill_zero(&mut self) {
         self.values.fill(0.0);
@@ -110,7 +124,9 @@ impl BlockMatrix {
     pub fn norm_1(&self) -> f64 {
         let n = self.structure.dim();
         let d = self.to_dense_rowmajor();
-        (0..n).map(|j| (0..n).map(|i| d[i * n + j].abs()).sum::<f64>()).fold(0.0, f64::max)
+        (0..n)
+            .map(|j| (0..n).map(|i| d[i * n + j].abs()).sum::<f64>())
+            .fold(0.0, f64::max)
     }
     pub fn to_faer_csc(&self) -> faer::sparse::SparseColMat<usize, f64> {
         let s = &self.structure;
@@ -119,10 +135,15 @@ impl BlockMatrix {
             let (ri, cj) = (s.sizes[i], s.sizes[j]);
             for a in 0..ri {
                 for b in 0..cj {
-                    t.push(faer::sparse::Triplet::new(s.offsets[i] + a, s.offsets[j] + b, self.values[o + a * cj + b]));
+                    t.push(faer::sparse::Triplet::new(
+                        s.offsets[i] + a,
+                        s.offsets[j] + b,
+                        self.values[o + a * cj + b],
+                    ));
                 }
             }
         }
-        faer::sparse::SparseColMat::try_new_from_triplets(s.dim(), s.dim(), &t).expect("valid triplets")
+        faer::sparse::SparseColMat::try_new_from_triplets(s.dim(), s.dim(), &t)
+            .expect("valid triplets")
     }
 }

@@ -26,7 +26,11 @@ pub fn exact_2norm(a: &BlockMatrix) -> f64 {
         Ok(s) if !s.is_empty() => {
             let smax = s[0];
             let smin = s[s.len() - 1];
-            if smin > 0.0 { smax / smin } else { f64::INFINITY }
+            if smin > 0.0 {
+                smax / smin
+            } else {
+                f64::INFINITY
+            }
         }
         _ => f64::NAN,
     }
@@ -44,13 +48,17 @@ pub fn inverse_norm1_estimate(lin: &mut LinearSolver, n: usize) -> f64 {
         let mut y = x.clone();
         lin.solve_in_place(&mut y);
         let new_est: f64 = y.iter().map(|v| v.abs()).sum();
-        let mut z: Vec<f64> = y.iter().map(|&v| if v >= 0.0 { 1.0 } else { -1.0 }).collect();
+        let mut z: Vec<f64> = y
+            .iter()
+            .map(|&v| if v >= 0.0 { 1.0 } else { -1.0 })
+            .collect();
         lin.solve_transpose_in_place(&mut z);
         est = f64::max(est, new_est);
-        let (j, zmax) = z
-            .iter()
-            .enumerate()
-            .fold((0, 0.0), |(bj, bv), (i, v)| if v.abs() > bv { (i, v.abs()) } else { (bj, bv) });
+        let (j, zmax) =
+            z.iter().enumerate().fold(
+                (0, 0.0),
+                |(bj, bv), (i, v)| if v.abs() > bv { (i, v.abs()) } else { (bj, bv) },
+            );
         let ztx: f64 = z.iter().zip(&x).map(|(a, b)| a * b).sum();
         if zmax <= ztx || j == last_j {
             break;
@@ -77,6 +85,9 @@ pub fn condition_number(a: &BlockMatrix, lin: &mut LinearSolver) -> (f64, Condit
     if n <= EXACT_LIMIT {
         (exact_2norm(a), ConditionKind::Exact2Norm)
     } else {
-        (a.norm_1() * inverse_norm1_estimate(lin, n), ConditionKind::Estimate1Norm)
+        (
+            a.norm_1() * inverse_norm1_estimate(lin, n),
+            ConditionKind::Estimate1Norm,
+        )
     }
 }

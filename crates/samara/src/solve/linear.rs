@@ -45,7 +45,9 @@ pub struct LinearSolver {
 impl LinearSolver {
     /// Performs the symbolic analysis of `structure` (once per topology).
     pub fn new(structure: &BlockStructure, kind: LinearSolverType) -> Self {
-        let symbolic = Arc::new(BlockLuSymbolic::new(structure).expect("structure built by the system is valid"));
+        let symbolic = Arc::new(
+            BlockLuSymbolic::new(structure).expect("structure built by the system is valid"),
+        );
         Self {
             kind,
             block: BlockLu::new(symbolic),

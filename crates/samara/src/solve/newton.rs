@@ -50,10 +50,22 @@ pub struct NewtonReport {
 /// Why Newton stopped without converging.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum NewtonFailure {
-    #[error("Newton did not converge in {iterations} iterations (last correction norm {correction:.3e}, constraint violation {violation:.3e})")]
-    NotConverged { iterations: usize, correction: f64, violation: f64 },
-    #[error("Newton diverged at iteration {iteration} (correction norm grew from {previous:.3e} to {correction:.3e})")]
-    Diverged { iteration: usize, previous: f64, correction: f64 },
+    #[error(
+        "Newton did not converge in {iterations} iterations (last correction norm {correction:.3e}, constraint violation {violation:.3e})"
+    )]
+    NotConverged {
+        iterations: usize,
+        correction: f64,
+        violation: f64,
+    },
+    #[error(
+        "Newton diverged at iteration {iteration} (correction norm grew from {previous:.3e} to {correction:.3e})"
+    )]
+    Diverged {
+        iteration: usize,
+        previous: f64,
+        correction: f64,
+    },
     #[error("the residual or the correction became NaN or infinite at iteration {iteration}")]
     NotFinite { iteration: usize },
     #[error("the iteration matrix is singular at block {block}")]

@@ -22,7 +22,9 @@ impl SparseLu {
                 Err(_) => return false,
             }
         }
-        let Some(sym) = &self.symbolic else { return false };
+        let Some(sym) = &self.symbolic else {
+            return false;
+        };
         match Lu::try_new_with_symbolic(sym.clone(), csc.as_ref()) {
             Ok(lu) => {
                 self.lu = Some(lu);
@@ -45,7 +47,10 @@ impl SparseLu {
     pub fn solve_transpose_in_place(&self, rhs: &mut [f64]) {
         if let Some(lu) = &self.lu {
             let n = rhs.len();
-            lu.solve_transpose_in_place_with_conj(Conj::No, MatMut::from_column_major_slice_mut(rhs, n, 1));
+            lu.solve_transpose_in_place_with_conj(
+                Conj::No,
+                MatMut::from_column_major_slice_mut(rhs, n, 1),
+            );
         }
     }
 }

@@ -176,17 +176,26 @@ impl Assembler {
             }
         }
         let structure = Arc::new(
-            BlockStructure::new(sizes, kinds, &couplings).expect("block structure of a validated model is consistent"),
+            BlockStructure::new(sizes, kinds, &couplings)
+                .expect("block structure of a validated model is consistent"),
         );
         let s = &structure;
-        let slot = |i: usize, j: usize| s.entry(i, j).expect("pattern contains every coupled block");
-        let terms = sys.elements.iter().map(|e| LocalTerms::new(e.nodes().len())).collect();
+        let slot =
+            |i: usize, j: usize| s.entry(i, j).expect("pattern contains every coupled block");
+        let terms = sys
+            .elements
+            .iter()
+            .map(|e| LocalTerms::new(e.nodes().len()))
+            .collect();
         let element_slots = sys
             .elements
             .iter()
             .map(|e| {
                 let en = e.nodes();
-                en.iter().flat_map(|&a| en.iter().map(move |&b| (a, b))).map(|(a, b)| slot(a, b)).collect()
+                en.iter()
+                    .flat_map(|&a| en.iter().map(move |&b| (a, b)))
+                    .map(|(a, b)| slot(a, b))
+                    .collect()
             })
             .collect();
         let constraints = sys
@@ -207,10 +216,18 @@ impl Assembler {
                     kr: DMatrix::zeros(6 * cn.len(), 6 * cn.len()),
                     unit: vec![0.0; m],
                     dbv: DMatrix::zeros(m, 6 * cn.len()),
-                    node_slots: cn.iter().flat_map(|&a| cn.iter().map(move |&b| (a, b))).map(|(a, b)| slot(a, b)).collect(),
+                    node_slots: cn
+                        .iter()
+                        .flat_map(|&a| cn.iter().map(move |&b| (a, b)))
+                        .map(|(a, b)| slot(a, b))
+                        .collect(),
                     lam_col: cn.iter().map(|&a| slot(a, lam)).collect(),
                     lam_row: cn.iter().map(|&a| slot(lam, a)).collect(),
-                    nu_row: if stabilized { cn.iter().map(|&a| slot(nu, a)).collect() } else { Vec::new() },
+                    nu_row: if stabilized {
+                        cn.iter().map(|&a| slot(nu, a)).collect()
+                    } else {
+                        Vec::new()
+                    },
                     nu_diag: if stabilized { slot(nu, nu) } else { 0 },
                 }
             })
@@ -293,8 +310,10 @@ impl Assembler {
                         for i in 0..6 {
                             for j in 0..6 {
                                 let (r, c) = (6 * a + i, 6 * b + j);
-                                dst[6 * i + j] +=
-                                    sr * (coef.mass * t.m[(r, c)] + coef.damping * t.c[(r, c)] + coef.stiffness * t.k[(r, c)]);
+                                dst[6 * i + j] += sr
+                                    * (coef.mass * t.m[(r, c)]
+                                        + coef.damping * t.c[(r, c)]
+                                        + coef.stiffness * t.k[(r, c)]);
                             }
                         }
                     }
@@ -339,7 +358,9 @@ impl Assembler {
                     residual[6 * na + i] += sr * acc;
                 }
             }
-            let Some(mat) = matrix.as_deref_mut() else { continue };
+            let Some(mat) = matrix.as_deref_mut() else {
+                continue;
+            };
             w.k.fill(0.0);
             c.reaction_tangent(ctx, &state.nodes, &w.mu, &mut w.k);
             if coef.penalty != 0.0 {
@@ -383,7 +404,8 @@ impl Assembler {
                         for (a, &na) in cn.iter().enumerate() {
                             let nd = &state.nodes[na];
                             for i in 0..3 {
-                                acc += nd.v[i] * w.kr[(6 * a + i, j)] + nd.w[i] * w.kr[(6 * a + 3 + i, j)];
+                                acc += nd.v[i] * w.kr[(6 * a + i, j)]
+                                    + nd.w[i] * w.kr[(6 * a + 3 + i, j)];
                             }
                         }
                         w.dbv[(r, j)] = acc;
@@ -398,7 +420,8 @@ impl Assembler {
                 for r in 0..m {
                     for j in 0..6 {
                         dst[6 * r + j] += if stabilized {
-                            coef.velocity_scale * (coef.damping * w.b[(r, 6 * a + j)] + w.dbv[(r, 6 * a + j)])
+                            coef.velocity_scale
+                                * (coef.damping * w.b[(r, 6 * a + j)] + w.dbv[(r, 6 * a + j)])
                         } else {
                             w.bt[(r, 6 * a + j)]
                         };
@@ -440,7 +463,10 @@ impl Assembler {
     fn add_projection_couplings(&self, sys: &System, matrix: &mut BlockMatrix) {
         for &(k, l, o, a, b) in &self.nu_pairs {
             let (wk, wl) = (&self.constraints[k], &self.constraints[l]);
-            let (mk, ml) = (sys.constraints[k].n_equations(), sys.constraints[l].n_equations());
+            let (mk, ml) = (
+                sys.constraints[k].n_equations(),
+                sys.constraints[l].n_equations(),
+            );
             let dst = &mut matrix.values[o..o + mk * ml];
             for r in 0..mk {
                 for s in 0..ml {
@@ -474,7 +500,13 @@ impl Assembler {
 
     /// Overwrites the constraint rows of `residual` with the convective accelerations
     /// `Φ̈ − B v̇` (for the consistent-initial-acceleration problem, index-3 layout).
-    pub fn acceleration_rows(&mut self, sys: &System, state: &State, ctx: &EvalContext, residual: &mut [f64]) {
+    pub fn acceleration_rows(
+        &mut self,
+        sys: &System,
+        state: &State,
+        ctx: &EvalContext,
+        residual: &mut [f64],
+    ) {
         let n_cfg = sys.n_config();
         for (k, c) in sys.constraints.iter().enumerate() {
             let m = c.n_equations();

@@ -46,7 +46,8 @@ impl System {
             elements.push(Box::new(body));
         }
         let local_offset = |r: NodeRef, p: Vector3<f64>| -> Option<(usize, Vector3<f64>)> {
-            r.index().map(|i| (i, nodes[i].r().transpose() * (p - nodes[i].x)))
+            r.index()
+                .map(|i| (i, nodes[i].r().transpose() * (p - nodes[i].x)))
         };
         for s in &model.springs {
             elements.push(Box::new(SpringDamper::new(
@@ -132,7 +133,6 @@ impl System {
         6 * self.n_nodes()
     }
 
-
     /// Evaluation context at time `t` with load factor `lf`.
     pub fn context(&self, t: f64, lf: f64) -> EvalContext {
         EvalContext {
@@ -143,19 +143,31 @@ impl System {
     }
 
     pub fn kinetic_energy(&self, s: &State) -> f64 {
-        self.elements.iter().map(|e| e.kinetic_energy(&s.nodes)).sum()
+        self.elements
+            .iter()
+            .map(|e| e.kinetic_energy(&s.nodes))
+            .sum()
     }
 
     pub fn potential_energy(&self, ctx: &EvalContext, s: &State) -> f64 {
-        self.elements.iter().map(|e| e.potential_energy(ctx, &s.nodes)).sum()
+        self.elements
+            .iter()
+            .map(|e| e.potential_energy(ctx, &s.nodes))
+            .sum()
     }
 
     pub fn external_power(&self, ctx: &EvalContext, s: &State) -> f64 {
-        self.elements.iter().map(|e| e.external_power(ctx, &s.nodes)).sum()
+        self.elements
+            .iter()
+            .map(|e| e.external_power(ctx, &s.nodes))
+            .sum()
     }
 
     pub fn dissipated_power(&self, s: &State) -> f64 {
-        self.elements.iter().map(|e| e.dissipated_power(&s.nodes)).sum()
+        self.elements
+            .iter()
+            .map(|e| e.dissipated_power(&s.nodes))
+            .sum()
     }
 
     /// Total linear and angular momentum (about the global origin) of the rigid bodies.

@@ -15,7 +15,9 @@ pub fn model(toml: &str) -> Model {
 
 /// Loads a model file relative to the workspace root.
 pub fn model_file(rel: &str) -> Model {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel);
     match Model::from_file(&path) {
         Ok(l) => l.model,
         Err(e) => panic!("{e}"),
@@ -39,8 +41,14 @@ pub fn run(m: &Model) -> (AnalysisSummary, History) {
 pub fn run_nth(m: &Model, k: usize) -> (AnalysisSummary, History) {
     let sys = System::new(m);
     let mut h = History::default();
-    let s = run_analysis(&sys, &m.analyses[k], State::initial(m, sys.n_multipliers), &mut h, &mut |_| {})
-        .expect("recording to memory cannot fail");
+    let s = run_analysis(
+        &sys,
+        &m.analyses[k],
+        State::initial(m, sys.n_multipliers),
+        &mut h,
+        &mut |_| {},
+    )
+    .expect("recording to memory cannot fail");
     assert!(s.failure.is_none(), "analysis failed: {:?}", s.failure);
     (s, h)
 }

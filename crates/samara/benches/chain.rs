@@ -1,0 +1,107 @@
+//! Chain benchmark (issue #2): N steel links pinned end to end, 1 s at h = 1e-3 with
+//! ρ∞ = 0.9 and ρ∞ = 1, on revolute joints (released from rest) and on spherical joints
+//! (spinning at 1 rad/s about z). Models: `examples/bench/chain_{revolute,spherical}_N.toml`.
+//!
+//! `cargo bench -p samara --bench chain [-- N…]` prints, per run: wall time, Newton
+//! iterations, tip position at 1 s, energy drift, max constraint violation; then the
+//! fitted growth exponent of wall time with N.
+
+use samara::analysis::{History, run_analysis};
+use samara::model::Model;
+use samara::system::{State, System};
+use std::path::Path;
+use std::time::Instant;
+
+fn main() {
+    let args: Vec<usize> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    let sizes = if args.is_empty() {
+        vec![10, 100, 1000]
+    } else {
+        args
+    };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    println!(
+        "{:<10} {:>5} {:>5} {:>9} {:>7} {:>9} {:>30} {:>11} {:>9}",
+        "joints",
+        "N",
+        "ρ∞",
+        "wall [s]",
+        "it/step",
+        "ms/step",
+        "tip at 1 s [m]",
+        "ΔE/E_ref",
+        "max |Φ|"
+    );
+    let mut growth: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for kind in ["revolute", "spherical"] {
+        for &n in &sizes {
+            let path = root.join(format!("examples/bench/chain_{kind}_{n}.toml"));
+            let loaded = match Model::from_file(&path) {
+                Ok(l) => l,
+                Err(e) => {
+                    eprintln!("skipping {}: {e}", path.display());
+                    continue;
+                }
+            };
+            let model = loaded.model;
+            let sys = System::new(&model);
+            for def in &model.analyses {
+                let mut hist = History::default();
+                let clock = Instant::now();
+                let s = run_analysis(
+                    &sys,
+                    def,
+                    State::initial(&model, sys.n_multipliers),
+                    &mut hist,
+                    &mut |_| {},
+                )
+                .expect("in-memory recording");
+                let wall = clock.elapsed().as_secs_f64();
+                if let Some(f) = &s.failure {
+                    println!("{kind:<10} {n:>5} {:>5}  FAILED: {}", def.name, f.reason);
+                    continue;
+                }
+                let first = &hist.frames[0];
+                let last = hist.last().unwrap();
+                let e = |f: &samara::analysis::Frame| f.energy.kinetic + f.energy.potential;
+                // Reference energy: the potential-energy change of the chain dropping by
+                // its own length scale (m g L_link N) — the released energy is of that order.
+                let m_link = 7850.0 * 0.1 * 0.01 * 0.01;
+                let e_ref = m_link * 9.81 * 0.1 * n as f64 + first.energy.kinetic;
+                let drift = (e(last) - e(first)) / e_ref;
+                let tip = last.state.nodes[n - 1].x
+                    + last.state.nodes[n - 1].r() * nalgebra::Vector3::new(0.05, 0.0, 0.0);
+                let rho = def.name.trim_start_matches("rho");
+                println!(
+                    "{kind:<10} {n:>5} {rho:>5} {wall:>9.3} {:>7.2} {:>9.3} {:>30} {drift:>11.3e} {:>9.2e}",
+                    s.newton_iterations as f64 / s.steps as f64,
+                    1e3 * wall / s.steps as f64,
+                    format!("({:.4}, {:.4}, {:.4})", tip.x, tip.y, tip.z),
+                    s.max_constraint_violation
+                );
+                let key = format!("{kind} ρ∞={rho}");
+                match growth.iter_mut().find(|(k, _)| *k == key) {
+                    Some((_, v)) => v.push((n as f64, wall)),
+                    None => growth.push((key, vec![(n as f64, wall)])),
+                }
+            }
+        }
+    }
+    for (key, pts) in &growth {
+        if pts.len() >= 2 {
+            let lx: Vec<f64> = pts.iter().map(|p| p.0.ln()).collect();
+            let ly: Vec<f64> = pts.iter().map(|p| p.1.ln()).collect();
+            let k = lx.len() as f64;
+            let (mx, my) = (lx.iter().sum::<f64>() / k, ly.iter().sum::<f64>() / k);
+            let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
+            let sxx: f64 = lx.iter().map(|a| (a - mx) * (a - mx)).sum();
+            println!(
+                "growth of wall time with N, {key}: exponent {:.2}",
+                sxy / sxx
+            );
+        }
+    }
+}
