@@ -94,7 +94,7 @@ pub struct Row {
 pub fn summary(model: &str, rows: &[Row], total: Duration) {
     println!("model '{model}'");
     println!(
-        "  {:<14} {:<8} {:>8} {:>8} {:>7} {:>8} {:>10} {:>10}  {}",
+        "  {:<14} {:<8} {:>8} {:>8} {:>7} {:>8} {:>10} {:>10}  results",
         "analysis",
         "type",
         "steps",
@@ -102,8 +102,7 @@ pub fn summary(model: &str, rows: &[Row], total: Duration) {
         "it/step",
         "rejected",
         "max |Φ|",
-        "wall [s]",
-        "results"
+        "wall [s]"
     );
     for r in rows {
         let s = &r.summary;
