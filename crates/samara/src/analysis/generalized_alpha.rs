@@ -68,7 +68,7 @@ mod tests {
     fn high_frequency_spectral_radius_is_rho_inf() {
         for rho in [0.0, 0.3, 0.6, 0.9, 1.0] {
             let ga = GeneralizedAlpha::from_rho_inf(rho);
-            let (w, h) = (1e4, 1.0);
+            let (w, h) = (1e6, 1.0);
             // State (x, v, vdot, a) ↦ next, built column by column.
             let step = |s: [f64; 4]| -> [f64; 4] {
                 let [x, v, vd, a] = s;
@@ -98,9 +98,11 @@ mod tests {
                 .iter()
                 .map(|z| z.norm())
                 .fold(0.0, f64::max);
-            // ρ(ωh) → ρ∞ with an O((ωh)⁻¹) deviation; ωh = 1e4 here.
+            // ρ(ωh) → ρ∞ as ωh → ∞. The limit eigenvalues are defective, so finite ωh and
+            // rounding perturb the computed radius by ~(ωh)^(−2/3) ≈ 1e-4 at ωh = 1e6.
+            let tol = 1e-3;
             assert!(
-                (radius - rho).abs() < 1e-3,
+                (radius - rho).abs() < tol,
                 "rho_inf {rho}: spectral radius {radius}"
             );
         }

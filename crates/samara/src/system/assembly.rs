@@ -301,21 +301,17 @@ impl Assembler {
             }
             if let Some(mat) = matrix.as_deref_mut() {
                 apply_tangent_ops(&mut t.k, en, tangent_ops);
+                // K_eff = s_r (c_M M + c_C C + c_K K), combined in place in `k`.
+                let (cm, cc, ck) = (sr * coef.mass, sr * coef.damping, sr * coef.stiffness);
+                for ((k, m), c) in t.k.as_mut_slice().iter_mut().zip(t.m.as_slice()).zip(t.c.as_slice()) {
+                    *k = ck * *k + cm * m + cc * c;
+                }
                 let n = en.len();
                 let slots = &self.element_slots[k];
                 for a in 0..n {
                     for b in 0..n {
                         let off = slots[a * n + b];
-                        let dst = &mut mat.values[off..off + 36];
-                        for i in 0..6 {
-                            for j in 0..6 {
-                                let (r, c) = (6 * a + i, 6 * b + j);
-                                dst[6 * i + j] += sr
-                                    * (coef.mass * t.m[(r, c)]
-                                        + coef.damping * t.c[(r, c)]
-                                        + coef.stiffness * t.k[(r, c)]);
-                            }
-                        }
+                        scatter_block(&mut mat.values[off..off + 36], t.k.as_slice(), 6 * n, 6 * a, 6 * b, 6, 6, 1.0);
                     }
                 }
             }
@@ -370,15 +366,11 @@ impl Assembler {
             w.bt.copy_from(&w.b);
             apply_tangent_ops(&mut w.bt, cn, tangent_ops);
             let n = cn.len();
+            let nr = 6 * n;
             for a in 0..n {
                 for b in 0..n {
                     let o = w.node_slots[a * n + b];
-                    let dst = &mut mat.values[o..o + 36];
-                    for i in 0..6 {
-                        for j in 0..6 {
-                            dst[6 * i + j] += sr * coef.stiffness * w.k[(6 * a + i, 6 * b + j)];
-                        }
-                    }
+                    scatter_block(&mut mat.values[o..o + 36], w.k.as_slice(), nr, 6 * a, 6 * b, 6, 6, sr * coef.stiffness);
                 }
             }
             // (node, λ): (s_r/s_λ) Bᵀ, 6 × m row-major.
@@ -387,8 +379,9 @@ impl Assembler {
                 let o = w.lam_col[a];
                 let dst = &mut mat.values[o..o + 6 * m];
                 for i in 0..6 {
-                    for r in 0..m {
-                        dst[m * i + r] += cs * w.b[(r, 6 * a + i)];
+                    let col = &w.b.as_slice()[(6 * a + i) * m..(6 * a + i + 1) * m];
+                    for (d, v) in dst[m * i..m * i + m].iter_mut().zip(col) {
+                        *d += cs * v;
                     }
                 }
             }
@@ -417,27 +410,19 @@ impl Assembler {
             for a in 0..n {
                 let o = w.lam_row[a];
                 let dst = &mut mat.values[o..o + 6 * m];
-                for r in 0..m {
-                    for j in 0..6 {
-                        dst[6 * r + j] += if stabilized {
-                            coef.velocity_scale
-                                * (coef.damping * w.b[(r, 6 * a + j)] + w.dbv[(r, 6 * a + j)])
-                        } else {
-                            w.bt[(r, 6 * a + j)]
-                        };
-                    }
+                if stabilized {
+                    let cv = coef.velocity_scale * coef.damping;
+                    scatter_block(dst, w.b.as_slice(), m, 0, 6 * a, m, 6, cv);
+                    scatter_block(dst, w.dbv.as_slice(), m, 0, 6 * a, m, 6, coef.velocity_scale);
+                } else {
+                    scatter_block(dst, w.bt.as_slice(), m, 0, 6 * a, m, 6, 1.0);
                 }
             }
             if stabilized {
                 // (ν, node): B T; (ν, ν): B T Bᵀ.
                 for a in 0..n {
                     let o = w.nu_row[a];
-                    let dst = &mut mat.values[o..o + 6 * m];
-                    for r in 0..m {
-                        for j in 0..6 {
-                            dst[6 * r + j] += w.bt[(r, 6 * a + j)];
-                        }
-                    }
+                    scatter_block(&mut mat.values[o..o + 6 * m], w.bt.as_slice(), m, 0, 6 * a, m, 6, 1.0);
                 }
                 let o = w.nu_diag;
                 let dst = &mut mat.values[o..o + m * m];
@@ -512,6 +497,19 @@ impl Assembler {
             let m = c.n_equations();
             let off = n_cfg + sys.multiplier_offsets[k];
             c.acceleration_term(ctx, &state.nodes, &mut residual[off..off + m]);
+        }
+    }
+}
+
+/// `dst[r][c] += scale · src[r0 + r, c0 + c]` for an `rows × cols` row-major block `dst`
+/// and a column-major `src` with `nr` rows.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn scatter_block(dst: &mut [f64], src: &[f64], nr: usize, r0: usize, c0: usize, rows: usize, cols: usize, scale: f64) {
+    for c in 0..cols {
+        let col = &src[(c0 + c) * nr + r0..(c0 + c) * nr + r0 + rows];
+        for (r, v) in col.iter().enumerate() {
+            dst[r * cols + c] += scale * v;
         }
     }
 }
