@@ -1,5 +1,6 @@
 //! `samara`: run, check and describe multibody models.
 
+mod info;
 mod report;
 
 use clap::{Parser, Subcommand};
@@ -45,6 +46,19 @@ enum Command {
     },
     /// Print the JSON Schema of the model file.
     Schema,
+    /// Write a ParaView time series (.pvd + one .vtu per output time) from a results file.
+    Vtk {
+        /// Results file (NetCDF) written by `samara run`.
+        results: PathBuf,
+        /// Output directory [default: `<results stem>_vtk/` beside the results file].
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+    },
+    /// Describe a results file: analysis, time span, nodes, joints, solver statistics, variables.
+    Info {
+        /// Results file (NetCDF) written by `samara run`.
+        results: PathBuf,
+    },
 }
 
 fn main() -> ExitCode {
@@ -53,6 +67,49 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Run { model, out, quiet } => run(&model, out, quiet),
         Command::Check { model } => check(&model),
+        Command::Info { results } => {
+            let r =
+                samara::output::ResultsReader::open(&results).and_then(|mut r| info::info(&mut r));
+            match r {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(EXIT_MODEL)
+                }
+            }
+        }
+        Command::Vtk { results, out } => {
+            let dir = out.unwrap_or_else(|| {
+                let stem = results
+                    .file_stem()
+                    .and_then(|s| s.to_str())
+                    .unwrap_or("results");
+                results
+                    .parent()
+                    .unwrap_or(Path::new("."))
+                    .join(format!("{stem}_vtk"))
+            });
+            let written = samara::output::ResultsReader::open(&results)
+                .map_err(|e| e.to_string())
+                .and_then(|mut r| {
+                    samara::output::write_vtk(&mut r, &dir).map_err(|e| e.to_string())
+                });
+            match written {
+                Ok(s) => {
+                    println!(
+                        "{}: {} time steps, {} points each — open it in ParaView",
+                        s.collection.display(),
+                        s.files.len(),
+                        s.points
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(EXIT_MODEL)
+                }
+            }
+        }
         Command::Schema => {
             let schema = schemars::schema_for!(ModelInput);
             println!(

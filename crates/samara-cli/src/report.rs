@@ -95,14 +95,7 @@ pub fn summary(model: &str, rows: &[Row], total: Duration) {
     println!("model '{model}'");
     println!(
         "  {:<14} {:<8} {:>8} {:>8} {:>7} {:>8} {:>10} {:>10}  results",
-        "analysis",
-        "type",
-        "steps",
-        "newton",
-        "it/step",
-        "rejected",
-        "max |Φ|",
-        "wall [s]"
+        "analysis", "type", "steps", "newton", "it/step", "rejected", "max |Φ|", "wall [s]"
     );
     for r in rows {
         let s = &r.summary;

@@ -273,6 +273,11 @@ impl Constraint for Joint {
         }
     }
 
+    fn location(&self, nodes: &[NodeState]) -> (Vector3<f64>, Matrix3<f64>) {
+        let f = self.frames(nodes);
+        (f.x[1] + f.arm[1], f.axes[0])
+    }
+
     fn reactions(&self, nodes: &[NodeState], mu: &[f64]) -> (Vector3<f64>, Vector3<f64>) {
         let f = self.frames(nodes);
         let ea = f.axes[0];

@@ -43,4 +43,7 @@ pub trait Constraint: Send + Sync {
     /// Force and moment exerted on side B by side A (about B's frame origin), in frame-A
     /// components, for multipliers `μ` in physical units.
     fn reactions(&self, nodes: &[NodeState], mu: &[f64]) -> (Vector3<f64>, Vector3<f64>);
+    /// Global position of the joint point on side B and the axes of frame A (columns,
+    /// global components), for output.
+    fn location(&self, nodes: &[NodeState]) -> (Vector3<f64>, nalgebra::Matrix3<f64>);
 }

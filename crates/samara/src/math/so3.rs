@@ -66,7 +66,16 @@ fn coef_b(psi: f64) -> f64 {
 }
 
 /// (2n+3)! for n = 0…7.
-const FACTORIAL_ODD: [f64; 8] = [6.0, 120.0, 5040.0, 362880.0, 39916800.0, 6227020800.0, 1307674368000.0, 355687428096000.0];
+const FACTORIAL_ODD: [f64; 8] = [
+    6.0,
+    120.0,
+    5040.0,
+    362880.0,
+    39916800.0,
+    6227020800.0,
+    1307674368000.0,
+    355687428096000.0,
+];
 
 /// Taylor coefficients of `coef_inv` in ψ²: −(−1)ⁿ B₂ₙ/(2n)!, n = 1…8 (B: Bernoulli numbers).
 const COEF_INV_SERIES: [f64; 8] = [
@@ -84,7 +93,10 @@ const COEF_INV_SERIES: [f64; 8] = [
 fn coef_inv(psi: f64) -> f64 {
     if psi < SERIES_ANGLE {
         let p2 = psi * psi;
-        COEF_INV_SERIES.iter().rev().fold(0.0, |acc, c| acc * p2 + c)
+        COEF_INV_SERIES
+            .iter()
+            .rev()
+            .fold(0.0, |acc, c| acc * p2 + c)
     } else {
         let h = 0.5 * psi;
         (1.0 - h * h.cos() / h.sin()) / (psi * psi)

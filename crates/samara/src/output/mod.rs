@@ -2,9 +2,15 @@
 //!
 //! - `netcdf`: a dependency-free incremental NetCDF-3 (64-bit offset) writer;
 //! - `results`: the layout of a samara results file, one per analysis, as a
-//!   [`crate::analysis::Recorder`].
+//!   [`crate::analysis::Recorder`];
+//! - `reader`: reading results files back (metadata, variables, named channels);
+//! - `vtk`: ParaView time series (`.pvd` + `.vtu`) from a results file.
 
 pub mod netcdf;
+mod reader;
 mod results;
+mod vtk;
 
+pub use reader::{Channel, ReadError, ResultsReader, VariableInfo};
 pub use results::{FORMAT_VERSION, ResultsFile};
+pub use vtk::{VtkSeries, write_vtk};

@@ -22,6 +22,8 @@ struct Vars {
     orientation: VarId,
     velocity: VarId,
     angular_velocity: VarId,
+    joint_position: Option<VarId>,
+    joint_axes: Option<VarId>,
     joint_force: Option<VarId>,
     joint_moment: Option<VarId>,
     kinetic: VarId,
@@ -48,6 +50,8 @@ pub struct ResultsFile {
     buf4: Vec<f64>,
     jf: Vec<f64>,
     jm: Vec<f64>,
+    jp: Vec<f64>,
+    ja: Vec<f64>,
     /// An earlier file of the same name, moved aside.
     pub backup: Option<PathBuf>,
 }
@@ -216,6 +220,27 @@ impl ResultsFile {
             "rad s-1",
             "node angular velocity, global frame",
         );
+        let axes3 = joint.map(|_| d.add_dim("axis", 3));
+        let joint_position = joint.map(|j| {
+            var(
+                &mut d,
+                "joint_position",
+                NcType::Double,
+                &[time, j, vec3],
+                "m",
+                "joint point (on side B), global frame",
+            )
+        });
+        let joint_axes = joint.zip(axes3).map(|(j, ax)| {
+            var(
+                &mut d,
+                "joint_axes",
+                NcType::Double,
+                &[time, j, ax, vec3],
+                "1",
+                "axes e1, e2, e3 of joint frame A, global components",
+            )
+        });
         let (joint_force, joint_moment) = match joint {
             Some(j) => (
                 Some(var(
@@ -344,6 +369,8 @@ impl ResultsFile {
                 orientation,
                 velocity,
                 angular_velocity,
+                joint_position,
+                joint_axes,
                 joint_force,
                 joint_moment,
                 kinetic,
@@ -357,6 +384,8 @@ impl ResultsFile {
             buf4: vec![0.0; 4 * n_nodes],
             jf: vec![0.0; 3 * n_joints],
             jm: vec![0.0; 3 * n_joints],
+            jp: vec![0.0; 3 * n_joints],
+            ja: vec![0.0; 9 * n_joints],
             backup,
         })
     }
@@ -452,6 +481,17 @@ impl Recorder for ResultsFile {
                 let (f, m) = c.reactions(nodes, &frame.mu[off..off + c.n_equations()]);
                 self.jf[3 * k..3 * k + 3].copy_from_slice(f.as_slice());
                 self.jm[3 * k..3 * k + 3].copy_from_slice(m.as_slice());
+                let (p, axes) = c.location(nodes);
+                self.jp[3 * k..3 * k + 3].copy_from_slice(p.as_slice());
+                for e in 0..3 {
+                    for i in 0..3 {
+                        self.ja[9 * k + 3 * e + i] = axes[(i, e)];
+                    }
+                }
+            }
+            if let (Some(pv), Some(av)) = (v.joint_position, v.joint_axes) {
+                w.set_record_f64(pv, &self.jp).map_err(e)?;
+                w.set_record_f64(av, &self.ja).map_err(e)?;
             }
             w.set_record_f64(fv, &self.jf).map_err(e)?;
             w.set_record_f64(mv, &self.jm).map_err(e)?;

@@ -1,57 +1,1367 @@
-//! TEMPORARY dense stand-in for the block LU (replaced by the block-sparse implementation).
+//! Block LU factorization (no inter-block pivoting, static block order) for
+//! block-sparse KKT-like Newton matrices of constrained multibody systems.
+//!
+//! # Factorization
+//!
+//! With the block elimination order `p` (positions `0..n`), the factorization
+//! is `A = L U` where `L` is block unit-lower-triangular and `U` is block
+//! upper-triangular:
+//!
+//! * diagonal of `U`: `D_k` = Schur-complemented pivot block, stored as its
+//!   dense LU with partial pivoting *inside* the block (`P D = L_D U_D`,
+//!   reciprocal pivots stored on the diagonal, permutation in gather form);
+//! * `U_kj = A_kj` (Schur-updated, not scaled);
+//! * `L_ik = A_ik D_k^{-1}` (two triangular solves per row, vectorized across
+//!   rows; explicit inverses of `D_k` were tried and rejected: ~10³× larger
+//!   residuals on ill-conditioned chains for no measurable speed gain);
+//! * Schur update `A_ij -= L_ik U_kj` for all `i, j` in the filled pattern of
+//!   block column / row `k`.
+//!
+//! # Ordering
+//!
+//! AMD (faer) on the block graph, post-processed so that every multiplier
+//! block is eliminated after all primary blocks it is coupled to: a multiplier
+//! encountered too early is deferred until right after its last coupled
+//! primary. Its pivot is then the (nonsingular) Schur complement
+//! `-B M^{-1} B^T (+ C)`.
+//!
+//! # Singularity criterion
+//!
+//! Pivot block `k` is declared singular if any pivot `u` of its in-block
+//! partial-pivoting LU satisfies `!(|u| > 1e-14 * scale_k)` (so zero and NaN
+//! pivots are always rejected), where
+//! `scale_k = max(max |A_ik| over the ORIGINAL block column k (all i),
+//!                max |entry| of the Schur-complemented pivot block)`.
+//! The first term catches pivot blocks that cancelled down to roundoff
+//! relative to the original data (e.g. a multiplier block whose constraint
+//! Jacobian is rank deficient); the second keeps the test scale invariant for
+//! blocks whose Schur complement legitimately has a different magnitude.
 
-use super::{BlockMatrix, BlockStructure, StructureError};
-use faer::linalg::solvers::SolveCore;
 use std::sync::Arc;
 
+use super::{BlockKind, BlockMatrix, BlockStructure, StructureError};
+
+/// Relative pivot tolerance (see module docs).
+const PIVOT_RTOL: f64 = 1e-14;
+
+/// A pivot block is (numerically) singular. `block` is the original index.
 #[derive(Clone, Debug, thiserror::Error)]
 #[error("singular pivot block {block}")]
 pub struct SingularBlock {
     pub block: usize,
 }
 
+/// Off-diagonal entry `i` of the filled block column/row `k`.
+#[derive(Clone, Copy, Debug)]
+struct OffDiag {
+    /// Scalar offset (original numbering) of block `i`.
+    roff: usize,
+    /// Size of block `i`.
+    size: usize,
+    /// Storage offset of `L_ik` (`size x s_k`, row-major).
+    l: usize,
+    /// Storage offset of `U_ki` (`s_k x size`, row-major).
+    u: usize,
+}
+
+/// Schur update `dst -= L * U` with `L: si x sk`, `U: sk x sj`.
+#[derive(Clone, Copy, Debug)]
+struct Update {
+    dst: usize,
+    l: usize,
+    u: usize,
+    si: u32,
+    sj: u32,
+}
+
+/// Copy of an input block into the factor storage.
+#[derive(Clone, Copy, Debug)]
+struct Scatter {
+    src: usize,
+    dst: usize,
+    len: usize,
+    /// Elimination position of the block column.
+    col: usize,
+}
+
+/// Symbolic block LU: ordering, filled pattern, storage layout and the flat
+/// list of Schur updates. Reusable for any matrix with the same structure.
+#[derive(Clone, Debug)]
 pub struct BlockLuSymbolic {
     n: usize,
+    dim: usize,
+    nnz_a: usize,
+    /// Position -> original block.
+    order: Vec<usize>,
+    /// Original block -> position.
+    pos: Vec<usize>,
+    /// Per position: block size, scalar offset (original numbering), D offset.
+    size: Vec<usize>,
+    roff: Vec<usize>,
+    d_off: Vec<usize>,
+    /// Filled off-diagonal pattern of column/row k, sorted by position.
+    s_ptr: Vec<usize>,
+    s_ent: Vec<OffDiag>,
+    upd_ptr: Vec<usize>,
+    upd: Vec<Update>,
+    scatter: Vec<Scatter>,
+    /// Storage ranges (offset, len) of fill blocks that must be zeroed.
+    fill: Vec<(usize, usize)>,
+    n_values: usize,
+    max_size: usize,
 }
 
 impl BlockLuSymbolic {
+    /// Ordering + symbolic factorization of the block pattern of `s`.
     pub fn new(s: &BlockStructure) -> Result<Self, StructureError> {
-        Ok(Self { n: s.dim() })
+        let n = s.n_blocks();
+        // ---- block adjacency (original numbering, no diagonal) ----
+        let mut adj: Vec<Vec<usize>> = (0..n)
+            .map(|i| s.row_cols(i).iter().copied().filter(|&j| j != i).collect())
+            .collect();
+        for (i, a) in adj.iter().enumerate() {
+            for &j in a {
+                if s.entry(j, i).is_none() {
+                    return Err(StructureError(format!(
+                        "block pattern not structurally symmetric at ({i}, {j})"
+                    )));
+                }
+            }
+        }
+
+        let order = Self::constrained_order(s, &adj)?;
+        let mut pos = vec![0usize; n];
+        for (k, &b) in order.iter().enumerate() {
+            pos[b] = k;
+        }
+
+        // ---- symbolic elimination (elimination tree on positions) ----
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); n];
+        let mut srows: Vec<Vec<usize>> = Vec::with_capacity(n);
+        let mut tmp: Vec<usize> = Vec::new();
+        for k in 0..n {
+            tmp.clear();
+            tmp.extend(adj[order[k]].iter().map(|&j| pos[j]).filter(|&p| p > k));
+            for &c in &children[k] {
+                tmp.extend(srows[c].iter().copied().filter(|&p| p > k));
+            }
+            tmp.sort_unstable();
+            tmp.dedup();
+            if let Some(&parent) = tmp.first() {
+                children[parent].push(k);
+            }
+            srows.push(tmp.clone());
+        }
+        for a in adj.iter_mut() {
+            a.clear();
+            a.shrink_to_fit();
+        }
+        drop(children);
+
+        // ---- storage layout: per k: D_k, then (L_ik, U_ki) for i in S_k ----
+        let size: Vec<usize> = order.iter().map(|&b| s.block_size(b)).collect();
+        let roff: Vec<usize> = order.iter().map(|&b| s.block_offset(b)).collect();
+        let mut d_off = Vec::with_capacity(n);
+        let mut s_ptr = Vec::with_capacity(n + 1);
+        let mut s_ent = Vec::new();
+        let mut off = 0usize;
+        s_ptr.push(0);
+        for k in 0..n {
+            let sk = size[k];
+            d_off.push(off);
+            off += sk * sk;
+            for &i in &srows[k] {
+                let si = size[i];
+                let l = off;
+                let u = off + si * sk;
+                off += 2 * si * sk;
+                s_ent.push(OffDiag {
+                    roff: roff[i],
+                    size: si,
+                    l,
+                    u,
+                });
+            }
+            s_ptr.push(s_ent.len());
+        }
+        let n_values = off;
+
+        // Storage offset of filled block (i, j) in positions.
+        let locate = |i: usize, j: usize| -> usize {
+            use std::cmp::Ordering::*;
+            match i.cmp(&j) {
+                Equal => d_off[i],
+                Greater => {
+                    let p = srows[j].binary_search(&i).expect("filled pattern");
+                    s_ent[s_ptr[j] + p].l
+                }
+                Less => {
+                    let p = srows[i].binary_search(&j).expect("filled pattern");
+                    s_ent[s_ptr[i] + p].u
+                }
+            }
+        };
+
+        // ---- Schur updates ----
+        let mut upd_ptr = Vec::with_capacity(n + 1);
+        let mut upd = Vec::new();
+        upd_ptr.push(0);
+        for k in 0..n {
+            let ents = &s_ent[s_ptr[k]..s_ptr[k + 1]];
+            for (a, &i) in srows[k].iter().enumerate() {
+                for (b, &j) in srows[k].iter().enumerate() {
+                    upd.push(Update {
+                        dst: locate(i, j),
+                        l: ents[a].l,
+                        u: ents[b].u,
+                        si: size[i] as u32,
+                        sj: size[j] as u32,
+                    });
+                }
+            }
+            upd_ptr.push(upd.len());
+        }
+
+        // ---- scatter map and fill blocks ----
+        let mut covered = vec![false; n_values];
+        let mut scatter = Vec::with_capacity(s.nnz_values());
+        for bi in 0..n {
+            for (&bj, &src) in s.row_cols(bi).iter().zip(s.row_offsets(bi)) {
+                let len = s.block_size(bi) * s.block_size(bj);
+                let dst = locate(pos[bi], pos[bj]);
+                scatter.push(Scatter {
+                    src,
+                    dst,
+                    len,
+                    col: pos[bj],
+                });
+                covered[dst] = true;
+            }
+        }
+        // Block starts that were not covered are fill blocks.
+        let mut fill: Vec<(usize, usize)> = Vec::new();
+        let mut push_fill = |o: usize, len: usize| {
+            if let Some(last) = fill.last_mut() {
+                if last.0 + last.1 == o {
+                    last.1 += len;
+                    return;
+                }
+            }
+            fill.push((o, len));
+        };
+        for k in 0..n {
+            for e in &s_ent[s_ptr[k]..s_ptr[k + 1]] {
+                let len = e.size * size[k];
+                if !covered[e.l] {
+                    push_fill(e.l, len);
+                }
+                if !covered[e.u] {
+                    push_fill(e.u, len);
+                }
+            }
+        }
+        // Sort scatter by destination for streaming writes.
+        scatter.sort_unstable_by_key(|sc| sc.dst);
+
+        let max_size = size.iter().copied().max().unwrap_or(0);
+        Ok(Self {
+            n,
+            dim: s.dim(),
+            nnz_a: s.nnz_values(),
+            order,
+            pos,
+            size,
+            roff,
+            d_off,
+            s_ptr,
+            s_ent,
+            upd_ptr,
+            upd,
+            scatter,
+            fill,
+            n_values,
+            max_size,
+        })
+    }
+
+    /// AMD on the block graph, then defer every multiplier until all its
+    /// coupled primaries have been eliminated.
+    fn constrained_order(
+        s: &BlockStructure,
+        adj: &[Vec<usize>],
+    ) -> Result<Vec<usize>, StructureError> {
+        use faer::dyn_stack::{MemBuffer, MemStack};
+        use faer::sparse::SymbolicSparseColMatRef;
+        use faer::sparse::linalg::amd;
+
+        let n = adj.len();
+        if n == 0 {
+            return Ok(Vec::new());
+        }
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0usize);
+        for a in adj {
+            row_idx.extend_from_slice(a); // sorted, symmetric
+            col_ptr.push(row_idx.len());
+        }
+        let nnz = row_idx.len().max(1);
+        let mut perm = vec![0usize; n];
+        let mut perm_inv = vec![0usize; n];
+        {
+            let a = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
+            let mut mem = MemBuffer::try_new(amd::order_scratch::<usize>(n, nnz))
+                .map_err(|e| StructureError(format!("amd workspace: {e:?}")))?;
+            amd::order(
+                &mut perm,
+                &mut perm_inv,
+                a,
+                amd::Control::default(),
+                MemStack::new(&mut mem),
+            )
+            .map_err(|e| StructureError(format!("amd failed: {e:?}")))?;
+        }
+        // perm[new] = old.
+        let is_mult = |b: usize| s.kind(b) == BlockKind::Multiplier;
+        let mut remaining: Vec<usize> = (0..n)
+            .map(|b| {
+                if is_mult(b) {
+                    adj[b].iter().filter(|&&j| !is_mult(j)).count()
+                } else {
+                    0
+                }
+            })
+            .collect();
+        let mut deferred = vec![false; n];
+        let mut out = Vec::with_capacity(n);
+        let mut ready: Vec<usize> = Vec::new();
+        for &v in &perm {
+            if is_mult(v) {
+                if remaining[v] == 0 {
+                    out.push(v);
+                } else {
+                    deferred[v] = true;
+                }
+            } else {
+                out.push(v);
+                ready.clear();
+                for &m in &adj[v] {
+                    if is_mult(m) {
+                        remaining[m] -= 1;
+                        if remaining[m] == 0 && deferred[m] {
+                            deferred[m] = false;
+                            ready.push(m);
+                        }
+                    }
+                }
+                ready.sort_unstable_by_key(|&m| perm_inv[m]);
+                out.extend_from_slice(&ready);
+            }
+        }
+        debug_assert_eq!(out.len(), n);
+        Ok(out)
+    }
+
+    /// Elimination order: `order()[k]` is the original block eliminated at step `k`.
+    pub fn elimination_order(&self) -> &[usize] {
+        &self.order
+    }
+
+    /// Elimination position of original block `b`.
+    pub fn position(&self, b: usize) -> usize {
+        self.pos[b]
+    }
+
+    /// Number of blocks in `L + U` (diagonal pivot blocks counted once).
+    pub fn n_factor_blocks(&self) -> usize {
+        self.n + 2 * self.s_ent.len()
+    }
+
+    /// Number of scalar values stored for the factors.
+    pub fn n_factor_values(&self) -> usize {
+        self.n_values
+    }
+
+    /// Number of block Schur updates performed by `factor`.
+    pub fn n_updates(&self) -> usize {
+        self.upd.len()
     }
 }
 
+/// Numeric block LU. All storage is allocated in [`BlockLu::new`].
 pub struct BlockLu {
     sym: Arc<BlockLuSymbolic>,
-    lu: Option<faer::linalg::solvers::PartialPivLu<f64>>,
+    /// Factor storage. `D_k` slots hold the in-block LU of the pivot block
+    /// (unit `L` strictly below the diagonal, `U` above, and `1/u_cc` on the
+    /// diagonal).
+    values: Vec<f64>,
+    /// In-block row permutation of each pivot block, indexed by the block's
+    /// scalar offset: `(P x)[c] = x[perm[c]]` with `P D = L U`.
+    perm: Vec<u32>,
+    /// Scratch for the in-block row swaps (len max_size).
+    piv: Vec<u32>,
+    colmax: Vec<f64>,
+    /// Scratch, `2 * max_size` values.
+    work: Vec<f64>,
+    factored: bool,
 }
 
 impl BlockLu {
+    /// Allocates all numeric storage once.
     pub fn new(sym: Arc<BlockLuSymbolic>) -> Self {
-        Self { sym, lu: None }
+        let values = vec![0.0; sym.n_values];
+        let perm = vec![0u32; sym.dim];
+        let piv = vec![0u32; sym.max_size];
+        let colmax = vec![0.0; sym.n];
+        let work = vec![0.0; 2 * sym.max_size];
+        Self {
+            sym,
+            values,
+            perm,
+            piv,
+            colmax,
+            work,
+            factored: false,
+        }
     }
+
+    /// The symbolic factorization this numeric factorization uses.
+    pub fn symbolic(&self) -> &Arc<BlockLuSymbolic> {
+        &self.sym
+    }
+
+    /// Numeric factorization of `a` (same structure as the symbolic one).
+    /// Performs no heap allocation.
     pub fn factor(&mut self, a: &BlockMatrix) -> Result<(), SingularBlock> {
-        let n = self.sym.n;
-        let d = a.to_dense_rowmajor();
-        let m = faer::Mat::<f64>::from_fn(n, n, |i, j| d[i * n + j]);
-        self.lu = Some(m.partial_piv_lu());
+        let sym = &*self.sym;
+        assert_eq!(
+            a.values.len(),
+            sym.nnz_a,
+            "BlockLu::factor: matrix does not match the symbolic structure"
+        );
+        assert_eq!(a.structure.dim(), sym.dim);
+        self.factored = false;
+        let vals = &mut self.values[..];
+        let colmax = &mut self.colmax[..];
+        let work = &mut self.work[..];
+        let piv = &mut self.piv[..];
+        let perm = &mut self.perm[..];
+
+        // ---- scatter ----
+        colmax.fill(0.0);
+        for &(o, len) in &sym.fill {
+            vals[o..o + len].fill(0.0);
+        }
+        let av = &a.values[..];
+        for sc in &sym.scatter {
+            let src = &av[sc.src..sc.src + sc.len];
+            let dst = &mut vals[sc.dst..sc.dst + sc.len];
+            let mut m = 0.0f64;
+            for (d, &x) in dst.iter_mut().zip(src) {
+                *d = x;
+                m = m.max(x.abs());
+            }
+            let c = &mut colmax[sc.col];
+            *c = c.max(m);
+        }
+
+        // ---- elimination ----
+        for k in 0..sym.n {
+            let sk = sym.size[k];
+            let d = sym.d_off[k];
+            let rk = sym.roff[k];
+            let (head, tail) = vals.split_at_mut(d + sk * sk);
+            let db = &mut head[d..];
+            let pk = &mut perm[rk..rk + sk];
+            {
+                let bmax = db.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                let thr = PIVOT_RTOL * colmax[k].max(bmax);
+                if !lu_block(db, &mut piv[..sk], pk, sk, thr) {
+                    return Err(SingularBlock {
+                        block: sym.order[k],
+                    });
+                }
+            }
+            let db = &*db;
+            let pk = &*pk;
+            let ents = &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]];
+            if ents.is_empty() {
+                continue;
+            }
+            // L_ik = A_ik D_k^{-1}
+            let base = d + sk * sk;
+            for e in ents {
+                let lo = e.l - base;
+                rsolve_block(&mut tail[lo..lo + e.size * sk], db, pk, e.size, sk, work);
+            }
+            // Schur updates
+            let ups = &sym.upd[sym.upd_ptr[k]..sym.upd_ptr[k + 1]];
+            let bp = vals.as_mut_ptr();
+            for up in ups {
+                // SAFETY: dst is a block (i, j) with positions i, j > k while
+                // l and u are blocks of column/row k, so the three ranges are
+                // disjoint and all lie within `vals` (layout built by the
+                // symbolic phase).
+                unsafe {
+                    gemm_sub(
+                        bp.add(up.dst),
+                        bp.add(up.l),
+                        bp.add(up.u),
+                        up.si as usize,
+                        sk,
+                        up.sj as usize,
+                    );
+                }
+            }
+        }
+        self.factored = true;
         Ok(())
     }
+
+    /// Solve `A x = b` in place (`rhs` = `b` on entry, `x` on exit).
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
-        let n = rhs.len();
-        if let Some(lu) = &self.lu {
-            lu.solve_in_place_with_conj(
-                faer::Conj::No,
-                faer::MatMut::from_column_major_slice_mut(rhs, n, 1),
+        let sym = &*self.sym;
+        assert!(self.factored, "BlockLu::solve_in_place: not factored");
+        assert_eq!(rhs.len(), sym.dim);
+        let vals = &self.values[..];
+        let work = &mut self.work[..];
+        // forward: L y = b (column oriented)
+        for k in 0..sym.n {
+            let sk = sym.size[k];
+            let rk = sym.roff[k];
+            let ents = &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]];
+            if ents.is_empty() {
+                continue;
+            }
+            let yk = &mut work[..sk];
+            yk.copy_from_slice(&rhs[rk..rk + sk]);
+            for e in ents {
+                let lb = &vals[e.l..e.l + e.size * sk];
+                let yi = &mut rhs[e.roff..e.roff + e.size];
+                matvec_acc(lb, yk, yi, e.size, sk, -1.0);
+            }
+        }
+        // backward: U x = y (row oriented)
+        for k in (0..sym.n).rev() {
+            let sk = sym.size[k];
+            let rk = sym.roff[k];
+            let t = &mut work[..sk];
+            t.copy_from_slice(&rhs[rk..rk + sk]);
+            for e in &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]] {
+                let ub = &vals[e.u..e.u + sk * e.size];
+                matvec_acc(ub, &rhs[e.roff..e.roff + e.size], t, sk, e.size, -1.0);
+            }
+            let d = sym.d_off[k];
+            let (t, tmp) = work.split_at_mut(sk);
+            // x_k = D⁻¹ t
+            d_solve(
+                &vals[d..d + sk * sk],
+                &self.perm[rk..rk + sk],
+                sk,
+                t,
+                &mut rhs[rk..rk + sk],
+                tmp,
             );
         }
     }
+
+    /// Solve `Aᵀ x = b` in place.
     pub fn solve_transpose_in_place(&mut self, rhs: &mut [f64]) {
-        let n = rhs.len();
-        if let Some(lu) = &self.lu {
-            lu.solve_transpose_in_place_with_conj(
-                faer::Conj::No,
-                faer::MatMut::from_column_major_slice_mut(rhs, n, 1),
+        let sym = &*self.sym;
+        assert!(
+            self.factored,
+            "BlockLu::solve_transpose_in_place: not factored"
+        );
+        assert_eq!(rhs.len(), sym.dim);
+        let vals = &self.values[..];
+        let work = &mut self.work[..];
+        // forward: Uᵀ z = b (column oriented)
+        for k in 0..sym.n {
+            let sk = sym.size[k];
+            let rk = sym.roff[k];
+            let d = sym.d_off[k];
+            let (z, tmp) = work.split_at_mut(sk);
+            // z_k = D⁻ᵀ b_k (row-vector form: z = b D⁻¹)
+            z.copy_from_slice(&rhs[rk..rk + sk]);
+            rsolve_block(
+                z,
+                &vals[d..d + sk * sk],
+                &self.perm[rk..rk + sk],
+                1,
+                sk,
+                tmp,
             );
+            rhs[rk..rk + sk].copy_from_slice(z);
+            let z = &*z;
+            for e in &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]] {
+                let ub = &vals[e.u..e.u + sk * e.size];
+                matvec_t_acc(ub, z, &mut rhs[e.roff..e.roff + e.size], sk, e.size, -1.0);
+            }
         }
+        // backward: Lᵀ x = z (row oriented)
+        for k in (0..sym.n).rev() {
+            let sk = sym.size[k];
+            let rk = sym.roff[k];
+            let ents = &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]];
+            if ents.is_empty() {
+                continue;
+            }
+            let t = &mut work[..sk];
+            t.copy_from_slice(&rhs[rk..rk + sk]);
+            for e in ents {
+                let lb = &vals[e.l..e.l + e.size * sk];
+                matvec_t_acc(lb, &rhs[e.roff..e.roff + e.size], t, e.size, sk, -1.0);
+            }
+            rhs[rk..rk + sk].copy_from_slice(t);
+        }
+    }
+}
+
+// ----------------------------------------------------------------------------
+// small dense kernels (row-major)
+// ----------------------------------------------------------------------------
+
+/// In-place LU with partial pivoting of the `s x s` row-major block `a`:
+/// `P a = L U`; unit `L` stored strictly below the diagonal, `U` strictly
+/// above, and `1/u_cc` on the diagonal. `perm` receives the gather form of
+/// `P` (`(P x)[c] = x[perm[c]]`); `piv` is scratch. Returns false if a pivot
+/// `u` has `!(|u| > thr)`.
+#[inline]
+fn lu_block(a: &mut [f64], piv: &mut [u32], perm: &mut [u32], s: usize, thr: f64) -> bool {
+    match s {
+        6 => lu_impl(a, piv, perm, 6, thr),
+        5 => lu_impl(a, piv, perm, 5, thr),
+        3 => lu_impl(a, piv, perm, 3, thr),
+        _ => lu_impl(a, piv, perm, s, thr),
+    }
+}
+
+#[inline(always)]
+fn lu_impl(a: &mut [f64], piv: &mut [u32], perm: &mut [u32], s: usize, thr: f64) -> bool {
+    let a = &mut a[..s * s];
+    let piv = &mut piv[..s];
+    let perm = &mut perm[..s];
+    for c in 0..s {
+        let mut p = c;
+        let mut pm = a[c * s + c].abs();
+        for r in c + 1..s {
+            let v = a[r * s + c].abs();
+            if v > pm {
+                pm = v;
+                p = r;
+            }
+        }
+        if !(pm > thr) {
+            return false;
+        }
+        piv[c] = p as u32;
+        if p != c {
+            for q in 0..s {
+                a.swap(c * s + q, p * s + q);
+            }
+        }
+        let inv = 1.0 / a[c * s + c];
+        a[c * s + c] = inv;
+        for r in c + 1..s {
+            let f = a[r * s + c] * inv;
+            a[r * s + c] = f;
+            for q in c + 1..s {
+                a[r * s + q] -= f * a[c * s + q];
+            }
+        }
+    }
+    for (c, p) in perm.iter_mut().enumerate() {
+        *p = c as u32;
+    }
+    for c in 0..s {
+        perm.swap(c, piv[c] as usize);
+    }
+    true
+}
+
+/// `x = D⁻¹ b` (`P D = L U` from `lu_block`); `tmp` (len >= s) is scratch
+/// for sizes without a fixed-size kernel.
+#[inline]
+fn d_solve(lu: &[f64], perm: &[u32], s: usize, b: &[f64], x: &mut [f64], tmp: &mut [f64]) {
+    #[inline(always)]
+    fn fixed<const S: usize>(lu: &[f64], perm: &[u32], b: &[f64], x: &mut [f64]) {
+        let lu = as_rows::<S>(&lu[..S * S]);
+        let mut y = [0.0f64; S];
+        for c in 0..S {
+            y[c] = b[perm[c] as usize];
+        }
+        for r in 1..S {
+            let mut acc = y[r];
+            for q in 0..r {
+                acc -= lu[r][q] * y[q];
+            }
+            y[r] = acc;
+        }
+        for r in (0..S).rev() {
+            let mut acc = y[r];
+            for q in r + 1..S {
+                acc -= lu[r][q] * y[q];
+            }
+            y[r] = acc * lu[r][r];
+        }
+        x[..S].copy_from_slice(&y);
+    }
+    match s {
+        6 => fixed::<6>(lu, perm, b, x),
+        5 => fixed::<5>(lu, perm, b, x),
+        4 => fixed::<4>(lu, perm, b, x),
+        3 => fixed::<3>(lu, perm, b, x),
+        2 => fixed::<2>(lu, perm, b, x),
+        1 => fixed::<1>(lu, perm, b, x),
+        _ => {
+            let y = &mut tmp[..s];
+            for c in 0..s {
+                y[c] = b[perm[c] as usize];
+            }
+            for r in 1..s {
+                let mut acc = y[r];
+                for q in 0..r {
+                    acc -= lu[r * s + q] * y[q];
+                }
+                y[r] = acc;
+            }
+            for r in (0..s).rev() {
+                let mut acc = y[r];
+                for q in r + 1..s {
+                    acc -= lu[r * s + q] * y[q];
+                }
+                y[r] = acc * lu[r * s + r];
+            }
+            x[..s].copy_from_slice(y);
+        }
+    }
+}
+
+/// `X <- X D⁻¹` in place for `X: m x s` row-major (each row solves
+/// `Dᵀ xᵀ = rowᵀ`; `Dᵀ = Uᵀ Lᵀ P`). `tmp` (len >= s) is scratch for sizes
+/// without a fixed-size kernel.
+#[inline]
+fn rsolve_block(x: &mut [f64], lu: &[f64], perm: &[u32], m: usize, s: usize, tmp: &mut [f64]) {
+    // Rows are processed in groups of up to `R`, column-oriented, so the
+    // substitution steps are vector operations across independent rows
+    // (instead of one latency-bound dependency chain per row).
+    const R: usize = 6;
+    #[inline(always)]
+    fn fixed<const S: usize>(x: &mut [f64], lu: &[f64], perm: &[u32], m: usize) {
+        let lu = as_rows::<S>(&lu[..S * S]);
+        let perm: [u32; S] = perm[..S].try_into().unwrap();
+        for grp in x[..m * S].chunks_mut(R * S) {
+            let mr = grp.len() / S;
+            let mut w = [[0.0f64; R]; S]; // w[c][r] = X[r][c]
+            for r in 0..mr {
+                for c in 0..S {
+                    w[c][r] = grp[r * S + c];
+                }
+            }
+            // Uᵀ w = x
+            for c in 0..S {
+                let mut acc = w[c];
+                for q in 0..c {
+                    let u = lu[q][c];
+                    for r in 0..R {
+                        acc[r] -= u * w[q][r];
+                    }
+                }
+                let d = lu[c][c];
+                for r in 0..R {
+                    w[c][r] = acc[r] * d;
+                }
+            }
+            // Lᵀ v = w
+            for c in (0..S).rev() {
+                let mut acc = w[c];
+                for q in c + 1..S {
+                    let l = lu[q][c];
+                    for r in 0..R {
+                        acc[r] -= l * w[q][r];
+                    }
+                }
+                w[c] = acc;
+            }
+            // x = Pᵀ v
+            for c in 0..S {
+                let pc = perm[c] as usize;
+                for r in 0..mr {
+                    grp[r * S + pc] = w[c][r];
+                }
+            }
+        }
+    }
+    match s {
+        6 => fixed::<6>(x, lu, perm, m),
+        5 => fixed::<5>(x, lu, perm, m),
+        4 => fixed::<4>(x, lu, perm, m),
+        3 => fixed::<3>(x, lu, perm, m),
+        2 => fixed::<2>(x, lu, perm, m),
+        1 => fixed::<1>(x, lu, perm, m),
+        _ => {
+            let w = &mut tmp[..s];
+            for row in x[..m * s].chunks_exact_mut(s) {
+                w.copy_from_slice(row);
+                for c in 0..s {
+                    let mut acc = w[c];
+                    for q in 0..c {
+                        acc -= lu[q * s + c] * w[q];
+                    }
+                    w[c] = acc * lu[c * s + c];
+                }
+                for c in (0..s).rev() {
+                    let mut acc = w[c];
+                    for q in c + 1..s {
+                        acc -= lu[q * s + c] * w[q];
+                    }
+                    w[c] = acc;
+                }
+                for c in 0..s {
+                    row[perm[c] as usize] = w[c];
+                }
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn as_rows<const K: usize>(s: &[f64]) -> &[[f64; K]] {
+    let (rows, rest) = s.as_chunks::<K>();
+    debug_assert!(rest.is_empty());
+    rows
+}
+
+/// `y += alpha M x`, `M: m x n` row-major.
+#[inline]
+fn matvec_acc(mat: &[f64], x: &[f64], y: &mut [f64], m: usize, n: usize, alpha: f64) {
+    #[inline(always)]
+    fn fixed<const N: usize>(mat: &[f64], x: &[f64], y: &mut [f64], m: usize, alpha: f64) {
+        let xv: [f64; N] = x[..N].try_into().unwrap();
+        for (yr, row) in y[..m].iter_mut().zip(as_rows::<N>(&mat[..m * N])) {
+            let mut acc = 0.0;
+            for q in 0..N {
+                acc += row[q] * xv[q];
+            }
+            *yr += alpha * acc;
+        }
+    }
+    match n {
+        6 => fixed::<6>(mat, x, y, m, alpha),
+        5 => fixed::<5>(mat, x, y, m, alpha),
+        3 => fixed::<3>(mat, x, y, m, alpha),
+        _ => {
+            let x = &x[..n];
+            for (r, yr) in y[..m].iter_mut().enumerate() {
+                let row = &mat[r * n..r * n + n];
+                let mut acc = 0.0;
+                for (a, b) in row.iter().zip(x) {
+                    acc += a * b;
+                }
+                *yr += alpha * acc;
+            }
+        }
+    }
+}
+
+/// `y += alpha Mᵀ x`, `M: m x n` row-major (`x` has length m, `y` length n).
+#[inline]
+fn matvec_t_acc(mat: &[f64], x: &[f64], y: &mut [f64], m: usize, n: usize, alpha: f64) {
+    #[inline(always)]
+    fn fixed<const N: usize>(mat: &[f64], x: &[f64], y: &mut [f64], m: usize, alpha: f64) {
+        let mut acc: [f64; N] = y[..N].try_into().unwrap();
+        for (&xr, row) in x[..m].iter().zip(as_rows::<N>(&mat[..m * N])) {
+            let ax = alpha * xr;
+            for q in 0..N {
+                acc[q] += row[q] * ax;
+            }
+        }
+        y[..N].copy_from_slice(&acc);
+    }
+    match n {
+        6 => fixed::<6>(mat, x, y, m, alpha),
+        5 => fixed::<5>(mat, x, y, m, alpha),
+        3 => fixed::<3>(mat, x, y, m, alpha),
+        _ => {
+            let y = &mut y[..n];
+            for (r, &xr) in x[..m].iter().enumerate() {
+                let ax = alpha * xr;
+                let row = &mat[r * n..r * n + n];
+                for (yc, a) in y.iter_mut().zip(row) {
+                    *yc += a * ax;
+                }
+            }
+        }
+    }
+}
+
+/// `C -= A B` with `C: m x n`, `A: m x k`, `B: k x n` (row-major, disjoint).
+///
+/// # Safety
+/// The three ranges must be valid and `c` must not overlap `a` or `b`.
+#[inline]
+unsafe fn gemm_sub(c: *mut f64, a: *const f64, b: *const f64, m: usize, k: usize, n: usize) {
+    macro_rules! dispatch {
+        ($($kk:literal),*; $($nn:literal),*) => {
+            dispatch!(@k [$($kk),*] [$($nn),*])
+        };
+        (@k [$($kk:literal),*] $ns:tt) => {
+            match k {
+                $( $kk => dispatch!(@n $kk $ns), )*
+                _ => unsafe { gemm_sub_dyn(c, a, b, m, k, n) },
+            }
+        };
+        (@n $kk:literal [$($nn:literal),*]) => {
+            match n {
+                $( $nn => unsafe { gemm_sub_fixed::<$kk, $nn>(c, a, b, m) }, )*
+                _ => unsafe { gemm_sub_dyn(c, a, b, m, k, n) },
+            }
+        };
+    }
+    dispatch!(1, 2, 3, 4, 5, 6; 1, 2, 3, 4, 5, 6)
+}
+
+#[inline(always)]
+unsafe fn gemm_sub_fixed<const K: usize, const N: usize>(
+    c: *mut f64,
+    a: *const f64,
+    b: *const f64,
+    m: usize,
+) {
+    unsafe {
+        let bm: [[f64; N]; K] = core::ptr::read_unaligned(b as *const [[f64; N]; K]);
+        for r in 0..m {
+            let ar: [f64; K] = core::ptr::read_unaligned(a.add(r * K) as *const [f64; K]);
+            let cp = c.add(r * N) as *mut [f64; N];
+            let mut acc: [f64; N] = core::ptr::read_unaligned(cp);
+            for p in 0..K {
+                let av = ar[p];
+                for q in 0..N {
+                    acc[q] -= av * bm[p][q];
+                }
+            }
+            core::ptr::write_unaligned(cp, acc);
+        }
+    }
+}
+
+#[inline(never)]
+unsafe fn gemm_sub_dyn(c: *mut f64, a: *const f64, b: *const f64, m: usize, k: usize, n: usize) {
+    unsafe {
+        for r in 0..m {
+            for p in 0..k {
+                let av = *a.add(r * k + p);
+                if av == 0.0 {
+                    continue;
+                }
+                for q in 0..n {
+                    *c.add(r * n + q) -= av * *b.add(p * n + q);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::Mat;
+    use faer::linalg::solvers::Solve;
+
+    /// Small deterministic PRNG (xorshift64*).
+    struct Rng(u64);
+    impl Rng {
+        fn next_u64(&mut self) -> u64 {
+            let mut x = self.0;
+            x ^= x >> 12;
+            x ^= x << 25;
+            x ^= x >> 27;
+            self.0 = x;
+            x.wrapping_mul(0x2545F4914F6CDD1D)
+        }
+        fn uniform(&mut self) -> f64 {
+            (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
+    /// Build a KKT-like structure from a tree of nodes. `parent[k]` is the
+    /// parent node of node k (None for roots). One multiplier block of size
+    /// `msizes[k % len]` per node, coupling node k and its parent (roots:
+    /// only node k). Node-node couplings along tree edges.
+    /// Returns (structure, node block ids, mult block ids, mult -> nodes).
+    fn kkt_tree(
+        parent: &[Option<usize>],
+        msizes: &[usize],
+        interleave: bool,
+    ) -> (BlockStructure, Vec<Vec<usize>>) {
+        let nn = parent.len();
+        let mut sizes = Vec::new();
+        let mut kinds = Vec::new();
+        let mut node_id = vec![0; nn];
+        let mut mult_id = vec![0; nn];
+        if interleave {
+            for k in 0..nn {
+                node_id[k] = sizes.len();
+                sizes.push(6);
+                kinds.push(BlockKind::Primary);
+                mult_id[k] = sizes.len();
+                sizes.push(msizes[k % msizes.len()]);
+                kinds.push(BlockKind::Multiplier);
+            }
+        } else {
+            // multipliers first in the original numbering (worst case for
+            // a naive order)
+            for k in 0..nn {
+                mult_id[k] = sizes.len();
+                sizes.push(msizes[k % msizes.len()]);
+                kinds.push(BlockKind::Multiplier);
+            }
+            for k in 0..nn {
+                node_id[k] = sizes.len();
+                sizes.push(6);
+                kinds.push(BlockKind::Primary);
+            }
+        }
+        let mut coup = Vec::new();
+        let mut mult_nodes = vec![Vec::new(); sizes.len()];
+        for k in 0..nn {
+            coup.push((mult_id[k], node_id[k]));
+            mult_nodes[mult_id[k]].push(node_id[k]);
+            if let Some(p) = parent[k] {
+                coup.push((node_id[p], mult_id[k]));
+                coup.push((node_id[k], node_id[p]));
+                mult_nodes[mult_id[k]].push(node_id[p]);
+            }
+        }
+        (
+            BlockStructure::new(sizes, kinds, &coup).unwrap(),
+            mult_nodes,
+        )
+    }
+
+    fn chain_parent(n: usize) -> Vec<Option<usize>> {
+        (0..n)
+            .map(|k| if k == 0 { None } else { Some(k - 1) })
+            .collect()
+    }
+
+    /// Random values: diagonally dominant primary blocks, random couplings,
+    /// multiplier diagonals zero (or small random if `mult_diag`).
+    fn fill_random(a: &mut BlockMatrix, rng: &mut Rng, mult_diag: bool) {
+        let s = a.structure.clone();
+        for i in 0..s.n_blocks() {
+            for &j in s.row_cols(i) {
+                let (si, sj) = (s.block_size(i), s.block_size(j));
+                let b = a.block_mut(i, j).unwrap();
+                let ki = s.kind(i);
+                let kj = s.kind(j);
+                if i == j && ki == BlockKind::Multiplier {
+                    for (t, v) in b.iter_mut().enumerate() {
+                        *v = if mult_diag && t % (si + 1) == 0 {
+                            0.1 * rng.uniform()
+                        } else {
+                            0.0
+                        };
+                    }
+                } else if i == j {
+                    for r in 0..si {
+                        for c in 0..sj {
+                            b[r * sj + c] = rng.uniform() + if r == c { 20.0 } else { 0.0 };
+                        }
+                    }
+                } else {
+                    let scale = if ki == BlockKind::Primary && kj == BlockKind::Primary {
+                        1.0
+                    } else {
+                        2.0
+                    };
+                    for v in b.iter_mut() {
+                        *v = scale * rng.uniform();
+                    }
+                }
+            }
+        }
+    }
+
+    fn dense_of(a: &BlockMatrix) -> Mat<f64> {
+        let n = a.structure.dim();
+        let d = a.to_dense_rowmajor();
+        Mat::from_fn(n, n, |r, c| d[r * n + c])
+    }
+
+    fn rel_err(x: &[f64], y: &Mat<f64>) -> f64 {
+        let mut num = 0.0f64;
+        let mut den = 0.0f64;
+        for (k, &v) in x.iter().enumerate() {
+            num = num.max((v - y[(k, 0)]).abs());
+            den = den.max(y[(k, 0)].abs());
+        }
+        num / den
+    }
+
+    fn check_against_dense(s: BlockStructure, seed: u64, mult_diag: bool) {
+        let s = Arc::new(s);
+        let sym = Arc::new(BlockLuSymbolic::new(&s).unwrap());
+        let mut lu = BlockLu::new(sym);
+        let mut rng = Rng(seed);
+        let n = s.dim();
+        for round in 0..3 {
+            let mut a = BlockMatrix::zeros(s.clone());
+            fill_random(&mut a, &mut rng, mult_diag);
+            lu.factor(&a).unwrap();
+            let dense = dense_of(&a);
+            let dlu = dense.partial_piv_lu();
+            let b: Vec<f64> = (0..n).map(|_| rng.uniform()).collect();
+            let bm = Mat::from_fn(n, 1, |r, _| b[r]);
+
+            let mut x = b.clone();
+            lu.solve_in_place(&mut x);
+            let xr = dlu.solve(&bm);
+            let e = rel_err(&x, &xr);
+            assert!(e < 1e-10, "solve rel err {e} (round {round})");
+            // residual check
+            let mut ax = vec![0.0; n];
+            a.mul_vec(&x, &mut ax);
+            let res = ax
+                .iter()
+                .zip(&b)
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max);
+            let xmax = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let berr = res / (a.norm_1() * xmax);
+            assert!(berr < 1e-13, "normwise backward error {berr}");
+
+            let mut xt = b.clone();
+            lu.solve_transpose_in_place(&mut xt);
+            let mut xtr = bm.clone();
+            dlu.solve_transpose_in_place(&mut xtr);
+            let e = rel_err(&xt, &xtr);
+            assert!(e < 1e-10, "transpose solve rel err {e} (round {round})");
+        }
+    }
+
+    fn assert_mult_after_primaries(s: &BlockStructure, sym: &BlockLuSymbolic) {
+        for m in 0..s.n_blocks() {
+            if s.kind(m) != BlockKind::Multiplier {
+                continue;
+            }
+            for &j in s.row_cols(m) {
+                if s.kind(j) == BlockKind::Primary {
+                    assert!(sym.pos[j] < sym.pos[m], "multiplier {m} before primary {j}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn chain_matches_dense() {
+        for &inter in &[true, false] {
+            let (s, _) = kkt_tree(&chain_parent(20), &[5, 3], inter);
+            check_against_dense(s, 42, false);
+        }
+    }
+
+    #[test]
+    fn chain_with_mult_diag_matches_dense() {
+        let (s, _) = kkt_tree(&chain_parent(15), &[3, 5, 1, 6], true);
+        check_against_dense(s, 7, true);
+    }
+
+    #[test]
+    fn tree_matches_dense() {
+        let mut rng = Rng(99);
+        for &nn in &[1usize, 2, 10, 40] {
+            let parent: Vec<Option<usize>> = (0..nn)
+                .map(|k| {
+                    if k == 0 {
+                        None
+                    } else {
+                        Some((rng.next_u64() % k as u64) as usize)
+                    }
+                })
+                .collect();
+            for &inter in &[true, false] {
+                let (s, _) = kkt_tree(&parent, &[3, 5], inter);
+                check_against_dense(s, 1234 + nn as u64, false);
+            }
+        }
+    }
+
+    #[test]
+    fn multiplier_multiplier_coupling_and_closed_loop() {
+        // chain of 8 nodes + loop-closing multiplier between node 0 and node 7
+        // + a coupling between two multiplier blocks (with nonzero values).
+        let (s0, _) = kkt_tree(&chain_parent(8), &[5, 3], true);
+        let n = s0.n_blocks();
+        let mut sizes: Vec<usize> = (0..n).map(|k| s0.block_size(k)).collect();
+        let mut kinds: Vec<BlockKind> = (0..n).map(|k| s0.kind(k)).collect();
+        let mut coup = Vec::new();
+        for i in 0..n {
+            for &j in s0.row_cols(i) {
+                if j > i {
+                    coup.push((i, j));
+                }
+            }
+        }
+        let lm = sizes.len();
+        sizes.push(3);
+        kinds.push(BlockKind::Multiplier);
+        coup.push((lm, 0)); // node 0
+        coup.push((14, lm)); // node 7
+        coup.push((1, 3)); // mult-mult
+        let s = BlockStructure::new(sizes, kinds, &coup).unwrap();
+        let sym = BlockLuSymbolic::new(&s).unwrap();
+        assert_mult_after_primaries(&s, &sym);
+        check_against_dense(s, 5, true);
+    }
+
+    #[test]
+    fn refactor_reuses_symbolic() {
+        let (s, _) = kkt_tree(&chain_parent(12), &[5], true);
+        let s = Arc::new(s);
+        let sym = Arc::new(BlockLuSymbolic::new(&s).unwrap());
+        let mut lu1 = BlockLu::new(sym.clone());
+        let mut rng = Rng(3);
+        let mut a1 = BlockMatrix::zeros(s.clone());
+        let mut a2 = BlockMatrix::zeros(s.clone());
+        fill_random(&mut a1, &mut rng, false);
+        fill_random(&mut a2, &mut rng, false);
+        let b: Vec<f64> = (0..s.dim()).map(|_| rng.uniform()).collect();
+
+        lu1.factor(&a1).unwrap();
+        let mut x1 = b.clone();
+        lu1.solve_in_place(&mut x1);
+        lu1.factor(&a2).unwrap();
+        let mut x2 = b.clone();
+        lu1.solve_in_place(&mut x2);
+        lu1.factor(&a1).unwrap();
+        let mut x1b = b.clone();
+        lu1.solve_in_place(&mut x1b);
+        assert_eq!(x1, x1b, "refactor must reproduce bitwise identical results");
+
+        let mut lu2 = BlockLu::new(sym);
+        lu2.factor(&a2).unwrap();
+        let mut x2b = b.clone();
+        lu2.solve_in_place(&mut x2b);
+        assert_eq!(x2, x2b);
+        assert_ne!(x1, x2);
+    }
+
+    #[test]
+    fn singular_multiplier_detected() {
+        // multiplier coupled to a node, but all coupling values zero
+        let (s, _) = kkt_tree(&chain_parent(4), &[5], true);
+        let s = Arc::new(s);
+        let sym = Arc::new(BlockLuSymbolic::new(&s).unwrap());
+        let mut lu = BlockLu::new(sym);
+        let mut rng = Rng(11);
+        let mut a = BlockMatrix::zeros(s.clone());
+        fill_random(&mut a, &mut rng, false);
+        lu.factor(&a).unwrap();
+        let bad = 5; // multiplier of node 2 (interleaved: node 4, mult 5)
+        assert_eq!(s.kind(bad), BlockKind::Multiplier);
+        for &j in s.row_cols(bad).to_vec().iter() {
+            a.block_mut(bad, j).unwrap().fill(0.0);
+            a.block_mut(j, bad).unwrap().fill(0.0);
+        }
+        let err = lu.factor(&a).unwrap_err();
+        assert_eq!(err.block, bad);
+        assert_eq!(err.to_string(), format!("singular pivot block {bad}"));
+
+        // rank-deficient constraint: two identical rows in B (and Bᵀ)
+        let mut a = BlockMatrix::zeros(s.clone());
+        fill_random(&mut a, &mut rng, false);
+        for &j in s.row_cols(bad).to_vec().iter() {
+            if j == bad {
+                continue;
+            }
+            let sj = s.block_size(j);
+            let b = a.block_mut(bad, j).unwrap();
+            let row0: Vec<f64> = b[..sj].to_vec();
+            b[sj..2 * sj].copy_from_slice(&row0);
+            let bt = a.block_mut(j, bad).unwrap();
+            for r in 0..sj {
+                bt[r * 5 + 1] = bt[r * 5];
+            }
+        }
+        let err = lu.factor(&a).unwrap_err();
+        assert_eq!(err.block, bad);
+
+        // singular primary block with nothing else
+        let s1 = Arc::new(BlockStructure::new(vec![2], vec![BlockKind::Primary], &[]).unwrap());
+        let mut lu1 = BlockLu::new(Arc::new(BlockLuSymbolic::new(&s1).unwrap()));
+        let mut a1 = BlockMatrix::zeros(s1.clone());
+        a1.values.copy_from_slice(&[1.0, 2.0, 2.0, 4.0]);
+        assert_eq!(lu1.factor(&a1).unwrap_err().block, 0);
+        a1.values.copy_from_slice(&[0.0, 2.0, 3.0, 4.0]);
+        lu1.factor(&a1).unwrap();
+        let mut x = vec![2.0, 7.0];
+        lu1.solve_in_place(&mut x);
+        assert!((x[0] - 1.0).abs() < 1e-15 && (x[1] - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn ordering_multipliers_after_primaries() {
+        for &inter in &[true, false] {
+            for &nn in &[1usize, 5, 50] {
+                let (s, mult_nodes) = kkt_tree(&chain_parent(nn), &[5, 3], inter);
+                let sym = BlockLuSymbolic::new(&s).unwrap();
+                assert_mult_after_primaries(&s, &sym);
+                // order is a permutation
+                let mut o = sym.elimination_order().to_vec();
+                o.sort_unstable();
+                assert_eq!(o, (0..s.n_blocks()).collect::<Vec<_>>());
+                for (m, nodes) in mult_nodes.iter().enumerate() {
+                    for &p in nodes {
+                        assert!(sym.pos[p] < sym.pos[m]);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn chain_fill_is_linear() {
+        let count = |nn: usize| {
+            let (s, _) = kkt_tree(&chain_parent(nn), &[5], false);
+            let sym = BlockLuSymbolic::new(&s).unwrap();
+            (sym.n_factor_blocks(), sym.n_updates())
+        };
+        let (b100, u100) = count(100);
+        let (b1000, u1000) = count(1000);
+        let rb = b1000 as f64 / b100 as f64;
+        let ru = u1000 as f64 / u100 as f64;
+        eprintln!("fill: N=100 {b100} blocks/{u100} updates, N=1000 {b1000}/{u1000}");
+        assert!((8.0..12.0).contains(&rb), "block ratio {rb}");
+        assert!((8.0..12.0).contains(&ru), "update ratio {ru}");
+        // bandedness: bounded blocks per node
+        assert!(b1000 < 1000 * 2 * 12, "too much fill: {b1000}");
+    }
+
+    #[test]
+    fn empty_and_structure_errors() {
+        let s = BlockStructure::new(vec![], vec![], &[]).unwrap();
+        let sym = Arc::new(BlockLuSymbolic::new(&s).unwrap());
+        let mut lu = BlockLu::new(sym);
+        lu.factor(&BlockMatrix::zeros(Arc::new(s))).unwrap();
+        lu.solve_in_place(&mut []);
+        lu.solve_transpose_in_place(&mut []);
+        assert!(BlockStructure::new(vec![6, 3], vec![BlockKind::Primary], &[]).is_err());
+        assert!(BlockStructure::new(vec![6, 0], vec![BlockKind::Primary; 2], &[]).is_err());
+        assert!(BlockStructure::new(vec![6, 3], vec![BlockKind::Primary; 2], &[(0, 2)]).is_err());
+    }
+
+    #[test]
+    fn large_blocks_generic_path() {
+        // block sizes > 6 exercise the generic kernels
+        let sizes = vec![8, 7, 2, 9];
+        let kinds = vec![
+            BlockKind::Primary,
+            BlockKind::Primary,
+            BlockKind::Multiplier,
+            BlockKind::Primary,
+        ];
+        let s = BlockStructure::new(sizes, kinds, &[(0, 1), (1, 3), (2, 0), (2, 3)]).unwrap();
+        check_against_dense(s, 77, false);
     }
 }

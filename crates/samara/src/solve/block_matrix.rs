@@ -1,149 +1,434 @@
-//! TEMPORARY minimal block structure (replaced by the block-sparse implementation).
+//! Block-sparse matrices with a structurally symmetric block pattern.
+//!
+//! The matrix is partitioned into square diagonal blocks (`sizes[k]` rows and
+//! columns for block `k`). Each present block `(i, j)` is stored densely in
+//! row-major order (`sizes[i] x sizes[j]`) in one flat `values` vector. The
+//! block pattern is always structurally symmetric: a coupling `(i, j)` creates
+//! both `(i, j)` and `(j, i)`, and all diagonal blocks are present.
 
-use std::collections::HashMap;
 use std::sync::Arc;
 
+/// Role of a diagonal block in a constrained multibody system.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BlockKind {
+    /// Primary unknowns (e.g. a node with 6 dofs).
     Primary,
+    /// Lagrange multipliers of constraint equations.
     Multiplier,
 }
 
+/// Error raised when a block structure is inconsistent.
 #[derive(Clone, Debug, thiserror::Error)]
 #[error("invalid block structure: {0}")]
 pub struct StructureError(pub String);
 
+/// Block pattern (block sizes, kinds, and present blocks) of a [`BlockMatrix`].
 #[derive(Clone, Debug)]
 pub struct BlockStructure {
     sizes: Vec<usize>,
     kinds: Vec<BlockKind>,
+    /// Scalar offset of each block, length `n_blocks + 1`.
     offsets: Vec<usize>,
-    entries: HashMap<(usize, usize), usize>,
-    list: Vec<(usize, usize, usize)>,
-    nnz: usize,
+    /// Block-row pointers into `cols`/`val_off`, length `n_blocks + 1`.
+    row_ptr: Vec<usize>,
+    /// Sorted block-column indices of each block row (diagonal included).
+    cols: Vec<usize>,
+    /// Offset into `values` of each block entry (row-major block storage).
+    val_off: Vec<usize>,
+    nnz_values: usize,
 }
 
 impl BlockStructure {
+    /// `sizes[k]` = rows = cols of diagonal block `k`; each coupling `(i, j)`
+    /// adds blocks `(i, j)` and `(j, i)`; diagonal blocks are always present;
+    /// duplicate couplings are allowed.
+    ///
+    /// Errors on out-of-range block index, `sizes`/`kinds` length mismatch,
+    /// or a zero block size.
     pub fn new(
         sizes: Vec<usize>,
         kinds: Vec<BlockKind>,
         couplings: &[(usize, usize)],
     ) -> Result<Self, StructureError> {
-        let mut offsets = Vec::with_capacity(sizes.len());
-        let mut o = 0;
-        for s in &sizes {
-            offsets.push(o);
-            o += s;
+        let n = sizes.len();
+        if kinds.len() != n {
+            return Err(StructureError(format!(
+                "sizes has {} entries but kinds has {}",
+                n,
+                kinds.len()
+            )));
         }
-        let mut entries = HashMap::new();
-        let mut list = Vec::new();
-        let mut nnz = 0;
-        let mut add = |i: usize, j: usize, entries: &mut HashMap<(usize, usize), usize>| {
-            if let std::collections::hash_map::Entry::Vacant(e) = entries.entry((i, j)) {
-                e.insert(nnz);
-                list.push((i, j, nnz));
-                nnz += sizes[i] * sizes[j];
-            }
-        };
-        for i in 0..sizes.len() {
-            add(i, i, &mut entries);
+        if let Some(k) = sizes.iter().position(|&s| s == 0) {
+            return Err(StructureError(format!("block {k} has zero size")));
         }
         for &(i, j) in couplings {
-            if i >= sizes.len() || j >= sizes.len() {
-                return Err(StructureError(format!("coupling ({i}, {j}) out of range")));
+            if i >= n || j >= n {
+                return Err(StructureError(format!(
+                    "coupling ({i}, {j}) out of range for {n} blocks"
+                )));
             }
-            add(i, j, &mut entries);
-            add(j, i, &mut entries);
+        }
+        let mut offsets = Vec::with_capacity(n + 1);
+        let mut acc = 0usize;
+        offsets.push(0);
+        for &s in &sizes {
+            acc = acc
+                .checked_add(s)
+                .ok_or_else(|| StructureError("dimension overflow".into()))?;
+            offsets.push(acc);
+        }
+
+        // Count per row (with duplicates), then fill, sort, dedup.
+        let mut cnt = vec![1usize; n];
+        for &(i, j) in couplings {
+            if i != j {
+                cnt[i] += 1;
+                cnt[j] += 1;
+            }
+        }
+        let mut ptr = Vec::with_capacity(n + 1);
+        ptr.push(0usize);
+        for k in 0..n {
+            ptr.push(ptr[k] + cnt[k]);
+        }
+        let mut raw = vec![0usize; ptr[n]];
+        let mut pos: Vec<usize> = ptr[..n].to_vec();
+        for k in 0..n {
+            raw[pos[k]] = k;
+            pos[k] += 1;
+        }
+        for &(i, j) in couplings {
+            if i != j {
+                raw[pos[i]] = j;
+                pos[i] += 1;
+                raw[pos[j]] = i;
+                pos[j] += 1;
+            }
+        }
+        let mut row_ptr = Vec::with_capacity(n + 1);
+        row_ptr.push(0usize);
+        let mut cols = Vec::with_capacity(raw.len());
+        for k in 0..n {
+            let row = &mut raw[ptr[k]..ptr[k + 1]];
+            row.sort_unstable();
+            let mut last = usize::MAX;
+            for &c in row.iter() {
+                if c != last {
+                    cols.push(c);
+                    last = c;
+                }
+            }
+            row_ptr.push(cols.len());
+        }
+        let mut val_off = Vec::with_capacity(cols.len());
+        let mut nnz = 0usize;
+        for i in 0..n {
+            for &j in &cols[row_ptr[i]..row_ptr[i + 1]] {
+                val_off.push(nnz);
+                nnz = sizes[i]
+                    .checked_mul(sizes[j])
+                    .and_then(|b| nnz.checked_add(b))
+                    .ok_or_else(|| StructureError("value count overflow".into()))?;
+            }
         }
         Ok(Self {
             sizes,
             kinds,
             offsets,
-            entries,
-            list,
-            nnz,
+            row_ptr,
+            cols,
+            val_off,
+            nnz_values: nnz,
         })
     }
+
+    /// Number of diagonal blocks.
+    #[inline]
     pub fn n_blocks(&self) -> usize {
         self.sizes.len()
     }
+
+    /// Scalar dimension of the matrix.
+    #[inline]
     pub fn dim(&self) -> usize {
-        self.sizes.iter().sum()
+        self.offsets[self.sizes.len()]
     }
+
+    /// Size of diagonal block `k`.
+    #[inline]
     pub fn block_size(&self, k: usize) -> usize {
         self.sizes[k]
     }
+
+    /// Scalar offset of block `k`.
+    #[inline]
     pub fn block_offset(&self, k: usize) -> usize {
         self.offsets[k]
     }
+
+    /// Kind of block `k`.
+    #[inline]
     pub fn kind(&self, k: usize) -> BlockKind {
         self.kinds[k]
     }
+
+    /// Offset into [`BlockMatrix::values`] of block `(i, j)` (row-major,
+    /// `sizes[i] x sizes[j]`), or `None` if not in the pattern.
+    /// `O(log deg(i))`.
+    #[inline]
     pub fn entry(&self, i: usize, j: usize) -> Option<usize> {
-        self.entries.get(&(i, j)).copied()
+        if i >= self.sizes.len() {
+            return None;
+        }
+        let lo = self.row_ptr[i];
+        let hi = self.row_ptr[i + 1];
+        self.cols[lo..hi]
+            .binary_search(&j)
+            .ok()
+            .map(|p| self.val_off[lo + p])
     }
+
+    /// Total number of stored scalar values.
+    #[inline]
     pub fn nnz_values(&self) -> usize {
-        self.nnz
+        self.nnz_values
+    }
+
+    /// Sorted block columns of block row `i` (diagonal included).
+    #[inline]
+    pub(crate) fn row_cols(&self, i: usize) -> &[usize] {
+        &self.cols[self.row_ptr[i]..self.row_ptr[i + 1]]
+    }
+
+    /// Value offsets of the blocks of block row `i`, parallel to `row_cols(i)`.
+    #[inline]
+    pub(crate) fn row_offsets(&self, i: usize) -> &[usize] {
+        &self.val_off[self.row_ptr[i]..self.row_ptr[i + 1]]
     }
 }
 
+/// Block-sparse matrix: a shared [`BlockStructure`] plus the block values.
 pub struct BlockMatrix {
     pub structure: Arc<BlockStructure>,
     pub values: Vec<f64>,
 }
 
 impl BlockMatrix {
+    /// All-zero matrix with the given structure.
     pub fn zeros(s: Arc<BlockStructure>) -> Self {
-        let n = s.nnz_values();
+        let values = vec![0.0; s.nnz_values()];
         Self {
             structure: s,
-            values: vec![0.0; n],
+            values,
         }
     }
+
+    /// Set all stored values to zero.
     pub fn fill_zero(&mut self) {
         self.values.fill(0.0);
     }
+
+    /// Row-major values of block `(i, j)`, if present.
+    #[inline]
     pub fn block(&self, i: usize, j: usize) -> Option<&[f64]> {
-        let o = self.structure.entry(i, j)?;
-        Some(&self.values[o..o + self.structure.sizes[i] * self.structure.sizes[j]])
+        let s = &*self.structure;
+        if j >= s.n_blocks() {
+            return None;
+        }
+        let off = s.entry(i, j)?;
+        let len = s.sizes[i] * s.sizes[j];
+        Some(&self.values[off..off + len])
     }
+
+    /// Mutable row-major values of block `(i, j)`, if present.
+    #[inline]
+    pub fn block_mut(&mut self, i: usize, j: usize) -> Option<&mut [f64]> {
+        let s = &*self.structure;
+        if j >= s.n_blocks() {
+            return None;
+        }
+        let off = s.entry(i, j)?;
+        let len = s.sizes[i] * s.sizes[j];
+        Some(&mut self.values[off..off + len])
+    }
+
+    /// Dense `n x n` row-major copy (tests / debugging only).
     pub fn to_dense_rowmajor(&self) -> Vec<f64> {
-        let s = &self.structure;
+        let s = &*self.structure;
         let n = s.dim();
         let mut d = vec![0.0; n * n];
-        for &(i, j, o) in &s.list {
-            let (ri, cj) = (s.sizes[i], s.sizes[j]);
-            for a in 0..ri {
-                for b in 0..cj {
-                    d[(s.offsets[i] + a) * n + s.offsets[j] + b] += self.values[o + a * cj + b];
+        for i in 0..s.n_blocks() {
+            let (ri, si) = (s.offsets[i], s.sizes[i]);
+            for (&j, &off) in s.row_cols(i).iter().zip(s.row_offsets(i)) {
+                let (cj, sj) = (s.offsets[j], s.sizes[j]);
+                for r in 0..si {
+                    let src = &self.values[off + r * sj..off + (r + 1) * sj];
+                    d[(ri + r) * n + cj..(ri + r) * n + cj + sj].copy_from_slice(src);
                 }
             }
         }
         d
     }
+
+    /// Matrix 1-norm (maximum absolute column sum), computed sparsely.
     pub fn norm_1(&self) -> f64 {
-        let n = self.structure.dim();
-        let d = self.to_dense_rowmajor();
-        (0..n)
-            .map(|j| (0..n).map(|i| d[i * n + j].abs()).sum::<f64>())
-            .fold(0.0, f64::max)
-    }
-    pub fn to_faer_csc(&self) -> faer::sparse::SparseColMat<usize, f64> {
-        let s = &self.structure;
-        let mut t = Vec::new();
-        for &(i, j, o) in &s.list {
-            let (ri, cj) = (s.sizes[i], s.sizes[j]);
-            for a in 0..ri {
-                for b in 0..cj {
-                    t.push(faer::sparse::Triplet::new(
-                        s.offsets[i] + a,
-                        s.offsets[j] + b,
-                        self.values[o + a * cj + b],
-                    ));
+        let s = &*self.structure;
+        let mut colsum = vec![0.0f64; s.dim()];
+        for i in 0..s.n_blocks() {
+            let si = s.sizes[i];
+            for (&j, &off) in s.row_cols(i).iter().zip(s.row_offsets(i)) {
+                let (cj, sj) = (s.offsets[j], s.sizes[j]);
+                let cs = &mut colsum[cj..cj + sj];
+                for r in 0..si {
+                    let row = &self.values[off + r * sj..off + (r + 1) * sj];
+                    for (c, v) in cs.iter_mut().zip(row) {
+                        *c += v.abs();
+                    }
                 }
             }
         }
-        faer::sparse::SparseColMat::try_new_from_triplets(s.dim(), s.dim(), &t)
-            .expect("valid triplets")
+        colsum.into_iter().fold(0.0, f64::max)
+    }
+
+    /// `y = A x`.
+    pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        let s = &*self.structure;
+        let n = s.dim();
+        assert_eq!(x.len(), n, "mul_vec: x has wrong length");
+        assert_eq!(y.len(), n, "mul_vec: y has wrong length");
+        for i in 0..s.n_blocks() {
+            let (ri, si) = (s.offsets[i], s.sizes[i]);
+            let yi = &mut y[ri..ri + si];
+            yi.fill(0.0);
+            for (&j, &off) in s.row_cols(i).iter().zip(s.row_offsets(i)) {
+                let (cj, sj) = (s.offsets[j], s.sizes[j]);
+                let xj = &x[cj..cj + sj];
+                for (r, yr) in yi.iter_mut().enumerate() {
+                    let row = &self.values[off + r * sj..off + (r + 1) * sj];
+                    let mut acc = 0.0;
+                    for (a, b) in row.iter().zip(xj) {
+                        acc += a * b;
+                    }
+                    *yr += acc;
+                }
+            }
+        }
+    }
+
+    /// Convert to a faer compressed-sparse-column matrix (all stored block
+    /// entries become explicit entries, zeros included; rows sorted).
+    pub fn to_faer_csc(&self) -> faer::sparse::SparseColMat<usize, f64> {
+        let s = &*self.structure;
+        let n = s.dim();
+        let nnz = s.nnz_values();
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::with_capacity(nnz);
+        let mut vals = Vec::with_capacity(nnz);
+        col_ptr.push(0usize);
+        for j in 0..s.n_blocks() {
+            let sj = s.sizes[j];
+            // The pattern is structurally symmetric: block column j has the
+            // same block indices as block row j (sorted).
+            for q in 0..sj {
+                for &i in s.row_cols(j) {
+                    let off = s.entry(i, j).expect("structurally symmetric pattern");
+                    let (ri, si) = (s.offsets[i], s.sizes[i]);
+                    for p in 0..si {
+                        row_idx.push(ri + p);
+                        vals.push(self.values[off + p * sj + q]);
+                    }
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        let sym = faer::sparse::SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        faer::sparse::SparseColMat::new(sym, vals)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small() -> BlockMatrix {
+        let s = BlockStructure::new(
+            vec![2, 1, 3],
+            vec![
+                BlockKind::Primary,
+                BlockKind::Multiplier,
+                BlockKind::Primary,
+            ],
+            &[(0, 1), (1, 2), (1, 0), (0, 1)],
+        )
+        .unwrap();
+        let mut a = BlockMatrix::zeros(Arc::new(s));
+        for (k, v) in a.values.iter_mut().enumerate() {
+            *v = (k as f64 * 0.37).sin() - 0.2;
+        }
+        a
+    }
+
+    #[test]
+    fn structure_basics() {
+        let a = small();
+        let s = &*a.structure;
+        assert_eq!(s.n_blocks(), 3);
+        assert_eq!(s.dim(), 6);
+        assert_eq!(s.block_offset(2), 3);
+        assert_eq!(s.block_size(2), 3);
+        assert_eq!(s.kind(1), BlockKind::Multiplier);
+        assert!(s.entry(0, 2).is_none());
+        assert!(s.entry(2, 0).is_none());
+        assert!(s.entry(5, 0).is_none());
+        // blocks: (0,0)4 (0,1)2 (1,0)2 (1,1)1 (1,2)3 (2,1)3 (2,2)9
+        assert_eq!(s.nnz_values(), 4 + 2 + 2 + 1 + 3 + 3 + 9);
+        assert_eq!(s.entry(0, 0), Some(0));
+        assert_eq!(s.entry(0, 1), Some(4));
+        assert_eq!(s.entry(1, 0), Some(6));
+        assert_eq!(a.block(1, 2).unwrap().len(), 3);
+        assert!(a.block(0, 7).is_none());
+    }
+
+    #[test]
+    fn structure_errors() {
+        use BlockKind::*;
+        assert!(BlockStructure::new(vec![2, 3], vec![Primary], &[]).is_err());
+        assert!(BlockStructure::new(vec![2, 0], vec![Primary, Primary], &[]).is_err());
+        assert!(BlockStructure::new(vec![2, 3], vec![Primary, Primary], &[(0, 2)]).is_err());
+        assert!(BlockStructure::new(vec![2, 3], vec![Primary, Primary], &[(2, 0)]).is_err());
+        let e = BlockStructure::new(vec![2, 3], vec![Primary, Primary], &[(0, 5)]).unwrap_err();
+        assert!(e.to_string().starts_with("invalid block structure: "));
+        assert!(BlockStructure::new(vec![], vec![], &[]).is_ok());
+    }
+
+    #[test]
+    fn dense_matvec_norm_csc_agree() {
+        let a = small();
+        let n = a.structure.dim();
+        let d = a.to_dense_rowmajor();
+        // block (1,2): row 2, cols 3..6
+        let b12 = a.block(1, 2).unwrap();
+        assert_eq!(&d[2 * n + 3..2 * n + 6], b12);
+        assert_eq!(d[0 * n + 3], 0.0);
+
+        let x: Vec<f64> = (0..n).map(|k| 1.0 + k as f64).collect();
+        let mut y = vec![0.0; n];
+        a.mul_vec(&x, &mut y);
+        for r in 0..n {
+            let yr: f64 = (0..n).map(|c| d[r * n + c] * x[c]).sum();
+            assert!((yr - y[r]).abs() < 1e-13);
+        }
+        let n1 = (0..n)
+            .map(|c| (0..n).map(|r| d[r * n + c].abs()).sum::<f64>())
+            .fold(0.0, f64::max);
+        assert!((n1 - a.norm_1()).abs() < 1e-13);
+
+        let csc = a.to_faer_csc();
+        let dm = csc.to_dense();
+        for r in 0..n {
+            for c in 0..n {
+                assert_eq!(dm[(r, c)], d[r * n + c]);
+            }
+        }
     }
 }

@@ -303,7 +303,12 @@ impl Assembler {
                 apply_tangent_ops(&mut t.k, en, tangent_ops);
                 // K_eff = s_r (c_M M + c_C C + c_K K), combined in place in `k`.
                 let (cm, cc, ck) = (sr * coef.mass, sr * coef.damping, sr * coef.stiffness);
-                for ((k, m), c) in t.k.as_mut_slice().iter_mut().zip(t.m.as_slice()).zip(t.c.as_slice()) {
+                for ((k, m), c) in
+                    t.k.as_mut_slice()
+                        .iter_mut()
+                        .zip(t.m.as_slice())
+                        .zip(t.c.as_slice())
+                {
                     *k = ck * *k + cm * m + cc * c;
                 }
                 let n = en.len();
@@ -311,7 +316,16 @@ impl Assembler {
                 for a in 0..n {
                     for b in 0..n {
                         let off = slots[a * n + b];
-                        scatter_block(&mut mat.values[off..off + 36], t.k.as_slice(), 6 * n, 6 * a, 6 * b, 6, 6, 1.0);
+                        scatter_block(
+                            &mut mat.values[off..off + 36],
+                            t.k.as_slice(),
+                            6 * n,
+                            6 * a,
+                            6 * b,
+                            6,
+                            6,
+                            1.0,
+                        );
                     }
                 }
             }
@@ -370,7 +384,16 @@ impl Assembler {
             for a in 0..n {
                 for b in 0..n {
                     let o = w.node_slots[a * n + b];
-                    scatter_block(&mut mat.values[o..o + 36], w.k.as_slice(), nr, 6 * a, 6 * b, 6, 6, sr * coef.stiffness);
+                    scatter_block(
+                        &mut mat.values[o..o + 36],
+                        w.k.as_slice(),
+                        nr,
+                        6 * a,
+                        6 * b,
+                        6,
+                        6,
+                        sr * coef.stiffness,
+                    );
                 }
             }
             // (node, λ): (s_r/s_λ) Bᵀ, 6 × m row-major.
@@ -413,7 +436,16 @@ impl Assembler {
                 if stabilized {
                     let cv = coef.velocity_scale * coef.damping;
                     scatter_block(dst, w.b.as_slice(), m, 0, 6 * a, m, 6, cv);
-                    scatter_block(dst, w.dbv.as_slice(), m, 0, 6 * a, m, 6, coef.velocity_scale);
+                    scatter_block(
+                        dst,
+                        w.dbv.as_slice(),
+                        m,
+                        0,
+                        6 * a,
+                        m,
+                        6,
+                        coef.velocity_scale,
+                    );
                 } else {
                     scatter_block(dst, w.bt.as_slice(), m, 0, 6 * a, m, 6, 1.0);
                 }
@@ -422,7 +454,16 @@ impl Assembler {
                 // (ν, node): B T; (ν, ν): B T Bᵀ.
                 for a in 0..n {
                     let o = w.nu_row[a];
-                    scatter_block(&mut mat.values[o..o + 6 * m], w.bt.as_slice(), m, 0, 6 * a, m, 6, 1.0);
+                    scatter_block(
+                        &mut mat.values[o..o + 6 * m],
+                        w.bt.as_slice(),
+                        m,
+                        0,
+                        6 * a,
+                        m,
+                        6,
+                        1.0,
+                    );
                 }
                 let o = w.nu_diag;
                 let dst = &mut mat.values[o..o + m * m];
@@ -505,7 +546,16 @@ impl Assembler {
 /// and a column-major `src` with `nr` rows.
 #[inline]
 #[allow(clippy::too_many_arguments)]
-fn scatter_block(dst: &mut [f64], src: &[f64], nr: usize, r0: usize, c0: usize, rows: usize, cols: usize, scale: f64) {
+fn scatter_block(
+    dst: &mut [f64],
+    src: &[f64],
+    nr: usize,
+    r0: usize,
+    c0: usize,
+    rows: usize,
+    cols: usize,
+    scale: f64,
+) {
     for c in 0..cols {
         let col = &src[(c0 + c) * nr + r0..(c0 + c) * nr + r0 + rows];
         for (r, v) in col.iter().enumerate() {
