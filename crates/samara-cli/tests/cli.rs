@@ -351,7 +351,13 @@ fn pendulum_results() -> (tempfile::TempDir, PathBuf) {
     let model = dir.path().join("pendulum.toml");
     std::fs::write(&model, PENDULUM).unwrap();
     let out = dir.path().join("out");
-    let o = samara(&["run", model.to_str().unwrap(), "--out", out.to_str().unwrap(), "-q"]);
+    let o = samara(&[
+        "run",
+        model.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     (dir, out.join("swing.nc"))
 }
@@ -362,7 +368,16 @@ fn info_describes_a_results_file() {
     let o = samara(&["info", path.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     let s = String::from_utf8_lossy(&o.stdout);
-    for want in ["pendulum", "swing (dynamic)", "completed", "501 output times", "bob", "pivot", "500 steps", "joint_force"] {
+    for want in [
+        "pendulum",
+        "swing (dynamic)",
+        "completed",
+        "501 output times",
+        "bob",
+        "pivot",
+        "500 steps",
+        "joint_force",
+    ] {
         assert!(s.contains(want), "'{want}' missing from:\n{s}");
     }
 }
@@ -373,7 +388,11 @@ fn info_reports_missing_truncated_foreign_and_newer_files() {
     // Missing.
     let o = samara(&["info", dir.path().join("nope.nc").to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("cannot open results file"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("cannot open results file"),
+        "{}",
+        stderr(&o)
+    );
     // Truncated in the middle of the records.
     let bytes = std::fs::read(&path).unwrap();
     let cut = dir.path().join("cut.nc");
@@ -406,15 +425,26 @@ fn vtk_series_reads_back_with_a_vtk_reader() {
     use vtkio::model::{Attribute, DataSet, IOBuffer, Piece};
     let (dir, path) = pendulum_results();
     let out = dir.path().join("vtk");
-    let o = samara(&["vtk", path.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = samara(&[
+        "vtk",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let pvd = std::fs::read_to_string(out.join("swing.pvd")).unwrap();
     assert_eq!(pvd.matches("<DataSet ").count(), 501);
     // Last time: the bob (point 0) and the pivot (point 1).
     let vtk = vtkio::Vtk::import(out.join("swing_000500.vtu")).expect("a valid .vtu");
-    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else { panic!("not an unstructured grid") };
-    let Piece::Inline(piece) = &pieces[0] else { panic!("piece not inline") };
-    let IOBuffer::F64(points) = &piece.points else { panic!("points not f64") };
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+        panic!("not an unstructured grid")
+    };
+    let Piece::Inline(piece) = &pieces[0] else {
+        panic!("piece not inline")
+    };
+    let IOBuffer::F64(points) = &piece.points else {
+        panic!("points not f64")
+    };
     assert_eq!(points.len(), 6);
     let mut rd = FileReader::open(&path).unwrap();
     let x = rd.read_var_f64("position").unwrap();
@@ -431,13 +461,29 @@ fn vtk_series_reads_back_with_a_vtk_reader() {
             Attribute::Field { name, .. } => name.as_str(),
         })
         .collect();
-    for want in ["kind", "frame_x", "frame_y", "frame_z", "velocity", "joint_force", "joint_moment"] {
+    for want in [
+        "kind",
+        "frame_x",
+        "frame_y",
+        "frame_z",
+        "velocity",
+        "joint_force",
+        "joint_moment",
+    ] {
         assert!(names.contains(&want), "{want} missing: {names:?}");
     }
     // The joint force in global components has the magnitude of the stored frame-A one.
     let f = rd.read_var_f64("joint_force").unwrap();
     let stored = (f[1500].powi(2) + f[1501].powi(2) + f[1502].powi(2)).sqrt();
-    let Attribute::DataArray(jf) = piece.data.point.iter().find(|a| matches!(a, Attribute::DataArray(d) if d.name == "joint_force")).unwrap() else { unreachable!() };
+    let Attribute::DataArray(jf) = piece
+        .data
+        .point
+        .iter()
+        .find(|a| matches!(a, Attribute::DataArray(d) if d.name == "joint_force"))
+        .unwrap()
+    else {
+        unreachable!()
+    };
     let IOBuffer::F64(g) = &jf.data else { panic!() };
     let global = (g[3].powi(2) + g[4].powi(2) + g[5].powi(2)).sqrt();
     assert!((stored - global).abs() < 1e-9 * stored.max(1.0));
