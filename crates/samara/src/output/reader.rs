@@ -123,7 +123,7 @@ impl ResultsReader {
             .iter()
             .filter(|v| v.is_record_var())
             .map(|v| v.name().to_string())
-            .last();
+            .next_back();
         let mut complete = listed;
         if let Some(v) = &last_var
             && listed > 0

@@ -37,6 +37,9 @@
 //! Jacobian is rank deficient); the second keeps the test scale invariant for
 //! blocks whose Schur complement legitimately has a different magnitude.
 
+// Dense block kernels index several arrays with one loop variable; ranges read clearer.
+#![allow(clippy::needless_range_loop)]
+
 use std::sync::Arc;
 
 use super::{BlockKind, BlockMatrix, BlockStructure, StructureError};
@@ -241,11 +244,11 @@ impl BlockLuSymbolic {
         // Block starts that were not covered are fill blocks.
         let mut fill: Vec<(usize, usize)> = Vec::new();
         let mut push_fill = |o: usize, len: usize| {
-            if let Some(last) = fill.last_mut() {
-                if last.0 + last.1 == o {
-                    last.1 += len;
-                    return;
-                }
+            if let Some(last) = fill.last_mut()
+                && last.0 + last.1 == o
+            {
+                last.1 += len;
+                return;
             }
             fill.push((o, len));
         };
@@ -651,6 +654,8 @@ fn lu_impl(a: &mut [f64], piv: &mut [u32], perm: &mut [u32], s: usize, thr: f64)
                 p = r;
             }
         }
+        // Written so that NaN pivots are rejected too.
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
         if !(pm > thr) {
             return false;
         }

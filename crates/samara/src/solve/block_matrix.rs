@@ -409,7 +409,7 @@ mod tests {
         // block (1,2): row 2, cols 3..6
         let b12 = a.block(1, 2).unwrap();
         assert_eq!(&d[2 * n + 3..2 * n + 6], b12);
-        assert_eq!(d[0 * n + 3], 0.0);
+        assert_eq!(d[3], 0.0);
 
         let x: Vec<f64> = (0..n).map(|k| 1.0 + k as f64).collect();
         let mut y = vec![0.0; n];

@@ -1,9 +1,11 @@
 //! Newton–Raphson with convergence control.
 //!
 //! Each iteration solves `J Δ = −r` and applies `Δ`. It has converged when
-//! 1. the weighted norm `max_i |δq_i| / (atol + rtol |ref_i|)` of the configuration change
-//!    made by the correction is ≤ 1 (the problem computes it: configuration unknowns only,
-//!    in m and rad, so the test does not depend on the scaling of the equations), and
+//! 1. the weighted norm ε = `max_i |δq_i| / (atol + rtol |ref_i|)` of the configuration
+//!    change made by the correction is ≤ 1 — or, once the contraction rate θ = ε_k/ε_{k−1}
+//!    is known, the error it leaves, ε θ/(1 − θ), is ≤ 1 (the problem computes ε:
+//!    configuration unknowns only, in m and rad, so the test does not depend on the
+//!    scaling of the equations), and
 //! 2. the constraint violation `max |Φ|` at the updated iterate is ≤ the tolerance.
 //!
 //! With `reuse_jacobian` (modified Newton) the factorization is kept while the correction
@@ -133,7 +135,15 @@ pub fn newton(
         }
         let eps = problem.apply(&work.delta);
         report.last_correction = eps;
-        if eps <= 1.0 {
+        // Error left after this correction: ≈ eps·θ/(1 − θ) for a contraction rate θ
+        // (Hairer & Wanner, Solving ODEs II, §IV.8); before θ is known, eps itself.
+        let theta = eps / previous;
+        let remaining = if it > 1 && theta < 0.9 {
+            eps * theta / (1.0 - theta)
+        } else {
+            eps
+        };
+        if eps <= 1.0 || remaining <= 1.0 {
             let viol = problem.constraint_violation();
             report.constraint_violation = viol;
             if viol <= settings.constraint_tolerance {
