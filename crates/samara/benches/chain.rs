@@ -24,10 +24,11 @@ fn main() {
     };
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     println!(
-        "{:<10} {:>5} {:>5} {:>9} {:>7} {:>9} {:>30} {:>11} {:>9}",
+        "{:<10} {:>5} {:>5} {:<8} {:>9} {:>7} {:>9} {:>30} {:>11} {:>9}",
         "joints",
         "N",
         "ρ∞",
+        "newton",
         "wall [s]",
         "it/step",
         "ms/step",
@@ -48,20 +49,40 @@ fn main() {
             };
             let model = loaded.model;
             let sys = System::new(&model);
-            for def in &model.analyses {
-                let mut hist = History::default();
-                let clock = Instant::now();
-                let s = run_analysis(
-                    &sys,
-                    def,
-                    State::initial(&model, sys.n_multipliers),
-                    &mut hist,
-                    &mut |_| {},
-                )
-                .expect("in-memory recording");
-                let wall = clock.elapsed().as_secs_f64();
+            let variants = model.analyses.iter().flat_map(|d| {
+                let mut m = d.clone();
+                if let samara::model::AnalysisKind::Dynamic(s) = &mut m.kind {
+                    s.jacobian = samara::model::JacobianUpdate::Modified;
+                }
+                [(d.clone(), "full"), (m, "modified")]
+            });
+            for (def, newton) in variants {
+                let def = &def;
+                // The machine is shared: small runs are repeated and the fastest is kept.
+                let repeats = if n <= 100 { 3 } else { 1 };
+                let mut best = f64::INFINITY;
+                let mut kept = None;
+                for _ in 0..repeats {
+                    let mut hist = History::default();
+                    let clock = Instant::now();
+                    let s = run_analysis(
+                        &sys,
+                        def,
+                        State::initial(&model, sys.n_multipliers),
+                        &mut hist,
+                        &mut |_| {},
+                    )
+                    .expect("in-memory recording");
+                    best = best.min(clock.elapsed().as_secs_f64());
+                    kept = Some((s, hist));
+                }
+                let (s, hist) = kept.expect("at least one run");
+                let wall = best;
                 if let Some(f) = &s.failure {
-                    println!("{kind:<10} {n:>5} {:>5}  FAILED: {}", def.name, f.reason);
+                    println!(
+                        "{kind:<10} {n:>5} {:>5} {newton:<8} FAILED: {}",
+                        def.name, f.reason
+                    );
                     continue;
                 }
                 let first = &hist.frames[0];
@@ -76,13 +97,13 @@ fn main() {
                     + last.state.nodes[n - 1].r() * nalgebra::Vector3::new(0.05, 0.0, 0.0);
                 let rho = def.name.trim_start_matches("rho");
                 println!(
-                    "{kind:<10} {n:>5} {rho:>5} {wall:>9.3} {:>7.2} {:>9.3} {:>30} {drift:>11.3e} {:>9.2e}",
+                    "{kind:<10} {n:>5} {rho:>5} {newton:<8} {wall:>9.3} {:>7.2} {:>9.3} {:>30} {drift:>11.3e} {:>9.2e}",
                     s.newton_iterations as f64 / s.steps as f64,
                     1e3 * wall / s.steps as f64,
                     format!("({:.4}, {:.4}, {:.4})", tip.x, tip.y, tip.z),
                     s.max_constraint_violation
                 );
-                let key = format!("{kind} ρ∞={rho}");
+                let key = format!("{kind} ρ∞={rho} {newton} Newton");
                 match growth.iter_mut().find(|(k, _)| *k == key) {
                     Some((_, v)) => v.push((n as f64, wall)),
                     None => growth.push((key, vec![(n as f64, wall)])),
