@@ -276,20 +276,7 @@ pub fn run_dynamic(
         mu: vec![0.0; sys.n_multipliers],
         factored_h: f64::NAN,
     };
-    let mut summary = AnalysisSummary {
-        name: name.to_string(),
-        kind: "dynamic",
-        steps: 0,
-        newton_iterations: 0,
-        rejected_steps: 0,
-        factorizations: 0,
-        fallbacks: 0,
-        wall_time: Default::default(),
-        final_state: State::default(),
-        max_constraint_violation: 0.0,
-        warnings: Vec::new(),
-        failure: None,
-    };
+    let mut summary = AnalysisSummary::new(name, "dynamic");
     let fail = |summary: &mut AnalysisSummary, time: f64, reason: String, hint: Option<String>| {
         summary.failure = Some(SolverFailure {
             analysis: name.to_string(),

@@ -94,6 +94,26 @@ pub struct AnalysisSummary {
     pub failure: Option<SolverFailure>,
 }
 
+impl AnalysisSummary {
+    /// An analysis that has not taken a step yet.
+    pub fn new(name: &str, kind: &'static str) -> Self {
+        Self {
+            name: name.to_string(),
+            kind,
+            steps: 0,
+            newton_iterations: 0,
+            rejected_steps: 0,
+            factorizations: 0,
+            fallbacks: 0,
+            wall_time: Duration::ZERO,
+            final_state: State::default(),
+            max_constraint_violation: 0.0,
+            warnings: Vec::new(),
+            failure: None,
+        }
+    }
+}
+
 /// Progress callback: fraction of the analysis done, in [0, 1].
 pub type Progress<'a> = &'a mut dyn FnMut(f64);
 

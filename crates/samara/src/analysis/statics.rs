@@ -183,20 +183,7 @@ pub fn run_static(
     let mut phi = vec![0.0; sys.n_multipliers];
     let mut total = vec![0.0; sys.n_config()];
     let mut mu = vec![0.0; sys.n_multipliers];
-    let mut summary = AnalysisSummary {
-        name: name.to_string(),
-        kind: "static",
-        steps: 0,
-        newton_iterations: 0,
-        rejected_steps: 0,
-        factorizations: 0,
-        fallbacks: 0,
-        wall_time: Default::default(),
-        final_state: State::default(),
-        max_constraint_violation: 0.0,
-        warnings: Vec::new(),
-        failure: None,
-    };
+    let mut summary = AnalysisSummary::new(name, "static");
     let ctx_full = sys.context(settings.time, 1.0);
     let penalty = settings.solver.penalty
         * characteristic_stiffness(sys, &mut asm, &state, &ctx_full, &mut matrix);
