@@ -1,6 +1,7 @@
 //! `samara`: run, check and describe multibody models.
 
 mod info;
+mod plot;
 mod report;
 
 use clap::{Parser, Subcommand};
@@ -46,6 +47,17 @@ enum Command {
     },
     /// Print the JSON Schema of the model file.
     Schema,
+    /// Plot time histories of channels, e.g. `position:bob:z`, `joint_force:pivot:x`, `kinetic_energy`.
+    Plot {
+        /// Results file (NetCDF) written by `samara run`.
+        results: PathBuf,
+        /// Channels: `variable` or `variable:node_or_joint:component` (x, y, z; w for quaternions).
+        #[arg(required = true)]
+        channels: Vec<String>,
+        /// Figure file, .png or .svg [default: `<results stem>.png` beside the results file].
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+    },
     /// Write a ParaView time series (.pvd + one .vtu per output time) from a results file.
     Vtk {
         /// Results file (NetCDF) written by `samara run`.
@@ -72,6 +84,26 @@ fn main() -> ExitCode {
                 samara::output::ResultsReader::open(&results).and_then(|mut r| info::info(&mut r));
             match r {
                 Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(EXIT_MODEL)
+                }
+            }
+        }
+        Command::Plot {
+            results,
+            channels,
+            out,
+        } => {
+            let out = out.unwrap_or_else(|| results.with_extension("png"));
+            let done = samara::output::ResultsReader::open(&results)
+                .map_err(|e| e.to_string())
+                .and_then(|mut r| plot::plot(&mut r, &channels, &out));
+            match done {
+                Ok(()) => {
+                    println!("{}", out.display());
+                    ExitCode::SUCCESS
+                }
                 Err(e) => {
                     eprintln!("error: {e}");
                     ExitCode::from(EXIT_MODEL)

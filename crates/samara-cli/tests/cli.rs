@@ -488,3 +488,58 @@ fn vtk_series_reads_back_with_a_vtk_reader() {
     let global = (g[3].powi(2) + g[4].powi(2) + g[5].powi(2)).sqrt();
     assert!((stored - global).abs() < 1e-9 * stored.max(1.0));
 }
+
+#[test]
+fn plot_writes_png_and_svg_and_suggests_channel_names() {
+    let (dir, path) = pendulum_results();
+    let png = dir.path().join("swing.png");
+    let o = samara(&[
+        "plot",
+        path.to_str().unwrap(),
+        "position:bob:z",
+        "joint_force:pivot:y",
+        "kinetic_energy",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&png).unwrap();
+    assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n") && bytes.len() > 20_000);
+    let svg = dir.path().join("swing.svg");
+    let o = samara(&[
+        "plot",
+        path.to_str().unwrap(),
+        "orientation:bob:w",
+        "--out",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(
+        text.starts_with("<svg") && text.contains("time [s]") && text.contains("orientation:bob:w")
+    );
+    // Unknown channels: a clear error with the closest name.
+    let o = samara(&["plot", path.to_str().unwrap(), "position:bobb:z"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(
+        e.contains("unknown channel") && e.contains("did you mean 'position:bob:z'"),
+        "{e}"
+    );
+    let o = samara(&["plot", path.to_str().unwrap(), "kinetic_enrgy"]);
+    assert!(
+        stderr(&o).contains("did you mean 'kinetic_energy'"),
+        "{}",
+        stderr(&o)
+    );
+    let o = samara(&["plot", path.to_str().unwrap(), "position:bob:q"]);
+    assert!(stderr(&o).contains("component 'q'"), "{}", stderr(&o));
+    let o = samara(&[
+        "plot",
+        path.to_str().unwrap(),
+        "kinetic_energy",
+        "--out",
+        "figure.pdf",
+    ]);
+    assert!(stderr(&o).contains(".png or .svg"), "{}", stderr(&o));
+}

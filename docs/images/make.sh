@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Regenerates the README's pictures with samara's own commands.
+# Run from anywhere: docs/images/make.sh
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+cargo build --release --quiet
+samara=target/release/samara
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+$samara run examples/pendulum.toml --out "$tmp/pendulum" --quiet > /dev/null
+$samara plot "$tmp/pendulum/swing.nc" position:bob:x position:bob:z joint_force:pivot:y \
+    kinetic_energy potential_energy --out docs/images/pendulum.png
+$samara run examples/double_pendulum.toml --out "$tmp/double" --quiet > /dev/null
+$samara plot "$tmp/double/swing.nc" position:bob2:x position:bob2:z kinetic_energy potential_energy \
+    --out docs/images/double_pendulum.png
+$samara run examples/heavy_top.toml --out "$tmp/top" --quiet > /dev/null
+$samara plot "$tmp/top/precession.nc" orientation:top:w orientation:top:x orientation:top:y orientation:top:z \
+    joint_force:pivot:x joint_force:pivot:y joint_force:pivot:z --out docs/images/heavy_top.png
