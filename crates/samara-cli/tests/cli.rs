@@ -445,12 +445,17 @@ fn vtk_series_reads_back_with_a_vtk_reader() {
     let IOBuffer::F64(points) = &piece.points else {
         panic!("points not f64")
     };
-    assert_eq!(points.len(), 6);
+    // The bob's node, the pivot, the bob's CG (no offset: on the node).
+    assert_eq!(points.len(), 9);
     let mut rd = FileReader::open(&path).unwrap();
     let x = rd.read_var_f64("position").unwrap();
     for i in 0..3 {
         assert!((points[i] - x[3 * 500 + i]).abs() < 1e-12);
         assert!(points[3 + i].abs() < 1e-9, "pivot at the origin");
+        assert!(
+            (points[6 + i] - x[3 * 500 + i]).abs() < 1e-12,
+            "CG on the node"
+        );
     }
     let names: Vec<&str> = piece
         .data

@@ -73,6 +73,7 @@ pub struct ResultsReader {
     pub format_version: i32,
     pub node_names: Vec<String>,
     pub joint_names: Vec<String>,
+    pub body_names: Vec<String>,
     /// Complete output times in the file.
     pub records: usize,
 }
@@ -149,12 +150,14 @@ impl ResultsReader {
         }
         let node_names = names(&mut reader, "node_name");
         let joint_names = names(&mut reader, "joint_name");
+        let body_names = names(&mut reader, "body_name");
         Ok(Self {
             reader,
             path,
             format_version,
             node_names,
             joint_names,
+            body_names,
             records: complete,
         })
     }

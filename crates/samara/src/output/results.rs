@@ -125,11 +125,14 @@ impl ResultsFile {
             .iter()
             .map(|n| n.name.len())
             .chain(model.joints.iter().map(|j| j.name.len()))
+            .chain(model.bodies.iter().map(|b| b.name.len()))
             .max()
             .unwrap_or(1)
             .max(1);
         let strlen = d.add_dim("name_strlen", longest);
         let joint = (n_joints > 0).then(|| d.add_dim("joint", n_joints));
+        let n_bodies = model.bodies.len();
+        let body = (n_bodies > 0).then(|| d.add_dim("body", n_bodies));
 
         let text = |s: &str| AttrValue::Text(s.to_string());
         let var = |d: &mut Definition,
@@ -168,6 +171,35 @@ impl ResultsFile {
             "",
             "node name",
         );
+        let body_vars = body.map(|b| {
+            (
+                var(
+                    &mut d,
+                    "body_name",
+                    NcType::Char,
+                    &[b, strlen],
+                    "",
+                    "body name",
+                ),
+                var(
+                    &mut d,
+                    "body_node",
+                    NcType::Int,
+                    &[b],
+                    "",
+                    "index of the body's node in `node`",
+                ),
+                var(
+                    &mut d,
+                    "body_cg_offset",
+                    NcType::Double,
+                    &[b, vec3],
+                    "m",
+                    "centre of gravity relative to the node, node frame",
+                ),
+                var(&mut d, "body_mass", NcType::Double, &[b], "kg", "body mass"),
+            )
+        });
         let joint_name = joint.map(|j| {
             var(
                 &mut d,
@@ -354,6 +386,21 @@ impl ResultsFile {
         writer
             .put_fixed_text(node_name, &names)
             .map_err(|e| nc_err(&path, e))?;
+        if let Some((bn, bnode, boff, bmass)) = body_vars {
+            let e = |err| nc_err(&path, err);
+            let names: Vec<&str> = model.bodies.iter().map(|b| b.name.as_str()).collect();
+            writer.put_fixed_text(bn, &names).map_err(e)?;
+            let nodes: Vec<i32> = model.bodies.iter().map(|b| b.node as i32).collect();
+            writer.put_fixed_i32(bnode, &nodes).map_err(e)?;
+            let off: Vec<f64> = model
+                .bodies
+                .iter()
+                .flat_map(|b| b.cg_offset.iter().copied())
+                .collect();
+            writer.put_fixed_f64(boff, &off).map_err(e)?;
+            let mass: Vec<f64> = model.bodies.iter().map(|b| b.mass).collect();
+            writer.put_fixed_f64(bmass, &mass).map_err(e)?;
+        }
         if let Some(jn) = joint_name {
             let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
             writer

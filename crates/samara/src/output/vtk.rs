@@ -1,11 +1,12 @@
 //! ParaView time series from a results file: one VTK XML UnstructuredGrid (`.vtu`) per
 //! output time and a `.pvd` collection that indexes them by time.
 //!
-//! Points are the nodes followed by the joints (as vertex cells). Point data:
-//! `kind` (0 node, 1 joint), `index` (within its kind), `frame_x`/`frame_y`/`frame_z`
-//! (node frame, or joint frame A, global components — glyph them to see orientations),
-//! `velocity`, `angular_velocity` (nodes; zero on joints), `joint_force`,
-//! `joint_moment` (joints, **global** components; zero on nodes).
+//! Points are the nodes, then the joints, then the bodies' centres of gravity (as vertex
+//! cells). Point data: `kind` (0 node, 1 joint, 2 body), `index` (within its kind),
+//! `frame_x`/`frame_y`/`frame_z` (node frame, joint frame A, or the body's node frame;
+//! global components — glyph them to see orientations), `velocity`, `angular_velocity`
+//! (nodes and bodies' CGs; zero on joints), `joint_force`, `joint_moment` (joints,
+//! **global** components; zero elsewhere), `mass` (bodies; zero elsewhere).
 
 use super::reader::{ReadError, ResultsReader};
 use std::fmt::Write as _;
@@ -76,7 +77,17 @@ pub fn write_vtk(reader: &mut ResultsReader, dir: &Path) -> Result<VtkSeries, cr
     } else {
         Default::default()
     };
-    let np = nn + nj;
+    let nb = reader.body_names.len();
+    let (body_node, body_off, body_mass) = if nb > 0 {
+        (
+            reader.read("body_node").map_err(rd)?,
+            reader.read("body_cg_offset").map_err(rd)?,
+            reader.read("body_mass").map_err(rd)?,
+        )
+    } else {
+        Default::default()
+    };
+    let np = nn + nj + nb;
     let mut files = Vec::with_capacity(time.len());
     let mut pvd = String::from(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n",
@@ -105,6 +116,28 @@ pub fn write_vtk(reader: &mut ResultsReader, dir: &Path) -> Result<VtkSeries, cr
                 }
             }
         }
+        // Bodies: CG = x + R c, frame of their node, CG velocity v + ω × R c.
+        let mut body_pts = Vec::with_capacity(3 * nb);
+        let mut body_vel = Vec::with_capacity(3 * nb);
+        let mut body_omega = Vec::with_capacity(3 * nb);
+        for b in 0..nb {
+            let i = body_node[b] as usize;
+            let f = frames[i];
+            let c = &body_off[3 * b..3 * b + 3];
+            let rc = [0, 1, 2].map(|r| f[0][r] * c[0] + f[1][r] * c[1] + f[2][r] * c[2]);
+            let x = &pos[(k * nn + i) * 3..(k * nn + i) * 3 + 3];
+            let v = &vel[(k * nn + i) * 3..(k * nn + i) * 3 + 3];
+            let w = &omega[(k * nn + i) * 3..(k * nn + i) * 3 + 3];
+            let wxrc = [
+                w[1] * rc[2] - w[2] * rc[1],
+                w[2] * rc[0] - w[0] * rc[2],
+                w[0] * rc[1] - w[1] * rc[0],
+            ];
+            body_pts.extend((0..3).map(|r| x[r] + rc[r]));
+            body_vel.extend((0..3).map(|r| v[r] + wxrc[r]));
+            body_omega.extend_from_slice(w);
+            frames[nn + nj + b] = f;
+        }
         // Reactions to global components: F = Σ_e F_e a_e.
         let global = |v: &[f64], j: usize| -> [f64; 3] {
             let a = &frames[nn + j];
@@ -118,7 +151,8 @@ pub fn write_vtk(reader: &mut ResultsReader, dir: &Path) -> Result<VtkSeries, cr
         );
         let points = (0..nn)
             .flat_map(|i| pos[(k * nn + i) * 3..(k * nn + i) * 3 + 3].to_vec())
-            .chain((0..nj).flat_map(|j| jpos[(k * nj + j) * 3..(k * nj + j) * 3 + 3].to_vec()));
+            .chain((0..nj).flat_map(|j| jpos[(k * nj + j) * 3..(k * nj + j) * 3 + 3].to_vec()))
+            .chain(body_pts.iter().copied());
         data_array(&mut out, "Points", 3, points);
         out.push_str("      </Points>\n      <Cells>\n");
         let ints = |out: &mut String, name: &str, v: &mut dyn Iterator<Item = usize>| {
@@ -139,38 +173,58 @@ pub fn write_vtk(reader: &mut ResultsReader, dir: &Path) -> Result<VtkSeries, cr
         out.push_str(
             "\n        </DataArray>\n      </Cells>\n      <PointData Vectors=\"frame_x\">\n",
         );
-        data_array(
-            &mut out,
-            "kind",
-            1,
-            (0..np).map(|p| if p < nn { 0.0 } else { 1.0 }),
-        );
+        let kind = |p: usize| {
+            if p < nn {
+                0
+            } else if p < nn + nj {
+                1
+            } else {
+                2
+            }
+        };
+        data_array(&mut out, "kind", 1, (0..np).map(|p| kind(p) as f64));
+        let first = [0, nn, nn + nj];
         data_array(
             &mut out,
             "index",
             1,
-            (0..np).map(|p| if p < nn { p as f64 } else { (p - nn) as f64 }),
+            (0..np).map(|p| (p - first[kind(p)]) as f64),
         );
         for (e, name) in ["frame_x", "frame_y", "frame_z"].iter().enumerate() {
             data_array(&mut out, name, 3, frames.iter().flat_map(|f| f[e]));
         }
-        let node_vec = |v: &[f64]| -> Vec<f64> {
+        let node_vec = |v: &[f64], bodies: &[f64]| -> Vec<f64> {
             let mut o = v[k * nn * 3..(k + 1) * nn * 3].to_vec();
-            o.resize(np * 3, 0.0);
+            o.resize((nn + nj) * 3, 0.0);
+            o.extend_from_slice(bodies);
             o
         };
-        data_array(&mut out, "velocity", 3, node_vec(&vel).into_iter());
+        data_array(
+            &mut out,
+            "velocity",
+            3,
+            node_vec(&vel, &body_vel).into_iter(),
+        );
         data_array(
             &mut out,
             "angular_velocity",
             3,
-            node_vec(&omega).into_iter(),
+            node_vec(&omega, &body_omega).into_iter(),
         );
+        let mass = (0..np).map(|p| {
+            if p >= nn + nj {
+                body_mass[p - nn - nj]
+            } else {
+                0.0
+            }
+        });
+        data_array(&mut out, "mass", 1, mass);
         let joint_vec = |v: &[f64]| -> Vec<f64> {
             let mut o = vec![0.0; nn * 3];
             for j in 0..nj {
                 o.extend(global(v, j));
             }
+            o.resize(np * 3, 0.0);
             o
         };
         if nj > 0 {
