@@ -124,6 +124,19 @@ impl Joint {
         &self.components
     }
 
+    /// Current frames with the nodes' velocities (for convective terms).
+    fn frames_with_rates(&self, nodes: &[NodeState]) -> FramePair {
+        let mut f = self.frames(nodes);
+        for (k, s) in self.sides.iter().enumerate() {
+            if let Some(i) = s.node {
+                f.v[k] = nodes[i].v;
+                f.omega[k] = nodes[i].r() * nodes[i].w;
+            }
+        }
+        f
+    }
+
+    /// Current frames (positions, arms, axes); velocities left at zero.
     fn frames(&self, nodes: &[NodeState]) -> FramePair {
         let mut f = FramePair {
             x: [Vector3::zeros(); 2],
@@ -144,8 +157,6 @@ impl Joint {
                     f.x[k] = n.x;
                     f.arm[k] = r * s.offset;
                     f.axes[k] = r * s.axes;
-                    f.v[k] = n.v;
-                    f.omega[k] = r * n.w;
                 }
             }
         }
@@ -188,8 +199,18 @@ impl Constraint for Joint {
         b: Option<&mut DMatrix<f64>>,
     ) {
         let f = self.frames(nodes);
+        let Some(b) = b else {
+            // Values only (constraint-violation checks): no Jacobian rows.
+            for (row, &c) in self.components.iter().enumerate() {
+                phi[row] = match c {
+                    Component::Displacement(i) => displacement::value(&f, i),
+                    Component::Rotation(i) => rotation::value(&f, i),
+                };
+            }
+            return;
+        };
+        let mut b = Some(b);
         let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
-        let mut b = b;
         for (row, &c) in self.components.iter().enumerate() {
             let (value, b12) = self.row(&f, c);
             phi[row] = value;
@@ -264,7 +285,7 @@ impl Constraint for Joint {
     }
 
     fn acceleration_term(&self, _ctx: &EvalContext, nodes: &[NodeState], out: &mut [f64]) {
-        let f = self.frames(nodes);
+        let f = self.frames_with_rates(nodes);
         for (row, &c) in self.components.iter().enumerate() {
             out[row] = match c {
                 Component::Displacement(i) => displacement::convective(&f, i),
