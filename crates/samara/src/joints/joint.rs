@@ -209,28 +209,25 @@ impl Constraint for Joint {
             }
             return;
         };
-        let mut b = Some(b);
         let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
         for (row, &c) in self.components.iter().enumerate() {
             let (value, b12) = self.row(&f, c);
             phi[row] = value;
-            if let Some(b) = b.as_deref_mut() {
-                for (x, s) in self.sides.iter().enumerate() {
-                    if s.node.is_none() {
-                        continue;
+            for (x, s) in self.sides.iter().enumerate() {
+                if s.node.is_none() {
+                    continue;
+                }
+                let col = 6 * s.local;
+                for m in 0..3 {
+                    b[(row, col + m)] = b12[6 * x + m];
+                }
+                // Material rotation columns: b_φ R.
+                for m in 0..3 {
+                    let mut acc = 0.0;
+                    for l in 0..3 {
+                        acc += b12[6 * x + 3 + l] * rots[x][(l, m)];
                     }
-                    let col = 6 * s.local;
-                    for m in 0..3 {
-                        b[(row, col + m)] = b12[6 * x + m];
-                    }
-                    // Material rotation columns: b_φ R.
-                    for m in 0..3 {
-                        let mut acc = 0.0;
-                        for l in 0..3 {
-                            acc += b12[6 * x + 3 + l] * rots[x][(l, m)];
-                        }
-                        b[(row, col + 3 + m)] = acc;
-                    }
+                    b[(row, col + 3 + m)] = acc;
                 }
             }
         }

@@ -44,6 +44,8 @@ struct DiagnosticVars {
 /// Writes one analysis's results as they are computed (a [`Recorder`]).
 pub struct ResultsFile {
     writer: Writer,
+    /// The file's path (kept apart from the writer so errors need no allocation per record).
+    path: PathBuf,
     vars: Vars,
     /// Per-record scratch (no allocation per record).
     buf3: Vec<f64>,
@@ -409,6 +411,7 @@ impl ResultsFile {
         }
         Ok(Self {
             writer,
+            path: path.clone(),
             vars: Vars {
                 time: time_v,
                 load_factor,
@@ -498,8 +501,8 @@ impl Recorder for ResultsFile {
     fn record(&mut self, sys: &System, frame: &OutputFrame) -> Result<(), crate::Error> {
         let v = &self.vars;
         let w = &mut self.writer;
-        let path = w.path().to_path_buf();
-        let e = |err| nc_err(&path, err);
+        let path = &self.path;
+        let e = |err| nc_err(path, err);
         let nodes = &frame.state.nodes;
         w.set_record_f64(v.time, &[frame.time]).map_err(e)?;
         if let Some(lf) = v.load_factor {

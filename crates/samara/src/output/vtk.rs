@@ -41,8 +41,9 @@ fn data_array(out: &mut String, name: &str, comps: usize, values: impl Iterator<
     out.push_str("\n        </DataArray>\n");
 }
 
-/// Writes `<dir>/<stem>.pvd` and `<dir>/<stem>_NNNNNN.vtu`. Existing files are
-/// overwritten only if they belong to the same series (same stem); `dir` is created.
+/// Writes `<dir>/<stem>.pvd` and `<dir>/<stem>_NNNNNN.vtu`, creating `dir`. These are
+/// derived files: an earlier series of the same stem in `dir` is replaced (the results
+/// file itself is only read).
 pub fn write_vtk(reader: &mut ResultsReader, dir: &Path) -> Result<VtkSeries, crate::Error> {
     let source = reader.path().to_path_buf();
     let rd = |e: ReadError| crate::Error::Output {
