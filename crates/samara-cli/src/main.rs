@@ -183,14 +183,24 @@ fn check(path: &Path) -> ExitCode {
     };
     let m = &loaded.model;
     let sys = System::new(m);
+    for w in &sys.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    let dropped: usize = sys.loops.iter().map(|l| l.dropped.len()).sum();
     println!(
-        "{}: ok — model '{}': {} nodes, {} bodies, {} joints ({} constraint equations), {} springs, {} loads, {} analyses",
+        "{}: ok — model '{}': {} nodes, {} bodies, {} joints ({} constraint equations{}, {} joint coordinates), {} springs, {} loads, {} analyses",
         path.display(),
         m.name,
         m.nodes.len(),
         m.bodies.len(),
         m.joints.len(),
         sys.n_multipliers,
+        if dropped > 0 {
+            format!(" after dropping {dropped} redundant")
+        } else {
+            String::new()
+        },
+        sys.n_coordinates,
         m.springs.len(),
         m.loads.len(),
         m.analyses.len()
@@ -205,6 +215,9 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
     let model = &loaded.model;
     let out_dir = out.unwrap_or_else(|| path.parent().unwrap_or(Path::new(".")).join("out"));
     let sys = System::new(model);
+    for w in &sys.warnings {
+        eprintln!("warning: {w}");
+    }
     let show_progress = !quiet && std::io::stderr().is_terminal();
     let clock = Instant::now();
     let mut rows = Vec::new();
@@ -213,7 +226,7 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
     for def in &model.analyses {
         let initial = match def.start_from {
             Some(i) => finals[i].clone(),
-            None => State::initial(model, sys.n_multipliers),
+            None => State::initial(model, &sys),
         };
         let mut file = match ResultsFile::create(&out_dir, model, Some(path), &sys, def) {
             Ok(f) => f,

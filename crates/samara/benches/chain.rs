@@ -68,7 +68,7 @@ fn main() {
                     let s = run_analysis(
                         &sys,
                         def,
-                        State::initial(&model, sys.n_multipliers),
+                        State::initial(&model, &sys),
                         &mut hist,
                         &mut |_| {},
                     )

@@ -1,5 +1,6 @@
-//! Issue #2, verification 7: every element's and constraint's tangents against finite
-//! differences, through the one generic checker in `samara::tangent_check`.
+//! Issues #2 and #3, verification 7: every element's and constraint's tangents against
+//! finite differences, through the one generic checker in `samara::tangent_check`; every
+//! joint type, with and without the elements attached to its coordinates.
 //!
 //! States are random (seeded), away from the constraint manifold and with non-zero
 //! velocities and accelerations, so that every term of every tangent is exercised.
@@ -10,8 +11,10 @@ use nalgebra::{Matrix3, Vector3};
 use samara::elements::{AppliedLoad, Element, EvalContext, RigidBody, SpringDamper};
 use samara::joints::{Constraint, Joint};
 use samara::math::Rotation;
-use samara::model::{JointType, LoadFrame, NodeRef, TimeFunction};
-use samara::system::NodeState;
+use samara::model::{
+    BacklashDef, ComponentDef, ForceLaw, JointDef, JointType, LoadFrame, NodeRef, TimeFunction,
+};
+use samara::system::{Coordinate, NodeState};
 use samara::tangent_check::{check_constraint, check_element};
 
 const TOL: f64 = 1e-6;
@@ -107,24 +110,83 @@ fn elements(rng: &mut Lcg) -> Vec<Box<dyn Element>> {
     ]
 }
 
+const ALL_JOINTS: [JointType; 11] = [
+    JointType::Fixed,
+    JointType::Revolute,
+    JointType::Prismatic,
+    JointType::Screw,
+    JointType::Cylindrical,
+    JointType::Planar,
+    JointType::Spherical,
+    JointType::Universal,
+    JointType::PointOnLine,
+    JointType::PointOnPlane,
+    JointType::Prescribed,
+];
+
+/// Everything that can hang on a free component: a table spring, a linear damper, a
+/// backlash contact (engaged at the random coordinate values used here), an input and,
+/// on every other component, a drive.
+fn attachments(rng: &mut Lcg, c: usize) -> ComponentDef {
+    ComponentDef {
+        spring: Some(ForceLaw::Table {
+            x: vec![-2.0, -0.1, 0.3, 2.0],
+            f: vec![-50.0, -1.0, 4.0, 90.0],
+        }),
+        damper: Some(ForceLaw::Linear {
+            coefficient: 3.0,
+            reference: 0.0,
+        }),
+        backlash: Some(BacklashDef {
+            center: 0.05 * rng.next(),
+            half_width: 0.01,
+            stiffness: 400.0,
+            damping: 2.0,
+        }),
+        drive: c.is_multiple_of(2).then_some(TimeFunction::Sine {
+            amplitude: 0.4,
+            frequency: 1.7,
+            phase: 0.2,
+            offset: 0.1,
+            start: 0.0,
+        }),
+        input: Some(("u".into(), TimeFunction::Constant(2.5))),
+    }
+}
+
 fn joints(rng: &mut Lcg, nodes: &[NodeState]) -> Vec<Box<dyn Constraint>> {
     let mut out: Vec<Box<dyn Constraint>> = Vec::new();
-    for kind in [JointType::Fixed, JointType::Spherical, JointType::Revolute] {
-        for (a, b) in [
+    for kind in ALL_JOINTS {
+        for (variant, (a, b)) in [
             (NodeRef::Node(0), NodeRef::Node(1)),
             (NodeRef::Ground, NodeRef::Node(2)),
             (NodeRef::Node(1), NodeRef::Ground),
-        ] {
+        ]
+        .into_iter()
+        .enumerate()
+        {
             let axes = *Rotation::exp(&rng.vec3(1.0)).matrix();
-            out.push(Box::new(Joint::new(
-                format!("{kind:?}"),
+            let mut def = JointDef::new(
+                format!("{kind:?}.{variant}"),
                 kind,
                 a,
                 b,
                 rng.vec3(1.0),
                 axes,
-                nodes,
-            )));
+            );
+            // Separate origins on the two sides (the frames need not coincide).
+            def.position_b = def.position_a + rng.vec3(0.2);
+            def.pitch = 0.05;
+            // Variant 0 bare; variants 1, 2 with elements on every free component (which
+            // also creates the Bryant coordinates of joints with three free rotations).
+            if variant > 0 {
+                for c in 0..6 {
+                    if samara::joints::rows::has_coordinate(kind, c) {
+                        def.components[c] = Some(attachments(rng, c + variant));
+                    }
+                }
+            }
+            out.push(Box::new(Joint::new(&def, nodes)));
         }
     }
     out
@@ -146,24 +208,36 @@ fn every_element_tangent_matches_finite_differences() {
     }
 }
 
+/// Every joint type, bare and with every coordinate element, on both kinds of sides.
 #[test]
 fn every_constraint_tangent_matches_finite_differences() {
     let mut rng = Lcg(11);
     for trial in 0..5 {
-        // Frames attached in one configuration, checked in another (Φ ≠ 0).
+        // Frames attached in one configuration, checked in another (Φ ≠ 0), with
+        // coordinates away from their consistent values.
         let reference = random_nodes(&mut rng, 3);
         let nodes = random_nodes(&mut rng, 3);
         for c in joints(&mut rng, &reference) {
+            let coords: Vec<Coordinate> = (0..c.n_coordinates())
+                .map(|_| Coordinate {
+                    q: 0.8 * rng.next(),
+                    v: 2.0 * rng.next(),
+                    a: 0.0,
+                })
+                .collect();
             let mu: Vec<f64> = (0..c.n_equations()).map(|_| 10.0 * rng.next()).collect();
-            let rep = check_constraint(c.as_ref(), &ctx(), &nodes, &mu);
+            let rep = check_constraint(c.as_ref(), &ctx(), &nodes, &coords, &mu);
             assert!(
-                rep.b.relative < TOL && rep.k.relative < TOL,
+                rep.b.relative < TOL
+                    && rep.k.relative < TOL
+                    && rep.coordinate_stiffness.relative < TOL
+                    && rep.coordinate_damping.relative < TOL,
                 "trial {trial}, {}: {rep:?}",
                 c.name()
             );
-            // Second difference at ε = 1e-4: O(ε²) truncation and O(u/ε²) round-off ≈ 1e-8.
+            // Differences at ε = 1e-4: O(ε²) truncation and O(u/ε²) round-off ≈ 1e-8.
             assert!(
-                rep.convective < 1e-5,
+                rep.convective < 1e-5 && rep.velocity < 1e-5,
                 "trial {trial}, {}: {rep:?}",
                 c.name()
             );

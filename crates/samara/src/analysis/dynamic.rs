@@ -2,7 +2,7 @@
 //! index-3 constraints, Newton–Raphson per step, and step cutting on Newton failure.
 
 use super::generalized_alpha::GeneralizedAlpha;
-use super::initial::consistent_accelerations;
+use super::initial::{assemble_initial_state, consistent_accelerations};
 use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
@@ -29,8 +29,11 @@ struct StepProblem<'a> {
     asm: &'a mut Assembler,
     prev: &'a State,
     cur: &'a mut State,
-    /// hΔq_n per configuration unknown (6 per node).
+    /// hΔq_n per configuration unknown (6 per node, then the joint coordinates).
     hdq: &'a mut [f64],
+    /// Configuration and multiplier parts of the current Newton correction.
+    dcfg: &'a mut [f64],
+    dlam: &'a mut [f64],
     t_ops: &'a mut [Matrix3<f64>],
     phi: &'a mut [f64],
     /// Configuration change of the current correction (Δx + Bᵀ Δν).
@@ -49,6 +52,16 @@ impl StepProblem<'_> {
             let d = &self.hdq[6 * i..6 * i + 6];
             n.x = p.x + Vector3::new(d[0], d[1], d[2]);
             n.rot = p.rot.compose_exp(&Vector3::new(d[3], d[4], d[5]));
+        }
+        let n6 = 6 * self.cur.nodes.len();
+        for (j, (c, p)) in self
+            .cur
+            .coords
+            .iter_mut()
+            .zip(&self.prev.coords)
+            .enumerate()
+        {
+            c.q = p.q + self.hdq[n6 + j];
         }
     }
 }
@@ -71,21 +84,24 @@ impl NewtonSystem for StepProblem<'_> {
 
     fn apply(&mut self, delta: &[f64]) -> f64 {
         let (bp, gp) = (self.beta_p, self.gamma_p);
-        let n_cfg = self.sys.n_config();
-        let n_mult = self.sys.n_multipliers;
-        self.change.copy_from_slice(&delta[..n_cfg]);
+        self.asm.configuration_of(self.sys, delta, self.dcfg);
+        self.change.copy_from_slice(self.dcfg);
         if self.asm.formulation() == Formulation::StabilizedIndex2 {
-            self.asm
-                .add_projection(self.sys, &delta[n_cfg + n_mult..], self.change);
+            self.asm.add_projection(self.sys, delta, self.change);
         }
         for (i, n) in self.cur.nodes.iter_mut().enumerate() {
-            let d = &delta[6 * i..6 * i + 6];
+            let d = &self.dcfg[6 * i..6 * i + 6];
             let dx = Vector3::new(d[0], d[1], d[2]);
             let dth = Vector3::new(d[3], d[4], d[5]);
             n.v += dx * gp;
             n.w += dth * gp;
             n.a += dx * bp;
             n.wd += dth * bp;
+        }
+        let n6 = 6 * self.cur.nodes.len();
+        for (c, d) in self.cur.coords.iter_mut().zip(&self.dcfg[n6..]) {
+            c.v += d * gp;
+            c.a += d * bp;
         }
         let mut worst: f64 = 0.0;
         for (q, c) in self.hdq.iter_mut().zip(self.change.iter()) {
@@ -94,12 +110,8 @@ impl NewtonSystem for StepProblem<'_> {
         }
         self.update_configuration();
         let s = 1.0 / self.coef.multiplier_scale;
-        for (l, d) in self
-            .cur
-            .lambda
-            .iter_mut()
-            .zip(&delta[n_cfg..n_cfg + n_mult])
-        {
+        self.asm.multipliers_of(self.sys, delta, self.dlam);
+        for (l, d) in self.cur.lambda.iter_mut().zip(self.dlam.iter()) {
             *l += d * s;
         }
         worst
@@ -122,9 +134,11 @@ struct Integrator<'a> {
     work: NewtonWork,
     state: State,
     trial: State,
-    /// Algorithmic accelerations a_n (6 per node).
+    /// Algorithmic accelerations a_n (6 per node, then one per coordinate).
     acc: Vec<f64>,
     hdq: Vec<f64>,
+    dcfg: Vec<f64>,
+    dlam: Vec<f64>,
     t_ops: Vec<Matrix3<f64>>,
     phi: Vec<f64>,
     change: Vec<f64>,
@@ -170,6 +184,19 @@ impl Integrator<'_> {
             n.v = Vector3::new(v1[0], v1[1], v1[2]);
             n.w = Vector3::new(v1[3], v1[4], v1[5]);
         }
+        let n6 = 6 * self.state.nodes.len();
+        for (j, (c, p)) in self
+            .trial
+            .coords
+            .iter_mut()
+            .zip(&self.state.coords)
+            .enumerate()
+        {
+            let an = self.acc[n6 + j];
+            let a1 = ga.algorithmic_acceleration(an, p.a, p.a);
+            c.v = p.v + h * (1.0 - ga.gamma) * an + h * ga.gamma * a1;
+            self.hdq[n6 + j] = h * (p.v + h * (0.5 - ga.beta) * an + h * ga.beta * a1);
+        }
         let scaling = self.settings.solver.scaling;
         let scale = if scaling { ga.beta * h * h } else { 1.0 };
         let coef = Coefficients {
@@ -195,6 +222,8 @@ impl Integrator<'_> {
             prev: &self.state,
             cur: &mut self.trial,
             hdq: &mut self.hdq,
+            dcfg: &mut self.dcfg,
+            dlam: &mut self.dlam,
             t_ops: &mut self.t_ops,
             phi: &mut self.phi,
             change: &mut self.change,
@@ -236,6 +265,11 @@ impl Integrator<'_> {
                 self.acc[6 * i + k] = ga.algorithmic_acceleration(an, vd0[k], vd1[k]);
             }
         }
+        let n6 = 6 * self.state.nodes.len();
+        for (j, (c, p)) in self.trial.coords.iter().zip(&self.state.coords).enumerate() {
+            let an = self.acc[n6 + j];
+            self.acc[n6 + j] = ga.algorithmic_acceleration(an, p.a, c.a);
+        }
         std::mem::swap(&mut self.state, &mut self.trial);
     }
 }
@@ -270,6 +304,8 @@ pub fn run_dynamic(
         state: initial,
         acc: vec![0.0; sys.n_config()],
         hdq: vec![0.0; sys.n_config()],
+        dcfg: vec![0.0; sys.n_config()],
+        dlam: vec![0.0; sys.n_multipliers],
         t_ops: vec![Matrix3::identity(); sys.n_nodes()],
         phi: vec![0.0; sys.n_multipliers],
         change: vec![0.0; sys.n_config()],
@@ -286,20 +322,43 @@ pub fn run_dynamic(
         });
     };
 
-    // Initial constraint violation and consistent accelerations.
+    // Consistent initial conditions: assembly onto the constraints, then accelerations.
     let ctx0 = sys.context(t0, 1.0);
-    sys.constraint_values(&ctx0, &it.state, &mut it.phi);
-    let viol0 = it.phi.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    if viol0 > settings.solver.tolerance {
-        summary.warnings.push(format!(
-            "the initial configuration violates the joints by up to {viol0:.3e} (more than the tolerance {:.1e}); the first step will pull the nodes onto the constraints",
-            settings.solver.tolerance
-        ));
-    }
-    // The initial-acceleration problem has the index-3 layout in either formulation.
+    // The initial problems have the index-3 layout in either formulation.
     let mut init_asm = Assembler::new(sys, Formulation::Index3);
     let mut init_lin = LinearSolver::new(init_asm.structure(), settings.solver.linear_solver);
     let mut init_matrix = BlockMatrix::zeros(init_asm.structure().clone());
+    match assemble_initial_state(
+        sys,
+        &mut it.state,
+        &ctx0,
+        settings.solver.tolerance,
+        &mut init_asm,
+        &mut init_lin,
+        &mut init_matrix,
+    ) {
+        Ok(report) => {
+            summary.warnings.extend(super::assembly_warnings(
+                sys,
+                &report,
+                settings.solver.tolerance,
+            ));
+            summary.assembly = Some(report);
+        }
+        Err(e) => {
+            fail(
+                &mut summary,
+                t0,
+                format!("cannot assemble the initial configuration: {e}"),
+                Some("check the joint positions and axes, the drives' values at the start time, and that the mechanism can reach them".into()),
+            );
+            summary.final_state = it.state.clone();
+            summary.wall_time = clock.elapsed();
+            return Ok(summary);
+        }
+    }
+    sys.constraint_values(&ctx0, &it.state, &mut it.phi);
+    let viol0 = it.phi.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let mut res0 = vec![0.0; init_asm.n_unknowns()];
     let init = consistent_accelerations(
         sys,
@@ -317,6 +376,7 @@ pub fn run_dynamic(
         .nodes
         .iter()
         .all(|nd| nd.a.iter().chain(nd.wd.iter()).all(|x| x.is_finite()))
+        && it.state.coords.iter().all(|c| c.a.is_finite())
         && it.state.lambda.iter().all(|x| x.is_finite());
     match init {
         Err(LinearError::Singular { block }) => {
@@ -344,6 +404,10 @@ pub fn run_dynamic(
         let v = [nd.a.x, nd.a.y, nd.a.z, nd.wd.x, nd.wd.y, nd.wd.z];
         it.acc[6 * i..6 * i + 6].copy_from_slice(&v);
     }
+    let n6 = 6 * sys.n_nodes();
+    for (j, c) in it.state.coords.iter().enumerate() {
+        it.acc[n6 + j] = c.a;
+    }
     it.mu.copy_from_slice(&it.state.lambda);
 
     let mut energy = Energy {
@@ -352,7 +416,8 @@ pub fn run_dynamic(
         external_work: 0.0,
         dissipated: 0.0,
     };
-    let mut p_ext = sys.external_power(&ctx0, &it.state);
+    // External power: applied loads, input ports, and the drives (rheonomic constraints).
+    let mut p_ext = sys.external_power(&ctx0, &it.state) + sys.drive_power(&it.state, &it.mu);
     let mut p_dis = sys.dissipated_power(&it.state);
     let record = |it: &Integrator,
                   energy: Energy,
@@ -411,7 +476,8 @@ pub fn run_dynamic(
                     grid_k += 1;
                 }
                 let ctx = sys.context(it.state.time, 1.0);
-                let p_ext1 = sys.external_power(&ctx, &it.state);
+                let p_ext1 =
+                    sys.external_power(&ctx, &it.state) + sys.drive_power(&it.state, &it.mu);
                 let p_dis1 = sys.dissipated_power(&it.state);
                 energy.external_work += 0.5 * h_try * (p_ext + p_ext1);
                 energy.dissipated += 0.5 * h_try * (p_dis + p_dis1);

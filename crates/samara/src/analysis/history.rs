@@ -14,6 +14,9 @@ pub struct Frame {
     pub load_factor: f64,
     /// Per joint: (force, moment) on B by A, frame-A components.
     pub reactions: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Per joint coordinate: generalized force from its elements and drive
+    /// (see [`System::coordinate_forces`]).
+    pub coordinate_forces: Vec<f64>,
     pub diagnostics: Option<StepDiagnostics>,
 }
 
@@ -42,12 +45,14 @@ impl History {
 
 impl Recorder for History {
     fn record(&mut self, sys: &System, frame: &OutputFrame) -> Result<(), crate::Error> {
-        let reactions = sys
-            .constraints
-            .iter()
-            .zip(&sys.multiplier_offsets)
-            .map(|(c, &off)| c.reactions(&frame.state.nodes, &frame.mu[off..off + c.n_equations()]))
-            .collect();
+        let ctx = sys.context(frame.state.time, frame.load_factor);
+        let mut reactions = vec![(Vector3::zeros(), Vector3::zeros()); sys.constraints.len()];
+        let mut all = vec![0.0; sys.n_rows];
+        sys.reactions(&ctx, frame.state, frame.mu, &mut all, |k, f, m| {
+            reactions[k] = (f, m)
+        });
+        let mut coordinate_forces = vec![0.0; sys.n_coordinates];
+        sys.coordinate_forces(&ctx, frame.state, frame.mu, &mut coordinate_forces);
         self.frames.push(Frame {
             time: frame.time,
             state: frame.state.clone(),
@@ -55,6 +60,7 @@ impl Recorder for History {
             constraint_violation: frame.constraint_violation,
             load_factor: frame.load_factor,
             reactions,
+            coordinate_forces,
             diagnostics: frame.diagnostics,
         });
         Ok(())

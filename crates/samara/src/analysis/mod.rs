@@ -12,7 +12,9 @@ mod statics;
 pub use dynamic::run_dynamic;
 pub use generalized_alpha::GeneralizedAlpha;
 pub use history::{Frame, History};
-pub use initial::consistent_accelerations;
+pub use initial::{
+    AssemblyError, AssemblyReport, assemble_initial_state, consistent_accelerations,
+};
 pub use statics::run_static;
 
 use crate::model::{AnalysisDef, AnalysisKind, Model};
@@ -89,6 +91,8 @@ pub struct AnalysisSummary {
     pub wall_time: Duration,
     pub final_state: State,
     pub max_constraint_violation: f64,
+    /// What the initial assembly moved (analyses that start from the model's state).
+    pub assembly: Option<AssemblyReport>,
     pub warnings: Vec<String>,
     /// Set when the analysis stopped before its end.
     pub failure: Option<SolverFailure>,
@@ -108,6 +112,7 @@ impl AnalysisSummary {
             wall_time: Duration::ZERO,
             final_state: State::default(),
             max_constraint_violation: 0.0,
+            assembly: None,
             warnings: Vec::new(),
             failure: None,
         }
@@ -143,7 +148,7 @@ pub fn run_all<R: Recorder>(
     for def in &model.analyses {
         let initial = match def.start_from {
             Some(i) => out[i].0.final_state.clone(),
-            None => State::initial(model, sys.n_multipliers),
+            None => State::initial(model, sys),
         };
         let mut rec = make_recorder(def)?;
         let mut p = |f: f64| progress(def, f);
@@ -155,6 +160,34 @@ pub fn run_all<R: Recorder>(
         }
     }
     Ok(out)
+}
+
+/// Warnings for nodes the initial assembly moved by more than the tolerance.
+pub(crate) fn assembly_warnings(sys: &System, r: &AssemblyReport, tol: f64) -> Vec<String> {
+    let mut out = Vec::new();
+    if r.violation_before <= tol {
+        return out;
+    }
+    let mut moved: Vec<String> = r
+        .moved
+        .iter()
+        .enumerate()
+        .filter(|(_, (d, a))| *d > tol || *a > tol)
+        .map(|(i, (d, a))| format!("'{}' by {d:.3e} m and {a:.3e} rad", sys.node_names[i]))
+        .collect();
+    let total = moved.len();
+    moved.truncate(10);
+    out.push(format!(
+        "the initial configuration violated the joints by up to {:.3e}; the assembly ({} iteration{}) moved {} node{}: {}{}",
+        r.violation_before,
+        r.iterations,
+        if r.iterations == 1 { "" } else { "s" },
+        total,
+        if total == 1 { "" } else { "s" },
+        moved.join(", "),
+        if total > 10 { ", …" } else { "" }
+    ));
+    out
 }
 
 /// A hint for a Newton failure, naming the block where the matrix is singular.

@@ -2,6 +2,7 @@
 //! gravity are scaled by the load factor λ_k = k/n, k = 1…n, each increment solved by
 //! Newton from the previous equilibrium; an increment that fails is bisected.
 
+use super::initial::assemble_initial_state;
 use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
@@ -24,6 +25,9 @@ struct StaticProblem<'a> {
     state: &'a mut State,
     /// Accumulated configuration increment in this load step (reference for rtol).
     total: &'a mut [f64],
+    /// Configuration and multiplier parts of the current correction.
+    dcfg: &'a mut [f64],
+    dlam: &'a mut [f64],
     phi: &'a mut [f64],
     ctx: EvalContext,
     coef: Coefficients,
@@ -45,18 +49,23 @@ impl NewtonSystem for StaticProblem<'_> {
     }
 
     fn apply(&mut self, delta: &[f64]) -> f64 {
+        self.asm.configuration_of(self.sys, delta, self.dcfg);
         for (i, n) in self.state.nodes.iter_mut().enumerate() {
-            let d = &delta[6 * i..6 * i + 6];
+            let d = &self.dcfg[6 * i..6 * i + 6];
             n.x += Vector3::new(d[0], d[1], d[2]);
             n.rot = n.rot.compose_exp(&Vector3::new(d[3], d[4], d[5]));
         }
-        let n_cfg = self.sys.n_config();
+        let n6 = 6 * self.state.nodes.len();
+        for (c, d) in self.state.coords.iter_mut().zip(&self.dcfg[n6..]) {
+            c.q += d;
+        }
         let mut worst: f64 = 0.0;
-        for (t, d) in self.total.iter_mut().zip(delta) {
+        for (t, d) in self.total.iter_mut().zip(self.dcfg.iter()) {
             *t += d;
             worst = worst.max(d.abs() / (self.atol + self.rtol * t.abs()));
         }
-        for (l, d) in self.state.lambda.iter_mut().zip(&delta[n_cfg..]) {
+        self.asm.multipliers_of(self.sys, delta, self.dlam);
+        for (l, d) in self.state.lambda.iter_mut().zip(self.dlam.iter()) {
             *l += d;
         }
         worst
@@ -135,24 +144,21 @@ fn least_squares_multipliers(
         &mut work.residual,
         Some(matrix),
     );
-    let s = matrix.structure.clone();
-    for i in 0..sys.n_nodes() {
-        let o = s.entry(i, i).expect("diagonal blocks exist");
-        for k in 0..6 {
-            matrix.values[o + 7 * k] += 1.0;
-        }
-    }
-    let n_cfg = sys.n_config();
+    asm.add_configuration_metric(sys, matrix, &[1.0; 6], 1.0);
     for (d, r) in work.delta.iter_mut().zip(&work.residual) {
         *d = -r;
     }
-    work.delta[n_cfg..].fill(0.0);
+    for k in 0..sys.constraints.len() {
+        work.delta[asm.multiplier_range(k)].fill(0.0);
+    }
     if lin.factor(matrix).is_err() {
         return; // dependent constraints: Newton reports the singular block
     }
     lin.solve_in_place(&mut work.delta);
     if work.delta.iter().all(|x| x.is_finite()) {
-        for (l, d) in state.lambda.iter_mut().zip(&work.delta[n_cfg..]) {
+        let mut dl = vec![0.0; sys.n_multipliers];
+        asm.multipliers_of(sys, &work.delta, &mut dl);
+        for (l, d) in state.lambda.iter_mut().zip(&dl) {
             *l += d;
         }
     }
@@ -175,6 +181,10 @@ pub fn run_static(
         nd.a = Vector3::zeros();
         nd.wd = Vector3::zeros();
     }
+    for c in &mut state.coords {
+        c.v = 0.0;
+        c.a = 0.0;
+    }
     state.time = settings.time;
     let mut asm = Assembler::new(sys, Formulation::Index3);
     let mut lin = LinearSolver::new(asm.structure(), settings.solver.linear_solver);
@@ -182,9 +192,48 @@ pub fn run_static(
     let mut work = NewtonWork::new(asm.n_unknowns());
     let mut phi = vec![0.0; sys.n_multipliers];
     let mut total = vec![0.0; sys.n_config()];
+    let mut dcfg = vec![0.0; sys.n_config()];
+    let mut dlam = vec![0.0; sys.n_multipliers];
     let mut mu = vec![0.0; sys.n_multipliers];
     let mut summary = AnalysisSummary::new(name, "static");
     let ctx_full = sys.context(settings.time, 1.0);
+    match assemble_initial_state(
+        sys,
+        &mut state,
+        &ctx_full,
+        settings.solver.tolerance,
+        &mut asm,
+        &mut lin,
+        &mut matrix,
+    ) {
+        Ok(report) => {
+            summary.warnings.extend(super::assembly_warnings(
+                sys,
+                &report,
+                settings.solver.tolerance,
+            ));
+            summary.assembly = Some(report);
+        }
+        Err(e) => {
+            summary.failure = Some(SolverFailure {
+                analysis: name.to_string(),
+                time: 0.0,
+                reason: format!("cannot assemble the initial configuration: {e}"),
+                hint: Some("check the joint positions and axes, the drives' values at the analysis time, and that the mechanism can reach them".into()),
+            });
+            summary.final_state = state;
+            summary.wall_time = clock.elapsed();
+            return Ok(summary);
+        }
+    }
+    // Assembly left velocities consistent with the drives; statics has none.
+    for nd in &mut state.nodes {
+        nd.v = Vector3::zeros();
+        nd.w = Vector3::zeros();
+    }
+    for c in &mut state.coords {
+        c.v = 0.0;
+    }
     let penalty = settings.solver.penalty
         * characteristic_stiffness(sys, &mut asm, &state, &ctx_full, &mut matrix);
     let newton_settings = NewtonSettings {
@@ -215,6 +264,8 @@ pub fn run_static(
             asm: &mut asm,
             state: &mut state,
             total: &mut total,
+            dcfg: &mut dcfg,
+            dlam: &mut dlam,
             phi: &mut phi,
             ctx,
             coef: Coefficients::statics(penalty),

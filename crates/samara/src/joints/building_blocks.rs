@@ -6,6 +6,9 @@
 //! (12b)  Φ = e_jᴬ · e_kᴮ              relative rotation about e_iᴬ, (i, j, k) cyclic
 //! ```
 //!
+//! and, with a joint coordinate ν set free, the defining forms `e_iᴬ·(uᴮ − uᴬ) − ν` and
+//! `cos ν (e_kᴬ·e_jᴮ) − sin ν (e_jᴬ·e_jᴮ) = sin(θ − ν)` ([`AngleRow`]).
+//!
 //! Kernels here work in global ("spatial") components: a side X has position `x`, arm
 //! `r = R s` to the joint origin, and rotation variations `δφ` with `δR = δφ̃ R`. They
 //! return, per scalar constraint,
@@ -114,24 +117,24 @@ pub mod displacement {
     }
 }
 
-/// Eq. (12b) with θ_i = 0 about axis `i` of frame A.
-pub mod rotation {
+/// Eq. (12b): the direction cosine `R_pq = e_pᴬ · e_qᴮ` between an axis of frame A and an
+/// axis of frame B. A rotation row is a combination `Σ a_t(ν) R_{p_t q_t} + c(ν)` of these
+/// (see [`AngleRow`]); θ_i = 0 about axis i is `R_jk = 0` with (i, j, k) cyclic.
+pub mod direction_cosine {
     use super::*;
 
-    fn pair(f: &FramePair, i: usize) -> (Vector3<f64>, Vector3<f64>) {
-        let j = (i + 1) % 3;
-        let k = (i + 2) % 3;
-        (f.axes[0].column(j).into(), f.axes[1].column(k).into())
+    fn pair(f: &FramePair, p: usize, q: usize) -> (Vector3<f64>, Vector3<f64>) {
+        (f.axes[0].column(p).into(), f.axes[1].column(q).into())
     }
 
-    pub fn value(f: &FramePair, i: usize) -> f64 {
-        let (e, g) = pair(f, i);
+    pub fn value(f: &FramePair, p: usize, q: usize) -> f64 {
+        let (e, g) = pair(f, p, q);
         e.dot(&g)
     }
 
-    /// `b = [0, nᵀ, 0, −nᵀ]` with `n = e_jᴬ × e_kᴮ`.
-    pub fn jacobian(f: &FramePair, i: usize) -> Row12 {
-        let (e, g) = pair(f, i);
+    /// `b = [0, nᵀ, 0, −nᵀ]` with `n = e_pᴬ × e_qᴮ`.
+    pub fn jacobian(f: &FramePair, p: usize, q: usize) -> Row12 {
+        let (e, g) = pair(f, p, q);
         let n = e.cross(&g);
         let mut b = Row12::zeros();
         put3(&mut b, 3, &n);
@@ -140,8 +143,8 @@ pub mod rotation {
     }
 
     /// `μ ∂(bᵀ)/∂q` (spatial): ∂n/∂φᴬ = g̃ ẽ, ∂n/∂φᴮ = −ẽ g̃.
-    pub fn force_tangent(f: &FramePair, i: usize, mu: f64, k: &mut Mat12) {
-        let (e, g) = pair(f, i);
+    pub fn force_tangent(f: &FramePair, p: usize, q: usize, mu: f64, k: &mut Mat12) {
+        let (e, g) = pair(f, p, q);
         let (et, gt) = (skew(&e), skew(&g));
         let dn_a = gt * et * mu;
         let dn_b = -(et * gt) * mu;
@@ -151,12 +154,137 @@ pub mod rotation {
         add33(k, 9, 9, &(-dn_b));
     }
 
+    /// `Ṙ_pq = b · (0, ωᴬ, 0, ωᴮ)`.
+    pub fn rate(f: &FramePair, p: usize, q: usize) -> f64 {
+        let (e, g) = pair(f, p, q);
+        let n = e.cross(&g);
+        n.dot(&f.omega[0]) - n.dot(&f.omega[1])
+    }
+
     /// `ë·g + 2 ė·ġ + e·g̈` at zero accelerations.
-    pub fn convective(f: &FramePair, i: usize) -> f64 {
-        let (e, g) = pair(f, i);
+    pub fn convective(f: &FramePair, p: usize, q: usize) -> f64 {
+        let (e, g) = pair(f, p, q);
         let (wa, wb) = (f.omega[0], f.omega[1]);
         let edot = wa.cross(&e);
         let gdot = wb.cross(&g);
         wa.cross(&edot).dot(&g) + 2.0 * edot.dot(&gdot) + e.dot(&wb.cross(&gdot))
+    }
+}
+
+/// A coefficient of a rotation row as a function of the row's joint coordinate ν.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Trig {
+    Zero,
+    /// s (constant).
+    One(f64),
+    /// s cos ν.
+    Cos(f64),
+    /// s sin ν.
+    Sin(f64),
+}
+
+impl Trig {
+    /// `[a(ν), a'(ν), a''(ν)]`.
+    #[inline]
+    pub fn eval(self, nu: f64) -> [f64; 3] {
+        match self {
+            Trig::Zero => [0.0; 3],
+            Trig::One(s) => [s, 0.0, 0.0],
+            Trig::Cos(s) => {
+                let (sn, cs) = nu.sin_cos();
+                [s * cs, -s * sn, -s * cs]
+            }
+            Trig::Sin(s) => {
+                let (sn, cs) = nu.sin_cos();
+                [s * sn, s * cs, -s * sn]
+            }
+        }
+    }
+}
+
+/// A rotation row (generalized eq. 12b):
+/// `Φ = a₁(ν) R_{p₁q₁} + a₂(ν) R_{p₂q₂} + c(ν)`, with `R_pq = e_pᴬ · e_qᴮ`.
+///
+/// θ = 0 about axis i is `R_jk` ((i, j, k) cyclic). A free rotation θ about e_iᴬ with the
+/// other two constrained is defined by `cos ν R_kj − sin ν R_jj = sin(θ − ν)`, which is
+/// eq. 12b with its sign convention made explicit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AngleRow {
+    pub terms: [(Trig, usize, usize); 2],
+    pub constant: Trig,
+}
+
+impl AngleRow {
+    /// θ_i = 0: `R_jk = 0`.
+    pub fn locked(i: usize) -> Self {
+        Self {
+            terms: [
+                (Trig::One(1.0), (i + 1) % 3, (i + 2) % 3),
+                (Trig::Zero, 0, 0),
+            ],
+            constant: Trig::Zero,
+        }
+    }
+
+    /// Defines θ about e_iᴬ (the other two rotations constrained): `sin(θ − ν)`.
+    pub fn about_a(i: usize) -> Self {
+        let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+        Self {
+            terms: [(Trig::Cos(1.0), k, j), (Trig::Sin(-1.0), j, j)],
+            constant: Trig::Zero,
+        }
+    }
+
+    /// `Φ`, `∂Φ/∂ν`, `∂²Φ/∂ν²` at the frames `f` and coordinate ν.
+    pub fn value(&self, f: &FramePair, nu: f64) -> [f64; 3] {
+        let mut out = self.constant.eval(nu);
+        for &(a, p, q) in &self.terms {
+            if a == Trig::Zero {
+                continue;
+            }
+            let r = direction_cosine::value(f, p, q);
+            let c = a.eval(nu);
+            for m in 0..3 {
+                out[m] += c[m] * r;
+            }
+        }
+        out
+    }
+
+    /// `Σ a_t^{(d)}(ν) b_t`: the q-Jacobian row for d = 0, its ν-derivative for d = 1.
+    pub fn jacobian(&self, f: &FramePair, nu: f64, d: usize) -> Row12 {
+        let mut b = Row12::zeros();
+        for &(a, p, q) in &self.terms {
+            if a == Trig::Zero {
+                continue;
+            }
+            b += direction_cosine::jacobian(f, p, q) * a.eval(nu)[d];
+        }
+        b
+    }
+
+    /// `μ Σ a_t(ν) ∂(b_tᵀ)/∂q` (spatial).
+    pub fn force_tangent(&self, f: &FramePair, nu: f64, mu: f64, k: &mut Mat12) {
+        for &(a, p, q) in &self.terms {
+            if a == Trig::Zero {
+                continue;
+            }
+            direction_cosine::force_tangent(f, p, q, mu * a.eval(nu)[0], k);
+        }
+    }
+
+    /// Part of Φ̈ without accelerations (q̈, ν̈), for coordinate rate `nu_dot`.
+    pub fn convective(&self, f: &FramePair, nu: f64, nu_dot: f64) -> f64 {
+        let mut out = self.constant.eval(nu)[2] * nu_dot * nu_dot;
+        for &(a, p, q) in &self.terms {
+            if a == Trig::Zero {
+                continue;
+            }
+            let c = a.eval(nu);
+            out += c[2] * nu_dot * nu_dot * direction_cosine::value(f, p, q)
+                + 2.0 * c[1] * nu_dot * direction_cosine::rate(f, p, q)
+                + c[0] * direction_cosine::convective(f, p, q);
+        }
+        out
     }
 }

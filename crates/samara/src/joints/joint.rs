@@ -1,57 +1,24 @@
-//! The joint library, assembled from the eq. 12 building blocks (seed, Table I):
+//! The joint: two frames, one on each side, and the rows of its type ([`super::rows`]).
 //!
-//! ```text
-//! joint        d1 d2 d3   θ1 θ2 θ3
-//! fixed        C  C  C    C  C  C
-//! revolute     C  C  C    C  C  F
-//! spherical    C  C  C    F  F  F
-//! ```
+//! Frame A is fixed to node A and frame B to node B (or to the ground). Rows are evaluated
+//! in global ("spatial") components by the building blocks and converted here to the
+//! material rotation increments of the nodes. The joint coordinates ν are unknowns of the
+//! system owned by the joint; their columns follow the node columns in `B`.
 //!
-//! Frame A is attached to node A and frame B to node B; both coincide with the joint frame
-//! given in the initial configuration. Reactions are reported as the force and moment
-//! that A exerts on B, about the origin of frame B, in frame-A components.
+//! Reactions are the force and moment that A exerts on B, about the origin of frame B, in
+//! frame-A components: `F = −Σ_r μ_r b_r^{x_B}`, `M = −Σ_r μ_r b_r^{θ_B} − rᴮ × F`. They
+//! include what the coordinate elements transmit (a spring on a free component is carried
+//! by the multiplier of the row that defines the coordinate).
 
-use super::Constraint;
-use super::building_blocks::{FramePair, Mat12, Row12, displacement, rotation};
+use super::building_blocks::{FramePair, Mat12, Row12, displacement};
+use super::coordinate_loads::CoordinateLoads;
+use super::rows::{COMPONENT_NAMES, Row, RowRole, measure, rows_of};
+use super::{Constraint, CoordinateTangents};
 use crate::elements::EvalContext;
 use crate::math::skew;
-use crate::model::{JointType, NodeRef};
-use crate::system::NodeState;
+use crate::model::{JointDef, JointType, NodeRef, TimeFunction};
+use crate::system::{Coordinate, NodeState};
 use nalgebra::{DMatrix, Matrix3, Vector3};
-
-/// One scalar constraint of a joint.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Component {
-    /// d_i = 0 (eq. 12a) along axis i of frame A.
-    Displacement(usize),
-    /// θ_i = 0 (eq. 12b) about axis i of frame A.
-    Rotation(usize),
-}
-
-impl Component {
-    /// The constrained components of each joint type (Table I).
-    pub fn of(kind: JointType) -> Vec<Component> {
-        use Component::*;
-        match kind {
-            JointType::Fixed => vec![
-                Displacement(0),
-                Displacement(1),
-                Displacement(2),
-                Rotation(0),
-                Rotation(1),
-                Rotation(2),
-            ],
-            JointType::Revolute => vec![
-                Displacement(0),
-                Displacement(1),
-                Displacement(2),
-                Rotation(0),
-                Rotation(1),
-            ],
-            JointType::Spherical => vec![Displacement(0), Displacement(1), Displacement(2)],
-        }
-    }
-}
 
 /// One side of a joint: a frame fixed to a node, or to the ground.
 #[derive(Clone, Debug)]
@@ -65,33 +32,38 @@ struct Side {
     local: usize,
 }
 
+/// A row evaluated in spatial components.
+struct RowValue {
+    phi: f64,
+    b: Row12,
+    /// (coordinate, ∂Φ/∂ν).
+    dnu: Option<(usize, f64)>,
+}
+
 #[derive(Clone, Debug)]
 pub struct Joint {
     name: String,
     kind: JointType,
     sides: [Side; 2],
     nodes: Vec<usize>,
-    components: Vec<Component>,
+    rows: Vec<Row>,
+    /// Indices of the enforced rows (all but those dropped as redundant).
+    active: Vec<usize>,
+    /// Component (0..6) of each coordinate.
+    components: Vec<usize>,
+    loads: Vec<CoordinateLoads>,
 }
 
 impl Joint {
-    /// A joint whose frame has global origin `position` and global axes `axes` in the
-    /// initial configuration `initial` (node states indexed like the model's nodes).
-    pub fn new(
-        name: impl Into<String>,
-        kind: JointType,
-        a: NodeRef,
-        b: NodeRef,
-        position: Vector3<f64>,
-        axes: Matrix3<f64>,
-        initial: &[NodeState],
-    ) -> Self {
+    /// A joint as defined in the model, attached in the initial configuration `initial`
+    /// (node states indexed like the model's nodes).
+    pub fn new(def: &JointDef, initial: &[NodeState]) -> Self {
         let mut nodes = Vec::new();
-        let mut side = |r: NodeRef| match r {
+        let mut side = |r: NodeRef, position: Vector3<f64>| match r {
             NodeRef::Ground => Side {
                 node: None,
                 offset: position,
-                axes,
+                axes: def.axes,
                 local: usize::MAX,
             },
             NodeRef::Node(i) => {
@@ -100,19 +72,35 @@ impl Joint {
                 Side {
                     node: Some(i),
                     offset: rt * (position - initial[i].x),
-                    axes: rt * axes,
+                    axes: rt * def.axes,
                     local: nodes.len() - 1,
                 }
             }
         };
-        let sa = side(a);
-        let sb = side(b);
+        let sa = side(def.node_a, def.position_a);
+        let sb = side(def.node_b, def.position_b);
+        let rotations_wanted = def.components[3..].iter().any(|c| c.is_some());
+        let drives: [Option<TimeFunction>; 6] =
+            std::array::from_fn(|c| def.components[c].as_ref().and_then(|d| d.drive.clone()));
+        let (rows, components) = rows_of(def.kind, def.pitch, rotations_wanted, &drives);
+        let loads = components
+            .iter()
+            .map(|&c| {
+                def.components[c]
+                    .as_ref()
+                    .map(CoordinateLoads::from_def)
+                    .unwrap_or_default()
+            })
+            .collect();
         Self {
-            name: name.into(),
-            kind,
+            name: def.name.clone(),
+            kind: def.kind,
             sides: [sa, sb],
             nodes,
-            components: Component::of(kind),
+            active: (0..rows.len()).collect(),
+            rows,
+            components,
+            loads,
         }
     }
 
@@ -120,11 +108,17 @@ impl Joint {
         self.kind
     }
 
-    pub fn components(&self) -> &[Component] {
+    /// All rows (enforced or not).
+    pub fn rows(&self) -> &[Row] {
+        &self.rows
+    }
+
+    /// Component (0..6 = d1 … θ3) of each coordinate.
+    pub fn components(&self) -> &[usize] {
         &self.components
     }
 
-    /// Current frames with the nodes' velocities (for convective terms).
+    /// Current frames with the nodes' velocities (for rate terms).
     fn frames_with_rates(&self, nodes: &[NodeState]) -> FramePair {
         let mut f = self.frames(nodes);
         for (k, s) in self.sides.iter().enumerate() {
@@ -163,10 +157,27 @@ impl Joint {
         f
     }
 
-    fn row(&self, f: &FramePair, c: Component) -> (f64, Row12) {
-        match c {
-            Component::Displacement(i) => (displacement::value(f, i), displacement::jacobian(f, i)),
-            Component::Rotation(i) => (rotation::value(f, i), rotation::jacobian(f, i)),
+    fn row_value(&self, f: &FramePair, coords: &[Coordinate], t: f64, row: &Row) -> RowValue {
+        match row {
+            Row::Displacement { axis, coord } => RowValue {
+                phi: displacement::value(f, *axis) - coord.map_or(0.0, |(c, s)| s * coords[c].q),
+                b: displacement::jacobian(f, *axis),
+                dnu: coord.map(|(c, s)| (c, -s)),
+            },
+            Row::Angle { row, coord } => {
+                let nu = coord.map_or(0.0, |c| coords[c].q);
+                let v = row.value(f, nu);
+                RowValue {
+                    phi: v[0],
+                    b: row.jacobian(f, nu, 0),
+                    dnu: coord.map(|c| (c, v[1])),
+                }
+            }
+            Row::Drive { coord, function } => RowValue {
+                phi: coords[*coord].q - function.eval(t),
+                b: Row12::zeros(),
+                dnu: Some((*coord, 1.0)),
+            },
         }
     }
 
@@ -174,6 +185,60 @@ impl Joint {
         match self.sides[side].node {
             Some(i) => *nodes[i].r(),
             None => Matrix3::identity(),
+        }
+    }
+
+    /// Writes a spatial 12-row into the material local row `out` (length 6·nodes + nc).
+    fn to_local<'a>(
+        &self,
+        b12: &Row12,
+        rots: &[Matrix3<f64>; 2],
+        mut put: impl FnMut(usize, f64) + 'a,
+    ) {
+        for (x, s) in self.sides.iter().enumerate() {
+            if s.node.is_none() {
+                continue;
+            }
+            let col = 6 * s.local;
+            for m in 0..3 {
+                put(col + m, b12[6 * x + m]);
+            }
+            for m in 0..3 {
+                let mut acc = 0.0;
+                for l in 0..3 {
+                    acc += b12[6 * x + 3 + l] * rots[x][(l, m)];
+                }
+                put(col + 3 + m, acc);
+            }
+        }
+    }
+
+    fn fill(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        which: &[usize],
+        phi: &mut [f64],
+        b: Option<&mut DMatrix<f64>>,
+    ) {
+        let f = self.frames(nodes);
+        let nq = 6 * self.nodes.len();
+        let Some(b) = b else {
+            for (i, &r) in which.iter().enumerate() {
+                phi[i] = self.row_value(&f, coords, ctx.time, &self.rows[r]).phi;
+            }
+            return;
+        };
+        b.fill(0.0);
+        let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
+        for (i, &r) in which.iter().enumerate() {
+            let v = self.row_value(&f, coords, ctx.time, &self.rows[r]);
+            phi[i] = v.phi;
+            self.to_local(&v.b, &rots, |c, x| b[(i, c)] = x);
+            if let Some((c, d)) = v.dnu {
+                b[(i, nq + c)] = d;
+            }
         }
     }
 }
@@ -187,69 +252,63 @@ impl Constraint for Joint {
         &self.nodes
     }
 
-    fn n_equations(&self) -> usize {
+    fn n_coordinates(&self) -> usize {
         self.components.len()
+    }
+
+    fn n_equations(&self) -> usize {
+        self.active.len()
     }
 
     fn evaluate(
         &self,
-        _ctx: &EvalContext,
+        ctx: &EvalContext,
         nodes: &[NodeState],
+        coords: &[Coordinate],
         phi: &mut [f64],
         b: Option<&mut DMatrix<f64>>,
     ) {
-        let f = self.frames(nodes);
-        let Some(b) = b else {
-            // Values only (constraint-violation checks): no Jacobian rows.
-            for (row, &c) in self.components.iter().enumerate() {
-                phi[row] = match c {
-                    Component::Displacement(i) => displacement::value(&f, i),
-                    Component::Rotation(i) => rotation::value(&f, i),
-                };
-            }
-            return;
-        };
-        let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
-        for (row, &c) in self.components.iter().enumerate() {
-            let (value, b12) = self.row(&f, c);
-            phi[row] = value;
-            for (x, s) in self.sides.iter().enumerate() {
-                if s.node.is_none() {
-                    continue;
-                }
-                let col = 6 * s.local;
-                for m in 0..3 {
-                    b[(row, col + m)] = b12[6 * x + m];
-                }
-                // Material rotation columns: b_φ R.
-                for m in 0..3 {
-                    let mut acc = 0.0;
-                    for l in 0..3 {
-                        acc += b12[6 * x + 3 + l] * rots[x][(l, m)];
-                    }
-                    b[(row, col + 3 + m)] = acc;
-                }
-            }
-        }
+        self.fill(ctx, nodes, coords, &self.active, phi, b);
     }
 
     fn reaction_tangent(
         &self,
         _ctx: &EvalContext,
         nodes: &[NodeState],
+        coords: &[Coordinate],
         mu: &[f64],
         k: &mut DMatrix<f64>,
     ) {
         let f = self.frames(nodes);
         let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
+        let nq = 6 * self.nodes.len();
         let mut k12 = Mat12::zeros();
         let mut g12 = Row12::zeros();
-        for (row, &c) in self.components.iter().enumerate() {
-            let (_, b12) = self.row(&f, c);
-            g12 += b12 * mu[row];
-            match c {
-                Component::Displacement(i) => displacement::force_tangent(&f, i, mu[row], &mut k12),
-                Component::Rotation(i) => rotation::force_tangent(&f, i, mu[row], &mut k12),
+        for (i, &r) in self.active.iter().enumerate() {
+            let mu_r = mu[i];
+            if mu_r == 0.0 {
+                continue;
+            }
+            match &self.rows[r] {
+                Row::Displacement { axis, .. } => {
+                    g12 += displacement::jacobian(&f, *axis) * mu_r;
+                    displacement::force_tangent(&f, *axis, mu_r, &mut k12);
+                }
+                Row::Angle { row, coord } => {
+                    let nu = coord.map_or(0.0, |c| coords[c].q);
+                    g12 += row.jacobian(&f, nu, 0) * mu_r;
+                    row.force_tangent(&f, nu, mu_r, &mut k12);
+                    if let Some(c) = *coord {
+                        // ∂(b_qᵀμ)/∂ν and ∂(b_ν μ)/∂q: the same vector μ Σ a_t' b_t.
+                        let v = row.jacobian(&f, nu, 1) * mu_r;
+                        self.to_local(&v, &rots, |j, x| {
+                            k[(j, nq + c)] += x;
+                            k[(nq + c, j)] += x;
+                        });
+                        k[(nq + c, nq + c)] += mu_r * row.value(&f, nu)[2];
+                    }
+                }
+                Row::Drive { .. } => {}
             }
         }
         for (x, sx) in self.sides.iter().enumerate() {
@@ -281,14 +340,128 @@ impl Constraint for Joint {
         }
     }
 
-    fn acceleration_term(&self, _ctx: &EvalContext, nodes: &[NodeState], out: &mut [f64]) {
+    fn acceleration_term(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        out: &mut [f64],
+    ) {
         let f = self.frames_with_rates(nodes);
-        for (row, &c) in self.components.iter().enumerate() {
-            out[row] = match c {
-                Component::Displacement(i) => displacement::convective(&f, i),
-                Component::Rotation(i) => rotation::convective(&f, i),
+        for (i, &r) in self.active.iter().enumerate() {
+            out[i] = match &self.rows[r] {
+                Row::Displacement { axis, .. } => displacement::convective(&f, *axis),
+                Row::Angle { row, coord } => {
+                    let (nu, nu_dot) = coord.map_or((0.0, 0.0), |c| (coords[c].q, coords[c].v));
+                    row.convective(&f, nu, nu_dot)
+                }
+                Row::Drive { function, .. } => -function.derivatives(ctx.time)[2],
             };
         }
+    }
+
+    fn velocity_term(&self, ctx: &EvalContext, out: &mut [f64]) {
+        for (i, &r) in self.active.iter().enumerate() {
+            out[i] = match &self.rows[r] {
+                Row::Drive { function, .. } => -function.derivatives(ctx.time)[1],
+                _ => 0.0,
+            };
+        }
+    }
+
+    fn coordinate_forces(
+        &self,
+        ctx: &EvalContext,
+        coords: &[Coordinate],
+        r: &mut [f64],
+        mut tangents: Option<CoordinateTangents>,
+    ) {
+        for (c, loads) in self.loads.iter().enumerate() {
+            if loads.is_empty() {
+                continue;
+            }
+            let [f, k, d] = loads.residual(ctx.time, coords[c].q, coords[c].v);
+            r[c] += f;
+            if let Some(t) = tangents.as_mut() {
+                t.stiffness[c] += k;
+                t.damping[c] += d;
+            }
+        }
+    }
+
+    fn potential_energy(&self, coords: &[Coordinate]) -> f64 {
+        self.loads
+            .iter()
+            .zip(coords)
+            .map(|(l, c)| l.potential_energy(c.q))
+            .sum()
+    }
+
+    fn dissipated_power(&self, coords: &[Coordinate]) -> f64 {
+        self.loads
+            .iter()
+            .zip(coords)
+            .map(|(l, c)| l.dissipated_power(c.q, c.v))
+            .sum()
+    }
+
+    fn external_power(&self, ctx: &EvalContext, coords: &[Coordinate]) -> f64 {
+        self.loads
+            .iter()
+            .zip(coords)
+            .map(|(l, c)| l.external_power(ctx.time, c.v))
+            .sum()
+    }
+
+    fn n_rows(&self) -> usize {
+        self.rows.len()
+    }
+
+    fn row_role(&self, r: usize) -> RowRole {
+        self.rows[r].role()
+    }
+
+    fn drop_rows(&mut self, rows: &[usize]) {
+        debug_assert!(
+            rows.iter()
+                .all(|&r| self.rows[r].role() == RowRole::Constraint)
+        );
+        self.active.retain(|r| !rows.contains(r));
+    }
+
+    fn active_rows(&self) -> &[usize] {
+        &self.active
+    }
+
+    fn evaluate_all_rows(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        phi: &mut [f64],
+        b: &mut DMatrix<f64>,
+    ) {
+        let all: Vec<usize> = (0..self.rows.len()).collect();
+        self.fill(ctx, nodes, coords, &all, phi, Some(b));
+    }
+
+    fn reactions(
+        &self,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        mu_all: &[f64],
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let f = self.frames(nodes);
+        let mut g = Row12::zeros();
+        for (row, &mu) in self.rows.iter().zip(mu_all) {
+            if mu != 0.0 {
+                g += self.row_value(&f, coords, 0.0, row).b * mu;
+            }
+        }
+        let force = -Vector3::new(g[6], g[7], g[8]);
+        let moment = -Vector3::new(g[9], g[10], g[11]) - f.arm[1].cross(&force);
+        let ea = f.axes[0];
+        (ea.transpose() * force, ea.transpose() * moment)
     }
 
     fn location(&self, nodes: &[NodeState]) -> (Vector3<f64>, Matrix3<f64>) {
@@ -296,22 +469,31 @@ impl Constraint for Joint {
         (f.x[1] + f.arm[1], f.axes[0])
     }
 
-    fn reactions(&self, nodes: &[NodeState], mu: &[f64]) -> (Vector3<f64>, Vector3<f64>) {
+    fn coordinate_names(&self) -> Vec<String> {
+        self.components
+            .iter()
+            .map(|&c| format!("{}.{}", self.name, COMPONENT_NAMES[c]))
+            .collect()
+    }
+
+    fn measure_coordinates(&self, nodes: &[NodeState], out: &mut [f64]) {
         let f = self.frames(nodes);
-        let ea = f.axes[0];
-        let mut force = Vector3::zeros();
-        let mut moment = Vector3::zeros();
-        for (row, &c) in self.components.iter().enumerate() {
-            match c {
-                // Generalized force on B is +μ e; the reaction on B is its opposite.
-                Component::Displacement(i) => force -= ea.column(i) * mu[row],
-                // Generalized moment on B is −μ n; the reaction moment is +μ n.
-                Component::Rotation(i) => {
-                    let b12 = rotation::jacobian(&f, i);
-                    moment += Vector3::new(b12[3], b12[4], b12[5]) * mu[row];
-                }
-            }
+        let rel = f.axes[0].transpose() * f.axes[1];
+        let r: [[f64; 3]; 3] = std::array::from_fn(|p| std::array::from_fn(|q| rel[(p, q)]));
+        let dv = f.axes[0].transpose() * f.d();
+        let d = [dv.x, dv.y, dv.z];
+        for (c, &comp) in self.components.iter().enumerate() {
+            out[c] = measure(self.kind, comp, &r, &d);
         }
-        (ea.transpose() * force, ea.transpose() * moment)
+    }
+
+    fn is_driven(&self, c: usize) -> bool {
+        self.drive_row(c).is_some()
+    }
+
+    fn drive_row(&self, c: usize) -> Option<usize> {
+        self.rows
+            .iter()
+            .position(|r| matches!(r, Row::Drive { coord, .. } if *coord == c))
     }
 }

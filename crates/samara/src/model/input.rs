@@ -26,6 +26,9 @@ pub struct ModelInput {
     /// Point-to-point spring-dampers.
     #[serde(default)]
     pub springs: Vec<Located<SpringInput>>,
+    /// Named input signals (forces/torques fed into joint coordinates through `input`).
+    #[serde(default)]
+    pub signals: Vec<Located<SignalInput>>,
     /// Applied forces and moments on nodes.
     #[serde(default)]
     pub forces: Vec<Located<ForceInput>>,
@@ -111,22 +114,128 @@ pub struct BodyInput {
     pub cg_offset: Option<[f64; 3]>,
 }
 
-/// Joint types.
+/// Joint types, in the components of Bottasso's Table I (d_i relative displacement along
+/// e_iᴬ, θ_i relative rotation; C constrained, F free, a joint coordinate):
+///
+/// ```text
+/// type            d1 d2 d3   θ1 θ2 θ3
+/// fixed           C  C  C    C  C  C
+/// revolute        C  C  C    C  C  F
+/// prismatic       C  C  F    C  C  C
+/// screw           C  C  pθ3  C  C  F
+/// cylindrical     C  C  F    C  C  F
+/// planar          F  F  C    C  C  F
+/// spherical       C  C  C    F  F  F
+/// universal       C  C  C    F  F  C     (θ1 about e₁ᴬ, θ2 about e₂ᴮ)
+/// point_on_line   C  C  F    F  F  F
+/// point_on_plane  F  F  C    F  F  F
+/// prescribed      F  F  F    F  F  F     (every component driven)
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum JointType {
     /// All six relative motions constrained (a clamp when one side is the ground).
     Fixed,
+    /// Rotation θ3 about the joint axis e₃ free; all else constrained.
+    Revolute,
+    /// Translation d3 along the joint axis e₃ free; all else constrained.
+    Prismatic,
+    /// Rotation θ3 about e₃ free with translation d3 = p θ3 (`pitch` p).
+    Screw,
+    /// Translation d3 along and rotation θ3 about e₃ free.
+    Cylindrical,
+    /// Translations d1, d2 in the plane normal to e₃ and rotation θ3 about e₃ free.
+    Planar,
     /// Relative translation constrained; relative rotation free.
     Spherical,
-    /// Rotation about the joint axis (e₃) free; all else constrained.
-    Revolute,
+    /// Cardan joint: rotations θ1 about e₁ᴬ (the cross arm on A) and θ2 about e₂ᴮ (the
+    /// arm on B) free; translation and the rotation about e₃ constrained.
+    Universal,
+    /// The joint point of B stays on the line through A's origin along e₃ᴬ.
+    PointOnLine,
+    /// The joint point of B stays in the plane through A's origin normal to e₃ᴬ.
+    PointOnPlane,
+    /// All six relative components follow time functions (`drive` on each; default 0).
+    Prescribed,
+}
+
+impl JointType {
+    /// The name used in model files.
+    pub fn name(self) -> &'static str {
+        match self {
+            JointType::Fixed => "fixed",
+            JointType::Revolute => "revolute",
+            JointType::Prismatic => "prismatic",
+            JointType::Screw => "screw",
+            JointType::Cylindrical => "cylindrical",
+            JointType::Planar => "planar",
+            JointType::Spherical => "spherical",
+            JointType::Universal => "universal",
+            JointType::PointOnLine => "point_on_line",
+            JointType::PointOnPlane => "point_on_plane",
+            JointType::Prescribed => "prescribed",
+        }
+    }
+}
+
+/// What is attached to one free component (joint coordinate) of a joint. Forces act on
+/// the coordinate: a positive spring force resists an increase of the coordinate.
+#[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ComponentInput {
+    /// Linear spring: stiffness k [N/m or N m/rad], force k (ν − `rest`).
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Rest value of the linear spring [m or rad] (default 0).
+    #[serde(default)]
+    pub rest: Option<f64>,
+    /// Nonlinear spring: [[ν, F], …] with increasing ν; piecewise linear, extended
+    /// linearly beyond the ends with the end slopes.
+    #[serde(default)]
+    pub spring_table: Option<Vec<[f64; 2]>>,
+    /// Linear viscous damper c [N s/m or N m s/rad], force c ν̇.
+    #[serde(default)]
+    pub damping: Option<f64>,
+    /// Nonlinear damper: [[ν̇, F], …] with increasing ν̇, piecewise linear.
+    #[serde(default)]
+    pub damper_table: Option<Vec<[f64; 2]>>,
+    /// Dead band of free play with contact stiffness and damping outside it.
+    #[serde(default)]
+    pub backlash: Option<BacklashInput>,
+    /// Drive: the coordinate follows this time function [m or rad]; the force it takes
+    /// is written out as `joint_coordinate_force`.
+    #[serde(default)]
+    pub drive: Option<Located<TimeFunctionInput>>,
+    /// Input port: a force/torque [N or N m] taken from the named signal, acting to
+    /// increase the coordinate.
+    #[serde(default)]
+    pub input: Option<Located<String>>,
+}
+
+/// Free play |ν − center| ≤ width/2; beyond it a contact force k g + c ν̇ (g the
+/// penetration) pushes back.
+#[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BacklashInput {
+    /// Total width of the dead band [m or rad], positive.
+    pub width: f64,
+    /// Contact stiffness [N/m or N m/rad], positive.
+    pub stiffness: f64,
+    /// Contact damping [N s/m or N m s/rad], non-negative (default 0).
+    #[serde(default)]
+    pub damping: Option<f64>,
+    /// Centre of the dead band [m or rad] (default 0).
+    #[serde(default)]
+    pub center: Option<f64>,
 }
 
 /// A joint between two nodes (or a node and the ground).
 ///
-/// The joint frame is given in the initial configuration, in global components; it is
-/// attached to both nodes there (frames A and B coincide initially).
+/// The joint frame (origin and axes) is given in the reference (initial) configuration,
+/// in global components, or in the frame of the node named by `relative_to`. Frame A is
+/// fixed to node A and frame B to node B; both coincide with the joint frame initially,
+/// unless `offset_a`/`offset_b` place the origin on each node separately (the initial
+/// assembly then moves the nodes onto the constraints).
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct JointInput {
@@ -139,16 +248,62 @@ pub struct JointInput {
     pub node_a: Located<String>,
     /// Node carrying frame B (`ground` for the inertial frame).
     pub node_b: Located<String>,
-    /// Origin of the joint frame, global [m]; default: the position of node B
-    /// (of node A if B is the ground).
+    /// Give `position`, `axis`, `axis_1` and `orientation` in this node's frame (relative
+    /// to its origin) instead of global components.
+    #[serde(default)]
+    pub relative_to: Option<Located<String>>,
+    /// Origin of the joint frame [m]; default: the position of node B (of node A if B is
+    /// the ground).
     #[serde(default)]
     pub position: Option<[f64; 3]>,
-    /// Joint axis e₃ in global components (revolute); need not be unit length.
+    /// Joint axis e₃ (hinge, slide or screw axis; plane normal; shaft of a universal
+    /// joint); need not be unit length.
     #[serde(default)]
     pub axis: Option<[f64; 3]>,
-    /// Full joint frame orientation; alternative to `axis`. Default: global axes.
+    /// Axis e₁, orthogonal to `axis` (the cross arm on A of a universal joint; the d1
+    /// direction of a planar joint). Default: a direction normal to `axis`.
+    #[serde(default)]
+    pub axis_1: Option<[f64; 3]>,
+    /// Full joint frame orientation; alternative to `axis`/`axis_1`. Default: global axes.
     #[serde(default)]
     pub orientation: Option<OrientationInput>,
+    /// Origin of frame A in node A's frame [m], overriding `position` on side A.
+    #[serde(default)]
+    pub offset_a: Option<[f64; 3]>,
+    /// Origin of frame B in node B's frame [m], overriding `position` on side B.
+    #[serde(default)]
+    pub offset_b: Option<[f64; 3]>,
+    /// Screw pitch p [m/rad]: d3 = p θ3 (screw joints only).
+    #[serde(default)]
+    pub pitch: Option<f64>,
+    /// Relative displacement along e₁ᴬ (free in planar, point_on_plane, prescribed).
+    #[serde(default)]
+    pub d1: Option<Located<ComponentInput>>,
+    /// Relative displacement along e₂ᴬ.
+    #[serde(default)]
+    pub d2: Option<Located<ComponentInput>>,
+    /// Relative displacement along e₃ᴬ.
+    #[serde(default)]
+    pub d3: Option<Located<ComponentInput>>,
+    /// Relative rotation θ1.
+    #[serde(default)]
+    pub theta1: Option<Located<ComponentInput>>,
+    /// Relative rotation θ2.
+    #[serde(default)]
+    pub theta2: Option<Located<ComponentInput>>,
+    /// Relative rotation θ3.
+    #[serde(default)]
+    pub theta3: Option<Located<ComponentInput>>,
+}
+
+/// A named scalar signal (a constant or a time function now; controller outputs later).
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SignalInput {
+    /// Unique signal name.
+    pub name: Located<String>,
+    /// The signal's value over time.
+    pub function: Located<TimeFunctionInput>,
 }
 
 /// A point-to-point spring-damper: tension k (l − l₀) + c l̇ along the line joining its points.
@@ -230,6 +385,8 @@ pub enum TimeFunctionType {
     Sine,
     /// Piecewise linear through `points` = [[t, f], …], constant beyond the ends.
     Table,
+    /// Σ `coefficients`[k] (t − `start`)^k for t ≥ `start` (default 0), held before.
+    Polynomial,
 }
 
 /// A scalar time function. `type` selects the kind; each kind uses the keys listed with it.
@@ -242,7 +399,7 @@ pub struct TimeFunctionInput {
     /// constant: the value.
     #[serde(default)]
     pub value: Option<f64>,
-    /// ramp: start time [s]; sine: start time (default 0).
+    /// ramp: start time [s]; sine, polynomial: start time (default 0).
     #[serde(default)]
     pub start: Option<f64>,
     /// ramp: end time [s].
@@ -278,6 +435,9 @@ pub struct TimeFunctionInput {
     /// table: [[t, f], …] with strictly increasing t.
     #[serde(default)]
     pub points: Option<Vec<[f64; 2]>>,
+    /// polynomial: c₀, c₁, … of Σ c_k (t − start)^k.
+    #[serde(default)]
+    pub coefficients: Option<Vec<f64>>,
 }
 
 /// Kinds of analysis.

@@ -1,4 +1,7 @@
-//! Scalar time functions f(t) that scale applied loads (and, later, drive joints).
+//! Scalar time functions f(t) that scale applied loads, drive joint coordinates and feed
+//! input signals. Drives also need f'(t) and f''(t) (the velocity and acceleration of a
+//! rheonomic constraint); for piecewise definitions these are the one-sided derivatives
+//! from the right (a ramp's corners and a step's jump give no impulse).
 
 /// A scalar function of time.
 #[derive(Clone, Debug, PartialEq)]
@@ -26,6 +29,8 @@ pub enum TimeFunction {
     /// Piecewise-linear through (times[i], values[i]), constant beyond the ends.
     /// `times` is strictly increasing (checked when the model is validated).
     Table { times: Vec<f64>, values: Vec<f64> },
+    /// f(t) = Σ c_k (t − start)^k for t ≥ start, f(start) before (smooth drives).
+    Polynomial { coefficients: Vec<f64>, start: f64 },
 }
 
 impl Default for TimeFunction {
@@ -87,6 +92,73 @@ impl TimeFunction {
                 let s = (t - times[i]) / (times[i + 1] - times[i]);
                 values[i] + s * (values[i + 1] - values[i])
             }
+            TimeFunction::Polynomial { .. } => self.derivatives(t)[0],
+        }
+    }
+
+    /// `[f(t), f'(t), f''(t)]`.
+    pub fn derivatives(&self, t: f64) -> [f64; 3] {
+        use std::f64::consts::PI;
+        match self {
+            TimeFunction::Constant(_) | TimeFunction::Step { .. } => [self.eval(t), 0.0, 0.0],
+            TimeFunction::Ramp {
+                start,
+                end,
+                from,
+                to,
+            } => {
+                let slope = if t >= *start && t < *end {
+                    (to - from) / (end - start)
+                } else {
+                    0.0
+                };
+                [self.eval(t), slope, 0.0]
+            }
+            TimeFunction::Sine {
+                amplitude,
+                frequency,
+                phase,
+                start,
+                ..
+            } => {
+                if t < *start {
+                    return [self.eval(t), 0.0, 0.0];
+                }
+                let w = 2.0 * PI * frequency;
+                let arg = w * (t - start) + phase;
+                [
+                    self.eval(t),
+                    amplitude * w * arg.cos(),
+                    -amplitude * w * w * arg.sin(),
+                ]
+            }
+            TimeFunction::Table { times, values } => {
+                let n = times.len();
+                if t < times[0] || t >= times[n - 1] {
+                    return [self.eval(t), 0.0, 0.0];
+                }
+                let i = times.partition_point(|&x| x <= t) - 1;
+                let slope = (values[i + 1] - values[i]) / (times[i + 1] - times[i]);
+                [self.eval(t), slope, 0.0]
+            }
+            TimeFunction::Polynomial {
+                coefficients,
+                start,
+            } => {
+                let tau = (t - start).max(0.0);
+                // Horner for f, f', f''.
+                let (mut f, mut d1, mut d2) = (0.0, 0.0, 0.0);
+                for &c in coefficients.iter().rev() {
+                    d2 = d2 * tau + 2.0 * d1;
+                    d1 = d1 * tau + f;
+                    f = f * tau + c;
+                }
+                if t < *start {
+                    [f, 0.0, 0.0]
+                } else {
+                    [f, d1, d2]
+                }
+            }
         }
     }
 }
@@ -130,5 +202,50 @@ mod tests {
         assert_eq!(t.eval(2.0), 5.0);
         assert_eq!(t.eval(1.0), 10.0);
         assert_eq!(t.eval(9.0), 0.0);
+        let p = TimeFunction::Polynomial {
+            coefficients: vec![1.0, 2.0, 3.0],
+            start: 1.0,
+        };
+        assert_eq!(p.derivatives(3.0), [1.0 + 4.0 + 12.0, 2.0 + 12.0, 6.0]);
+        assert_eq!(p.derivatives(0.0), [1.0, 0.0, 0.0]);
+    }
+
+    /// f' and f'' against central differences away from corners: a wrong derivative would
+    /// break the velocity and acceleration of every drive.
+    #[test]
+    fn derivatives_match_finite_differences() {
+        let fs = [
+            TimeFunction::Ramp {
+                start: 0.0,
+                end: 2.0,
+                from: 1.0,
+                to: 5.0,
+            },
+            TimeFunction::Sine {
+                amplitude: 0.7,
+                frequency: 1.3,
+                phase: 0.4,
+                offset: 0.2,
+                start: 0.1,
+            },
+            TimeFunction::Table {
+                times: vec![0.0, 1.0, 3.0],
+                values: vec![0.0, 10.0, 0.0],
+            },
+            TimeFunction::Polynomial {
+                coefficients: vec![0.5, -1.0, 0.25, 0.125],
+                start: 0.0,
+            },
+        ];
+        let h = 1e-4;
+        for f in &fs {
+            for t in [0.37, 0.81, 1.55] {
+                let [_, d1, d2] = f.derivatives(t);
+                let fd1 = (f.eval(t + h) - f.eval(t - h)) / (2.0 * h);
+                let fd2 = (f.eval(t + h) - 2.0 * f.eval(t) + f.eval(t - h)) / (h * h);
+                assert!((d1 - fd1).abs() < 1e-6, "{f:?} at {t}: {d1} vs {fd1}");
+                assert!((d2 - fd2).abs() < 1e-4, "{f:?} at {t}: {d2} vs {fd2}");
+            }
+        }
     }
 }

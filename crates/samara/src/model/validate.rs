@@ -328,7 +328,7 @@ impl<'a> Validator<'a> {
             span: f.span.clone(),
         };
         let t = &f.value;
-        let given: [(&str, bool); 13] = [
+        let given: [(&str, bool); 14] = [
             ("value", t.value.is_some()),
             ("start", t.start.is_some()),
             ("end", t.end.is_some()),
@@ -342,6 +342,7 @@ impl<'a> Validator<'a> {
             ("phase", t.phase.is_some()),
             ("offset", t.offset.is_some()),
             ("points", t.points.is_some()),
+            ("coefficients", t.coefficients.is_some()),
         ];
         let (kind, allowed, required): (&str, &[&str], &[&str]) = match t.kind {
             TimeFunctionType::Constant => ("constant", &["value"], &["value"]),
@@ -357,6 +358,9 @@ impl<'a> Validator<'a> {
                 &["amplitude", "frequency"],
             ),
             TimeFunctionType::Table => ("table", &["points"], &["points"]),
+            TimeFunctionType::Polynomial => {
+                ("polynomial", &["coefficients", "start"], &["coefficients"])
+            }
         };
         let mut ok = true;
         for (k, g) in given {
@@ -467,6 +471,21 @@ impl<'a> Validator<'a> {
                     values: pts.iter().map(|p| p[1]).collect(),
                 }
             }
+            TimeFunctionType::Polynomial => {
+                let c = t.coefficients.clone().unwrap_or_default();
+                if c.is_empty() || !c.iter().all(|x| x.is_finite()) {
+                    self.error(
+                        format!("{what}: polynomial `coefficients` must be a non-empty list of finite numbers"),
+                        self.key(&entry, "coefficients"),
+                        Some("e.g. coefficients = [0.0, 6.2832] for f(t) = 6.2832 t".into()),
+                    );
+                    return None;
+                }
+                TimeFunction::Polynomial {
+                    coefficients: c,
+                    start: t.start.unwrap_or(0.0),
+                }
+            }
         };
         Some(func)
     }
@@ -556,87 +575,26 @@ impl<'a> Validator<'a> {
             }
         }
 
+        // Signals.
+        self.unique_names(&input.signals, |g| &g.name, "signal");
+        let mut signals: HashMap<String, TimeFunction> = HashMap::new();
+        for g in &input.signals {
+            let what = format!("signal '{}'", g.value.name.value);
+            if let Some(f) = self.time_function(&g.value.function, &what) {
+                signals.insert(g.value.name.value.clone(), f.clone());
+                model.signals.push(SignalDef {
+                    name: g.value.name.value.clone(),
+                    function: f,
+                });
+            }
+        }
+
         // Joints.
         self.unique_names(&input.joints, |j| &j.name, "joint");
         for j in &input.joints {
-            let e = Entry {
-                span: j.span.clone(),
-            };
-            let ji = &j.value;
-            let what = format!("joint '{}'", ji.name.value);
-            let a = self.node_ref(&ji.node_a, &node_map, &what);
-            let b = self.node_ref(&ji.node_b, &node_map, &what);
-            let (Some(a), Some(b)) = (a, b) else { continue };
-            if a == b {
-                let msg = if a == NodeRef::Ground {
-                    format!("{what} connects the ground to itself")
-                } else {
-                    format!("{what} connects node '{}' to itself", ji.node_a.value)
-                };
-                self.error(
-                    msg,
-                    ji.node_b.span.clone(),
-                    Some("a joint needs two different nodes (or a node and 'ground')".into()),
-                );
-                continue;
+            if let Some(def) = self.joint(j, &node_map, &model, &signals) {
+                model.joints.push(def);
             }
-            let position = match ji.position {
-                Some(p) => {
-                    self.finite(&e, "position", &p, &what);
-                    Vector3::from(p)
-                }
-                None => {
-                    let n = b.index().or(a.index()).unwrap_or(0);
-                    model.nodes.get(n).map(|n| n.position).unwrap_or_default()
-                }
-            };
-            if ji.axis.is_some() && ji.orientation.is_some() {
-                self.error(
-                    format!("{what}: give either `axis` or `orientation`, not both"),
-                    self.key(&e, "axis"),
-                    None,
-                );
-                continue;
-            }
-            let axes = if let Some(axis) = ji.axis {
-                let ax = Vector3::from(axis);
-                let n = ax.norm();
-                if !n.is_finite() || n < 1e-12 {
-                    self.error(
-                        format!("{what}: `axis` must be a non-zero vector (got {axis:?})"),
-                        self.key(&e, "axis"),
-                        Some(
-                            "the axis is a direction in global components, e.g. [0.0, 1.0, 0.0]"
-                                .into(),
-                        ),
-                    );
-                    continue;
-                }
-                frame_from_axis(&(ax / n))
-            } else if let Some(o) = &ji.orientation {
-                match self.orientation(o, &e, &what) {
-                    Some(r) => *r.matrix(),
-                    None => continue,
-                }
-            } else {
-                if ji.kind.value == JointType::Revolute {
-                    self.error(
-                        format!("{what}: a revolute joint needs `axis` (or `orientation`, whose z axis is the hinge)"),
-                        e.span.clone(),
-                        Some("add e.g. `axis = [0.0, 1.0, 0.0]`".into()),
-                    );
-                    continue;
-                }
-                Matrix3::identity()
-            };
-            model.joints.push(JointDef {
-                name: ji.name.value.clone(),
-                kind: ji.kind.value,
-                node_a: a,
-                node_b: b,
-                position,
-                axes,
-            });
         }
 
         // Springs.
@@ -824,6 +782,420 @@ impl<'a> Validator<'a> {
             }
         }
         model
+    }
+
+    /// A unit vector from a `key = [x, y, z]` entry, or an error.
+    fn unit_axis(&mut self, v: [f64; 3], e: &Entry, key: &str, what: &str) -> Option<Vector3<f64>> {
+        let ax = Vector3::from(v);
+        let n = ax.norm();
+        if !n.is_finite() || n < 1e-12 {
+            self.error(
+                format!("{what}: `{key}` must be a non-zero vector (got {v:?})"),
+                self.key(e, key),
+                Some("an axis is a direction, e.g. [0.0, 1.0, 0.0]".into()),
+            );
+            return None;
+        }
+        Some(ax / n)
+    }
+
+    fn joint(
+        &mut self,
+        j: &Located<JointInput>,
+        node_map: &HashMap<String, usize>,
+        model: &Model,
+        signals: &HashMap<String, TimeFunction>,
+    ) -> Option<JointDef> {
+        let e = Entry {
+            span: j.span.clone(),
+        };
+        let ji = &j.value;
+        let kind = ji.kind.value;
+        let what = format!("joint '{}'", ji.name.value);
+        let a = self.node_ref(&ji.node_a, node_map, &what);
+        let b = self.node_ref(&ji.node_b, node_map, &what);
+        let (a, b) = (a?, b?);
+        if a == b {
+            let msg = if a == NodeRef::Ground {
+                format!("{what} connects the ground to itself")
+            } else {
+                format!("{what} connects node '{}' to itself", ji.node_a.value)
+            };
+            self.error(
+                msg,
+                ji.node_b.span.clone(),
+                Some("a joint needs two different nodes (or a node and 'ground')".into()),
+            );
+            return None;
+        }
+        // Frame in which position and axes are given.
+        let (origin, rot) = match &ji.relative_to {
+            None => (Vector3::zeros(), Matrix3::identity()),
+            Some(r) => match self.node_ref(r, node_map, &what)? {
+                NodeRef::Ground => (Vector3::zeros(), Matrix3::identity()),
+                NodeRef::Node(i) => (
+                    model.nodes[i].position,
+                    *model.nodes[i].orientation.matrix(),
+                ),
+            },
+        };
+        let position = match ji.position {
+            Some(p) => {
+                if !self.finite(&e, "position", &p, &what) {
+                    return None;
+                }
+                origin + rot * Vector3::from(p)
+            }
+            None => {
+                let n = b.index().or(a.index()).unwrap_or(0);
+                model.nodes.get(n).map(|n| n.position).unwrap_or_default()
+            }
+        };
+        if ji.orientation.is_some() && (ji.axis.is_some() || ji.axis_1.is_some()) {
+            self.error(
+                format!("{what}: give either `axis` (and `axis_1`) or `orientation`, not both"),
+                self.key(&e, "orientation"),
+                None,
+            );
+            return None;
+        }
+        let needs_axis = !matches!(
+            kind,
+            JointType::Fixed | JointType::Spherical | JointType::Prescribed
+        );
+        let local_axes = if let Some(axis) = ji.axis {
+            let e3 = self.unit_axis(axis, &e, "axis", &what)?;
+            match ji.axis_1 {
+                None => frame_from_axis(&e3),
+                Some(a1) => {
+                    let e1 = self.unit_axis(a1, &e, "axis_1", &what)?;
+                    let c = e1.dot(&e3);
+                    if c.abs() > 1e-6 {
+                        self.error(
+                            format!(
+                                "{what}: `axis_1` is not orthogonal to `axis` (cosine {c:.3e}, angle {:.4}°)",
+                                c.clamp(-1.0, 1.0).acos().to_degrees()
+                            ),
+                            self.key(&e, "axis_1"),
+                            Some("the joint axes must be orthogonal to within 1e-6; give e₁ normal to e₃".into()),
+                        );
+                        return None;
+                    }
+                    let e1 = (e1 - e3 * c).normalize();
+                    Matrix3::from_columns(&[e1, e3.cross(&e1), e3])
+                }
+            }
+        } else if ji.axis_1.is_some() {
+            self.error(
+                format!("{what}: `axis_1` needs `axis`"),
+                self.key(&e, "axis_1"),
+                Some("give the joint axis e₃ as `axis` too".into()),
+            );
+            return None;
+        } else if let Some(o) = &ji.orientation {
+            *self.orientation(o, &e, &what)?.matrix()
+        } else {
+            if needs_axis {
+                self.error(
+                    format!("{what}: a {} joint needs `axis` (or `orientation`, whose z axis is the joint axis)", kind.name()),
+                    e.span.clone(),
+                    Some("add e.g. `axis = [0.0, 1.0, 0.0]`".into()),
+                );
+                return None;
+            }
+            Matrix3::identity()
+        };
+        let axes = rot * local_axes;
+        // Per-side origins.
+        let side = |this: &mut Self,
+                    r: NodeRef,
+                    off: Option<[f64; 3]>,
+                    key: &str|
+         -> Option<Vector3<f64>> {
+            match off {
+                None => Some(position),
+                Some(o) => {
+                    if !this.finite(&e, key, &o, &what) {
+                        return None;
+                    }
+                    Some(match r {
+                        NodeRef::Ground => Vector3::from(o),
+                        NodeRef::Node(i) => {
+                            model.nodes[i].position
+                                + model.nodes[i].orientation.matrix() * Vector3::from(o)
+                        }
+                    })
+                }
+            }
+        };
+        let position_a = side(self, a, ji.offset_a, "offset_a")?;
+        let position_b = side(self, b, ji.offset_b, "offset_b")?;
+        let pitch = match (kind, ji.pitch) {
+            (JointType::Screw, Some(p)) if p.is_finite() => p,
+            (JointType::Screw, _) => {
+                self.error(
+                    format!("{what}: a screw joint needs a finite `pitch` [m/rad]"),
+                    self.key(&e, "pitch").or(e.span.clone()),
+                    Some(
+                        "d3 = pitch · θ3; e.g. a 2 mm lead is pitch = 0.002 / (2π) = 3.183e-4"
+                            .into(),
+                    ),
+                );
+                return None;
+            }
+            (_, Some(_)) => {
+                self.error(
+                    format!("{what}: `pitch` is only used by screw joints"),
+                    self.key(&e, "pitch"),
+                    None,
+                );
+                return None;
+            }
+            (_, None) => 0.0,
+        };
+        let inputs = [&ji.d1, &ji.d2, &ji.d3, &ji.theta1, &ji.theta2, &ji.theta3];
+        let mut components: [Option<ComponentDef>; 6] = Default::default();
+        let mut ok = true;
+        for (c, input) in inputs.iter().enumerate() {
+            let Some(ci) = input else { continue };
+            let name = crate::joints::COMPONENT_NAMES[c];
+            let free =
+                crate::joints::rows::is_free(kind, c) && !(kind == JointType::Screw && c == 2);
+            if !free {
+                let list: Vec<&str> = (0..6)
+                    .filter(|&k| {
+                        crate::joints::rows::is_free(kind, k)
+                            && !(kind == JointType::Screw && k == 2)
+                    })
+                    .map(|k| crate::joints::COMPONENT_NAMES[k])
+                    .collect();
+                let hint = if list.is_empty() {
+                    format!("a {} joint has no free component", kind.name())
+                } else {
+                    format!(
+                        "the free components of a {} joint are: {}",
+                        kind.name(),
+                        list.join(", ")
+                    )
+                };
+                self.error(
+                    format!("{what}: `{name}` is constrained by a {} joint; nothing can be attached to it", kind.name()),
+                    ci.span.clone().or(e.span.clone()),
+                    Some(hint),
+                );
+                ok = false;
+                continue;
+            }
+            let cw = format!("{what}, `{name}`");
+            match self.component(ci, &cw, signals) {
+                Some(d) => components[c] = Some(d),
+                None => ok = false,
+            }
+        }
+        if !ok {
+            return None;
+        }
+        Some(JointDef {
+            name: ji.name.value.clone(),
+            kind,
+            node_a: a,
+            node_b: b,
+            position_a,
+            position_b,
+            axes,
+            pitch,
+            components,
+        })
+    }
+
+    /// A piecewise-linear force law from `[[x, F], …]`.
+    fn force_table(
+        &mut self,
+        pts: &[[f64; 2]],
+        e: &Entry,
+        key: &str,
+        what: &str,
+    ) -> Option<ForceLaw> {
+        if pts.len() < 2 {
+            self.error(
+                format!("{what}: `{key}` needs at least two points"),
+                self.key(e, key),
+                Some("points are [[x0, F0], [x1, F1], …] with x0 < x1 < …".into()),
+            );
+            return None;
+        }
+        if !pts.iter().flatten().all(|x| x.is_finite()) {
+            self.error(
+                format!("{what}: `{key}` must be finite"),
+                self.key(e, key),
+                None,
+            );
+            return None;
+        }
+        if pts.windows(2).any(|w| w[1][0] <= w[0][0]) {
+            self.error(
+                format!("{what}: the first column of `{key}` must be strictly increasing"),
+                self.key(e, key),
+                Some("points are [[x0, F0], [x1, F1], …] with x0 < x1 < …".into()),
+            );
+            return None;
+        }
+        Some(ForceLaw::Table {
+            x: pts.iter().map(|p| p[0]).collect(),
+            f: pts.iter().map(|p| p[1]).collect(),
+        })
+    }
+
+    fn component(
+        &mut self,
+        ci: &Located<ComponentInput>,
+        what: &str,
+        signals: &HashMap<String, TimeFunction>,
+    ) -> Option<ComponentDef> {
+        let e = Entry {
+            span: ci.span.clone(),
+        };
+        let c = &ci.value;
+        let mut ok = true;
+        let mut nonneg = |this: &mut Self, v: Option<f64>, key: &str| -> Option<f64> {
+            let x = v?;
+            if !(x.is_finite() && x >= 0.0) {
+                this.error(
+                    format!("{what}: `{key}` must be ≥ 0 (got {x})"),
+                    this.key(&e, key),
+                    None,
+                );
+                ok = false;
+                return None;
+            }
+            Some(x)
+        };
+        let stiffness = nonneg(self, c.stiffness, "stiffness");
+        let damping = nonneg(self, c.damping, "damping");
+        let rest = c.rest.unwrap_or(0.0);
+        if !rest.is_finite() {
+            self.error(
+                format!("{what}: `rest` must be finite"),
+                self.key(&e, "rest"),
+                None,
+            );
+            ok = false;
+        }
+        if c.rest.is_some() && c.stiffness.is_none() {
+            self.error(
+                format!(
+                    "{what}: `rest` is the rest value of a linear spring and needs `stiffness`"
+                ),
+                self.key(&e, "rest"),
+                None,
+            );
+            ok = false;
+        }
+        let mut spring = stiffness.map(|k| ForceLaw::Linear {
+            coefficient: k,
+            reference: rest,
+        });
+        if let Some(t) = &c.spring_table {
+            if c.stiffness.is_some() {
+                self.error(
+                    format!("{what}: give either `stiffness` or `spring_table`, not both"),
+                    self.key(&e, "spring_table"),
+                    None,
+                );
+                ok = false;
+            }
+            spring = self.force_table(t, &e, "spring_table", what);
+            ok &= spring.is_some();
+        }
+        let mut damper = damping.map(|c| ForceLaw::Linear {
+            coefficient: c,
+            reference: 0.0,
+        });
+        if let Some(t) = &c.damper_table {
+            if c.damping.is_some() {
+                self.error(
+                    format!("{what}: give either `damping` or `damper_table`, not both"),
+                    self.key(&e, "damper_table"),
+                    None,
+                );
+                ok = false;
+            }
+            damper = self.force_table(t, &e, "damper_table", what);
+            ok &= damper.is_some();
+        }
+        let backlash = match &c.backlash {
+            None => None,
+            Some(b) => {
+                let bad = |this: &mut Self, msg: String| {
+                    this.error(
+                        format!("{what}: backlash {msg}"),
+                        this.key(&e, "backlash"),
+                        Some(
+                            "backlash = { width = 0.01, stiffness = 1e6, damping = 100.0 }".into(),
+                        ),
+                    );
+                };
+                let damping = b.damping.unwrap_or(0.0);
+                let center = b.center.unwrap_or(0.0);
+                if !(b.width.is_finite() && b.width > 0.0) {
+                    bad(self, format!("`width` must be positive (got {})", b.width));
+                    ok = false;
+                    None
+                } else if !(b.stiffness.is_finite() && b.stiffness > 0.0) {
+                    bad(
+                        self,
+                        format!("`stiffness` must be positive (got {})", b.stiffness),
+                    );
+                    ok = false;
+                    None
+                } else if !(damping.is_finite() && damping >= 0.0 && center.is_finite()) {
+                    bad(self, "`damping` must be ≥ 0 and `center` finite".into());
+                    ok = false;
+                    None
+                } else {
+                    Some(BacklashDef {
+                        center,
+                        half_width: 0.5 * b.width,
+                        stiffness: b.stiffness,
+                        damping,
+                    })
+                }
+            }
+        };
+        let drive = match &c.drive {
+            None => None,
+            Some(f) => {
+                let d = self.time_function(f, &format!("{what} drive"));
+                ok &= d.is_some();
+                d
+            }
+        };
+        let input = match &c.input {
+            None => None,
+            Some(name) => match signals.get(&name.value) {
+                Some(f) => Some((name.value.clone(), f.clone())),
+                None => {
+                    let hint = match did_you_mean(&name.value, signals.keys().map(|s| s.as_str())) {
+                        Some(b) => format!("did you mean '{b}'?"),
+                        None => "declare it in a [[signals]] table: name and function".into(),
+                    };
+                    self.error(
+                        format!("{what}: unknown signal '{}'", name.value),
+                        name.span.clone(),
+                        Some(hint),
+                    );
+                    ok = false;
+                    None
+                }
+            },
+        };
+        ok.then_some(ComponentDef {
+            spring,
+            damper,
+            backlash,
+            drive,
+            input,
+        })
     }
 
     fn check_inertia(&mut self, j: &Matrix3<f64>, e: &Entry, what: &str) {

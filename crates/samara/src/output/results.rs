@@ -26,12 +26,19 @@ struct Vars {
     joint_axes: Option<VarId>,
     joint_force: Option<VarId>,
     joint_moment: Option<VarId>,
+    coordinate: Option<CoordinateVars>,
     kinetic: VarId,
     potential: VarId,
     external_work: VarId,
     dissipated: VarId,
     violation: VarId,
     diagnostics: Option<DiagnosticVars>,
+}
+
+struct CoordinateVars {
+    value: VarId,
+    rate: VarId,
+    force: VarId,
 }
 
 struct DiagnosticVars {
@@ -54,6 +61,10 @@ pub struct ResultsFile {
     jm: Vec<f64>,
     jp: Vec<f64>,
     ja: Vec<f64>,
+    mu_all: Vec<f64>,
+    cq: Vec<f64>,
+    cv: Vec<f64>,
+    cf: Vec<f64>,
     /// An earlier file of the same name, moved aside.
     pub backup: Option<PathBuf>,
 }
@@ -128,6 +139,7 @@ impl ResultsFile {
             .map(|n| n.name.len())
             .chain(model.joints.iter().map(|j| j.name.len()))
             .chain(model.bodies.iter().map(|b| b.name.len()))
+            .chain(sys.coordinate_names.iter().map(|c| c.len()))
             .max()
             .unwrap_or(1)
             .max(1);
@@ -135,6 +147,9 @@ impl ResultsFile {
         let joint = (n_joints > 0).then(|| d.add_dim("joint", n_joints));
         let n_bodies = model.bodies.len();
         let body = (n_bodies > 0).then(|| d.add_dim("body", n_bodies));
+        let n_coords = sys.n_coordinates;
+        let coordinate = (n_coords > 0).then(|| d.add_dim("coordinate", n_coords));
+        let unit_len = d.add_dim("unit_strlen", 3);
 
         let text = |s: &str| AttrValue::Text(s.to_string());
         let var = |d: &mut Definition,
@@ -296,6 +311,52 @@ impl ResultsFile {
             ),
             None => (None, None),
         };
+        let coordinate_names = coordinate.map(|c| {
+            (
+                var(
+                    &mut d,
+                    "coordinate_name",
+                    NcType::Char,
+                    &[c, strlen],
+                    "",
+                    "joint coordinate name, <joint>.<component>",
+                ),
+                var(
+                    &mut d,
+                    "coordinate_units",
+                    NcType::Char,
+                    &[c, unit_len],
+                    "",
+                    "units of the coordinate: m (d1, d2, d3) or rad (theta1, theta2, theta3)",
+                ),
+            )
+        });
+        let coordinate_vars = coordinate.map(|c| CoordinateVars {
+            value: var(
+                &mut d,
+                "joint_coordinate",
+                NcType::Double,
+                &[time, c],
+                "m or rad",
+                "joint coordinate: relative displacement along or rotation about an axis of frame A (see coordinate_units)",
+            ),
+            rate: var(
+                &mut d,
+                "joint_coordinate_rate",
+                NcType::Double,
+                &[time, c],
+                "m s-1 or rad s-1",
+                "rate of the joint coordinate",
+            ),
+            force: var(
+                &mut d,
+                "joint_coordinate_force",
+                NcType::Double,
+                &[time, c],
+                "N or N m",
+                "generalized force on the coordinate from its springs, dampers, backlash, inputs and drive (the actuator force of a drive); positive tends to increase the coordinate",
+            ),
+        });
         let kinetic = var(
             &mut d,
             "kinetic_energy",
@@ -409,6 +470,23 @@ impl ResultsFile {
                 .put_fixed_text(jn, &names)
                 .map_err(|e| nc_err(&path, e))?;
         }
+        if let Some((cn, cu)) = coordinate_names {
+            let e = |err| nc_err(&path, err);
+            let names: Vec<&str> = sys.coordinate_names.iter().map(|s| s.as_str()).collect();
+            writer.put_fixed_text(cn, &names).map_err(e)?;
+            let units: Vec<&str> = sys
+                .coordinate_names
+                .iter()
+                .map(|s| {
+                    if s.rsplit('.').next().is_some_and(|c| c.starts_with('d')) {
+                        "m"
+                    } else {
+                        "rad"
+                    }
+                })
+                .collect();
+            writer.put_fixed_text(cu, &units).map_err(e)?;
+        }
         Ok(Self {
             writer,
             path: path.clone(),
@@ -423,6 +501,7 @@ impl ResultsFile {
                 joint_axes,
                 joint_force,
                 joint_moment,
+                coordinate: coordinate_vars,
                 kinetic,
                 potential,
                 external_work,
@@ -436,6 +515,10 @@ impl ResultsFile {
             jm: vec![0.0; 3 * n_joints],
             jp: vec![0.0; 3 * n_joints],
             ja: vec![0.0; 9 * n_joints],
+            mu_all: vec![0.0; sys.n_rows],
+            cq: vec![0.0; n_coords],
+            cv: vec![0.0; n_coords],
+            cf: vec![0.0; n_coords],
             backup,
         })
     }
@@ -522,15 +605,13 @@ impl Recorder for ResultsFile {
         }
         w.set_record_f64(v.orientation, &self.buf4).map_err(e)?;
         if let (Some(fv), Some(mv)) = (v.joint_force, v.joint_moment) {
-            for (k, (c, &off)) in sys
-                .constraints
-                .iter()
-                .zip(&sys.multiplier_offsets)
-                .enumerate()
-            {
-                let (f, m) = c.reactions(nodes, &frame.mu[off..off + c.n_equations()]);
-                self.jf[3 * k..3 * k + 3].copy_from_slice(f.as_slice());
-                self.jm[3 * k..3 * k + 3].copy_from_slice(m.as_slice());
+            let ctx = sys.context(frame.state.time, frame.load_factor);
+            let (jf, jm) = (&mut self.jf, &mut self.jm);
+            sys.reactions(&ctx, frame.state, frame.mu, &mut self.mu_all, |k, f, m| {
+                jf[3 * k..3 * k + 3].copy_from_slice(f.as_slice());
+                jm[3 * k..3 * k + 3].copy_from_slice(m.as_slice());
+            });
+            for (k, c) in sys.constraints.iter().enumerate() {
                 let (p, axes) = c.location(nodes);
                 self.jp[3 * k..3 * k + 3].copy_from_slice(p.as_slice());
                 for e in 0..3 {
@@ -545,6 +626,17 @@ impl Recorder for ResultsFile {
             }
             w.set_record_f64(fv, &self.jf).map_err(e)?;
             w.set_record_f64(mv, &self.jm).map_err(e)?;
+        }
+        if let Some(cv) = &v.coordinate {
+            let ctx = sys.context(frame.state.time, frame.load_factor);
+            for (j, c) in frame.state.coords.iter().enumerate() {
+                self.cq[j] = c.q;
+                self.cv[j] = c.v;
+            }
+            sys.coordinate_forces(&ctx, frame.state, frame.mu, &mut self.cf);
+            w.set_record_f64(cv.value, &self.cq).map_err(e)?;
+            w.set_record_f64(cv.rate, &self.cv).map_err(e)?;
+            w.set_record_f64(cv.force, &self.cf).map_err(e)?;
         }
         let en = frame.energy;
         w.set_record_f64(v.kinetic, &[en.kinetic]).map_err(e)?;

@@ -12,8 +12,8 @@
 //!
 //! **Stabilized index-2 formulation** (Gear–Gupta–Leimkuhler; for generalized-α on Lie
 //! groups, Arnold, Brüls & Cardona 2015): λ enforces the velocity constraint `B v = 0`, and
-//! a projection multiplier ν enforces `Φ = 0` by moving the configuration along `Bᵀν`
-//! (the update becomes `h Δq ← h Δq + Bᵀ ν`):
+//! a projection multiplier η enforces `Φ = 0` by moving the configuration along `Bᵀη`
+//! (the update becomes `h Δq ← h Δq + Bᵀ η`):
 //!
 //! ```text
 //! residual  [ s_r (r + Bᵀμ) ]    matrix  [ s_r (…same…)    (s_r/s_λ) Bᵀ   0     ]
@@ -21,13 +21,16 @@
 //!           [ Φ             ]            [ B T             0              B T Bᵀ ]
 //! ```
 //!
-//! (`B T Bᵀ` couples the ν of every two constraints that share a node.)
-//! ```text
-//! ```
+//! (`B T Bᵀ` couples the η of every two constraints that share a node.)
 //!
-//! The λ rows carry `s_v (γ' B + ∂(Bv)/∂q T)`. The couplings of the projection `Bᵀν`
+//! The λ rows carry `s_v (γ' B + ∂(Bv)/∂q T)`. The couplings of the projection `Bᵀη`
 //! into the other rows (`K T Bᵀ`, `∂(Bv)/∂q T Bᵀ`) are left out of the matrix: they are
 //! O(h²) and O(h) relative to the kept terms, and Newton still converges (see the tests).
+//!
+//! **Joint coordinates** ν are configuration unknowns without mass: their rows carry
+//! `s_r (f_ν(ν, ν̇) + B_νᵀ μ)` and their columns the ν-columns of `B`. They live in the
+//! block of their joint, after its multipliers, so that the joint's pivot block
+//! `[−B M⁻¹ Bᵀ, B_ν; B_νᵀ, K_νν]` stays invertible with no spring on the coordinate.
 //!
 //! `T` is the block-diagonal tangent operator of the configuration update (identity for
 //! statics). With the scaling on, `s_r = s_λ = βh²` and `s_v = βh/γ`, which keeps every
@@ -35,8 +38,10 @@
 
 use super::{State, System};
 use crate::elements::{EvalContext, LocalTerms, Need};
+use crate::joints::CoordinateTangents;
 use crate::solve::{BlockKind, BlockMatrix, BlockStructure};
 use nalgebra::{DMatrix, Matrix3};
+use std::ops::Range;
 use std::sync::Arc;
 
 /// How constraints enter the dynamic equations.
@@ -45,7 +50,7 @@ pub enum Formulation {
     /// Position constraints with Lagrange multipliers (index 3), scaled.
     #[default]
     Index3,
-    /// Velocity constraints with λ plus position constraints with projection multipliers ν
+    /// Velocity constraints with λ plus position constraints with projection multipliers η
     /// (stabilized index 2, GGL). Stable also without numerical dissipation (ρ∞ = 1).
     StabilizedIndex2,
 }
@@ -82,12 +87,37 @@ impl Coefficients {
             penalty,
         }
     }
+
+    /// Only the constraint blocks `Bᵀ` and `B` (for projections onto the constraints).
+    pub fn constraints_only() -> Self {
+        Self {
+            stiffness: 0.0,
+            ..Self::statics(0.0)
+        }
+    }
+}
+
+/// Where a constraint's unknowns sit in the Newton vector.
+#[derive(Clone, Debug, Default)]
+struct Place {
+    /// Its block (multipliers, then coordinates), if it has unknowns.
+    block: Option<usize>,
+    /// Its projection block (stabilized only).
+    projection: Option<usize>,
+    /// Vector offsets of the multipliers, coordinates and projection multipliers.
+    lam: usize,
+    coord: usize,
+    proj: usize,
 }
 
 struct ConstraintWork {
+    place: Place,
+    m: usize,
+    nc: usize,
     phi: Vec<f64>,
     mu: Vec<f64>,
-    /// B (material rotation columns).
+    phi_t: Vec<f64>,
+    /// B (material rotation columns, then coordinates).
     b: DMatrix<f64>,
     /// B T.
     bt: DMatrix<f64>,
@@ -96,14 +126,23 @@ struct ConstraintWork {
     kr: DMatrix<f64>,
     unit: Vec<f64>,
     dbv: DMatrix<f64>,
+    /// Coordinate forces and their tangents.
+    cf: Vec<f64>,
+    cf_k: Vec<f64>,
+    cf_c: Vec<f64>,
+    /// Local velocities (node v, Ω, then ν̇).
+    vel: Vec<f64>,
     /// Value offsets of the (node a, node b) blocks, row-major over local nodes.
     node_slots: Vec<usize>,
-    /// Offsets of (node, λ) and (λ, node) blocks.
+    /// Offsets of the (node, joint block) and (joint block, node) blocks, and of the
+    /// joint's diagonal block.
     lam_col: Vec<usize>,
     lam_row: Vec<usize>,
-    /// Offsets of (ν, node) blocks and of the (ν, ν) block (stabilized only).
-    nu_row: Vec<usize>,
-    nu_diag: usize,
+    diag: usize,
+    /// Offsets of (η, node) blocks, (η, joint block) and (η, η) (stabilized only).
+    proj_row: Vec<usize>,
+    proj_blk: usize,
+    proj_diag: usize,
 }
 
 /// Reusable workspace for assembling one system in one formulation: nothing is
@@ -114,7 +153,7 @@ pub struct Assembler {
     terms: Vec<LocalTerms>,
     element_slots: Vec<Vec<usize>>,
     constraints: Vec<ConstraintWork>,
-    /// Stabilized only: (ν_k, ν_l) couplings of constraints k ≠ l sharing a node, as
+    /// Stabilized only: (η_k, η_l) couplings of constraints k ≠ l sharing a node, as
     /// (k, l, value offset, local node index in k, local node index in l).
     nu_pairs: Vec<(usize, usize, usize, usize, usize)>,
 }
@@ -122,7 +161,6 @@ pub struct Assembler {
 impl Assembler {
     pub fn new(sys: &System, formulation: Formulation) -> Self {
         let n = sys.n_nodes();
-        let nc = sys.constraints.len();
         let stabilized = formulation == Formulation::StabilizedIndex2;
         let mut sizes = vec![6; n];
         let mut kinds = vec![BlockKind::Primary; n];
@@ -137,12 +175,50 @@ impl Assembler {
                 }
             }
         }
+        // Blocks of the constraints: multipliers + coordinates, then projections.
+        let mut places: Vec<Place> = vec![Place::default(); sys.constraints.len()];
+        for (k, c) in sys.constraints.iter().enumerate() {
+            let size = c.n_equations() + c.n_coordinates();
+            if size > 0 {
+                places[k].block = Some(sizes.len());
+                sizes.push(size);
+                kinds.push(BlockKind::Multiplier);
+            }
+        }
+        if stabilized {
+            for (k, c) in sys.constraints.iter().enumerate() {
+                if c.n_equations() > 0 {
+                    places[k].projection = Some(sizes.len());
+                    sizes.push(c.n_equations());
+                    kinds.push(BlockKind::Multiplier);
+                }
+            }
+        }
+        for (k, c) in sys.constraints.iter().enumerate() {
+            let cn = c.nodes();
+            for (i, &a) in cn.iter().enumerate() {
+                for &b in &cn[i + 1..] {
+                    if a != b {
+                        couplings.push((a, b));
+                    }
+                }
+                if let Some(blk) = places[k].block {
+                    couplings.push((blk, a));
+                }
+                if let Some(p) = places[k].projection {
+                    couplings.push((p, a));
+                }
+            }
+            if let (Some(p), Some(blk)) = (places[k].projection, places[k].block) {
+                couplings.push((p, blk));
+            }
+        }
         // Constraints sharing a node: (k, l, local index in k, local index in l).
         let mut shared = Vec::new();
         if stabilized {
             for (k, ck) in sys.constraints.iter().enumerate() {
                 for (l, cl) in sys.constraints.iter().enumerate() {
-                    if k == l {
+                    if k == l || places[k].projection.is_none() || places[l].projection.is_none() {
                         continue;
                     }
                     for (a, na) in ck.nodes().iter().enumerate() {
@@ -155,24 +231,10 @@ impl Assembler {
                 }
             }
             for &(k, l, _, _) in &shared {
-                couplings.push((n + nc + k, n + nc + l));
-            }
-        }
-        let groups = if stabilized { 2 } else { 1 };
-        for g in 0..groups {
-            for (k, c) in sys.constraints.iter().enumerate() {
-                sizes.push(c.n_equations());
-                kinds.push(BlockKind::Multiplier);
-                let blk = n + g * nc + k;
-                let cn = c.nodes();
-                for (i, &a) in cn.iter().enumerate() {
-                    couplings.push((blk, a));
-                    for &b in &cn[i + 1..] {
-                        if a != b {
-                            couplings.push((a, b));
-                        }
-                    }
-                }
+                couplings.push((
+                    places[k].projection.unwrap_or(0),
+                    places[l].projection.unwrap_or(0),
+                ));
             }
         }
         let structure = Arc::new(
@@ -180,6 +242,16 @@ impl Assembler {
                 .expect("block structure of a validated model is consistent"),
         );
         let s = &structure;
+        for (k, c) in sys.constraints.iter().enumerate() {
+            let p = &mut places[k];
+            if let Some(b) = p.block {
+                p.lam = s.block_offset(b);
+                p.coord = p.lam + c.n_equations();
+            }
+            if let Some(b) = p.projection {
+                p.proj = s.block_offset(b);
+            }
+        }
         let slot =
             |i: usize, j: usize| s.entry(i, j).expect("pattern contains every coupled block");
         let terms = sys
@@ -201,40 +273,57 @@ impl Assembler {
         let constraints = sys
             .constraints
             .iter()
-            .enumerate()
-            .map(|(k, c)| {
+            .zip(places)
+            .map(|(c, place)| {
                 let cn = c.nodes();
                 let m = c.n_equations();
-                let lam = n + k;
-                let nu = n + nc + k;
+                let nc = c.n_coordinates();
+                let nl = 6 * cn.len() + nc;
+                let blk = place.block;
+                let prj = place.projection;
                 ConstraintWork {
+                    m,
+                    nc,
                     phi: vec![0.0; m],
                     mu: vec![0.0; m],
-                    b: DMatrix::zeros(m, 6 * cn.len()),
-                    bt: DMatrix::zeros(m, 6 * cn.len()),
-                    k: DMatrix::zeros(6 * cn.len(), 6 * cn.len()),
-                    kr: DMatrix::zeros(6 * cn.len(), 6 * cn.len()),
+                    phi_t: vec![0.0; m],
+                    b: DMatrix::zeros(m, nl),
+                    bt: DMatrix::zeros(m, nl),
+                    k: DMatrix::zeros(nl, nl),
+                    kr: DMatrix::zeros(nl, nl),
                     unit: vec![0.0; m],
-                    dbv: DMatrix::zeros(m, 6 * cn.len()),
+                    dbv: DMatrix::zeros(m, nl),
+                    cf: vec![0.0; nc],
+                    cf_k: vec![0.0; nc],
+                    cf_c: vec![0.0; nc],
+                    vel: vec![0.0; nl],
                     node_slots: cn
                         .iter()
                         .flat_map(|&a| cn.iter().map(move |&b| (a, b)))
                         .map(|(a, b)| slot(a, b))
                         .collect(),
-                    lam_col: cn.iter().map(|&a| slot(a, lam)).collect(),
-                    lam_row: cn.iter().map(|&a| slot(lam, a)).collect(),
-                    nu_row: if stabilized {
-                        cn.iter().map(|&a| slot(nu, a)).collect()
-                    } else {
-                        Vec::new()
+                    lam_col: blk.map_or(Vec::new(), |j| cn.iter().map(|&a| slot(a, j)).collect()),
+                    lam_row: blk.map_or(Vec::new(), |j| cn.iter().map(|&a| slot(j, a)).collect()),
+                    diag: blk.map_or(0, |j| slot(j, j)),
+                    proj_row: prj.map_or(Vec::new(), |p| cn.iter().map(|&a| slot(p, a)).collect()),
+                    proj_blk: match (prj, blk) {
+                        (Some(p), Some(j)) => slot(p, j),
+                        _ => 0,
                     },
-                    nu_diag: if stabilized { slot(nu, nu) } else { 0 },
+                    proj_diag: prj.map_or(0, |p| slot(p, p)),
+                    place,
                 }
             })
-            .collect();
+            .collect::<Vec<_>>();
         let nu_pairs = shared
             .iter()
-            .map(|&(k, l, a, b)| (k, l, slot(n + nc + k, n + nc + l), a, b))
+            .map(|&(k, l, a, b)| {
+                let (pk, pl) = (
+                    constraints[k].place.projection.unwrap_or(0),
+                    constraints[l].place.projection.unwrap_or(0),
+                );
+                (k, l, slot(pk, pl), a, b)
+            })
             .collect();
         Self {
             formulation,
@@ -260,6 +349,71 @@ impl Assembler {
         self.structure.dim()
     }
 
+    /// Range of constraint k's multipliers in the Newton vector.
+    pub fn multiplier_range(&self, k: usize) -> Range<usize> {
+        let w = &self.constraints[k];
+        w.place.lam..w.place.lam + w.m
+    }
+
+    /// Range of constraint k's coordinates in the Newton vector.
+    pub fn coordinate_range(&self, k: usize) -> Range<usize> {
+        let w = &self.constraints[k];
+        w.place.coord..w.place.coord + w.nc
+    }
+
+    /// Range of constraint k's projection multipliers (stabilized only; empty otherwise).
+    pub fn projection_range(&self, k: usize) -> Range<usize> {
+        let w = &self.constraints[k];
+        match w.place.projection {
+            Some(_) => w.place.proj..w.place.proj + w.m,
+            None => 0..0,
+        }
+    }
+
+    /// Gathers the configuration part of a Newton vector `v` (6 per node, then the
+    /// coordinates in state order) into `cfg`.
+    pub fn configuration_of(&self, sys: &System, v: &[f64], cfg: &mut [f64]) {
+        let n6 = 6 * sys.n_nodes();
+        cfg[..n6].copy_from_slice(&v[..n6]);
+        for (k, off) in sys.coordinate_offsets.iter().enumerate() {
+            let r = self.coordinate_range(k);
+            cfg[n6 + off..n6 + off + r.len()].copy_from_slice(&v[r]);
+        }
+    }
+
+    /// Gathers the multipliers of a Newton vector `v` in `sys.multiplier_offsets` order.
+    pub fn multipliers_of(&self, sys: &System, v: &[f64], out: &mut [f64]) {
+        for (k, off) in sys.multiplier_offsets.iter().enumerate() {
+            let r = self.multiplier_range(k);
+            out[*off..off + r.len()].copy_from_slice(&v[r]);
+        }
+    }
+
+    /// Adds `w_node[i]` to the 6 diagonal entries of each node block and `w_coord` to the
+    /// coordinate diagonal (the metric of a projection onto the constraints).
+    pub fn add_configuration_metric(
+        &self,
+        sys: &System,
+        matrix: &mut BlockMatrix,
+        w_node: &[f64; 6],
+        w_coord: f64,
+    ) {
+        let s = matrix.structure.clone();
+        for i in 0..sys.n_nodes() {
+            let o = s.entry(i, i).expect("diagonal blocks exist");
+            for (k, w) in w_node.iter().enumerate() {
+                matrix.values[o + 7 * k] += w;
+            }
+        }
+        for w in &self.constraints {
+            let size = w.m + w.nc;
+            for c in 0..w.nc {
+                let d = w.m + c;
+                matrix.values[w.diag + d * size + d] += w_coord;
+            }
+        }
+    }
+
     /// Assembles the residual (always) and the iteration matrix (if given).
     ///
     /// `tangent_ops[i]` is the tangent operator of node i's rotation update; an empty slice
@@ -275,8 +429,6 @@ impl Assembler {
         residual: &mut [f64],
         mut matrix: Option<&mut BlockMatrix>,
     ) {
-        let n_cfg = sys.n_config();
-        let n_mult = sys.n_multipliers;
         let stabilized = self.formulation == Formulation::StabilizedIndex2;
         residual.fill(0.0);
         let need = if matrix.is_some() {
@@ -316,14 +468,14 @@ impl Assembler {
                 for a in 0..n {
                     for b in 0..n {
                         let off = slots[a * n + b];
-                        scatter_block(
+                        add_sub(
                             &mut mat.values[off..off + 36],
+                            6,
+                            (0, 0),
                             t.k.as_slice(),
                             6 * n,
-                            6 * a,
-                            6 * b,
-                            6,
-                            6,
+                            (6 * a, 6 * b),
+                            (6, 6),
                             1.0,
                         );
                     }
@@ -333,80 +485,150 @@ impl Assembler {
 
         for (k, c) in sys.constraints.iter().enumerate() {
             let w = &mut self.constraints[k];
-            let m = c.n_equations();
+            let (m, nc) = (w.m, w.nc);
             let off = sys.multiplier_offsets[k];
-            c.evaluate(ctx, &state.nodes, &mut w.phi, Some(&mut w.b));
+            let coords = sys.coords_of(k, state);
+            c.evaluate(ctx, &state.nodes, coords, &mut w.phi, Some(&mut w.b));
             let cn = c.nodes();
+            let n = cn.len();
+            let nq = 6 * n;
+            let nl = nq + nc;
             for i in 0..m {
                 w.mu[i] = state.lambda[off + i] + coef.penalty * w.phi[i];
             }
+            // Local velocities (node v, Ω, coordinate rates).
+            for (a, &na) in cn.iter().enumerate() {
+                let nd = &state.nodes[na];
+                for j in 0..3 {
+                    w.vel[6 * a + j] = nd.v[j];
+                    w.vel[6 * a + 3 + j] = nd.w[j];
+                }
+            }
+            for (j, q) in coords.iter().enumerate() {
+                w.vel[nq + j] = q.v;
+            }
+            let p = &w.place;
             if stabilized {
-                // λ rows: s_v B v; ν rows: Φ.
+                // λ rows: s_v (B v + Φ_t); η rows: Φ.
+                c.velocity_term(ctx, &mut w.phi_t);
                 for i in 0..m {
-                    let mut bv = 0.0;
-                    for (a, &na) in cn.iter().enumerate() {
-                        let nd = &state.nodes[na];
-                        for j in 0..3 {
-                            bv += w.b[(i, 6 * a + j)] * nd.v[j] + w.b[(i, 6 * a + 3 + j)] * nd.w[j];
-                        }
+                    let mut bv = w.phi_t[i];
+                    for j in 0..nl {
+                        bv += w.b[(i, j)] * w.vel[j];
                     }
-                    residual[n_cfg + off + i] = coef.velocity_scale * bv;
-                    residual[n_cfg + n_mult + off + i] = w.phi[i];
+                    residual[p.lam + i] = coef.velocity_scale * bv;
+                    residual[p.proj + i] = w.phi[i];
                 }
             } else {
                 for i in 0..m {
-                    residual[n_cfg + off + i] = w.phi[i];
+                    residual[p.lam + i] = w.phi[i];
                 }
             }
-            // Configuration rows: s_r Bᵀ μ.
-            for (a, &na) in cn.iter().enumerate() {
-                for i in 0..6 {
-                    let mut acc = 0.0;
-                    for r in 0..m {
-                        acc += w.b[(r, 6 * a + i)] * w.mu[r];
-                    }
-                    residual[6 * na + i] += sr * acc;
+            // Configuration rows: s_r Bᵀ μ; coordinate rows also s_r f_ν.
+            for j in 0..nl {
+                let mut acc = 0.0;
+                for r in 0..m {
+                    acc += w.b[(r, j)] * w.mu[r];
+                }
+                let row = if j < nq {
+                    6 * cn[j / 6] + j % 6
+                } else {
+                    p.coord + j - nq
+                };
+                residual[row] += sr * acc;
+            }
+            if nc > 0 {
+                w.cf.fill(0.0);
+                w.cf_k.fill(0.0);
+                w.cf_c.fill(0.0);
+                let tangents = matrix.is_some().then_some(CoordinateTangents {
+                    stiffness: &mut w.cf_k,
+                    damping: &mut w.cf_c,
+                });
+                c.coordinate_forces(ctx, coords, &mut w.cf, tangents);
+                for j in 0..nc {
+                    residual[p.coord + j] += sr * w.cf[j];
                 }
             }
             let Some(mat) = matrix.as_deref_mut() else {
                 continue;
             };
+            let p = &w.place;
+            let size = m + nc;
             w.k.fill(0.0);
-            c.reaction_tangent(ctx, &state.nodes, &w.mu, &mut w.k);
+            c.reaction_tangent(ctx, &state.nodes, coords, &w.mu, &mut w.k);
             if coef.penalty != 0.0 {
                 w.k.gemm_tr(coef.penalty, &w.b, &w.b, 1.0);
             }
             apply_tangent_ops(&mut w.k, cn, tangent_ops);
             w.bt.copy_from(&w.b);
             apply_tangent_ops(&mut w.bt, cn, tangent_ops);
-            let n = cn.len();
-            let nr = 6 * n;
+            let skk = sr * coef.stiffness;
+            // (config, config): s_r c_K (K_c + ρ BᵀB) T, plus the coordinate elements.
             for a in 0..n {
                 for b in 0..n {
                     let o = w.node_slots[a * n + b];
-                    scatter_block(
+                    add_sub(
                         &mut mat.values[o..o + 36],
+                        6,
+                        (0, 0),
                         w.k.as_slice(),
-                        nr,
-                        6 * a,
-                        6 * b,
-                        6,
-                        6,
-                        sr * coef.stiffness,
+                        nl,
+                        (6 * a, 6 * b),
+                        (6, 6),
+                        skk,
                     );
                 }
             }
-            // (node, λ): (s_r/s_λ) Bᵀ, 6 × m row-major.
+            if nc > 0 {
+                for a in 0..n {
+                    let (oc, or) = (w.lam_col[a], w.lam_row[a]);
+                    add_sub(
+                        &mut mat.values[oc..oc + 6 * size],
+                        size,
+                        (0, m),
+                        w.k.as_slice(),
+                        nl,
+                        (6 * a, nq),
+                        (6, nc),
+                        skk,
+                    );
+                    add_sub(
+                        &mut mat.values[or..or + size * 6],
+                        6,
+                        (m, 0),
+                        w.k.as_slice(),
+                        nl,
+                        (nq, 6 * a),
+                        (nc, 6),
+                        skk,
+                    );
+                }
+                let d = &mut mat.values[w.diag..w.diag + size * size];
+                add_sub(d, size, (m, m), w.k.as_slice(), nl, (nq, nq), (nc, nc), skk);
+                for j in 0..nc {
+                    d[(m + j) * size + m + j] +=
+                        sr * (coef.stiffness * w.cf_k[j] + coef.damping * w.cf_c[j]);
+                }
+            }
+            // (config, λ): (s_r/s_λ) Bᵀ.
             let cs = sr / coef.multiplier_scale;
             for a in 0..n {
                 let o = w.lam_col[a];
-                let dst = &mut mat.values[o..o + 6 * m];
-                for i in 0..6 {
-                    let col = &w.b.as_slice()[(6 * a + i) * m..(6 * a + i + 1) * m];
-                    for (d, v) in dst[m * i..m * i + m].iter_mut().zip(col) {
-                        *d += cs * v;
-                    }
-                }
+                add_sub_t(
+                    &mut mat.values[o..o + 6 * size],
+                    size,
+                    (0, 0),
+                    w.b.as_slice(),
+                    m,
+                    (0, 6 * a),
+                    (6, m),
+                    cs,
+                );
+            }
+            if nc > 0 {
+                let d = &mut mat.values[w.diag..w.diag + size * size];
+                add_sub_t(d, size, (m, 0), w.b.as_slice(), m, (0, nq), (nc, m), cs);
             }
             if stabilized {
                 // ∂(B v)/∂q, row r = vᵀ ∂(B_rᵀ)/∂q = vᵀ K(e_r), then times T.
@@ -414,63 +636,77 @@ impl Assembler {
                     w.unit.fill(0.0);
                     w.unit[r] = 1.0;
                     w.kr.fill(0.0);
-                    c.reaction_tangent(ctx, &state.nodes, &w.unit, &mut w.kr);
-                    for j in 0..6 * n {
+                    c.reaction_tangent(ctx, &state.nodes, coords, &w.unit, &mut w.kr);
+                    for j in 0..nl {
                         let mut acc = 0.0;
-                        for (a, &na) in cn.iter().enumerate() {
-                            let nd = &state.nodes[na];
-                            for i in 0..3 {
-                                acc += nd.v[i] * w.kr[(6 * a + i, j)]
-                                    + nd.w[i] * w.kr[(6 * a + 3 + i, j)];
-                            }
+                        for i in 0..nl {
+                            acc += w.vel[i] * w.kr[(i, j)];
                         }
                         w.dbv[(r, j)] = acc;
                     }
                 }
                 apply_tangent_ops(&mut w.dbv, cn, tangent_ops);
             }
-            // (λ, node): B T (index 3) or s_v (γ' B + ∂(Bv)/∂q T) (stabilized), m × 6 row-major.
-            for a in 0..n {
-                let o = w.lam_row[a];
-                let dst = &mut mat.values[o..o + 6 * m];
-                if stabilized {
-                    let cv = coef.velocity_scale * coef.damping;
-                    scatter_block(dst, w.b.as_slice(), m, 0, 6 * a, m, 6, cv);
-                    scatter_block(
-                        dst,
-                        w.dbv.as_slice(),
-                        m,
-                        0,
-                        6 * a,
-                        m,
-                        6,
-                        coef.velocity_scale,
-                    );
-                } else {
-                    scatter_block(dst, w.bt.as_slice(), m, 0, 6 * a, m, 6, 1.0);
-                }
-            }
-            if stabilized {
-                // (ν, node): B T; (ν, ν): B T Bᵀ.
+            // (λ, config): B T (index 3) or s_v (γ' B + ∂(Bv)/∂q T) (stabilized).
+            let mut lam_rows = |src: &DMatrix<f64>, scale: f64| {
                 for a in 0..n {
-                    let o = w.nu_row[a];
-                    scatter_block(
-                        &mut mat.values[o..o + 6 * m],
+                    let o = w.lam_row[a];
+                    add_sub(
+                        &mut mat.values[o..o + size * 6],
+                        6,
+                        (0, 0),
+                        src.as_slice(),
+                        m,
+                        (0, 6 * a),
+                        (m, 6),
+                        scale,
+                    );
+                }
+                if nc > 0 {
+                    let d = &mut mat.values[w.diag..w.diag + size * size];
+                    add_sub(d, size, (0, m), src.as_slice(), m, (0, nq), (m, nc), scale);
+                }
+            };
+            if stabilized {
+                lam_rows(&w.b, coef.velocity_scale * coef.damping);
+                lam_rows(&w.dbv, coef.velocity_scale);
+            } else {
+                lam_rows(&w.bt, 1.0);
+            }
+            if stabilized && p.projection.is_some() {
+                // (η, config): B T; (η, η): B T Bᵀ.
+                for a in 0..n {
+                    let o = w.proj_row[a];
+                    add_sub(
+                        &mut mat.values[o..o + m * 6],
+                        6,
+                        (0, 0),
                         w.bt.as_slice(),
                         m,
-                        0,
-                        6 * a,
-                        m,
-                        6,
+                        (0, 6 * a),
+                        (m, 6),
                         1.0,
                     );
                 }
-                let o = w.nu_diag;
+                if nc > 0 {
+                    let o = w.proj_blk;
+                    add_sub(
+                        &mut mat.values[o..o + m * size],
+                        size,
+                        (0, m),
+                        w.bt.as_slice(),
+                        m,
+                        (0, nq),
+                        (m, nc),
+                        1.0,
+                    );
+                }
+                let o = w.proj_diag;
                 let dst = &mut mat.values[o..o + m * m];
                 for r in 0..m {
                     for s in 0..m {
                         let mut acc = 0.0;
-                        for j in 0..6 * n {
+                        for j in 0..nl {
                             acc += w.bt[(r, j)] * w.b[(s, j)];
                         }
                         dst[m * r + s] += acc;
@@ -481,18 +717,15 @@ impl Assembler {
         if let Some(mat) = matrix
             && stabilized
         {
-            self.add_projection_couplings(sys, mat);
+            self.add_projection_couplings(mat);
         }
     }
 
-    /// Couplings `(ν_k, ν_l) = B_k T B_lᵀ` through the nodes constraints k and l share.
-    fn add_projection_couplings(&self, sys: &System, matrix: &mut BlockMatrix) {
+    /// Couplings `(η_k, η_l) = B_k T B_lᵀ` through the nodes constraints k and l share.
+    fn add_projection_couplings(&self, matrix: &mut BlockMatrix) {
         for &(k, l, o, a, b) in &self.nu_pairs {
             let (wk, wl) = (&self.constraints[k], &self.constraints[l]);
-            let (mk, ml) = (
-                sys.constraints[k].n_equations(),
-                sys.constraints[l].n_equations(),
-            );
+            let (mk, ml) = (wk.m, wl.m);
             let dst = &mut matrix.values[o..o + mk * ml];
             for r in 0..mk {
                 for s in 0..ml {
@@ -506,26 +739,35 @@ impl Assembler {
         }
     }
 
-    /// Adds the projection `Bᵀ Δν` of the last assembly to a configuration-sized vector
-    /// (stabilized index-2 only; `delta_nu` has one entry per constraint row).
-    pub fn add_projection(&self, sys: &System, delta_nu: &[f64], out: &mut [f64]) {
+    /// Adds the projection `Bᵀ Δη` of the last assembly to a configuration vector (6 per
+    /// node, then coordinates; stabilized index-2 only). `delta` is the Newton vector.
+    pub fn add_projection(&self, sys: &System, delta: &[f64], out: &mut [f64]) {
+        let n6 = 6 * sys.n_nodes();
         for (k, c) in sys.constraints.iter().enumerate() {
             let w = &self.constraints[k];
-            let off = sys.multiplier_offsets[k];
-            for (a, &na) in c.nodes().iter().enumerate() {
-                for i in 0..6 {
-                    let mut acc = 0.0;
-                    for r in 0..c.n_equations() {
-                        acc += w.b[(r, 6 * a + i)] * delta_nu[off + r];
-                    }
-                    out[6 * na + i] += acc;
+            if w.place.projection.is_none() {
+                continue;
+            }
+            let eta = &delta[w.place.proj..w.place.proj + w.m];
+            let cn = c.nodes();
+            let nq = 6 * cn.len();
+            for j in 0..nq + w.nc {
+                let mut acc = 0.0;
+                for (r, e) in eta.iter().enumerate() {
+                    acc += w.b[(r, j)] * e;
                 }
+                let row = if j < nq {
+                    6 * cn[j / 6] + j % 6
+                } else {
+                    n6 + sys.coordinate_offsets[k] + j - nq
+                };
+                out[row] += acc;
             }
         }
     }
 
     /// Overwrites the constraint rows of `residual` with the convective accelerations
-    /// `Φ̈ − B v̇` (for the consistent-initial-acceleration problem, index-3 layout).
+    /// `Φ̈ − B (v̇, ν̈)` (for the consistent-initial-acceleration problem, index-3 layout).
     pub fn acceleration_rows(
         &mut self,
         sys: &System,
@@ -533,33 +775,91 @@ impl Assembler {
         ctx: &EvalContext,
         residual: &mut [f64],
     ) {
-        let n_cfg = sys.n_config();
         for (k, c) in sys.constraints.iter().enumerate() {
-            let m = c.n_equations();
-            let off = n_cfg + sys.multiplier_offsets[k];
-            c.acceleration_term(ctx, &state.nodes, &mut residual[off..off + m]);
+            let r = self.multiplier_range(k);
+            c.acceleration_term(ctx, &state.nodes, sys.coords_of(k, state), &mut residual[r]);
+        }
+    }
+
+    /// Overwrites the constraint rows of `residual` with the velocity constraint
+    /// `B (v, ν̇) + Φ_t` and zeroes the configuration rows (index-3 layout; call after
+    /// `assemble`, which left `B` in the workspace).
+    pub fn velocity_rows(
+        &mut self,
+        sys: &System,
+        state: &State,
+        ctx: &EvalContext,
+        residual: &mut [f64],
+    ) {
+        residual.fill(0.0);
+        for (k, c) in sys.constraints.iter().enumerate() {
+            let w = &mut self.constraints[k];
+            c.velocity_term(ctx, &mut w.phi_t);
+            let coords = sys.coords_of(k, state);
+            let cn = c.nodes();
+            let nq = 6 * cn.len();
+            for (a, &na) in cn.iter().enumerate() {
+                let nd = &state.nodes[na];
+                for j in 0..3 {
+                    w.vel[6 * a + j] = nd.v[j];
+                    w.vel[6 * a + 3 + j] = nd.w[j];
+                }
+            }
+            for (j, q) in coords.iter().enumerate() {
+                w.vel[nq + j] = q.v;
+            }
+            for i in 0..w.m {
+                let mut acc = w.phi_t[i];
+                for j in 0..nq + w.nc {
+                    acc += w.b[(i, j)] * w.vel[j];
+                }
+                residual[w.place.lam + i] = acc;
+            }
         }
     }
 }
 
-/// `dst[r][c] += scale · src[r0 + r, c0 + c]` for an `rows × cols` row-major block `dst`
-/// and a column-major `src` with `nr` rows.
+/// `dst[(r0 + r) · stride + c0 + c] += scale · src[sr0 + r, sc0 + c]` for an
+/// `rows × cols` block; `dst` row-major with row length `stride`, `src` column-major
+/// with `nr` rows.
 #[inline]
 #[allow(clippy::too_many_arguments)]
-fn scatter_block(
+fn add_sub(
     dst: &mut [f64],
+    stride: usize,
+    (r0, c0): (usize, usize),
     src: &[f64],
     nr: usize,
-    r0: usize,
-    c0: usize,
-    rows: usize,
-    cols: usize,
+    (sr0, sc0): (usize, usize),
+    (rows, cols): (usize, usize),
     scale: f64,
 ) {
     for c in 0..cols {
-        let col = &src[(c0 + c) * nr + r0..(c0 + c) * nr + r0 + rows];
+        let col = &src[(sc0 + c) * nr + sr0..(sc0 + c) * nr + sr0 + rows];
         for (r, v) in col.iter().enumerate() {
-            dst[r * cols + c] += scale * v;
+            dst[(r0 + r) * stride + c0 + c] += scale * v;
+        }
+    }
+}
+
+/// Like [`add_sub`] with the source transposed: `dst[r, c] += scale · src[sr0 + c, sc0 + r]`.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn add_sub_t(
+    dst: &mut [f64],
+    stride: usize,
+    (r0, c0): (usize, usize),
+    src: &[f64],
+    nr: usize,
+    (sr0, sc0): (usize, usize),
+    (rows, cols): (usize, usize),
+    scale: f64,
+) {
+    for r in 0..rows {
+        let col = &src[(sc0 + r) * nr + sr0..(sc0 + r) * nr + sr0 + cols];
+        let d = &mut dst[(r0 + r) * stride + c0..(r0 + r) * stride + c0 + cols];
+        for (x, v) in d.iter_mut().zip(col) {
+            *x += scale * v;
         }
     }
 }

@@ -1,16 +1,19 @@
 //! The system: the model turned into elements, constraints and a DOF layout.
 //!
-//! Unknown vector layout: node `i` owns entries `6i .. 6i+6` (δx global, δθ material);
-//! the multipliers of constraint `c` follow all nodes, at `6N + multiplier_offsets[c]`
-//! (and, in the stabilized index-2 formulation, the projection multipliers at
-//! `6N + M + multiplier_offsets[c]`). The block structure of the iteration matrix depends
-//! on the formulation and is built by the [`Assembler`].
+//! Unknowns: node `i` owns 6 (δx global, δθ material); constraint `c` owns its joint
+//! coordinates ν (at `coordinate_offsets[c]` in the state) and one multiplier per enforced
+//! equation (at `multiplier_offsets[c]`). Where they sit in the Newton vector depends on
+//! the formulation and is decided by the [`Assembler`]: node blocks first, then one block
+//! per constraint holding its multipliers followed by its coordinates (so that the pivot
+//! of a joint with a massless coordinate is never singular).
 
 mod assembly;
+pub mod redundancy;
 mod state;
 
 pub use assembly::{Assembler, Coefficients, Formulation};
-pub use state::{NodeState, State};
+pub use redundancy::ConstraintLoop;
+pub use state::{Coordinate, NodeState, State};
 
 use crate::elements::{AppliedLoad, Element, EvalContext, RigidBody, SpringDamper};
 use crate::joints::{Constraint, Joint};
@@ -25,9 +28,21 @@ pub struct System {
     /// Copies of the rigid bodies (for momenta).
     pub bodies: Vec<RigidBody>,
     pub gravity: Vector3<f64>,
-    /// Offset of each constraint's multipliers in the multiplier vector.
+    /// Offset of each constraint's enforced multipliers in the multiplier vector.
     pub multiplier_offsets: Vec<usize>,
     pub n_multipliers: usize,
+    /// Offset of each constraint's rows (enforced or dropped) in the vector of all rows.
+    pub row_offsets: Vec<usize>,
+    pub n_rows: usize,
+    /// Offset of each constraint's joint coordinates in the state.
+    pub coordinate_offsets: Vec<usize>,
+    pub n_coordinates: usize,
+    /// `<joint>.<component>` per coordinate.
+    pub coordinate_names: Vec<String>,
+    /// Closed loops of joints, with the equations dropped as redundant.
+    pub loops: Vec<ConstraintLoop>,
+    /// Remarks on the model found while building the system (over-constraint).
+    pub warnings: Vec<String>,
     /// Mean translational mass per massive node [kg] (1 if the model has no mass).
     pub characteristic_mass: f64,
 }
@@ -36,7 +51,7 @@ impl System {
     /// Builds the system of a validated model; elements are attached in the model's
     /// initial configuration.
     pub fn new(model: &Model) -> Self {
-        let initial = State::initial(model, 0);
+        let initial = State::nodes_only(model);
         let nodes = &initial.nodes;
         let mut elements: Vec<Box<dyn Element>> = Vec::new();
         let mut bodies = Vec::new();
@@ -74,9 +89,7 @@ impl System {
         }
         let mut constraints: Vec<Box<dyn Constraint>> = Vec::new();
         for j in &model.joints {
-            constraints.push(Box::new(Joint::new(
-                &j.name, j.kind, j.node_a, j.node_b, j.position, j.axes, nodes,
-            )));
+            constraints.push(Box::new(Joint::new(j, nodes)));
         }
         Self::from_parts(
             model.nodes.iter().map(|n| n.name.clone()).collect(),
@@ -84,23 +97,94 @@ impl System {
             constraints,
             bodies,
             model.gravity,
+            nodes,
         )
     }
 
-    /// Assembles a system from elements and constraints built in code.
+    /// Assembles a system from elements and constraints built in code; `initial` is the
+    /// configuration at which redundant constraint equations are looked for.
     pub fn from_parts(
         node_names: Vec<String>,
         elements: Vec<Box<dyn Element>>,
-        constraints: Vec<Box<dyn Constraint>>,
+        mut constraints: Vec<Box<dyn Constraint>>,
         bodies: Vec<RigidBody>,
         gravity: Vector3<f64>,
+        initial: &[NodeState],
     ) -> Self {
         let n = node_names.len();
+        let mut coordinate_offsets = Vec::with_capacity(constraints.len());
+        let mut coordinate_names = Vec::new();
+        let mut nc = 0;
+        for c in &constraints {
+            coordinate_offsets.push(nc);
+            nc += c.n_coordinates();
+            coordinate_names.extend(c.coordinate_names());
+        }
+        // Redundant equations of closed loops, at the initial configuration.
+        let mut coords = vec![Coordinate::default(); nc];
+        let mut values = Vec::new();
+        for (c, off) in constraints.iter().zip(&coordinate_offsets) {
+            values.resize(c.n_coordinates(), 0.0);
+            c.measure_coordinates(initial, &mut values);
+            for (k, v) in values.iter().enumerate() {
+                coords[off + k].q = *v;
+            }
+        }
+        let ctx0 = EvalContext {
+            time: 0.0,
+            gravity,
+            load_factor: 1.0,
+        };
+        let loops = redundancy::analyse(
+            &constraints,
+            &coordinate_offsets,
+            n,
+            &ctx0,
+            initial,
+            &coords,
+        );
+        let mut warnings = Vec::new();
+        for lp in &loops {
+            if lp.dropped.is_empty() {
+                continue;
+            }
+            let names: Vec<&str> = lp
+                .constraints
+                .iter()
+                .map(|&k| constraints[k].name())
+                .collect();
+            warnings.push(format!(
+                "the model is over-constrained by {} equation{}: the loop of joints {} has {} equations of rank {}; the solver drops the redundant ones and writes minimum-norm reactions for the loop",
+                lp.dropped.len(),
+                if lp.dropped.len() == 1 { "" } else { "s" },
+                names
+                    .iter()
+                    .map(|s| format!("'{s}'"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                lp.rows,
+                lp.rank
+            ));
+            for (k, c) in constraints.iter_mut().enumerate() {
+                let rows: Vec<usize> = lp
+                    .dropped
+                    .iter()
+                    .filter(|d| d.0 == k)
+                    .map(|d| d.1)
+                    .collect();
+                if !rows.is_empty() {
+                    c.drop_rows(&rows);
+                }
+            }
+        }
         let mut multiplier_offsets = Vec::with_capacity(constraints.len());
-        let mut m = 0;
+        let mut row_offsets = Vec::with_capacity(constraints.len());
+        let (mut m, mut nr) = (0, 0);
         for c in &constraints {
             multiplier_offsets.push(m);
             m += c.n_equations();
+            row_offsets.push(nr);
+            nr += c.n_rows();
         }
         let mut node_mass = vec![0.0; n];
         for b in &bodies {
@@ -120,17 +204,138 @@ impl System {
             gravity,
             multiplier_offsets,
             n_multipliers: m,
+            row_offsets,
+            n_rows: nr,
+            coordinate_offsets,
+            n_coordinates: nc,
+            coordinate_names,
+            loops,
+            warnings,
             characteristic_mass,
         }
+    }
+
+    /// The joint coordinates of constraint `k` in `s`.
+    #[inline]
+    pub fn coords_of<'a>(&self, k: usize, s: &'a State) -> &'a [Coordinate] {
+        let o = self.coordinate_offsets[k];
+        &s.coords[o..o + self.constraints[k].n_coordinates()]
+    }
+
+    /// Sets every joint coordinate to the value implied by the nodes of `s`.
+    pub fn measure_coordinates(&self, s: &mut State) {
+        let mut values = Vec::new();
+        for (c, off) in self.constraints.iter().zip(&self.coordinate_offsets) {
+            values.resize(c.n_coordinates(), 0.0);
+            c.measure_coordinates(&s.nodes, &mut values);
+            for (k, v) in values.iter().enumerate() {
+                s.coords[off + k].q = *v;
+            }
+        }
+    }
+
+    /// Multipliers of all rows (zeros at dropped rows, then the minimum-norm solution in
+    /// loops with dropped rows), from the enforced multipliers `mu` (physical units).
+    pub fn all_multipliers(&self, ctx: &EvalContext, s: &State, mu: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
+        for (k, c) in self.constraints.iter().enumerate() {
+            let (mo, ro) = (self.multiplier_offsets[k], self.row_offsets[k]);
+            for (i, &r) in c.active_rows().iter().enumerate() {
+                out[ro + r] = mu[mo + i];
+            }
+        }
+        for lp in self.loops.iter().filter(|l| !l.dropped.is_empty()) {
+            redundancy::minimum_norm(
+                lp,
+                &self.constraints,
+                &self.row_offsets,
+                &self.coordinate_offsets,
+                ctx,
+                &s.nodes,
+                &s.coords,
+                out,
+            );
+        }
+    }
+
+    /// Generalized force each coordinate receives from its drive (the actuator force or
+    /// torque, `−μ_drive`), zero where there is none; `mu` enforced multipliers.
+    pub fn drive_forces(&self, mu: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
+        for (k, c) in self.constraints.iter().enumerate() {
+            let active = c.active_rows();
+            for j in 0..c.n_coordinates() {
+                if let Some(r) = c.drive_row(j)
+                    && let Some(i) = active.iter().position(|&x| x == r)
+                {
+                    out[self.coordinate_offsets[k] + j] = -mu[self.multiplier_offsets[k] + i];
+                }
+            }
+        }
+    }
+
+    /// Generalized force on each coordinate from its elements and its drive (positive
+    /// tends to increase the coordinate): `−(f_ν − f_in) − μ_drive`. By the coordinate's
+    /// equilibrium it equals the force the joint transmits along the component.
+    pub fn coordinate_forces(&self, ctx: &EvalContext, s: &State, mu: &[f64], out: &mut [f64]) {
+        self.drive_forces(mu, out);
+        for (k, c) in self.constraints.iter().enumerate() {
+            let nc = c.n_coordinates();
+            if nc == 0 {
+                continue;
+            }
+            // A joint has at most six coordinates.
+            let mut buf = [0.0; 6];
+            let r = &mut buf[..nc];
+            c.coordinate_forces(ctx, self.coords_of(k, s), r, None);
+            for (j, x) in r.iter().enumerate() {
+                out[self.coordinate_offsets[k] + j] -= x;
+            }
+        }
+    }
+
+    /// Reaction force and moment of every joint (on B by A, about B's frame origin, frame-A
+    /// components) from the enforced multipliers `mu`; `all` is scratch of `n_rows`.
+    pub fn reactions(
+        &self,
+        ctx: &EvalContext,
+        s: &State,
+        mu: &[f64],
+        all: &mut [f64],
+        mut out: impl FnMut(usize, Vector3<f64>, Vector3<f64>),
+    ) {
+        self.all_multipliers(ctx, s, mu, all);
+        for (k, c) in self.constraints.iter().enumerate() {
+            let o = self.row_offsets[k];
+            let (f, m) = c.reactions(&s.nodes, self.coords_of(k, s), &all[o..o + c.n_rows()]);
+            out(k, f, m);
+        }
+    }
+
+    /// Power delivered by the drives, `Σ (−μ_drive) ν̇`.
+    pub fn drive_power(&self, s: &State, mu: &[f64]) -> f64 {
+        let mut p = 0.0;
+        for (k, c) in self.constraints.iter().enumerate() {
+            let active = c.active_rows();
+            for j in 0..c.n_coordinates() {
+                if let Some(r) = c.drive_row(j)
+                    && let Some(i) = active.iter().position(|&x| x == r)
+                {
+                    let nu_dot = s.coords[self.coordinate_offsets[k] + j].v;
+                    p -= mu[self.multiplier_offsets[k] + i] * nu_dot;
+                }
+            }
+        }
+        p
     }
 
     pub fn n_nodes(&self) -> usize {
         self.node_names.len()
     }
 
-    /// Number of configuration unknowns (6 per node).
+    /// Number of configuration unknowns: 6 per node, then the joint coordinates.
     pub fn n_config(&self) -> usize {
-        6 * self.n_nodes()
+        6 * self.n_nodes() + self.n_coordinates
     }
 
     /// Evaluation context at time `t` with load factor `lf`.
@@ -140,6 +345,15 @@ impl System {
             gravity: self.gravity,
             load_factor: lf,
         }
+    }
+
+    /// Potential, dissipated and input power of the joint-coordinate elements.
+    fn coordinate_sum(&self, s: &State, f: impl Fn(&dyn Constraint, &[Coordinate]) -> f64) -> f64 {
+        self.constraints
+            .iter()
+            .enumerate()
+            .map(|(k, c)| f(c.as_ref(), self.coords_of(k, s)))
+            .sum()
     }
 
     pub fn kinetic_energy(&self, s: &State) -> f64 {
@@ -153,21 +367,24 @@ impl System {
         self.elements
             .iter()
             .map(|e| e.potential_energy(ctx, &s.nodes))
-            .sum()
+            .sum::<f64>()
+            + self.coordinate_sum(s, |c, q| c.potential_energy(q))
     }
 
     pub fn external_power(&self, ctx: &EvalContext, s: &State) -> f64 {
         self.elements
             .iter()
             .map(|e| e.external_power(ctx, &s.nodes))
-            .sum()
+            .sum::<f64>()
+            + self.coordinate_sum(s, |c, q| c.external_power(ctx, q))
     }
 
     pub fn dissipated_power(&self, s: &State) -> f64 {
         self.elements
             .iter()
             .map(|e| e.dissipated_power(&s.nodes))
-            .sum()
+            .sum::<f64>()
+            + self.coordinate_sum(s, |c, q| c.dissipated_power(q))
     }
 
     /// Total linear and angular momentum (about the global origin) of the rigid bodies.
@@ -184,9 +401,20 @@ impl System {
 
     /// Constraint values Φ of all constraints, concatenated.
     pub fn constraint_values(&self, ctx: &EvalContext, s: &State, out: &mut [f64]) {
-        for (c, off) in self.constraints.iter().zip(&self.multiplier_offsets) {
+        for (k, (c, off)) in self
+            .constraints
+            .iter()
+            .zip(&self.multiplier_offsets)
+            .enumerate()
+        {
             let m = c.n_equations();
-            c.evaluate(ctx, &s.nodes, &mut out[*off..off + m], None);
+            c.evaluate(
+                ctx,
+                &s.nodes,
+                self.coords_of(k, s),
+                &mut out[*off..off + m],
+                None,
+            );
         }
     }
 

@@ -1,4 +1,4 @@
-//! Kinematic state of the nodes and the multipliers.
+//! Kinematic state of the nodes, the joint coordinates and the multipliers.
 
 use crate::math::Rotation;
 use crate::model::Model;
@@ -33,18 +33,38 @@ impl NodeState {
     }
 }
 
+/// State of one scalar unknown (a joint coordinate ν): value, rate, acceleration.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Coordinate {
+    pub q: f64,
+    pub v: f64,
+    pub a: f64,
+}
+
 /// State of the whole system at one time.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct State {
     pub time: f64,
     pub nodes: Vec<NodeState>,
+    /// Joint coordinates, constraint by constraint (see `System::coordinate_offsets`).
+    pub coords: Vec<Coordinate>,
     /// Lagrange multipliers in physical units (force, moment), per constraint row.
     pub lambda: Vec<f64>,
 }
 
 impl State {
-    /// The initial conditions written in the model, at rest in acceleration.
-    pub fn initial(model: &Model, n_multipliers: usize) -> Self {
+    /// The initial conditions written in the model, at rest in acceleration, with the
+    /// joint coordinates measured from the node configuration.
+    pub fn initial(model: &Model, sys: &super::System) -> Self {
+        let mut s = Self::nodes_only(model);
+        s.coords = vec![Coordinate::default(); sys.n_coordinates];
+        s.lambda = vec![0.0; sys.n_multipliers];
+        sys.measure_coordinates(&mut s);
+        s
+    }
+
+    /// The nodes' initial conditions only (no coordinates, no multipliers).
+    pub(crate) fn nodes_only(model: &Model) -> Self {
         Self {
             time: 0.0,
             nodes: model
@@ -59,7 +79,8 @@ impl State {
                     wd: Vector3::zeros(),
                 })
                 .collect(),
-            lambda: vec![0.0; n_multipliers],
+            coords: Vec::new(),
+            lambda: Vec::new(),
         }
     }
 }

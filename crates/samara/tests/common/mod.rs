@@ -44,7 +44,7 @@ pub fn run_nth(m: &Model, k: usize) -> (AnalysisSummary, History) {
     let s = run_analysis(
         &sys,
         &m.analyses[k],
-        State::initial(m, sys.n_multipliers),
+        State::initial(m, &sys),
         &mut h,
         &mut |_| {},
     )
