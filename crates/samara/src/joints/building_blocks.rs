@@ -226,6 +226,14 @@ impl AngleRow {
         }
     }
 
+    /// `R_pq = 0`.
+    pub fn direction_cosine(p: usize, q: usize) -> Self {
+        Self {
+            terms: [(Trig::One(1.0), p, q), (Trig::Zero, 0, 0)],
+            constant: Trig::Zero,
+        }
+    }
+
     /// Defines θ about e_iᴬ (the other two rotations constrained): `sin(θ − ν)`.
     pub fn about_a(i: usize) -> Self {
         let (j, k) = ((i + 1) % 3, (i + 2) % 3);

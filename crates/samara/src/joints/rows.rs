@@ -1,7 +1,10 @@
 //! The rows of each joint type (seed Table I, extended): which components are constrained,
 //! which are joint coordinates, and the equations that define them.
 //!
-//! Components are indexed `0..6` = d1, d2, d3, θ1, θ2, θ3. Free rotations:
+//! Components are indexed `0..6` = d1, d2, d3, θ1, θ2, θ3. Locked rotations are
+//! `R_pq = 0` for pairs of axes that stay independent over the joint's free motion: with
+//! θ3 free, `R₃₂ = R₃₁ = 0` (e₃ᴬ normal to e₁ᴮ and e₂ᴮ); with all rotations locked, the
+//! cyclic `R₂₃, R₃₁, R₁₂` of eq. 12b. Free rotations:
 //! - one free rotation about e₃ᴬ (revolute, screw, cylindrical, planar):
 //!   `cos ν R₂₁ − sin ν R₁₁ = sin(θ3 − ν)` with `R_pq = e_pᴬ·e_qᴮ` (1-based here);
 //! - universal: θ1 about e₁ᴬ from `R₃₂, R₂₂`, θ2 about e₂ᴮ from `R₁₃, R₁₁`, and the
@@ -116,12 +119,17 @@ pub fn rows_of(
             });
         }
     }
+    let spin_free = is_free(kind, 5) && !is_free(kind, 3) && !is_free(kind, 4);
     for i in 0..3 {
         if !is_free(kind, 3 + i) {
-            rows.push(Row::Angle {
-                row: AngleRow::locked(i),
-                coord: None,
-            });
+            let row = if spin_free {
+                // θ3 free: keep e₃ᴬ normal to e₁ᴮ and e₂ᴮ. These stay independent at any
+                // θ3, where R₂₃ and R₃₁ would both turn about e₁ᴬ at θ3 = 90°.
+                AngleRow::direction_cosine(2, 1 - i)
+            } else {
+                AngleRow::locked(i)
+            };
+            rows.push(Row::Angle { row, coord: None });
         }
     }
     // Definitions.
