@@ -2,6 +2,7 @@
 //! finite elements.
 //!
 //! Placeholder: see element.rs.
+pub mod element;
 pub mod gll;
 pub mod kernel;
 pub mod quaternion;
