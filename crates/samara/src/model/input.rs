@@ -26,6 +26,9 @@ pub struct ModelInput {
     /// Point-to-point spring-dampers.
     #[serde(default)]
     pub springs: Vec<Located<SpringInput>>,
+    /// Geometrically exact beams (Legendre spectral elements).
+    #[serde(default)]
+    pub beams: Vec<Located<super::beam_input::BeamInput>>,
     /// Applied forces and moments on nodes.
     #[serde(default)]
     pub forces: Vec<Located<ForceInput>>,

@@ -222,6 +222,10 @@ impl BeamElement {
         }
     }
 
+    pub fn nodes_slice(&self) -> &[usize] {
+        &self.nodes
+    }
+
     pub fn order(&self) -> usize {
         self.nodes.len() - 1
     }
