@@ -231,3 +231,36 @@ fn tips_arc(orders: &[usize]) -> Vec<Vector3<f64>> {
         })
         .collect()
 }
+
+/// Roll-up to a full circle: a straight cantilever (L = 1, EI = 1) under the tip moment
+/// M = 2π EI/L curls into a circle, tip back at the root. The tip error falls
+/// exponentially with the order p (2 elements: each bends by 180°) and algebraically with
+/// the number of elements at fixed p. Tolerances: error below 1e-8 at p = 10, and each
+/// step p → p + 2 gains at least a factor 10 while above round-off.
+#[test]
+fn rollup_full_circle_converges_exponentially() {
+    let text = |p: usize, ne: usize| {
+        format!(
+            "[model]\nname = \"rollup\"\n[[beams]]\nname = \"b\"\norder = {p}\nelements = {ne}\npoints = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]\nroot = \"root\"\ntip = \"tip\"\n[[beams.sections]]\nstation = 0.0\nstiffness = [[1e3,0.0,0.0,0.0,0.0,0.0],[0.0,1e3,0.0,0.0,0.0,0.0],[0.0,0.0,1e3,0.0,0.0,0.0],[0.0,0.0,0.0,1.0,0.0,0.0],[0.0,0.0,0.0,0.0,1.0,0.0],[0.0,0.0,0.0,0.0,0.0,1.0]]\n[[joints]]\nname = \"c\"\ntype = \"fixed\"\nnode_a = \"ground\"\nnode_b = \"root\"\n[[forces]]\nname = \"m\"\nnode = \"tip\"\nmoment = [0.0, 0.0, {}]\nframe = \"node\"\n[[analyses]]\nname = \"s\"\ntype = \"static\"\nload_steps = 8\ntolerance = 1e-12\nrelative_tolerance = 1e-12\n",
+            2.0 * std::f64::consts::PI
+        )
+    };
+    let err = |p: usize, ne: usize| {
+        let m = model(&text(p, ne));
+        let (_, h) = run(&m);
+        let (u, _) = node_final(&m, &h, "tip");
+        // Exact: the tip returns to the root, displacement (−1, 0, 0).
+        (u - Vector3::new(-1.0, 0.0, 0.0)).norm()
+    };
+    let by_p: Vec<f64> = [2usize, 4, 6, 8, 10].iter().map(|&p| err(p, 2)).collect();
+    let by_n: Vec<f64> = [2usize, 4, 8, 16].iter().map(|&n| err(2, n)).collect();
+    println!("tip error vs p (2 elements): {by_p:?}");
+    println!("tip error vs elements (p = 2): {by_n:?}");
+    assert!(by_p[4] < 1e-8, "{by_p:?}");
+    for w in by_p.windows(2) {
+        assert!(w[1] < 0.1 * w[0] || w[1] < 1e-9, "{by_p:?}");
+    }
+    let slope = common::loglog_slope(&[2.0, 4.0, 8.0, 16.0], &by_n);
+    println!("algebraic order in the element count at p = 2: {:.2}", -slope);
+    assert!(-slope > 1.8);
+}
