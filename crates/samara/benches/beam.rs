@@ -6,15 +6,18 @@
 //! time, Newton iterations, ms per step and the tip displacement at the end of each
 //! analysis, then the fitted growth exponent of the dynamic wall time with N.
 
-use samara::analysis::run_all;
 use samara::analysis::History;
+use samara::analysis::run_all;
 use samara::model::{AnalysisKind, JacobianUpdate, Model};
 use samara::system::System;
 use std::path::Path;
 use std::time::Instant;
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with('-')).collect();
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
     let cases: Vec<String> = if args.is_empty() {
         vec!["10".into(), "100".into(), "1000".into(), "p8x4".into()]
     } else {
@@ -36,7 +39,11 @@ fn main() {
             let mut model = loaded.model.clone();
             for a in &mut model.analyses {
                 if let AnalysisKind::Dynamic(d) = &mut a.kind {
-                    d.jacobian = if newton == "full" { JacobianUpdate::Full } else { JacobianUpdate::Modified };
+                    d.jacobian = if newton == "full" {
+                        JacobianUpdate::Full
+                    } else {
+                        JacobianUpdate::Modified
+                    };
                 }
             }
             let sys = System::new(&model);
@@ -51,7 +58,8 @@ fn main() {
                 single.analyses = vec![def.clone()];
                 let _ = k;
                 let clock = Instant::now();
-                let out = run_all(&single, &sys, |_| Ok(History::default()), |_, _| {}).expect("in-memory");
+                let out = run_all(&single, &sys, |_| Ok(History::default()), |_, _| {})
+                    .expect("in-memory");
                 let wall = clock.elapsed().as_secs_f64();
                 let (s, h) = &out[0];
                 if let Some(f) = &s.failure {
@@ -85,7 +93,10 @@ fn main() {
             let (mx, my) = (lx.iter().sum::<f64>() / k, ly.iter().sum::<f64>() / k);
             let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
             let sxx: f64 = lx.iter().map(|a| (a - mx) * (a - mx)).sum();
-            println!("growth of wall time with N, {key}: exponent {:.2}", sxy / sxx);
+            println!(
+                "growth of wall time with N, {key}: exponent {:.2}",
+                sxy / sxx
+            );
         }
     }
 }

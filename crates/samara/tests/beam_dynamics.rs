@@ -21,7 +21,8 @@ const T_COMPARE: f64 = 0.5;
 /// and unknown ρ∞), not resolvable from the data given. See the report.
 #[test]
 fn composite_dynamic() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/verification/composite_dynamic.toml");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/verification/composite_dynamic.toml");
     let text = std::fs::read_to_string(path).unwrap();
     let variant = std::env::var("BEAM_VARIANT").unwrap_or_default();
     let text = match variant.as_str() {
@@ -36,15 +37,17 @@ fn composite_dynamic() {
     let (_, h) = run(&m);
     let tip = m.node_index("tip").unwrap();
     let x0 = m.nodes[tip].position;
-    let text = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../../shared/reference/kynema_verification/dynamic_beam_5nodes_0pt005s_beamdyn.csv"),
-    )
+    let text = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(
+        "../../../shared/reference/kynema_verification/dynamic_beam_5nodes_0pt005s_beamdyn.csv",
+    ))
     .expect("reference data beside the repository");
     let mut worst: f64 = 0.0;
     let mut n = 0;
     for line in text.lines().skip(1) {
-        let v: Vec<f64> = line.split_whitespace().map(|c| c.parse().unwrap()).collect();
+        let v: Vec<f64> = line
+            .split_whitespace()
+            .map(|c| c.parse().unwrap())
+            .collect();
         if v[0] > T_COMPARE + 1e-9 {
             break;
         }
@@ -52,7 +55,12 @@ fn composite_dynamic() {
         assert!((f.time - v[0]).abs() < 1e-9);
         let u = f.state.nodes[tip].x - x0;
         let err = (u - Vector3::new(v[3], v[2], v[1])).norm();
-        if n % 20 == 0 { println!("t {:.3} ours {:.4} {:.4} {:.4} ref {:.4} {:.4} {:.4}", v[0], u.z, u.y, u.x, v[1], v[2], v[3]); }
+        if n % 20 == 0 {
+            println!(
+                "t {:.3} ours {:.4} {:.4} {:.4} ref {:.4} {:.4} {:.4}",
+                v[0], u.z, u.y, u.x, v[1], v[2], v[3]
+            );
+        }
         worst = worst.max(err);
         n += 1;
     }
@@ -122,7 +130,11 @@ fn cantilever_first_bending_frequency() {
     let m = model(&cantilever(4, 4, period / 200.0, 1.0, 5.2 * period));
     let (_, h) = run_chain(&m);
     let tip = m.node_index("tip").unwrap();
-    let z: Vec<(f64, f64)> = h.frames.iter().map(|f| (f.time, f.state.nodes[tip].x.z)).collect();
+    let z: Vec<(f64, f64)> = h
+        .frames
+        .iter()
+        .map(|f| (f.time, f.state.nodes[tip].x.z))
+        .collect();
 
     let ups: Vec<f64> = z
         .windows(2)
@@ -131,7 +143,10 @@ fn cantilever_first_bending_frequency() {
         .collect();
     let measured = (ups[ups.len() - 1] - ups[0]) / (ups.len() - 1) as f64;
     let err = (measured - period) / period;
-    println!("period {measured:.6e} s vs Euler–Bernoulli {period:.6e} s: rel. error {err:.3e} over {} periods", ups.len() - 1);
+    println!(
+        "period {measured:.6e} s vs Euler–Bernoulli {period:.6e} s: rel. error {err:.3e} over {} periods",
+        ups.len() - 1
+    );
     assert!(err.abs() < 1e-3);
 }
 
@@ -147,7 +162,12 @@ fn energy_conserved_to_second_order() {
         let (_, h) = run_chain(&m);
         let en = |f: &samara::analysis::Frame| f.energy.kinetic + f.energy.potential;
         let e0 = en(&h.frames[0]);
-        let dev = h.frames.iter().map(|f| (en(f) - e0).abs()).fold(0.0, f64::max) / e0;
+        let dev = h
+            .frames
+            .iter()
+            .map(|f| (en(f) - e0).abs())
+            .fold(0.0, f64::max)
+            / e0;
         println!("h = T/{k}: max |ΔE|/E = {dev:.3e}");
         devs.push(dev);
     }
@@ -157,9 +177,17 @@ fn energy_conserved_to_second_order() {
 }
 
 /// Runs all analyses (chaining `start_from`) and returns the last one's summary and frames.
-fn run_chain(m: &samara::model::Model) -> (samara::analysis::AnalysisSummary, samara::analysis::History) {
+fn run_chain(
+    m: &samara::model::Model,
+) -> (samara::analysis::AnalysisSummary, samara::analysis::History) {
     let sys = samara::system::System::new(m);
-    let mut out = samara::analysis::run_all(m, &sys, |_| Ok(samara::analysis::History::default()), |_, _| {}).unwrap();
+    let mut out = samara::analysis::run_all(
+        m,
+        &sys,
+        |_| Ok(samara::analysis::History::default()),
+        |_, _| {},
+    )
+    .unwrap();
     let (s, h) = out.pop().unwrap();
     assert!(s.failure.is_none(), "{:?}", s.failure);
     (s, h)

@@ -15,14 +15,21 @@ fn node_final(m: &Model, h: &History, name: &str) -> (Vector3<f64>, UnitQuaterni
     let i = m.node_index(name).expect("node exists");
     let n = &h.last().unwrap().state.nodes[i];
     let n0 = &m.nodes[i];
-    (n.x - n0.position, n.rot.quaternion() * n0.orientation.quaternion().inverse())
+    (
+        n.x - n0.position,
+        n.rot.quaternion() * n0.orientation.quaternion().inverse(),
+    )
 }
 
 /// Wiener–Milenkovic parameters c = 4 tan(φ/4) n of a rotation (BeamDyn's TipRD outputs).
 fn wiener_milenkovic(q: &UnitQuaternion<f64>) -> Vector3<f64> {
     let psi = samara::math::log_map(q);
     let phi = psi.norm();
-    if phi < 1e-300 { Vector3::zeros() } else { psi / phi * 4.0 * (phi / 4.0).tan() }
+    if phi < 1e-300 {
+        Vector3::zeros()
+    } else {
+        psi / phi * 4.0 * (phi / 4.0).tan()
+    }
 }
 
 /// bd_isotropic_rollup: BeamDyn's r-test output and the exact Euler solution.
@@ -38,7 +45,11 @@ fn bd_isotropic_rollup() {
     println!("tip displacement {u:?}, reference {reference:?}");
     assert!((u - reference).norm() < 1e-7, "{u:?}");
     let theta: f64 = 12.5664 * 10.0 / 100.0;
-    let exact = Vector3::new(0.0, 10.0 / theta * (1.0 - theta.cos()), 10.0 / theta * theta.sin() - 10.0);
+    let exact = Vector3::new(
+        0.0,
+        10.0 / theta * (1.0 - theta.cos()),
+        10.0 / theta * theta.sin() - 10.0,
+    );
     assert!((u - exact).norm() < 1e-7, "exact {exact:?}");
     let c = wiener_milenkovic(&q);
     println!("tip WM {c:?}");
@@ -63,7 +74,14 @@ fn elastica_tip(q: f64, l: f64, ei: f64, ea: f64, ga: f64) -> (f64, f64, f64) {
         let mut y = [0.0, 0.0, 0.0, m0];
         for i in 0..n {
             let s = i as f64 * h;
-            let add = |y: [f64; 4], k: [f64; 4], c: f64| [y[0] + c * k[0], y[1] + c * k[1], y[2] + c * k[2], y[3] + c * k[3]];
+            let add = |y: [f64; 4], k: [f64; 4], c: f64| {
+                [
+                    y[0] + c * k[0],
+                    y[1] + c * k[1],
+                    y[2] + c * k[2],
+                    y[3] + c * k[3],
+                ]
+            };
             let k1 = rhs(s, y);
             let k2 = rhs(s + h / 2.0, add(y, k1, h / 2.0));
             let k3 = rhs(s + h / 2.0, add(y, k2, h / 2.0));
@@ -116,12 +134,16 @@ fn elastica_tip(q: f64, l: f64, ei: f64, ea: f64, ga: f64) -> (f64, f64, f64) {
 /// reference tightly.
 #[test]
 fn bd_static_cantilever_beam() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/verification/bd_static_cantilever_beam.toml");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/verification/bd_static_cantilever_beam.toml");
     let text = std::fs::read_to_string(path).unwrap();
     let (ex, ez, eth) = elastica_tip(9.806, 10.0, 100.0, 1e4, 1e4);
     let exact = Vector3::new(ex, 0.0, ez);
     let beamdyn = Vector3::new(9.06014769, 0.0, -8.52177367);
-    println!("shooting solution: tip {exact:?}, rotation {eth}, WM {}", 4.0 * (eth / 4.0).tan());
+    println!(
+        "shooting solution: tip {exact:?}, rotation {eth}, WM {}",
+        4.0 * (eth / 4.0).tan()
+    );
     let mut errs = Vec::new();
     for p in [5usize, 8, 12] {
         let m = model(&text.replace("order = 5", &format!("order = {p}")));
@@ -129,13 +151,19 @@ fn bd_static_cantilever_beam() {
         let (u, q) = node_final(&m, &h, "tip");
         let c = wiener_milenkovic(&q);
         let e = (u - exact).norm() / exact.norm();
-        println!("p = {p}: tip {u:?}, WM {c:?}, rel. error {e:.3e} (vs BeamDyn {:.3e})", (u - beamdyn).norm() / beamdyn.norm());
+        println!(
+            "p = {p}: tip {u:?}, WM {c:?}, rel. error {e:.3e} (vs BeamDyn {:.3e})",
+            (u - beamdyn).norm() / beamdyn.norm()
+        );
         if p == 5 {
             assert!((u - beamdyn).norm() / beamdyn.norm() < 4e-2);
         }
         errs.push(e);
     }
-    assert!(errs[0] < 1e-2 && errs[2] < 2e-5 && errs[2] < errs[1] && errs[1] < errs[0], "{errs:?}");
+    assert!(
+        errs[0] < 1e-2 && errs[2] < 2e-5 && errs[2] < errs[1] && errs[1] < errs[0],
+        "{errs:?}"
+    );
 }
 
 /// Kynema/BeamDyn composite beam (fully populated 6×6 with bend–twist coupling), static.
@@ -187,7 +215,11 @@ fn bd_curved_beam() {
     let limit = tips_arc(&[14])[0];
     for i in 0..3 {
         let (lo, hi) = (bathe[i].min(converged[i]), bathe[i].max(converged[i]));
-        assert!(limit[i] > lo - 0.05 && limit[i] < hi + 0.05, "component {i}: {} not in [{lo}, {hi}]", limit[i]);
+        assert!(
+            limit[i] > lo - 0.05 && limit[i] < hi + 0.05,
+            "component {i}: {} not in [{lo}, {hi}]",
+            limit[i]
+        );
     }
     // Exponential convergence: successive differences shrink by > 100× from p = 4→6 to 8→10.
     let t = tips_arc(&[4, 6, 8, 10]);
@@ -207,14 +239,21 @@ fn arc_model(p: usize) -> String {
         // Section frame: x along the tangent (sin a, 0, cos a), y in the plane, z = global y.
         let tx = [a.sin(), 0.0, a.cos()];
         let ty = [a.cos(), 0.0, -a.sin()];
-        let name = if k == p { "tip".to_string() } else { format!("n{k}") };
+        let name = if k == p {
+            "tip".to_string()
+        } else {
+            format!("n{k}")
+        };
         s += &format!(
             "[[nodes]]\nname = \"{name}\"\nposition = [{:.17e}, 0.0, {:.17e}]\norientation = {{ x_axis = [{:.17e}, 0.0, {:.17e}], y_axis = [{:.17e}, 0.0, {:.17e}] }}\n\n",
             pos[0], pos[2], tx[0], tx[2], ty[0], ty[2]
         );
         names.push(format!("\"{name}\""));
     }
-    s += &format!("[[beams]]\nname = \"arc\"\norder = {p}\nnodes = [{}]\n\n", names.join(", "));
+    s += &format!(
+        "[[beams]]\nname = \"arc\"\norder = {p}\nnodes = [{}]\n\n",
+        names.join(", ")
+    );
     s += "[[beams.sections]]\nstation = 0.0\nstiffness = [[100e5,0.0,0.0,0.0,0.0,0.0],[0.0,41.6667e5,0.0,0.0,0.0,0.0],[0.0,0.0,41.6667e5,0.0,0.0,0.0],[0.0,0.0,0.0,8.333e5,0.0,0.0],[0.0,0.0,0.0,0.0,8.333e5,0.0],[0.0,0.0,0.0,0.0,0.0,8.333e5]]\n\n";
     s += "[[joints]]\nname = \"clamp\"\ntype = \"fixed\"\nnode_a = \"ground\"\nnode_b = \"n0\"\n\n[[forces]]\nname = \"f\"\nnode = \"tip\"\nforce = [0.0, 600.0, 0.0]\n\n";
     s += "[[analyses]]\nname = \"s\"\ntype = \"static\"\nload_steps = 10\ntolerance = 1e-11\nrelative_tolerance = 1e-11\n";
@@ -261,6 +300,9 @@ fn rollup_full_circle_converges_exponentially() {
         assert!(w[1] < 0.1 * w[0] || w[1] < 1e-9, "{by_p:?}");
     }
     let slope = common::loglog_slope(&[2.0, 4.0, 8.0, 16.0], &by_n);
-    println!("algebraic order in the element count at p = 2: {:.2}", -slope);
+    println!(
+        "algebraic order in the element count at p = 2: {:.2}",
+        -slope
+    );
     assert!(-slope > 1.8);
 }

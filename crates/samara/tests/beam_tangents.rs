@@ -8,9 +8,7 @@
 //! accurate to ~1e-10 relative, so a larger mismatch is a wrong tangent.
 
 use nalgebra::{Matrix3, Matrix6, Vector3};
-use samara::elements::beam::element::{
-    BeamElement, DistributedLoad, ElementSpec, Quadrature,
-};
+use samara::elements::beam::element::{BeamElement, DistributedLoad, ElementSpec, Quadrature};
 use samara::elements::beam::reference_line::ReferenceLine;
 use samara::elements::beam::section::{Section, SectionTable, mass_matrix};
 use samara::elements::{Element, EvalContext};
@@ -50,13 +48,24 @@ fn table() -> SectionTable {
     SectionTable {
         stations: vec![0.0, 1.0],
         sections: vec![
-            Section { stiffness: full_stiffness(0.1), mass: m(0.0) },
-            Section { stiffness: full_stiffness(0.7), mass: m(1.0) },
+            Section {
+                stiffness: full_stiffness(0.1),
+                mass: m(0.0),
+            },
+            Section {
+                stiffness: full_stiffness(0.7),
+                mass: m(1.0),
+            },
         ],
     }
 }
 
-fn element(p: usize, quadrature: Quadrature, damping: [f64; 6], offsets: bool) -> (BeamElement, Vec<NodeState>) {
+fn element(
+    p: usize,
+    quadrature: Quadrature,
+    damping: [f64; 6],
+    offsets: bool,
+) -> (BeamElement, Vec<NodeState>) {
     let line = ReferenceLine::new(
         &[
             Vector3::new(0.0, 0.0, 0.0),
@@ -153,7 +162,12 @@ fn beam_tangents_match_finite_differences() {
     let cases = [
         (1, Quadrature::Reduced, [0.0; 6], false),
         (1, Quadrature::Full, [0.01; 6], true),
-        (2, Quadrature::Reduced, [0.02, 0.01, 0.03, 0.0, 0.05, 0.01], true),
+        (
+            2,
+            Quadrature::Reduced,
+            [0.02, 0.01, 0.03, 0.0, 0.05, 0.01],
+            true,
+        ),
         (4, Quadrature::Full, [0.0; 6], true),
         (5, Quadrature::Reduced, [0.01; 6], false),
     ];
@@ -176,13 +190,21 @@ fn beam_tangents_match_finite_differences() {
 fn rigid_motion_is_strain_free() {
     let mut rng = Lcg(3);
     let (e, nodes0) = element(4, Quadrature::Full, [0.0; 6], true);
-    let ctx0 = EvalContext { time: 0.0, gravity: Vector3::zeros(), load_factor: 0.0 };
+    let ctx0 = EvalContext {
+        time: 0.0,
+        gravity: Vector3::zeros(),
+        load_factor: 0.0,
+    };
     for _ in 0..3 {
         let rigid = Rotation::exp(&rng.vec3(2.0));
         let t = rng.vec3(3.0);
         let nodes: Vec<NodeState> = nodes0
             .iter()
-            .map(|n| NodeState { x: rigid.matrix() * n.x + t, rot: rigid.compose(&n.rot), ..Default::default() })
+            .map(|n| NodeState {
+                x: rigid.matrix() * n.x + t,
+                rot: rigid.compose(&n.rot),
+                ..Default::default()
+            })
             .collect();
         let mut terms = samara::elements::LocalTerms::new(5);
         e.evaluate(&ctx0, &nodes, samara::elements::Need::Residual, &mut terms);

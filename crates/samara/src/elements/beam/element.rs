@@ -9,7 +9,9 @@
 //! material increment through `G(s_k)ᵀ` (`δs_k = G(s_k) δθ_k`), and the tangent is the exact
 //! derivative of the residual (checked by `tangent_check`).
 
-use super::kernel::{self, ElasticFields, ElasticOut, ElasticSection, InertialFields, InertialOut, PointLoads};
+use super::kernel::{
+    self, ElasticFields, ElasticOut, ElasticSection, InertialFields, InertialOut, PointLoads,
+};
 use super::quaternion::{Quat, conj, dg_w, dgt_f, from_rotation, g_mat, mul, rotation};
 use super::section::{SectionTable, damping_matrix};
 use crate::elements::{Element, EvalContext, LocalTerms, Need, add_block};
@@ -140,13 +142,19 @@ fn aligned(s: Quat, r: &Quat) -> Quat {
 impl BeamElement {
     pub fn new(spec: ElementSpec) -> Self {
         let nn = spec.nodes.len();
-        assert!((2..=MAX_ORDER + 1).contains(&nn), "element order out of range");
+        assert!(
+            (2..=MAX_ORDER + 1).contains(&nn),
+            "element order out of range"
+        );
         let p = nn - 1;
         let (xi_nodes, _) = super::gll::gauss_lobatto_legendre(p);
         let middle = p / 2;
         let offsets: Vec<Option<(Quat, Matrix3<f64>)>> = (0..nn)
             .map(|k| {
-                let o = mul(&conj(&from_rotation(&spec.node_frames[k])), &from_rotation(&spec.sections0[k]));
+                let o = mul(
+                    &conj(&from_rotation(&spec.node_frames[k])),
+                    &from_rotation(&spec.sections0[k]),
+                );
                 let o = aligned(o, &Quat::new(1.0, 0.0, 0.0, 0.0));
                 if (o - Quat::new(1.0, 0.0, 0.0, 0.0)).norm() < 1e-14 {
                     None
@@ -156,7 +164,11 @@ impl BeamElement {
             })
             .collect();
         let s0r = from_rotation(&spec.sections0[middle]);
-        let s0: Vec<Quat> = spec.sections0.iter().map(|r| aligned(from_rotation(r), &s0r)).collect();
+        let s0: Vec<Quat> = spec
+            .sections0
+            .iter()
+            .map(|r| aligned(from_rotation(r), &s0r))
+            .collect();
         let (e0, e1) = spec.eta_range;
         let mut h = vec![0.0; nn];
         let mut dh = vec![0.0; nn];
@@ -437,7 +449,8 @@ impl Element for BeamElement {
                 let gk = nm.g[k];
                 // Columns of node k: ∂(outputs)/∂x_k, ∂/∂θ_k (and rates for C).
                 let col_th = |jm: &nalgebra::SMatrix<f64, 4, { kernel::NE }>| -> Matrix4x3<f64> {
-                    let mut c = jm.fixed_view::<4, 4>(0, E_Q) * gk * hk + jm.fixed_view::<4, 4>(0, E_QP) * gk * dk;
+                    let mut c = jm.fixed_view::<4, 4>(0, E_Q) * gk * hk
+                        + jm.fixed_view::<4, 4>(0, E_QP) * gk * dk;
                     if damped {
                         c += jm.fixed_view::<4, 4>(0, E_QD) * nm.gd[k] * hk
                             + jm.fixed_view::<4, 4>(0, E_QPD) * nm.gd[k] * dk;
@@ -445,10 +458,12 @@ impl Element for BeamElement {
                     c
                 };
                 let col_w = |jm: &nalgebra::SMatrix<f64, 4, { kernel::NE }>| -> Matrix4x3<f64> {
-                    jm.fixed_view::<4, 4>(0, E_QD) * gk * hk + jm.fixed_view::<4, 4>(0, E_QPD) * gk * dk
+                    jm.fixed_view::<4, 4>(0, E_QD) * gk * hk
+                        + jm.fixed_view::<4, 4>(0, E_QPD) * gk * dk
                 };
                 let jx = &eo.d_xp;
-                let mut xp_th = jx.fixed_view::<3, 4>(0, E_Q) * gk * hk + jx.fixed_view::<3, 4>(0, E_QP) * gk * dk;
+                let mut xp_th = jx.fixed_view::<3, 4>(0, E_Q) * gk * hk
+                    + jx.fixed_view::<3, 4>(0, E_QP) * gk * dk;
                 if damped {
                     xp_th += jx.fixed_view::<3, 4>(0, E_QD) * nm.gd[k] * hk
                         + jx.fixed_view::<3, 4>(0, E_QPD) * nm.gd[k] * dk;
@@ -463,12 +478,23 @@ impl Element for BeamElement {
                     let gjt = nm.g[j].transpose();
                     add_block(&mut out.k, 6 * j, 6 * k, &(xp_x * (w * dj)));
                     add_block(&mut out.k, 6 * j, 6 * k + 3, &(xp_th * (w * dj)));
-                    add_block(&mut out.k, 6 * j + 3, 6 * k, &(gjt * (q_x * hj + qp_x * dj) * w));
-                    add_block(&mut out.k, 6 * j + 3, 6 * k + 3, &(gjt * (q_th * hj + qp_th * dj) * w));
+                    add_block(
+                        &mut out.k,
+                        6 * j + 3,
+                        6 * k,
+                        &(gjt * (q_x * hj + qp_x * dj) * w),
+                    );
+                    add_block(
+                        &mut out.k,
+                        6 * j + 3,
+                        6 * k + 3,
+                        &(gjt * (q_th * hj + qp_th * dj) * w),
+                    );
                 }
                 if damped {
                     let xp_v: Matrix3<f64> = jx.fixed_view::<3, 3>(0, E_XPD) * dk;
-                    let xp_w = jx.fixed_view::<3, 4>(0, E_QD) * gk * hk + jx.fixed_view::<3, 4>(0, E_QPD) * gk * dk;
+                    let xp_w = jx.fixed_view::<3, 4>(0, E_QD) * gk * hk
+                        + jx.fixed_view::<3, 4>(0, E_QPD) * gk * dk;
                     let q_v = eo.d_q.fixed_view::<4, 3>(0, E_XPD) * dk;
                     let qp_v = eo.d_qp.fixed_view::<4, 3>(0, E_XPD) * dk;
                     let q_w = col_w(&eo.d_q);
@@ -478,8 +504,18 @@ impl Element for BeamElement {
                         let gjt = nm.g[j].transpose();
                         add_block(&mut out.c, 6 * j, 6 * k, &(xp_v * (w * dj)));
                         add_block(&mut out.c, 6 * j, 6 * k + 3, &(xp_w * (w * dj)));
-                        add_block(&mut out.c, 6 * j + 3, 6 * k, &(gjt * (q_v * hj + qp_v * dj) * w));
-                        add_block(&mut out.c, 6 * j + 3, 6 * k + 3, &(gjt * (q_w * hj + qp_w * dj) * w));
+                        add_block(
+                            &mut out.c,
+                            6 * j + 3,
+                            6 * k,
+                            &(gjt * (q_v * hj + qp_v * dj) * w),
+                        );
+                        add_block(
+                            &mut out.c,
+                            6 * j + 3,
+                            6 * k + 3,
+                            &(gjt * (q_w * hj + qp_w * dj) * w),
+                        );
                     }
                 }
             }
@@ -503,17 +539,30 @@ impl Element for BeamElement {
             for k in 0..nn {
                 let hk = ip.h[k];
                 let gk = nm.g[k];
-                let th = |jm_q: nalgebra::SMatrix<f64, 3, 4>, jm_qd: nalgebra::SMatrix<f64, 3, 4>, jm_qdd: nalgebra::SMatrix<f64, 3, 4>| {
+                let th = |jm_q: nalgebra::SMatrix<f64, 3, 4>,
+                          jm_qd: nalgebra::SMatrix<f64, 3, 4>,
+                          jm_qdd: nalgebra::SMatrix<f64, 3, 4>| {
                     (jm_q * gk + jm_qd * nm.gd[k] + jm_qdd * nm.gdd[k]) * hk
                 };
                 let dx = &io.d_x;
-                let x_th = th(dx.fixed_view::<3, 4>(0, I_Q).into(), dx.fixed_view::<3, 4>(0, I_QD).into(), dx.fixed_view::<3, 4>(0, I_QDD).into());
+                let x_th = th(
+                    dx.fixed_view::<3, 4>(0, I_Q).into(),
+                    dx.fixed_view::<3, 4>(0, I_QD).into(),
+                    dx.fixed_view::<3, 4>(0, I_QDD).into(),
+                );
                 let dq = &io.d_q;
-                let q_th = (dq.fixed_view::<4, 4>(0, I_Q) * gk + dq.fixed_view::<4, 4>(0, I_QD) * nm.gd[k] + dq.fixed_view::<4, 4>(0, I_QDD) * nm.gdd[k]) * hk;
+                let q_th = (dq.fixed_view::<4, 4>(0, I_Q) * gk
+                    + dq.fixed_view::<4, 4>(0, I_QD) * nm.gd[k]
+                    + dq.fixed_view::<4, 4>(0, I_QDD) * nm.gdd[k])
+                    * hk;
                 let x_v: Matrix3<f64> = dx.fixed_view::<3, 3>(0, I_V) * hk;
-                let x_w = (dx.fixed_view::<3, 4>(0, I_QD) * gk + dx.fixed_view::<3, 4>(0, I_QDD) * nm.sdd_w[k]) * hk;
+                let x_w = (dx.fixed_view::<3, 4>(0, I_QD) * gk
+                    + dx.fixed_view::<3, 4>(0, I_QDD) * nm.sdd_w[k])
+                    * hk;
                 let q_v = dq.fixed_view::<4, 3>(0, I_V) * hk;
-                let q_w = (dq.fixed_view::<4, 4>(0, I_QD) * gk + dq.fixed_view::<4, 4>(0, I_QDD) * nm.sdd_w[k]) * hk;
+                let q_w = (dq.fixed_view::<4, 4>(0, I_QD) * gk
+                    + dq.fixed_view::<4, 4>(0, I_QDD) * nm.sdd_w[k])
+                    * hk;
                 let x_a: Matrix3<f64> = dx.fixed_view::<3, 3>(0, I_A) * hk;
                 let x_wd = dx.fixed_view::<3, 4>(0, I_QDD) * gk * hk;
                 let q_a = dq.fixed_view::<4, 3>(0, I_A) * hk;
@@ -545,7 +594,8 @@ impl Element for BeamElement {
         // Section-frame increments → node-frame increments for offset nodes.
         for (j, off) in self.offsets.iter().enumerate() {
             let Some((_, om)) = off else { continue };
-            let rr: Vector3<f64> = om * Vector3::new(out.r[6 * j + 3], out.r[6 * j + 4], out.r[6 * j + 5]);
+            let rr: Vector3<f64> =
+                om * Vector3::new(out.r[6 * j + 3], out.r[6 * j + 4], out.r[6 * j + 5]);
             for i in 0..3 {
                 out.r[6 * j + 3 + i] = rr[i];
             }
@@ -553,13 +603,23 @@ impl Element for BeamElement {
                 for m in [&mut out.k, &mut out.c, &mut out.m] {
                     let n = m.nrows();
                     for col in 0..n {
-                        let v = om * Vector3::new(m[(6 * j + 3, col)], m[(6 * j + 4, col)], m[(6 * j + 5, col)]);
+                        let v = om
+                            * Vector3::new(
+                                m[(6 * j + 3, col)],
+                                m[(6 * j + 4, col)],
+                                m[(6 * j + 5, col)],
+                            );
                         for i in 0..3 {
                             m[(6 * j + 3 + i, col)] = v[i];
                         }
                     }
                     for row in 0..n {
-                        let v = om * Vector3::new(m[(row, 6 * j + 3)], m[(row, 6 * j + 4)], m[(row, 6 * j + 5)]);
+                        let v = om
+                            * Vector3::new(
+                                m[(row, 6 * j + 3)],
+                                m[(row, 6 * j + 4)],
+                                m[(row, 6 * j + 5)],
+                            );
                         for i in 0..3 {
                             m[(row, 6 * j + 3 + i)] = v[i];
                         }
@@ -588,7 +648,12 @@ impl Element for BeamElement {
         let mut u = 0.0;
         for ep in &self.elastic {
             let f = self.elastic_fields(ep, &g);
-            let sec = ElasticSection { c: &ep.c, d: None, eps0: ep.eps0, k0: ep.k0 };
+            let sec = ElasticSection {
+                c: &ep.c,
+                d: None,
+                eps0: ep.eps0,
+                k0: ep.k0,
+            };
             kernel::elastic(&f, &sec, false, &mut eo);
             u += 0.5 * ep.w * eo.strain.dot(&(ep.c * eo.strain));
         }
@@ -634,7 +699,12 @@ impl Element for BeamElement {
         for ep in &self.elastic {
             let Some(d) = &ep.d else { continue };
             let f = self.elastic_fields(ep, &g);
-            let sec = ElasticSection { c: &ep.c, d: Some(d), eps0: ep.eps0, k0: ep.k0 };
+            let sec = ElasticSection {
+                c: &ep.c,
+                d: Some(d),
+                eps0: ep.eps0,
+                k0: ep.k0,
+            };
             kernel::elastic(&f, &sec, false, &mut eo);
             p += ep.w * eo.strain_rate.dot(&(d * eo.strain_rate));
         }

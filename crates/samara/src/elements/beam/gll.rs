@@ -25,7 +25,11 @@ pub fn legendre(n: usize, x: f64) -> (f64, f64) {
     }
     // P′ₙ = n (x Pₙ − Pₙ₋₁)/(x² − 1), with the endpoint limit n(n+1)/2 · (±1)^(n+1).
     let d = if (1.0 - x.abs()) < 1e-14 {
-        let s = if x > 0.0 { 1.0 } else { (-1.0f64).powi(n as i32 + 1) };
+        let s = if x > 0.0 {
+            1.0
+        } else {
+            (-1.0f64).powi(n as i32 + 1)
+        };
         s * (n * (n + 1)) as f64 / 2.0
     } else {
         n as f64 * (x * p1 - p0) / (x * x - 1.0)
@@ -116,7 +120,11 @@ mod tests {
             let (x, w) = gauss_legendre(n);
             for k in 0..2 * n {
                 let q: f64 = x.iter().zip(&w).map(|(a, b)| b * a.powi(k as i32)).sum();
-                let exact = if k % 2 == 0 { 2.0 / (k + 1) as f64 } else { 0.0 };
+                let exact = if k % 2 == 0 {
+                    2.0 / (k + 1) as f64
+                } else {
+                    0.0
+                };
                 assert!((q - exact).abs() < 1e-13, "n {n} k {k}: {q} vs {exact}");
             }
         }
@@ -132,7 +140,11 @@ mod tests {
             let (x, w) = gauss_lobatto_legendre(p);
             for k in 0..2 * p {
                 let q: f64 = x.iter().zip(&w).map(|(a, b)| b * a.powi(k as i32)).sum();
-                let exact = if k % 2 == 0 { 2.0 / (k + 1) as f64 } else { 0.0 };
+                let exact = if k % 2 == 0 {
+                    2.0 / (k + 1) as f64
+                } else {
+                    0.0
+                };
                 assert!((q - exact).abs() < 1e-13, "p {p} k {k}: {q} vs {exact}");
             }
         }

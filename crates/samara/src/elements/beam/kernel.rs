@@ -192,7 +192,9 @@ pub fn elastic(f: &ElasticFields, s: &ElasticSection, jac: bool, out: &mut Elast
     let ptm = p.transpose() * mm;
     let eh_t = e_hat(&t) * (2.0 / n);
     let eh_m = e_hat(&mm) * (2.0 / n);
-    let dq_fixed = eh_t - ptt * q2n - (eh_m * f.qp) * q2n
+    let dq_fixed = eh_t
+        - ptt * q2n
+        - (eh_m * f.qp) * q2n
         - ptm * (f.qp.transpose() * (2.0 / n) - q2n * cp)
         - (eh_m - ptm * q2n) * cp;
     out.d_q.fixed_view_mut::<4, 4>(0, E_Q).add_assign(&dq_fixed);
@@ -405,9 +407,19 @@ mod tests {
             let fq = (o1.f_q - o2.f_q) / (2.0 * eps);
             let fqp = (o1.f_qp - o2.f_qp) / (2.0 * eps);
             let scale = 1.0 + out.stress.norm();
-            assert!((fx - out.d_xp.column(j)).norm() < 1e-6 * scale, "F_x' col {j}");
-            assert!((fq - out.d_q.column(j)).norm() < 1e-6 * scale, "F_Q col {j}: {fq} vs {}", out.d_q.column(j));
-            assert!((fqp - out.d_qp.column(j)).norm() < 1e-6 * scale, "F_Q' col {j}");
+            assert!(
+                (fx - out.d_xp.column(j)).norm() < 1e-6 * scale,
+                "F_x' col {j}"
+            );
+            assert!(
+                (fq - out.d_q.column(j)).norm() < 1e-6 * scale,
+                "F_Q col {j}: {fq} vs {}",
+                out.d_q.column(j)
+            );
+            assert!(
+                (fqp - out.d_qp.column(j)).norm() < 1e-6 * scale,
+                "F_Q' col {j}"
+            );
         }
     }
 
@@ -459,7 +471,11 @@ mod tests {
             let fx = (o1.f_x - o2.f_x) / (2.0 * eps);
             let fq = (o1.f_q - o2.f_q) / (2.0 * eps);
             assert!((fx - out.d_x.column(j)).norm() < 1e-6 * 30.0, "F_x col {j}");
-            assert!((fq - out.d_q.column(j)).norm() < 1e-6 * 30.0, "F_Q col {j}: {fq} vs {}", out.d_q.column(j));
+            assert!(
+                (fq - out.d_q.column(j)).norm() < 1e-6 * 30.0,
+                "F_Q col {j}: {fq} vs {}",
+                out.d_q.column(j)
+            );
         }
     }
 }

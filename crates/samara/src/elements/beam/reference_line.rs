@@ -109,10 +109,18 @@ pub enum LineError {
 impl std::fmt::Display for LineError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            LineError::TooFewPoints(n) => write!(f, "a reference line needs at least 2 key points (got {n})"),
+            LineError::TooFewPoints(n) => {
+                write!(f, "a reference line needs at least 2 key points (got {n})")
+            }
             LineError::CoincidentPoints(i) => write!(f, "key points {} and {} coincide", i, i + 1),
-            LineError::ParallelReference => write!(f, "the reference `y_axis` is parallel to the tangent at the root"),
-            LineError::BadTwistStations => write!(f, "twist stations must be strictly increasing within [0, 1]"),
+            LineError::ParallelReference => write!(
+                f,
+                "the reference `y_axis` is parallel to the tangent at the root"
+            ),
+            LineError::BadTwistStations => write!(
+                f,
+                "twist stations must be strictly increasing within [0, 1]"
+            ),
         }
     }
 }
@@ -145,7 +153,10 @@ impl ReferenceLine {
         let (tx, tw): (Vec<f64>, Vec<f64>) = if twist.is_empty() {
             (vec![0.0], vec![0.0])
         } else {
-            (twist.iter().map(|p| p[0]).collect(), twist.iter().map(|p| p[1]).collect())
+            (
+                twist.iter().map(|p| p[0]).collect(),
+                twist.iter().map(|p| p[1]).collect(),
+            )
         };
         if tx.windows(2).any(|w| !(w[1] > w[0])) || tx.iter().any(|x| !(0.0..=1.0).contains(x)) {
             return Err(LineError::BadTwistStations);
@@ -209,7 +220,11 @@ impl ReferenceLine {
     /// Spline parameter of arc length s.
     fn parameter(&self, s: f64) -> f64 {
         let chord = &self.coords[0].t;
-        let i = self.arc.partition_point(|&a| a <= s).clamp(1, self.arc.len() - 1) - 1;
+        let i = self
+            .arc
+            .partition_point(|&a| a <= s)
+            .clamp(1, self.arc.len() - 1)
+            - 1;
         let (s0, s1) = (self.arc[i], self.arc[i + 1]);
         let (t0, t1) = (chord[i], chord[i + 1]);
         let mut t = t0 + (s - s0) / (s1 - s0) * (t1 - t0);

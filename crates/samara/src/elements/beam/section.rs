@@ -257,7 +257,11 @@ mod tests {
         assert!(check_stiffness(&c).unwrap_err().contains("(1,4)"));
         let mut c = Matrix6::identity();
         c[(2, 2)] = -1.0;
-        assert!(check_stiffness(&c).unwrap_err().contains("positive definite"));
+        assert!(
+            check_stiffness(&c)
+                .unwrap_err()
+                .contains("positive definite")
+        );
         let mut m = Matrix6::identity();
         m[(1, 1)] = 2.0;
         assert!(check_mass(&m).unwrap_err().contains("m·I"));
