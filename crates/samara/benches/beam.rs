@@ -73,8 +73,10 @@ fn main() {
                     s.newton_iterations as f64 / s.steps as f64,
                     1e3 * wall / s.steps as f64
                 );
-                if def.type_name() == "dynamic" {
-                    if let Ok(n) = case.parse::<f64>() {
+                if def.type_name() == "dynamic"
+                    && let Ok(n) = case.parse::<f64>()
+                {
+                    {
                         let key = format!("dynamic, {newton} Newton");
                         match growth.iter_mut().find(|(g, _)| *g == key) {
                             Some((_, v)) => v.push((n, wall)),

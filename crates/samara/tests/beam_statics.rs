@@ -201,6 +201,7 @@ fn bd_curved_beam() {
     }
     let converged = Vector3::new(-13.7208006040, 53.5776450627, -23.6459716009);
     let mut errs = Vec::new();
+    #[allow(clippy::single_element_loop)]
     for p in [4usize] {
         let text = arc_model(p);
         let m = model(&text);

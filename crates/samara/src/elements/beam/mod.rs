@@ -28,6 +28,15 @@
 //! - **Inertia** from the 6×6 sectional mass matrix (mass-centre offset, full inertia),
 //!   Kirchhoff's form `F = ṗ + ω×p`, `M = ḣ + ω×h + V×p`; gravity as an acceleration.
 
+// Index loops over nodes and quadrature points read closer to the formulas; NaN-rejecting
+// comparisons (`!(x > 0.0)`) are intended.
+#![allow(
+    clippy::needless_range_loop,
+    clippy::neg_cmp_op_on_partial_ord,
+    clippy::type_complexity,
+    clippy::nonminimal_bool
+)]
+
 pub mod element;
 pub mod gll;
 pub mod kernel;

@@ -2,6 +2,15 @@
 //! matrices, isotropic constants or a CSV file), damping and loads; creates the beam's
 //! nodes.
 
+// Index loops over nodes and quadrature points read closer to the formulas; NaN-rejecting
+// comparisons (`!(x > 0.0)`) are intended.
+#![allow(
+    clippy::needless_range_loop,
+    clippy::neg_cmp_op_on_partial_ord,
+    clippy::type_complexity,
+    clippy::nonminimal_bool
+)]
+
 use super::super::beam::BeamDef;
 use super::super::beam_input::*;
 use super::{Entry, Validator};
