@@ -17,27 +17,6 @@ fn coord(m: &Model, name: &str) -> usize {
         .unwrap_or_else(|| panic!("no coordinate {name} in {:?}", sys.coordinate_names))
 }
 
-fn set_rho(mut m: Model, rho: f64) -> Model {
-    // Default formulation for the new ρ∞ (stabilized index 2 at ρ∞ = 1).
-    if let AnalysisKind::Dynamic(d) = &mut m.analyses[0].kind {
-        *d = samara::model::DynamicSettings {
-            t_start: d.t_start,
-            output_every: d.output_every,
-            jacobian: d.jacobian,
-            solver: d.solver.clone(),
-            ..samara::model::DynamicSettings::new(d.t_end, d.step, rho)
-        };
-    }
-    m
-}
-
-fn set_t_end(mut m: Model, t_end: f64) -> Model {
-    if let AnalysisKind::Dynamic(d) = &mut m.analyses[0].kind {
-        d.t_end = t_end;
-    }
-    m
-}
-
 /// Slider-crank, crank driven at ω = 2π rad/s: piston position, velocity and acceleration
 /// over a full turn against x = r cos θ + √(l² − r² sin² θ) and its derivatives.
 ///

@@ -11,6 +11,7 @@
 //! material angular). Elements never know which analysis calls them.
 
 mod applied_load;
+pub mod beam;
 mod rigid_body;
 mod spring_damper;
 

@@ -29,6 +29,9 @@ pub struct ModelInput {
     /// Named input signals (forces/torques fed into joint coordinates through `input`).
     #[serde(default)]
     pub signals: Vec<Located<SignalInput>>,
+    /// Geometrically exact beams (Legendre spectral elements).
+    #[serde(default)]
+    pub beams: Vec<Located<super::beam_input::BeamInput>>,
     /// Applied forces and moments on nodes.
     #[serde(default)]
     pub forces: Vec<Located<ForceInput>>,

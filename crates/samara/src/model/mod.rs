@@ -4,6 +4,8 @@
 //! diagnostics with file, line and column. Everything downstream (system, analyses) reads
 //! only the validated [`Model`].
 
+pub mod beam;
+pub mod beam_input;
 pub mod error;
 pub mod input;
 pub mod located;
@@ -285,6 +287,7 @@ pub struct Model {
     pub springs: Vec<SpringDef>,
     pub signals: Vec<SignalDef>,
     pub loads: Vec<LoadDef>,
+    pub beams: Vec<beam::BeamDef>,
     pub analyses: Vec<AnalysisDef>,
 }
 

@@ -11,6 +11,8 @@ use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use std::collections::HashMap;
 use std::ops::Range;
 
+mod beam;
+
 /// The name of the fixed inertial frame in node references.
 pub const GROUND: &str = "ground";
 
@@ -541,6 +543,9 @@ impl<'a> Validator<'a> {
             });
         }
 
+        // Beams (may create nodes).
+        self.beams(input, &mut model, &mut node_map);
+
         // Bodies.
         self.unique_names(&input.bodies, |b| &b.name, "body");
         for b in &input.bodies {
@@ -770,6 +775,11 @@ impl<'a> Validator<'a> {
                 if let Some(i) = r.index() {
                     used[i] = true;
                 }
+            }
+        }
+        for b in &model.beams {
+            for &i in &b.nodes {
+                used[i] = true;
             }
         }
         for (i, n) in input.nodes.iter().enumerate() {

@@ -25,6 +25,8 @@ pub struct System {
     pub node_names: Vec<String>,
     pub elements: Vec<Box<dyn Element>>,
     pub constraints: Vec<Box<dyn Constraint>>,
+    /// The beams' elements, grouped per beam (for sectional output).
+    pub beams: Vec<crate::elements::beam::Beam>,
     /// Copies of the rigid bodies (for momenta).
     pub bodies: Vec<RigidBody>,
     pub gravity: Vector3<f64>,
@@ -87,18 +89,33 @@ impl System {
                 l.function.clone(),
             )));
         }
+        let beams: Vec<crate::elements::beam::Beam> = model
+            .beams
+            .iter()
+            .map(|b| crate::elements::beam::Beam::build(b, nodes))
+            .collect();
+        for b in &beams {
+            for e in &b.elements {
+                elements.push(Box::new(e.clone()));
+            }
+        }
         let mut constraints: Vec<Box<dyn Constraint>> = Vec::new();
         for j in &model.joints {
             constraints.push(Box::new(Joint::new(j, nodes)));
         }
-        Self::from_parts(
+        let mut sys = Self::from_parts(
             model.nodes.iter().map(|n| n.name.clone()).collect(),
             elements,
             constraints,
             bodies,
             model.gravity,
             nodes,
-        )
+        );
+        if !beams.is_empty() {
+            sys.characteristic_mass = characteristic_mass(model, &beams);
+            sys.beams = beams;
+        }
+        sys
     }
 
     /// Assembles a system from elements and constraints built in code; `initial` is the
@@ -200,6 +217,7 @@ impl System {
             node_names,
             elements,
             constraints,
+            beams: Vec::new(),
             bodies,
             gravity,
             multiplier_offsets,
@@ -429,5 +447,26 @@ impl System {
         } else {
             format!("block {block}")
         }
+    }
+}
+
+/// Mean translational mass of the massive nodes, with the beams' mass lumped to their nodes.
+fn characteristic_mass(model: &Model, beams: &[crate::elements::beam::Beam]) -> f64 {
+    let mut node_mass = vec![0.0; model.nodes.len()];
+    for b in &model.bodies {
+        node_mass[b.node] += b.mass;
+    }
+    for b in beams {
+        for e in &b.elements {
+            for (k, m) in e.node_masses().into_iter().enumerate() {
+                node_mass[e.as_ref().nodes_slice()[k]] += m;
+            }
+        }
+    }
+    let massive: Vec<f64> = node_mass.into_iter().filter(|&x| x > 0.0).collect();
+    if massive.is_empty() {
+        1.0
+    } else {
+        massive.iter().sum::<f64>() / massive.len() as f64
     }
 }

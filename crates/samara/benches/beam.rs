@@ -1,0 +1,104 @@
+//! Beam benchmark (issue #4): the steel cantilever of `examples/bench/cantilever_N.toml`
+//! (N two-node elements; `cantilever_p8x4.toml`: 4 elements of order 8), static in 10 load
+//! steps and 1 s of dynamics at h = 1e-3, ρ∞ = 0.9, full and modified Newton.
+//!
+//! `cargo bench -p samara --bench beam [-- N…]` (default N = 10, 100, 1000) prints wall
+//! time, Newton iterations, ms per step and the tip displacement at the end of each
+//! analysis, then the fitted growth exponent of the dynamic wall time with N.
+
+use samara::analysis::History;
+use samara::analysis::run_all;
+use samara::model::{AnalysisKind, JacobianUpdate, Model};
+use samara::system::System;
+use std::path::Path;
+use std::time::Instant;
+
+fn main() {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let cases: Vec<String> = if args.is_empty() {
+        vec!["10".into(), "100".into(), "1000".into(), "p8x4".into()]
+    } else {
+        args
+    };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    println!(
+        "{:<8} {:<8} {:<9} {:>9} {:>8} {:>9} {:>12}",
+        "model", "analysis", "newton", "wall [s]", "it/step", "ms/step", "tip w [m]"
+    );
+    let mut growth: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for case in &cases {
+        let path = root.join(format!("examples/bench/cantilever_{case}.toml"));
+        let Ok(loaded) = Model::from_file(&path) else {
+            eprintln!("skipping {}", path.display());
+            continue;
+        };
+        for newton in ["full", "modified"] {
+            let mut model = loaded.model.clone();
+            for a in &mut model.analyses {
+                if let AnalysisKind::Dynamic(d) = &mut a.kind {
+                    d.jacobian = if newton == "full" {
+                        JacobianUpdate::Full
+                    } else {
+                        JacobianUpdate::Modified
+                    };
+                }
+            }
+            let sys = System::new(&model);
+            let tip = model.node_index("tip").expect("tip node");
+            let x0 = model.nodes[tip].position;
+            // The static and dynamic analyses are independent (both start from rest).
+            for (k, def) in model.analyses.iter().enumerate() {
+                if newton == "modified" && def.type_name() == "static" {
+                    continue;
+                }
+                let mut single = model.clone();
+                single.analyses = vec![def.clone()];
+                let _ = k;
+                let clock = Instant::now();
+                let out = run_all(&single, &sys, |_| Ok(History::default()), |_, _| {})
+                    .expect("in-memory");
+                let wall = clock.elapsed().as_secs_f64();
+                let (s, h) = &out[0];
+                if let Some(f) = &s.failure {
+                    println!("{case:<8} {:<8} {newton:<9} FAILED: {}", def.name, f.reason);
+                    continue;
+                }
+                let w = h.last().unwrap().state.nodes[tip].x.z - x0.z;
+                println!(
+                    "{case:<8} {:<8} {newton:<9} {wall:>9.3} {:>8.2} {:>9.3} {w:>12.6e}",
+                    def.name,
+                    s.newton_iterations as f64 / s.steps as f64,
+                    1e3 * wall / s.steps as f64
+                );
+                if def.type_name() == "dynamic"
+                    && let Ok(n) = case.parse::<f64>()
+                {
+                    {
+                        let key = format!("dynamic, {newton} Newton");
+                        match growth.iter_mut().find(|(g, _)| *g == key) {
+                            Some((_, v)) => v.push((n, wall)),
+                            None => growth.push((key, vec![(n, wall)])),
+                        }
+                    }
+                }
+            }
+        }
+    }
+    for (key, pts) in &growth {
+        if pts.len() >= 2 {
+            let lx: Vec<f64> = pts.iter().map(|p| p.0.ln()).collect();
+            let ly: Vec<f64> = pts.iter().map(|p| p.1.ln()).collect();
+            let k = lx.len() as f64;
+            let (mx, my) = (lx.iter().sum::<f64>() / k, ly.iter().sum::<f64>() / k);
+            let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
+            let sxx: f64 = lx.iter().map(|a| (a - mx) * (a - mx)).sum();
+            println!(
+                "growth of wall time with N, {key}: exponent {:.2}",
+                sxy / sxx
+            );
+        }
+    }
+}

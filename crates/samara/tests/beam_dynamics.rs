@@ -1,0 +1,194 @@
+//! Issue #4, verification of the beam in dynamics: the Kynema/BeamDyn composite beam under
+//! a suddenly applied tip load (reference history), the first bending frequency of a
+//! cantilever against Euler–Bernoulli, and energy conservation without dissipation.
+
+mod common;
+
+use common::{model, model_file, run};
+use nalgebra::Vector3;
+
+/// Compared span (≈ 2 periods of the first mode).
+const T_COMPARE: f64 = 0.5;
+
+/// Composite beam, step tip load Pz = 150: tip displacement history against BeamDyn's
+/// (same element order 4, same step 0.005 s). Columns u0, u1, u2 are the displacements
+/// along z (load), y and x (axial) here: identified by their means over 10 s, which match
+/// the static solution's components (1.23, −0.065, −0.09 → 1.21, −0.083, −0.117 with the
+/// oscillation). Tolerance 4 % of the peak response over the first 0.5 s (mostly the lateral, bend–twist-coupled component). Beyond that the
+/// histories drift apart in phase (0.2 at 2 s): ours is converged in space (order 8
+/// differs from order 4 by < 0.02 over 2 s) and in time (ρ∞ = 1 vs 0.9: < 0.01), so the
+/// drift is the reference's own discretization (BeamDyn's order-4 element, its quadrature
+/// and unknown ρ∞), not resolvable from the data given. See the report.
+#[test]
+fn composite_dynamic() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/verification/composite_dynamic.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let variant = std::env::var("BEAM_VARIANT").unwrap_or_default();
+    let text = match variant.as_str() {
+        "p8" => text.replace("order = 4", "order = 8"),
+        "rho0" => text.replace("rho_inf = 0.9", "rho_inf = 0.0"),
+        "rho1" => text.replace("rho_inf = 0.9", "rho_inf = 1.0"),
+        "full" => text.replace("order = 4", "order = 4\nquadrature = \"full\""),
+        _ => text,
+    };
+    let m = model(&text);
+    let _ = model_file;
+    let (_, h) = run(&m);
+    let tip = m.node_index("tip").unwrap();
+    let x0 = m.nodes[tip].position;
+    let text = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(
+        "../../../shared/reference/kynema_verification/dynamic_beam_5nodes_0pt005s_beamdyn.csv",
+    ))
+    .expect("reference data beside the repository");
+    let mut worst: f64 = 0.0;
+    let mut n = 0;
+    for line in text.lines().skip(1) {
+        let v: Vec<f64> = line
+            .split_whitespace()
+            .map(|c| c.parse().unwrap())
+            .collect();
+        if v[0] > T_COMPARE + 1e-9 {
+            break;
+        }
+        let f = h.at(v[0]).unwrap();
+        assert!((f.time - v[0]).abs() < 1e-9);
+        let u = f.state.nodes[tip].x - x0;
+        let err = (u - Vector3::new(v[3], v[2], v[1])).norm();
+        if n % 20 == 0 {
+            println!(
+                "t {:.3} ours {:.4} {:.4} {:.4} ref {:.4} {:.4} {:.4}",
+                v[0], u.z, u.y, u.x, v[1], v[2], v[3]
+            );
+        }
+        worst = worst.max(err);
+        n += 1;
+    }
+    println!("{n} samples, worst tip-displacement difference {worst:.4e} (peak response 2.35)");
+    assert!(worst < 0.04 * 2.35);
+}
+
+/// Steel cantilever (L = 1 m, 0.01 m square), released from a small static tip deflection.
+fn cantilever(p: usize, ne: usize, step: f64, rho: f64, t_end: f64) -> String {
+    format!(
+        r#"[model]
+name = "free_vibration"
+
+[[beams]]
+name = "beam"
+order = {p}
+elements = {ne}
+points = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]
+root = "root"
+tip = "tip"
+
+[[beams.sections]]
+station = 0.0
+isotropic = {{ E = 2.1e11, G = 8.076923076923077e10, A = 1e-4, I2 = 8.333333333333334e-10, I3 = 8.333333333333334e-10, J = 1.406e-9, shear_factors = [0.8333333333333334, 0.8333333333333334], density = 7850.0 }}
+
+[[joints]]
+name = "clamp"
+type = "fixed"
+node_a = "ground"
+node_b = "root"
+
+[[forces]]
+name = "release"
+node = "tip"
+force = [0.0, 0.0, -0.5]
+function = {{ type = "step", time = 0.0, before = 1.0, after = 0.0 }}
+
+[[analyses]]
+name = "preload"
+type = "static"
+time = -1.0
+tolerance = 1e-12
+relative_tolerance = 1e-12
+
+[[analyses]]
+name = "swing"
+type = "dynamic"
+start_from = "preload"
+t_end = {t_end}
+step = {step}
+rho_inf = {rho}
+tolerance = 1e-12
+relative_tolerance = 1e-10
+"#
+    )
+}
+
+/// First bending frequency from the tip's upward zero crossings against Euler–Bernoulli,
+/// ω₁ = 1.87510407² √(EI/(ρA L⁴)). Tolerance 1e-3: shear and rotary inertia (Timoshenko,
+/// (h/L)² = 1e-4 with a factor of a few), the time discretization (period error
+/// (ωh)²/12 ≈ 8e-5 at h = T/200) and the crossing interpolation are all below it.
+#[test]
+fn cantilever_first_bending_frequency() {
+    let (e, i, rho, a): (f64, f64, f64, f64) = (2.1e11, 1e-8 / 12.0, 7850.0, 1e-4);
+    let omega = 1.875104069f64.powi(2) * (e * i / (rho * a)).sqrt();
+    let period = 2.0 * std::f64::consts::PI / omega;
+    let m = model(&cantilever(4, 4, period / 200.0, 1.0, 5.2 * period));
+    let (_, h) = run_chain(&m);
+    let tip = m.node_index("tip").unwrap();
+    let z: Vec<(f64, f64)> = h
+        .frames
+        .iter()
+        .map(|f| (f.time, f.state.nodes[tip].x.z))
+        .collect();
+
+    let ups: Vec<f64> = z
+        .windows(2)
+        .filter(|w| w[0].1 < 0.0 && w[1].1 >= 0.0)
+        .map(|w| w[0].0 + (w[1].0 - w[0].0) * (-w[0].1) / (w[1].1 - w[0].1))
+        .collect();
+    let measured = (ups[ups.len() - 1] - ups[0]) / (ups.len() - 1) as f64;
+    let err = (measured - period) / period;
+    println!(
+        "period {measured:.6e} s vs Euler–Bernoulli {period:.6e} s: rel. error {err:.3e} over {} periods",
+        ups.len() - 1
+    );
+    assert!(err.abs() < 1e-3);
+}
+
+/// Undamped, ρ∞ = 1: the total energy (kinetic + strain) is conserved to O(h²) — the
+/// largest deviation over 3 periods falls by ≈ 4 when h halves (order ≥ 1.8 required).
+#[test]
+fn energy_conserved_to_second_order() {
+    let (e, i, rho, a): (f64, f64, f64, f64) = (2.1e11, 1e-8 / 12.0, 7850.0, 1e-4);
+    let period = 2.0 * std::f64::consts::PI / (1.875104069f64.powi(2) * (e * i / (rho * a)).sqrt());
+    let mut devs = Vec::new();
+    for k in [20.0, 40.0] {
+        let m = model(&cantilever(2, 4, period / k, 1.0, 3.0 * period));
+        let (_, h) = run_chain(&m);
+        let en = |f: &samara::analysis::Frame| f.energy.kinetic + f.energy.potential;
+        let e0 = en(&h.frames[0]);
+        let dev = h
+            .frames
+            .iter()
+            .map(|f| (en(f) - e0).abs())
+            .fold(0.0, f64::max)
+            / e0;
+        println!("h = T/{k}: max |ΔE|/E = {dev:.3e}");
+        devs.push(dev);
+    }
+    let order = (devs[0] / devs[1]).log2();
+    println!("order {order:.2}");
+    assert!(order > 1.8 && devs[1] < 1e-2, "{devs:?}");
+}
+
+/// Runs all analyses (chaining `start_from`) and returns the last one's summary and frames.
+fn run_chain(
+    m: &samara::model::Model,
+) -> (samara::analysis::AnalysisSummary, samara::analysis::History) {
+    let sys = samara::system::System::new(m);
+    let mut out = samara::analysis::run_all(
+        m,
+        &sys,
+        |_| Ok(samara::analysis::History::default()),
+        |_, _| {},
+    )
+    .unwrap();
+    let (s, h) = out.pop().unwrap();
+    assert!(s.failure.is_none(), "{:?}", s.failure);
+    (s, h)
+}
