@@ -49,6 +49,14 @@ impl GeneralizedAlpha {
         self.gamma / (self.beta * h)
     }
 
+    /// The derivative v̇_{n+1} that gives the algorithmic acceleration `a_np1` (the inverse
+    /// of [`Self::algorithmic_acceleration`]).
+    #[inline]
+    pub fn derivative_of(&self, a_n: f64, vdot_n: f64, a_np1: f64) -> f64 {
+        ((1.0 - self.alpha_m) * a_np1 + self.alpha_m * a_n - self.alpha_f * vdot_n)
+            / (1.0 - self.alpha_f)
+    }
+
     /// Algorithmic acceleration from the recurrence.
     #[inline]
     pub fn algorithmic_acceleration(&self, a_n: f64, vdot_n: f64, vdot_np1: f64) -> f64 {
