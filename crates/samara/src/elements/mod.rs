@@ -61,11 +61,12 @@ impl LocalTerms {
     }
 
     pub fn clear(&mut self, need: Need) {
-        self.r.fill(0.0);
+        // Through the slices: a plain memset (nalgebra's `fill` iterates element-wise).
+        self.r.as_mut_slice().fill(0.0);
         if need == Need::ResidualAndTangents {
-            self.k.fill(0.0);
-            self.c.fill(0.0);
-            self.m.fill(0.0);
+            self.k.as_mut_slice().fill(0.0);
+            self.c.as_mut_slice().fill(0.0);
+            self.m.as_mut_slice().fill(0.0);
         }
     }
 

@@ -8,17 +8,23 @@
 //! rotations, so the generalized forces conjugate to δQ and δQ′ map back to each node's
 //! material increment through `G(s_k)ᵀ` (`δs_k = G(s_k) δθ_k`), and the tangent is the exact
 //! derivative of the residual (checked by `tangent_check`).
+//!
+//! Cost: per quadrature point the kernel's Jacobian blocks are mapped to each node's columns
+//! once (`… G_k`), then to each node pair's rows (`G_jᵀ …`); per-evaluation nodal data live
+//! in a thread-local workspace, so an evaluation allocates nothing.
 
 use super::kernel::{
-    self, ElasticFields, ElasticOut, ElasticSection, InertialFields, InertialOut, PointLoads,
+    self, ElasticFields, ElasticOut, ElasticSection, InertialFields, InertialOut, InertialSection,
+    PointLoads,
 };
 use super::quaternion::{Quat, conj, dg_w, dgt_f, from_rotation, g_mat, mul, rotation};
 use super::section::{SectionTable, damping_matrix};
-use crate::elements::{Element, EvalContext, LocalTerms, Need, add_block};
+use crate::elements::{Element, EvalContext, LocalTerms, Need};
 use crate::math::Rotation;
 use crate::model::TimeFunction;
 use crate::system::NodeState;
-use nalgebra::{Matrix3, Matrix4x3, Matrix6, Vector3, Vector6};
+use nalgebra::{DMatrix, Matrix3, Matrix4x3, Matrix6, Vector3, Vector6};
+use std::cell::RefCell;
 use std::sync::Arc;
 
 /// Largest supported element order.
@@ -84,6 +90,7 @@ struct InertialPoint {
     w: f64,
     h: Vec<f64>,
     m6: Matrix6<f64>,
+    mass: InertialSection,
     eta: f64,
 }
 
@@ -215,10 +222,12 @@ impl BeamElement {
             .zip(&gw)
             .map(|(&xi, &wq)| {
                 let (w, h, _, _, _, eta) = point(xi, wq);
+                let m6 = spec.table.at(eta).mass;
                 InertialPoint {
                     w,
                     h,
-                    m6: spec.table.at(eta).mass,
+                    m6,
+                    mass: InertialSection::new(&m6),
                     eta,
                 }
             })
@@ -258,8 +267,8 @@ impl BeamElement {
         out
     }
 
-    /// Nodal kinematics in section frames, sign-aligned.
-    fn gather(&self, nodes: &[NodeState], g: &mut Gathered) {
+    /// Nodal kinematics in section frames, sign-aligned with the middle node.
+    fn gather(&self, nodes: &[NodeState], g: &mut Work) {
         let nn = self.nodes.len();
         for k in 0..nn {
             let nd = &nodes[self.nodes[k]];
@@ -284,7 +293,7 @@ impl BeamElement {
         }
     }
 
-    fn elastic_fields(&self, ep: &ElasticPoint, g: &Gathered) -> ElasticFields {
+    fn elastic_fields(&self, ep: &ElasticPoint, g: &Work) -> ElasticFields {
         let mut f = ElasticFields::default();
         for k in 0..self.nodes.len() {
             let (h, dh) = (ep.h[k], ep.dh[k]);
@@ -300,12 +309,11 @@ impl BeamElement {
         f
     }
 
-    fn inertial_fields(&self, ip: &InertialPoint, g: &Gathered) -> InertialFields {
+    fn inertial_fields(&self, ip: &InertialPoint, g: &Work) -> InertialFields {
         let mut f = InertialFields::default();
         for k in 0..self.nodes.len() {
             let h = ip.h[k];
             f.q += g.s[k] * h;
-            f.v += g.v[k] * h;
             f.a += g.a[k] * h;
             f.qd += g.sd[k] * h;
             f.qdd += g.sdd[k] * h;
@@ -313,10 +321,20 @@ impl BeamElement {
         f
     }
 
-    fn point_loads(&self, ctx: &EvalContext, eta: f64) -> PointLoads {
+    /// Time factors of the distributed loads (function × load factor), into `g.load_factors`.
+    fn load_factors(&self, ctx: &EvalContext, g: &mut Work) {
+        g.load_factors.clear();
+        g.load_factors.extend(
+            self.loads
+                .iter()
+                .map(|l| l.function.eval(ctx.time) * ctx.load_factor),
+        );
+    }
+
+    fn point_loads(&self, factors: &[f64], eta: f64) -> PointLoads {
         let mut pl = PointLoads::default();
-        for l in self.loads.iter() {
-            let f = l.function.eval(ctx.time) * ctx.load_factor * l.factor(eta);
+        for (l, f) in self.loads.iter().zip(factors) {
+            let f = f * l.factor(eta);
             if l.follower {
                 pl.f_follower += l.force * f;
                 pl.m_follower += l.moment * f;
@@ -330,265 +348,238 @@ impl BeamElement {
 
     /// Sectional states at the elastic quadrature points.
     pub fn sections(&self, nodes: &[NodeState], out: &mut Vec<SectionState>) {
-        let mut g = Gathered::default();
-        self.gather(nodes, &mut g);
-        let mut eo = ElasticOut::default();
-        for ep in &self.elastic {
-            let f = self.elastic_fields(ep, &g);
-            let sec = ElasticSection {
-                c: &ep.c,
-                d: ep.d.as_ref(),
-                eps0: ep.eps0,
-                k0: ep.k0,
-            };
-            kernel::elastic(&f, &sec, false, &mut eo);
-            let position = (0..self.nodes.len()).map(|k| g.x[k] * ep.h[k]).sum();
-            out.push(SectionState {
-                position,
-                frame: rotation(&f.q),
-                eta: ep.eta,
-                strain: eo.strain,
-                stress: eo.stress,
-            });
+        with_work(self.nodes.len(), |g| {
+            self.gather(nodes, g);
+            let mut eo = ElasticOut::default();
+            for ep in &self.elastic {
+                out.push(self.section_state(ep, g, &mut eo));
+            }
+        })
+    }
+
+    /// Sectional states at the elastic quadrature points, written into `out` (one per
+    /// point, `out.len() == n_section_points()`): allocation-free.
+    pub fn sections_into(&self, nodes: &[NodeState], out: &mut [SectionState]) {
+        with_work(self.nodes.len(), |g| {
+            self.gather(nodes, g);
+            let mut eo = ElasticOut::default();
+            for (ep, o) in self.elastic.iter().zip(out.iter_mut()) {
+                *o = self.section_state(ep, g, &mut eo);
+            }
+        })
+    }
+
+    fn section_state(&self, ep: &ElasticPoint, g: &Work, eo: &mut ElasticOut) -> SectionState {
+        let f = self.elastic_fields(ep, g);
+        let sec = ElasticSection {
+            c: &ep.c,
+            d: ep.d.as_ref(),
+            eps0: ep.eps0,
+            k0: ep.k0,
+        };
+        kernel::elastic(&f, &sec, false, eo);
+        let position = (0..self.nodes.len()).map(|k| g.x[k] * ep.h[k]).sum();
+        SectionState {
+            position,
+            frame: rotation(&f.q),
+            eta: ep.eta,
+            strain: eo.strain,
+            stress: eo.stress,
         }
     }
-}
 
-/// Per-evaluation nodal data on the stack (no allocation).
-struct Gathered {
-    s: [Quat; MAX_ORDER + 1],
-    sd: [Quat; MAX_ORDER + 1],
-    sdd: [Quat; MAX_ORDER + 1],
-    w: [Vector3<f64>; MAX_ORDER + 1],
-    wd: [Vector3<f64>; MAX_ORDER + 1],
-    x: [Vector3<f64>; MAX_ORDER + 1],
-    v: [Vector3<f64>; MAX_ORDER + 1],
-    a: [Vector3<f64>; MAX_ORDER + 1],
-}
-
-impl Default for Gathered {
-    fn default() -> Self {
-        Self {
-            s: [Quat::zeros(); MAX_ORDER + 1],
-            sd: [Quat::zeros(); MAX_ORDER + 1],
-            sdd: [Quat::zeros(); MAX_ORDER + 1],
-            w: [Vector3::zeros(); MAX_ORDER + 1],
-            wd: [Vector3::zeros(); MAX_ORDER + 1],
-            x: [Vector3::zeros(); MAX_ORDER + 1],
-            v: [Vector3::zeros(); MAX_ORDER + 1],
-            a: [Vector3::zeros(); MAX_ORDER + 1],
-        }
-    }
-}
-
-/// Node matrices of the tangent.
-struct NodeMats {
-    g: [Matrix4x3<f64>; MAX_ORDER + 1],
-    /// ∂ṡ/∂θ.
-    gd: [Matrix4x3<f64>; MAX_ORDER + 1],
-    /// ∂s̈/∂θ.
-    gdd: [Matrix4x3<f64>; MAX_ORDER + 1],
-    /// ∂s̈/∂Ω.
-    sdd_w: [Matrix4x3<f64>; MAX_ORDER + 1],
-}
-
-impl Element for BeamElement {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn nodes(&self) -> &[usize] {
-        &self.nodes
-    }
-
-    fn evaluate(&self, ctx: &EvalContext, nodes: &[NodeState], need: Need, out: &mut LocalTerms) {
+    /// The body of [`Element::evaluate`] with the nodal data gathered into `g`.
+    fn evaluate_gathered(&self, ctx: &EvalContext, need: Need, g: &mut Work, out: &mut LocalTerms) {
         let nn = self.nodes.len();
         let tangents = need == Need::ResidualAndTangents;
-        let mut g = Gathered::default();
-        self.gather(nodes, &mut g);
-        let mut fq = [Quat::zeros(); MAX_ORDER + 1];
-        let z43 = Matrix4x3::zeros();
-        let mut nm = NodeMats {
-            g: [z43; MAX_ORDER + 1],
-            gd: [z43; MAX_ORDER + 1],
-            gdd: [z43; MAX_ORDER + 1],
-            sdd_w: [z43; MAX_ORDER + 1],
-        };
         if tangents {
             for k in 0..nn {
                 let s = &g.s[k];
-                nm.g[k] = g_mat(s);
-                nm.gd[k] = dg_w(s, &g.w[k]);
-                nm.gdd[k] = dg_w(s, &g.wd[k]) - nm.g[k] * (0.25 * g.w[k].norm_squared());
-                nm.sdd_w[k] = s * g.w[k].transpose() * (-0.5);
+                g.g[k] = g_mat(s);
+                g.gd[k] = dg_w(s, &g.w[k]);
+                g.gdd[k] = dg_w(s, &g.wd[k]) - g.g[k] * (0.25 * g.w[k].norm_squared());
+                g.sdd_w[k] = s * g.w[k].transpose() * (-0.5);
             }
         }
+        g.fq[..nn].fill(Quat::zeros());
+        let ld = 6 * nn;
         // Elastic points.
-        let mut eo = ElasticOut::default();
+        let eo = &mut g.eo;
         for ep in &self.elastic {
-            let f = self.elastic_fields(ep, &g);
+            let f = {
+                let mut f = ElasticFields::default();
+                for k in 0..nn {
+                    let (h, dh) = (ep.h[k], ep.dh[k]);
+                    f.xp += g.x[k] * dh;
+                    f.q += g.s[k] * h;
+                    f.qp += g.s[k] * dh;
+                    if ep.d.is_some() {
+                        f.xpd += g.v[k] * dh;
+                        f.qd += g.sd[k] * h;
+                        f.qpd += g.sd[k] * dh;
+                    }
+                }
+                f
+            };
             let sec = ElasticSection {
                 c: &ep.c,
                 d: ep.d.as_ref(),
                 eps0: ep.eps0,
                 k0: ep.k0,
             };
-            kernel::elastic(&f, &sec, tangents, &mut eo);
+            kernel::elastic(&f, &sec, tangents, eo);
             let w = ep.w;
             for j in 0..nn {
                 out.add_r(6 * j, &(eo.f_xp * (w * ep.dh[j])));
-                fq[j] += (eo.f_q * ep.h[j] + eo.f_qp * ep.dh[j]) * w;
+                g.fq[j] += (eo.f_q * ep.h[j] + eo.f_qp * ep.dh[j]) * w;
             }
             if !tangents {
                 continue;
             }
-            use kernel::{E_Q, E_QD, E_QP, E_QPD, E_XP, E_XPD};
             let damped = ep.d.is_some();
+            let (jx, jq, jp) = (&eo.d_xp, &eo.d_q, &eo.d_qp);
+            // Columns of node k (θ_k; with damping also Ω_k).
             for k in 0..nn {
                 let (hk, dk) = (ep.h[k], ep.dh[k]);
-                let gk = nm.g[k];
-                // Columns of node k: ∂(outputs)/∂x_k, ∂/∂θ_k (and rates for C).
-                let col_th = |jm: &nalgebra::SMatrix<f64, 4, { kernel::NE }>| -> Matrix4x3<f64> {
-                    let mut c = jm.fixed_view::<4, 4>(0, E_Q) * gk * hk
-                        + jm.fixed_view::<4, 4>(0, E_QP) * gk * dk;
+                let gk = &g.g[k];
+                let (ax, aq, ap) = (
+                    jx.q * hk + jx.qp * dk,
+                    jq.q * hk + jq.qp * dk,
+                    jp.q * hk + jp.qp * dk,
+                );
+                g.c3a[k] = ax * gk;
+                g.c43a[k] = aq * gk;
+                g.c43b[k] = ap * gk;
+                if damped {
+                    let gdk = &g.gd[k];
+                    let (bx, bq, bp) = (
+                        jx.qd * hk + jx.qpd * dk,
+                        jq.qd * hk + jq.qpd * dk,
+                        jp.qd * hk + jp.qpd * dk,
+                    );
+                    g.c3a[k] += bx * gdk;
+                    g.c43a[k] += bq * gdk;
+                    g.c43b[k] += bp * gdk;
+                    g.c3b[k] = bx * gk;
+                    g.c43c[k] = bq * gk;
+                    g.c43d[k] = bp * gk;
+                }
+            }
+            // Rows of node j.
+            let (km, cm) = (out.k.as_mut_slice(), out.c.as_mut_slice());
+            for j in 0..nn {
+                let (hj, dj) = (ep.h[j], ep.dh[j]);
+                let gjt = g.g[j].transpose();
+                let (wj, wdj) = (w * hj, w * dj);
+                let gx = gjt * (jq.xp * wj + jp.xp * wdj);
+                let gxd = if damped {
+                    gjt * (jq.xpd * wj + jp.xpd * wdj)
+                } else {
+                    Matrix3::zeros()
+                };
+                for k in 0..nn {
+                    let dk = ep.dh[k];
+                    let (r, c) = (6 * j, 6 * k);
+                    add3(km, ld, r, c, &jx.xp, wdj * dk);
+                    add3(km, ld, r, c + 3, &g.c3a[k], wdj);
+                    add3(km, ld, r + 3, c, &gx, dk);
+                    let b = gjt * (g.c43a[k] * wj + g.c43b[k] * wdj);
+                    add3(km, ld, r + 3, c + 3, &b, 1.0);
                     if damped {
-                        c += jm.fixed_view::<4, 4>(0, E_QD) * nm.gd[k] * hk
-                            + jm.fixed_view::<4, 4>(0, E_QPD) * nm.gd[k] * dk;
-                    }
-                    c
-                };
-                let col_w = |jm: &nalgebra::SMatrix<f64, 4, { kernel::NE }>| -> Matrix4x3<f64> {
-                    jm.fixed_view::<4, 4>(0, E_QD) * gk * hk
-                        + jm.fixed_view::<4, 4>(0, E_QPD) * gk * dk
-                };
-                let jx = &eo.d_xp;
-                let mut xp_th = jx.fixed_view::<3, 4>(0, E_Q) * gk * hk
-                    + jx.fixed_view::<3, 4>(0, E_QP) * gk * dk;
-                if damped {
-                    xp_th += jx.fixed_view::<3, 4>(0, E_QD) * nm.gd[k] * hk
-                        + jx.fixed_view::<3, 4>(0, E_QPD) * nm.gd[k] * dk;
-                }
-                let xp_x: Matrix3<f64> = jx.fixed_view::<3, 3>(0, E_XP) * dk;
-                let q_x = eo.d_q.fixed_view::<4, 3>(0, E_XP) * dk;
-                let qp_x = eo.d_qp.fixed_view::<4, 3>(0, E_XP) * dk;
-                let q_th = col_th(&eo.d_q);
-                let qp_th = col_th(&eo.d_qp);
-                for j in 0..nn {
-                    let (hj, dj) = (ep.h[j], ep.dh[j]);
-                    let gjt = nm.g[j].transpose();
-                    add_block(&mut out.k, 6 * j, 6 * k, &(xp_x * (w * dj)));
-                    add_block(&mut out.k, 6 * j, 6 * k + 3, &(xp_th * (w * dj)));
-                    add_block(
-                        &mut out.k,
-                        6 * j + 3,
-                        6 * k,
-                        &(gjt * (q_x * hj + qp_x * dj) * w),
-                    );
-                    add_block(
-                        &mut out.k,
-                        6 * j + 3,
-                        6 * k + 3,
-                        &(gjt * (q_th * hj + qp_th * dj) * w),
-                    );
-                }
-                if damped {
-                    let xp_v: Matrix3<f64> = jx.fixed_view::<3, 3>(0, E_XPD) * dk;
-                    let xp_w = jx.fixed_view::<3, 4>(0, E_QD) * gk * hk
-                        + jx.fixed_view::<3, 4>(0, E_QPD) * gk * dk;
-                    let q_v = eo.d_q.fixed_view::<4, 3>(0, E_XPD) * dk;
-                    let qp_v = eo.d_qp.fixed_view::<4, 3>(0, E_XPD) * dk;
-                    let q_w = col_w(&eo.d_q);
-                    let qp_w = col_w(&eo.d_qp);
-                    for j in 0..nn {
-                        let (hj, dj) = (ep.h[j], ep.dh[j]);
-                        let gjt = nm.g[j].transpose();
-                        add_block(&mut out.c, 6 * j, 6 * k, &(xp_v * (w * dj)));
-                        add_block(&mut out.c, 6 * j, 6 * k + 3, &(xp_w * (w * dj)));
-                        add_block(
-                            &mut out.c,
-                            6 * j + 3,
-                            6 * k,
-                            &(gjt * (q_v * hj + qp_v * dj) * w),
-                        );
-                        add_block(
-                            &mut out.c,
-                            6 * j + 3,
-                            6 * k + 3,
-                            &(gjt * (q_w * hj + qp_w * dj) * w),
-                        );
+                        add3(cm, ld, r, c, &jx.xpd, wdj * dk);
+                        add3(cm, ld, r, c + 3, &g.c3b[k], wdj);
+                        add3(cm, ld, r + 3, c, &gxd, dk);
+                        let b = gjt * (g.c43c[k] * wj + g.c43d[k] * wdj);
+                        add3(cm, ld, r + 3, c + 3, &b, 1.0);
                     }
                 }
             }
         }
         // Inertial points.
         let grav = ctx.gravity * ctx.load_factor;
-        let mut io = InertialOut::default();
+        if !self.loads.is_empty() {
+            self.load_factors(ctx, g);
+        }
+        let io = &mut g.io;
         for ip in &self.inertial {
-            let f = self.inertial_fields(ip, &g);
-            let pl = self.point_loads(ctx, ip.eta);
-            kernel::inertial(&f, &ip.m6, &grav, &pl, tangents, &mut io);
+            let f = {
+                let mut f = InertialFields::default();
+                for k in 0..nn {
+                    let h = ip.h[k];
+                    f.q += g.s[k] * h;
+                    f.a += g.a[k] * h;
+                    f.qd += g.sd[k] * h;
+                    f.qdd += g.sdd[k] * h;
+                }
+                f
+            };
+            let pl = if self.loads.is_empty() {
+                PointLoads::default()
+            } else {
+                self.point_loads(&g.load_factors, ip.eta)
+            };
+            kernel::inertial(&f, &ip.mass, &grav, &pl, tangents, io);
             let w = ip.w;
             for j in 0..nn {
                 out.add_r(6 * j, &(io.f_x * (w * ip.h[j])));
-                fq[j] += io.f_q * (w * ip.h[j]);
+                g.fq[j] += io.f_q * (w * ip.h[j]);
             }
             if !tangents {
                 continue;
             }
-            use kernel::{I_A, I_Q, I_QD, I_QDD, I_V};
+            let (m, x_rot, offset) = (ip.mass.m, io.x_rot, ip.mass.offset);
             for k in 0..nn {
                 let hk = ip.h[k];
-                let gk = nm.g[k];
-                let th = |jm_q: nalgebra::SMatrix<f64, 3, 4>,
-                          jm_qd: nalgebra::SMatrix<f64, 3, 4>,
-                          jm_qdd: nalgebra::SMatrix<f64, 3, 4>| {
-                    (jm_q * gk + jm_qd * nm.gd[k] + jm_qdd * nm.gdd[k]) * hk
+                let (gk, gdk, gddk, swk) = (&g.g[k], &g.gd[k], &g.gdd[k], &g.sdd_w[k]);
+                g.c43a[k] = (io.q_q * gk + io.q_qd * gdk + io.q_qdd * gddk) * hk;
+                g.c43b[k] = (io.q_qd * gk + io.q_qdd * swk) * hk;
+                g.c43c[k] = io.q_qdd * gk * hk;
+                if x_rot {
+                    g.c3a[k] = (io.x_q * gk + io.x_qd * gdk + io.x_qdd * gddk) * hk;
+                    g.c3b[k] = (io.x_qd * gk + io.x_qdd * swk) * hk;
+                    g.c3c[k] = io.x_qdd * gk * hk;
+                }
+            }
+            let (km, cm, mm) = (
+                out.k.as_mut_slice(),
+                out.c.as_mut_slice(),
+                out.m.as_mut_slice(),
+            );
+            for j in 0..nn {
+                let wj = w * ip.h[j];
+                let gjt = g.g[j].transpose() * wj;
+                let gqa = if offset {
+                    gjt * io.q_a
+                } else {
+                    Matrix3::zeros()
                 };
-                let dx = &io.d_x;
-                let x_th = th(
-                    dx.fixed_view::<3, 4>(0, I_Q).into(),
-                    dx.fixed_view::<3, 4>(0, I_QD).into(),
-                    dx.fixed_view::<3, 4>(0, I_QDD).into(),
-                );
-                let dq = &io.d_q;
-                let q_th = (dq.fixed_view::<4, 4>(0, I_Q) * gk
-                    + dq.fixed_view::<4, 4>(0, I_QD) * nm.gd[k]
-                    + dq.fixed_view::<4, 4>(0, I_QDD) * nm.gdd[k])
-                    * hk;
-                let x_v: Matrix3<f64> = dx.fixed_view::<3, 3>(0, I_V) * hk;
-                let x_w = (dx.fixed_view::<3, 4>(0, I_QD) * gk
-                    + dx.fixed_view::<3, 4>(0, I_QDD) * nm.sdd_w[k])
-                    * hk;
-                let q_v = dq.fixed_view::<4, 3>(0, I_V) * hk;
-                let q_w = (dq.fixed_view::<4, 4>(0, I_QD) * gk
-                    + dq.fixed_view::<4, 4>(0, I_QDD) * nm.sdd_w[k])
-                    * hk;
-                let x_a: Matrix3<f64> = dx.fixed_view::<3, 3>(0, I_A) * hk;
-                let x_wd = dx.fixed_view::<3, 4>(0, I_QDD) * gk * hk;
-                let q_a = dq.fixed_view::<4, 3>(0, I_A) * hk;
-                let q_wd = dq.fixed_view::<4, 4>(0, I_QDD) * gk * hk;
-                for j in 0..nn {
-                    let hj = ip.h[j] * w;
-                    let gjt = nm.g[j].transpose();
-                    add_block(&mut out.k, 6 * j, 6 * k + 3, &(x_th * hj));
-                    add_block(&mut out.k, 6 * j + 3, 6 * k + 3, &(gjt * q_th * hj));
-                    add_block(&mut out.c, 6 * j, 6 * k, &(x_v * hj));
-                    add_block(&mut out.c, 6 * j, 6 * k + 3, &(x_w * hj));
-                    add_block(&mut out.c, 6 * j + 3, 6 * k, &(gjt * q_v * hj));
-                    add_block(&mut out.c, 6 * j + 3, 6 * k + 3, &(gjt * q_w * hj));
-                    add_block(&mut out.m, 6 * j, 6 * k, &(x_a * hj));
-                    add_block(&mut out.m, 6 * j, 6 * k + 3, &(x_wd * hj));
-                    add_block(&mut out.m, 6 * j + 3, 6 * k, &(gjt * q_a * hj));
-                    add_block(&mut out.m, 6 * j + 3, 6 * k + 3, &(gjt * q_wd * hj));
+                for k in 0..nn {
+                    let hk = ip.h[k];
+                    let (r, c) = (6 * j, 6 * k);
+                    add3(km, ld, r + 3, c + 3, &(gjt * g.c43a[k]), 1.0);
+                    add3(cm, ld, r + 3, c + 3, &(gjt * g.c43b[k]), 1.0);
+                    add3(mm, ld, r + 3, c + 3, &(gjt * g.c43c[k]), 1.0);
+                    for i in 0..3 {
+                        mm[(c + i) * ld + r + i] += wj * hk * m;
+                    }
+                    if offset {
+                        add3(mm, ld, r + 3, c, &gqa, hk);
+                    }
+                    if x_rot {
+                        add3(km, ld, r, c + 3, &g.c3a[k], wj);
+                        add3(cm, ld, r, c + 3, &g.c3b[k], wj);
+                        add3(mm, ld, r, c + 3, &g.c3c[k], wj);
+                    }
                 }
             }
         }
         // Rotational rows: r_θ = G(s_j)ᵀ f_j; and the derivative of G(s_j)ᵀ itself.
         for j in 0..nn {
-            let gt = g_mat(&g.s[j]).transpose() * fq[j];
+            let gt = g_mat(&g.s[j]).transpose() * g.fq[j];
             out.add_r(6 * j + 3, &gt);
             if tangents {
-                add_block(&mut out.k, 6 * j + 3, 6 * j + 3, &dgt_f(&g.s[j], &fq[j]));
+                let d = dgt_f(&g.s[j], &g.fq[j]);
+                add3(out.k.as_mut_slice(), ld, 6 * j + 3, 6 * j + 3, &d, 1.0);
             }
         }
         // Section-frame increments → node-frame increments for offset nodes.
@@ -601,114 +592,233 @@ impl Element for BeamElement {
             }
             if tangents {
                 for m in [&mut out.k, &mut out.c, &mut out.m] {
-                    let n = m.nrows();
-                    for col in 0..n {
-                        let v = om
-                            * Vector3::new(
-                                m[(6 * j + 3, col)],
-                                m[(6 * j + 4, col)],
-                                m[(6 * j + 5, col)],
-                            );
-                        for i in 0..3 {
-                            m[(6 * j + 3 + i, col)] = v[i];
-                        }
-                    }
-                    for row in 0..n {
-                        let v = om
-                            * Vector3::new(
-                                m[(row, 6 * j + 3)],
-                                m[(row, 6 * j + 4)],
-                                m[(row, 6 * j + 5)],
-                            );
-                        for i in 0..3 {
-                            m[(row, 6 * j + 3 + i)] = v[i];
-                        }
-                    }
+                    rotate_rows_and_columns(m, 6 * j + 3, om);
                 }
             }
         }
     }
+}
+
+/// `m ← diag(…, O, …) m diag(…, Oᵀ, …)ᵀ` on the three rows and columns from `at`:
+/// rows ← O·rows, columns ← columns·Oᵀ.
+fn rotate_rows_and_columns(m: &mut DMatrix<f64>, at: usize, om: &Matrix3<f64>) {
+    let n = m.nrows();
+    for col in 0..n {
+        let v = om * Vector3::new(m[(at, col)], m[(at + 1, col)], m[(at + 2, col)]);
+        for i in 0..3 {
+            m[(at + i, col)] = v[i];
+        }
+    }
+    for row in 0..n {
+        let v = om * Vector3::new(m[(row, at)], m[(row, at + 1)], m[(row, at + 2)]);
+        for i in 0..3 {
+            m[(row, at + i)] = v[i];
+        }
+    }
+}
+
+/// `dst[row.., col..] += s · b` for a column-major matrix with leading dimension `ld`.
+#[inline(always)]
+fn add3(dst: &mut [f64], ld: usize, row: usize, col: usize, b: &Matrix3<f64>, s: f64) {
+    let b = b.as_slice();
+    for j in 0..3 {
+        let o = (col + j) * ld + row;
+        let d = &mut dst[o..o + 3];
+        d[0] += s * b[3 * j];
+        d[1] += s * b[3 * j + 1];
+        d[2] += s * b[3 * j + 2];
+    }
+}
+
+/// Per-evaluation nodal data and per-point temporaries, kept per thread and grown to the
+/// largest element seen: evaluations allocate nothing.
+#[derive(Default)]
+struct Work {
+    s: Vec<Quat>,
+    sd: Vec<Quat>,
+    sdd: Vec<Quat>,
+    w: Vec<Vector3<f64>>,
+    wd: Vec<Vector3<f64>>,
+    x: Vec<Vector3<f64>>,
+    v: Vec<Vector3<f64>>,
+    a: Vec<Vector3<f64>>,
+    /// G(s_k) = ∂s_k/∂θ_k, ∂ṡ_k/∂θ_k, ∂s̈_k/∂θ_k, ∂s̈_k/∂Ω_k.
+    g: Vec<Matrix4x3<f64>>,
+    gd: Vec<Matrix4x3<f64>>,
+    gdd: Vec<Matrix4x3<f64>>,
+    sdd_w: Vec<Matrix4x3<f64>>,
+    /// Generalized forces conjugate to δs_j.
+    fq: Vec<Quat>,
+    /// Per-node column blocks of one quadrature point.
+    c3a: Vec<Matrix3<f64>>,
+    c3b: Vec<Matrix3<f64>>,
+    c3c: Vec<Matrix3<f64>>,
+    c43a: Vec<Matrix4x3<f64>>,
+    c43b: Vec<Matrix4x3<f64>>,
+    c43c: Vec<Matrix4x3<f64>>,
+    c43d: Vec<Matrix4x3<f64>>,
+    load_factors: Vec<f64>,
+    eo: ElasticOut,
+    io: InertialOut,
+}
+
+impl Work {
+    fn reserve(&mut self, nn: usize) {
+        if self.s.len() >= nn {
+            return;
+        }
+        let (q, v, m3, m43) = (
+            Quat::zeros(),
+            Vector3::zeros(),
+            Matrix3::zeros(),
+            Matrix4x3::zeros(),
+        );
+        for x in [&mut self.s, &mut self.sd, &mut self.sdd, &mut self.fq] {
+            x.resize(nn, q);
+        }
+        for x in [
+            &mut self.w,
+            &mut self.wd,
+            &mut self.x,
+            &mut self.v,
+            &mut self.a,
+        ] {
+            x.resize(nn, v);
+        }
+        for x in [&mut self.c3a, &mut self.c3b, &mut self.c3c] {
+            x.resize(nn, m3);
+        }
+        for x in [
+            &mut self.g,
+            &mut self.gd,
+            &mut self.gdd,
+            &mut self.sdd_w,
+            &mut self.c43a,
+            &mut self.c43b,
+            &mut self.c43c,
+            &mut self.c43d,
+        ] {
+            x.resize(nn, m43);
+        }
+    }
+}
+
+thread_local! {
+    static WORK: RefCell<Work> = RefCell::new(Work::default());
+}
+
+/// Runs `f` with this thread's workspace, sized for `nn` nodes.
+fn with_work<R>(nn: usize, f: impl FnOnce(&mut Work) -> R) -> R {
+    WORK.with(|cell| {
+        let mut w = cell.borrow_mut();
+        w.reserve(nn);
+        f(&mut w)
+    })
+}
+
+impl Element for BeamElement {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn nodes(&self) -> &[usize] {
+        &self.nodes
+    }
+
+    fn evaluate(&self, ctx: &EvalContext, nodes: &[NodeState], need: Need, out: &mut LocalTerms) {
+        with_work(self.nodes.len(), |g| {
+            self.gather(nodes, g);
+            self.evaluate_gathered(ctx, need, g, out);
+        })
+    }
 
     fn kinetic_energy(&self, nodes: &[NodeState]) -> f64 {
-        let mut g = Gathered::default();
-        self.gather(nodes, &mut g);
-        self.inertial
-            .iter()
-            .map(|ip| {
-                let f = self.inertial_fields(ip, &g);
-                ip.w * kernel::kinetic_density(&f.q, &f.qd, &f.v, &ip.m6)
-            })
-            .sum()
+        with_work(self.nodes.len(), |g| {
+            self.gather(nodes, g);
+            self.inertial
+                .iter()
+                .map(|ip| {
+                    let f = self.inertial_fields(ip, g);
+                    let v: Vector3<f64> = (0..self.nodes.len()).map(|k| g.v[k] * ip.h[k]).sum();
+                    ip.w * kernel::kinetic_density(&f.q, &f.qd, &v, &ip.m6)
+                })
+                .sum()
+        })
     }
 
     fn potential_energy(&self, ctx: &EvalContext, nodes: &[NodeState]) -> f64 {
-        let mut g = Gathered::default();
-        self.gather(nodes, &mut g);
-        let mut eo = ElasticOut::default();
-        let mut u = 0.0;
-        for ep in &self.elastic {
-            let f = self.elastic_fields(ep, &g);
-            let sec = ElasticSection {
-                c: &ep.c,
-                d: None,
-                eps0: ep.eps0,
-                k0: ep.k0,
-            };
-            kernel::elastic(&f, &sec, false, &mut eo);
-            u += 0.5 * ep.w * eo.strain.dot(&(ep.c * eo.strain));
-        }
-        let grav = ctx.gravity * ctx.load_factor;
-        for ip in &self.inertial {
-            let f = self.inertial_fields(ip, &g);
-            let x: Vector3<f64> = (0..self.nodes.len()).map(|k| g.x[k] * ip.h[k]).sum();
-            let m = ip.m6[(0, 0)];
-            let m_eta = Vector3::new(ip.m6[(5, 1)], ip.m6[(3, 2)], ip.m6[(4, 0)]);
-            u -= ip.w * grav.dot(&(x * m + rotation(&f.q) * m_eta));
-        }
-        u
+        with_work(self.nodes.len(), |g| {
+            self.gather(nodes, g);
+            let mut eo = ElasticOut::default();
+            let mut u = 0.0;
+            for ep in &self.elastic {
+                let f = self.elastic_fields(ep, g);
+                let sec = ElasticSection {
+                    c: &ep.c,
+                    d: None,
+                    eps0: ep.eps0,
+                    k0: ep.k0,
+                };
+                kernel::elastic(&f, &sec, false, &mut eo);
+                u += 0.5 * ep.w * eo.strain.dot(&(ep.c * eo.strain));
+            }
+            let grav = ctx.gravity * ctx.load_factor;
+            for ip in &self.inertial {
+                let f = self.inertial_fields(ip, g);
+                let x: Vector3<f64> = (0..self.nodes.len()).map(|k| g.x[k] * ip.h[k]).sum();
+                let m = ip.m6[(0, 0)];
+                let m_eta = Vector3::new(ip.m6[(5, 1)], ip.m6[(3, 2)], ip.m6[(4, 0)]);
+                u -= ip.w * grav.dot(&(x * m + rotation(&f.q) * m_eta));
+            }
+            u
+        })
     }
 
     fn external_power(&self, ctx: &EvalContext, nodes: &[NodeState]) -> f64 {
         if self.loads.is_empty() {
             return 0.0;
         }
-        let mut g = Gathered::default();
-        self.gather(nodes, &mut g);
-        let mut p = 0.0;
-        for ip in &self.inertial {
-            let f = self.inertial_fields(ip, &g);
-            let n = f.q.norm_squared();
-            let r = rotation(&f.q);
-            let omega = super::quaternion::e_mat(&f.q) * f.qd * (2.0 / n);
-            let pl = self.point_loads(ctx, ip.eta);
-            p += ip.w
-                * ((pl.f_dead + r * pl.f_follower).dot(&f.v)
-                    + (r.transpose() * pl.m_dead + pl.m_follower).dot(&omega));
-        }
-        p
+        with_work(self.nodes.len(), |g| {
+            self.gather(nodes, g);
+            self.load_factors(ctx, g);
+            let mut p = 0.0;
+            for ip in &self.inertial {
+                let f = self.inertial_fields(ip, g);
+                let v: Vector3<f64> = (0..self.nodes.len()).map(|k| g.v[k] * ip.h[k]).sum();
+                let n = f.q.norm_squared();
+                let r = rotation(&f.q);
+                let omega = super::quaternion::e_mat(&f.q) * f.qd * (2.0 / n);
+                let pl = self.point_loads(&g.load_factors, ip.eta);
+                p += ip.w
+                    * ((pl.f_dead + r * pl.f_follower).dot(&v)
+                        + (r.transpose() * pl.m_dead + pl.m_follower).dot(&omega));
+            }
+            p
+        })
     }
 
     fn dissipated_power(&self, nodes: &[NodeState]) -> f64 {
         if self.elastic.iter().all(|e| e.d.is_none()) {
             return 0.0;
         }
-        let mut g = Gathered::default();
-        self.gather(nodes, &mut g);
-        let mut eo = ElasticOut::default();
-        let mut p = 0.0;
-        for ep in &self.elastic {
-            let Some(d) = &ep.d else { continue };
-            let f = self.elastic_fields(ep, &g);
-            let sec = ElasticSection {
-                c: &ep.c,
-                d: Some(d),
-                eps0: ep.eps0,
-                k0: ep.k0,
-            };
-            kernel::elastic(&f, &sec, false, &mut eo);
-            p += ep.w * eo.strain_rate.dot(&(d * eo.strain_rate));
-        }
-        p
+        with_work(self.nodes.len(), |g| {
+            self.gather(nodes, g);
+            let mut eo = ElasticOut::default();
+            let mut p = 0.0;
+            for ep in &self.elastic {
+                let Some(d) = &ep.d else { continue };
+                let f = self.elastic_fields(ep, g);
+                let sec = ElasticSection {
+                    c: &ep.c,
+                    d: Some(d),
+                    eps0: ep.eps0,
+                    k0: ep.k0,
+                };
+                kernel::elastic(&f, &sec, false, &mut eo);
+                p += ep.w * eo.strain_rate.dot(&(d * eo.strain_rate));
+            }
+            p
+        })
     }
 }
 
