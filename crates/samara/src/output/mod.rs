@@ -3,9 +3,11 @@
 //! - `netcdf`: a dependency-free incremental NetCDF-3 (64-bit offset) writer;
 //! - `results`: the layout of a samara results file, one per analysis, as a
 //!   [`crate::analysis::Recorder`];
+//! - `beam_vars`: the beams' sectional variables of a results file (models with beams);
 //! - `reader`: reading results files back (metadata, variables, named channels);
 //! - `vtk`: ParaView time series (`.pvd` + `.vtu`) from a results file.
 
+mod beam_vars;
 pub mod netcdf;
 mod reader;
 mod results;

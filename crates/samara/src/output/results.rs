@@ -33,6 +33,8 @@ struct Vars {
     dissipated: VarId,
     violation: VarId,
     diagnostics: Option<DiagnosticVars>,
+    /// Sectional output of the beams (models with beams only).
+    beams: Option<super::beam_vars::BeamVars>,
 }
 
 struct CoordinateVars {
@@ -418,6 +420,7 @@ impl ResultsFile {
             step: var(&mut d, "step_size", NcType::Double, &[time], "s", "size of the accepted step"),
         });
 
+        let beams = super::beam_vars::BeamVars::define(&mut d, sys, time, vec3, quat);
         d.add_global_attr(
             "title",
             text(&format!(
@@ -464,6 +467,11 @@ impl ResultsFile {
             let mass: Vec<f64> = model.bodies.iter().map(|b| b.mass).collect();
             writer.put_fixed_f64(bmass, &mass).map_err(e)?;
         }
+        let mut beams = beams;
+        if let Some(b) = &mut beams {
+            b.write_fixed(&mut writer, sys)
+                .map_err(|e| nc_err(&path, e))?;
+        }
         if let Some(jn) = joint_name {
             let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
             writer
@@ -508,6 +516,7 @@ impl ResultsFile {
                 dissipated,
                 violation,
                 diagnostics,
+                beams,
             },
             buf3: vec![0.0; 3 * n_nodes],
             buf4: vec![0.0; 4 * n_nodes],
@@ -647,6 +656,10 @@ impl Recorder for ResultsFile {
             .map_err(e)?;
         w.set_record_f64(v.violation, &[frame.constraint_violation])
             .map_err(e)?;
+        if let Some(b) = &mut self.vars.beams {
+            b.record(w, sys, nodes).map_err(e)?;
+        }
+        let v = &self.vars;
         if let (Some(dv), Some(dg)) = (&v.diagnostics, frame.diagnostics) {
             w.set_record_i32(dv.iterations, &[dg.newton_iterations as i32])
                 .map_err(e)?;

@@ -150,7 +150,11 @@ struct ConstraintWork {
 pub struct Assembler {
     formulation: Formulation,
     structure: Arc<BlockStructure>,
+    /// Element scratch, one per distinct element size (node count), shared by every element
+    /// of that size: the working set stays small however many elements there are.
     terms: Vec<LocalTerms>,
+    /// Index into `terms` of each element.
+    term_of: Vec<usize>,
     element_slots: Vec<Vec<usize>>,
     constraints: Vec<ConstraintWork>,
     /// Stabilized only: (η_k, η_l) couplings of constraints k ≠ l sharing a node, as
@@ -254,11 +258,19 @@ impl Assembler {
         }
         let slot =
             |i: usize, j: usize| s.entry(i, j).expect("pattern contains every coupled block");
-        let terms = sys
+        let mut sizes_seen: Vec<usize> = Vec::new();
+        let term_of = sys
             .elements
             .iter()
-            .map(|e| LocalTerms::new(e.nodes().len()))
+            .map(|e| {
+                let n = e.nodes().len();
+                sizes_seen.iter().position(|&m| m == n).unwrap_or_else(|| {
+                    sizes_seen.push(n);
+                    sizes_seen.len() - 1
+                })
+            })
             .collect();
+        let terms = sizes_seen.iter().map(|&n| LocalTerms::new(n)).collect();
         let element_slots = sys
             .elements
             .iter()
@@ -329,6 +341,7 @@ impl Assembler {
             formulation,
             structure,
             terms,
+            term_of,
             element_slots,
             constraints,
             nu_pairs,
@@ -442,7 +455,7 @@ impl Assembler {
         let sr = coef.row_scale;
 
         for (k, e) in sys.elements.iter().enumerate() {
-            let t = &mut self.terms[k];
+            let t = &mut self.terms[self.term_of[k]];
             t.clear(need);
             e.evaluate(ctx, &state.nodes, need, t);
             let en = e.nodes();

@@ -101,6 +101,8 @@ pub struct SectionState {
     pub position: Vector3<f64>,
     /// Section frame (columns: axial x, y, z in global components).
     pub frame: Matrix3<f64>,
+    /// The same frame as a unit quaternion (w, x, y, z), section frame → global.
+    pub orientation: Quat,
     /// Normalized arc-length coordinate η along the beam.
     pub eta: f64,
     /// (ε, κ): axial, shear y, shear z strains; twist, bending curvatures about y, z.
@@ -256,6 +258,11 @@ impl BeamElement {
         self.elastic.len()
     }
 
+    /// Normalized arc length η of the elastic quadrature points.
+    pub fn section_etas(&self) -> impl Iterator<Item = f64> + '_ {
+        self.elastic.iter().map(|e| e.eta)
+    }
+
     /// Translational mass lumped to the nodes by the inertial quadrature (Σ = m L).
     pub fn node_masses(&self) -> Vec<f64> {
         let mut out = vec![0.0; self.nodes.len()];
@@ -382,6 +389,7 @@ impl BeamElement {
         SectionState {
             position,
             frame: rotation(&f.q),
+            orientation: f.q / f.q.norm(),
             eta: ep.eta,
             strain: eo.strain,
             stress: eo.stress,

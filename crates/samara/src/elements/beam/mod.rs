@@ -100,6 +100,17 @@ impl Beam {
         out
     }
 
+    /// Sectional states at every elastic quadrature point, root to tip, written into `out`
+    /// (`out.len() == n_section_points()`): allocation-free.
+    pub fn sections_into(&self, nodes: &[NodeState], out: &mut [SectionState]) {
+        let mut at = 0;
+        for e in &self.elements {
+            let n = e.n_section_points();
+            e.sections_into(nodes, &mut out[at..at + n]);
+            at += n;
+        }
+    }
+
     pub fn n_section_points(&self) -> usize {
         self.elements.iter().map(|e| e.n_section_points()).sum()
     }
