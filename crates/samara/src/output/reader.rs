@@ -74,6 +74,8 @@ pub struct ResultsReader {
     pub node_names: Vec<String>,
     pub joint_names: Vec<String>,
     pub body_names: Vec<String>,
+    /// Beam sections (`<beam>#<k>`), if the model has beams.
+    pub section_names: Vec<String>,
     /// Complete output times in the file.
     pub records: usize,
 }
@@ -151,6 +153,7 @@ impl ResultsReader {
         let node_names = names(&mut reader, "node_name");
         let joint_names = names(&mut reader, "joint_name");
         let body_names = names(&mut reader, "body_name");
+        let section_names = names(&mut reader, "section_name");
         Ok(Self {
             reader,
             path,
@@ -158,6 +161,7 @@ impl ResultsReader {
             node_names,
             joint_names,
             body_names,
+            section_names,
             records: complete,
         })
     }
@@ -242,6 +246,7 @@ impl ResultsReader {
                     let items = match v.dims[1].as_str() {
                         "node" => &self.node_names,
                         "joint" => &self.joint_names,
+                        "section" => &self.section_names,
                         _ => continue,
                     };
                     let comps: &[&str] = if v.dims[2] == "quat" {
@@ -288,6 +293,7 @@ impl ResultsReader {
             (3, 3) => {
                 let items = match info.dims[1].as_str() {
                     "node" => &self.node_names,
+                    "section" => &self.section_names,
                     _ => &self.joint_names,
                 };
                 let Some(i) = items.iter().position(|n| n == parts[1]) else {
