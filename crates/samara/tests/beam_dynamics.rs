@@ -1,6 +1,8 @@
 //! Issue #4, verification of the beam in dynamics: the Kynema/BeamDyn composite beam under
 //! a suddenly applied tip load (reference history), the first bending frequency of a
-//! cantilever against Euler–Bernoulli, and energy conservation without dissipation.
+//! cantilever against Euler–Bernoulli, energy conservation without dissipation, and the
+//! large-rotation right-angle cantilever of Simo & Vu-Quoc (1988) against the published
+//! curves.
 
 mod common;
 
@@ -191,4 +193,67 @@ fn run_chain(
     let (s, h) = out.pop().unwrap();
     assert!(s.failure.is_none(), "{:?}", s.failure);
     (s, h)
+}
+
+/// Right-angle cantilever (Simo & Vu-Quoc 1988, CMAME 66: an L-frame hit out of plane at the
+/// elbow, 30 s of large out-of-plane motion coupled with torsion): the elbow and tip
+/// out-of-plane displacements against the published curves
+/// (examples/verification/right_angle_cantilever_reference.csv, digitized points).
+///
+/// Our solution (2 elements of order 4 per member, h = 0.05, ρ∞ = 0.9) is converged: 4
+/// elements of order 6 at h = 0.0125 differ by < 0.033 over the 30 s, and ρ∞ = 1 changes
+/// nothing visible. The reference is the authors' own discretization (10 linear elements per
+/// member, step 0.25 — our run at h = 0.25 moves towards it) read off a figure, and its phase
+/// error grows with time. Measured: over the first 15 s max |Δu₃| = 7 % (elbow) and 4 % (tip)
+/// of the peak displacement; over 30 s the RMS difference is 6 % and 3 %. Tolerances: 10 %
+/// of the peak (max, 15 s) and 8 % (RMS, 30 s).
+#[test]
+fn right_angle_cantilever_against_simo_vu_quoc() {
+    let m = model_file("examples/verification/right_angle_cantilever.toml");
+    let (s, h) = run(&m);
+    assert_eq!(s.rejected_steps, 0);
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/verification/right_angle_cantilever_reference.csv"),
+    )
+    .unwrap();
+    for point in ["elbow", "tip"] {
+        let node = m.node_index(point).unwrap();
+        let z0 = m.nodes[node].position.z;
+        // Our history, for linear interpolation at the reference times.
+        let ours: Vec<(f64, f64)> = h
+            .frames
+            .iter()
+            .map(|f| (f.time, f.state.nodes[node].x.z - z0))
+            .collect();
+        let at = |t: f64| -> f64 {
+            let k = ours.partition_point(|p| p.0 <= t).clamp(1, ours.len() - 1);
+            let (a, b) = (ours[k - 1], ours[k]);
+            a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0)
+        };
+        let reference: Vec<(f64, f64)> = text
+            .lines()
+            .filter(|l| l.starts_with(&format!("{point},")))
+            .map(|l| {
+                let v: Vec<f64> = l.split(',').skip(1).map(|c| c.parse().unwrap()).collect();
+                (v[0], v[1])
+            })
+            .collect();
+        let peak = reference.iter().fold(0.0f64, |m, r| m.max(r.1.abs()));
+        let (mut max15, mut sum2) = (0.0f64, 0.0);
+        for &(t, u) in &reference {
+            let e = at(t) - u;
+            if t <= 15.0 {
+                max15 = max15.max(e.abs());
+            }
+            sum2 += e * e;
+        }
+        let rms = (sum2 / reference.len() as f64).sqrt();
+        println!(
+            "{point}: peak {peak:.2}, max |Δ| over 15 s {max15:.3} ({:.1} %), RMS over 30 s {rms:.3} ({:.1} %)",
+            100.0 * max15 / peak,
+            100.0 * rms / peak
+        );
+        assert!(max15 < 0.10 * peak && rms < 0.08 * peak);
+    }
 }
