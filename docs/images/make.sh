@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Regenerates the README's pictures with samara's own commands.
+# Regenerates the README's pictures with samara's own commands (and, for the beam frames and
+# the right-angle cantilever against its published curves, two matplotlib scripts).
 # Run from anywhere: docs/images/make.sh
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -16,3 +17,6 @@ $samara plot "$tmp/double/swing.nc" position:bob2:x position:bob2:z kinetic_ener
 $samara run examples/heavy_top.toml --out "$tmp/top" --quiet > /dev/null
 $samara plot "$tmp/top/precession.nc" orientation:top:w orientation:top:x orientation:top:y orientation:top:z \
     joint_force:pivot:x joint_force:pivot:y joint_force:pivot:z --out docs/images/heavy_top.png
+$samara run examples/verification/right_angle_cantilever.toml --out "$tmp/rac" --quiet > /dev/null
+python3 docs/images/right_angle_cantilever.py "$tmp/rac/dynamic.nc" docs/images/right_angle_cantilever.png
+python3 docs/images/beam_frames.py
