@@ -155,7 +155,9 @@ pub fn assemble_initial_state(
         .map(|(a, b)| ((a.x - b.x).norm(), b.rot.relative_log(&a.rot).norm()))
         .collect();
 
-    // Velocities: one projection onto B v + Φ_t = 0.
+    // Velocities: coordinate rates from the nodes, then one projection onto
+    // B v + Φ_t = 0 (which only changes what the drives or the joints demand).
+    sys.measure_coordinate_rates(state);
     asm.assemble(
         sys,
         state,

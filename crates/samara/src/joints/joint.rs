@@ -487,6 +487,35 @@ impl Constraint for Joint {
         }
     }
 
+    fn measure_coordinate_rates(
+        &self,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        out: &mut [f64],
+    ) {
+        let f = self.frames_with_rates(nodes);
+        let vel = Row12::from_iterator(
+            [f.v[0], f.omega[0], f.v[1], f.omega[1]]
+                .iter()
+                .flat_map(|v| v.iter().copied()),
+        );
+        let mut done = [false; 6];
+        for row in &self.rows {
+            if row.role() != RowRole::Definition {
+                continue;
+            }
+            let v = self.row_value(&f, coords, 0.0, row);
+            if let Some((c, d)) = v.dnu
+                && !done[c]
+                && d.abs() > 1e-12
+            {
+                // Φ̇ = b·(v, ω) + (∂Φ/∂ν) ν̇ = 0.
+                out[c] = -v.b.dot(&vel) / d;
+                done[c] = true;
+            }
+        }
+    }
+
     fn is_driven(&self, c: usize) -> bool {
         self.drive_row(c).is_some()
     }

@@ -131,6 +131,14 @@ pub trait Constraint: Send + Sync {
     }
     /// Coordinate values implied by the node configuration (initialization).
     fn measure_coordinates(&self, _nodes: &[NodeState], _out: &mut [f64]) {}
+    /// Coordinate rates implied by the node velocities (through the defining equations).
+    fn measure_coordinate_rates(
+        &self,
+        _nodes: &[NodeState],
+        _coords: &[Coordinate],
+        _out: &mut [f64],
+    ) {
+    }
     /// Whether coordinate `c` is driven (its value is prescribed).
     fn is_driven(&self, _c: usize) -> bool {
         false

@@ -252,6 +252,25 @@ impl System {
         }
     }
 
+    /// Sets every joint coordinate's rate to the value implied by the node velocities.
+    pub fn measure_coordinate_rates(&self, s: &mut State) {
+        let mut values = Vec::new();
+        for (k, (c, off)) in self
+            .constraints
+            .iter()
+            .zip(&self.coordinate_offsets)
+            .enumerate()
+        {
+            let nc = c.n_coordinates();
+            values.clear();
+            values.extend(self.coords_of(k, s).iter().map(|q| q.v));
+            c.measure_coordinate_rates(&s.nodes, &s.coords[*off..off + nc], &mut values);
+            for (j, v) in values.iter().enumerate() {
+                s.coords[off + j].v = *v;
+            }
+        }
+    }
+
     /// Multipliers of all rows (zeros at dropped rows, then the minimum-norm solution in
     /// loops with dropped rows), from the enforced multipliers `mu` (physical units).
     pub fn all_multipliers(&self, ctx: &EvalContext, s: &State, mu: &[f64], out: &mut [f64]) {
