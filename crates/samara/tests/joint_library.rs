@@ -106,8 +106,8 @@ fn rz(t: f64) -> Matrix3<f64> {
 
 /// Hand-computed equilibrium coordinates under the global force F and moment M at the
 /// joint point. In frame A (components f = Aᵀ F, m = Aᵀ M), the virtual work of a free
-/// translation d_i is f_i δd_i; of the rotations, m · ω with ω = e₁ δθ1 + R_x(θ1) e₂ δθ2
-/// + R_x(θ1) R_y(θ2) e₃ δθ3 (Bryant angles; the universal joint's θ2 is about
+/// translation d_i is f_i δd_i; of the rotations, m · ω with
+/// ω = e₁ δθ1 + R_x(θ1) e₂ δθ2 + R_x(θ1) R_y(θ2) e₃ δθ3 (Bryant angles; the universal joint's θ2 is about
 /// e₂ᴮ = R_x(θ1) e₂ as well). So each coordinate follows from the previous ones: the
 /// equilibrium is triangular. A screw's θ3 takes m₃ + p f₃.
 fn expected(kind: JointType, f: &Vector3<f64>, m: &Vector3<f64>) -> [Option<f64>; 6] {

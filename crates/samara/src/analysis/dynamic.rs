@@ -59,6 +59,7 @@ impl StepProblem<'_> {
             .coords
             .iter_mut()
             .zip(&self.prev.coords)
+            .take(self.sys.n_coordinates)
             .enumerate()
         {
             c.q = p.q + self.hdq[n6 + j];
@@ -190,6 +191,7 @@ impl Integrator<'_> {
             .coords
             .iter_mut()
             .zip(&self.state.coords)
+            .take(self.sys.n_coordinates)
             .enumerate()
         {
             let an = self.acc[n6 + j];
@@ -266,10 +268,18 @@ impl Integrator<'_> {
             }
         }
         let n6 = 6 * self.state.nodes.len();
-        for (j, (c, p)) in self.trial.coords.iter().zip(&self.state.coords).enumerate() {
+        for (j, (c, p)) in self
+            .trial
+            .coords
+            .iter()
+            .zip(&self.state.coords)
+            .take(self.sys.n_coordinates)
+            .enumerate()
+        {
             let an = self.acc[n6 + j];
             self.acc[n6 + j] = ga.algorithmic_acceleration(an, p.a, c.a);
         }
+        self.sys.update_passive_coordinates(&mut self.trial);
         std::mem::swap(&mut self.state, &mut self.trial);
     }
 }
@@ -405,9 +415,10 @@ pub fn run_dynamic(
         it.acc[6 * i..6 * i + 6].copy_from_slice(&v);
     }
     let n6 = 6 * sys.n_nodes();
-    for (j, c) in it.state.coords.iter().enumerate() {
+    for (j, c) in it.state.coords.iter().take(sys.n_coordinates).enumerate() {
         it.acc[n6 + j] = c.a;
     }
+    sys.update_passive_coordinates(&mut it.state);
     it.mu.copy_from_slice(&it.state.lambda);
 
     let mut energy = Energy {

@@ -49,9 +49,13 @@ pub struct Joint {
     rows: Vec<Row>,
     /// Indices of the enforced rows (all but those dropped as redundant).
     active: Vec<usize>,
-    /// Component (0..6) of each coordinate.
+    /// Component (0..6) of each coordinate, the active ones first.
     components: Vec<usize>,
+    /// Number of active coordinates (unknowns of the Newton system).
+    n_active: usize,
     loads: Vec<CoordinateLoads>,
+    /// Defining rows of the passive coordinates (`coord` indexes the passive list).
+    passive_rows: Vec<Row>,
 }
 
 impl Joint {
@@ -82,15 +86,65 @@ impl Joint {
         let rotations_wanted = def.components[3..].iter().any(|c| c.is_some());
         let drives: [Option<TimeFunction>; 6] =
             std::array::from_fn(|c| def.components[c].as_ref().and_then(|d| d.drive.clone()));
-        let (rows, components) = rows_of(def.kind, def.pitch, rotations_wanted, &drives);
-        let loads = components
+        let (all_rows, all_components) = rows_of(def.kind, def.pitch, rotations_wanted, &drives);
+        let loads_of = |c: usize| {
+            def.components[c]
+                .as_ref()
+                .map(CoordinateLoads::from_def)
+                .unwrap_or_default()
+        };
+        // A coordinate is active when something acts on it: elements, a drive, or (the
+        // screw) another equation of the joint.
+        let is_active = |c: usize| {
+            def.kind == JointType::Screw || drives[c].is_some() || !loads_of(c).is_empty()
+        };
+        let mut renumber = vec![0usize; all_components.len()];
+        let mut components = Vec::new();
+        for (j, &c) in all_components.iter().enumerate() {
+            if is_active(c) {
+                renumber[j] = components.len();
+                components.push(c);
+            }
+        }
+        let n_active = components.len();
+        for (j, &c) in all_components.iter().enumerate() {
+            if !is_active(c) {
+                renumber[j] = components.len() - n_active;
+                components.push(c);
+            }
+        }
+        let mut rows = Vec::new();
+        let mut passive_rows = Vec::new();
+        for row in all_rows {
+            let coord = match &row {
+                Row::Displacement { coord, .. } => coord.map(|(c, _)| c),
+                Row::Angle { coord, .. } => *coord,
+                Row::Drive { coord, .. } => Some(*coord),
+            };
+            let passive = coord.is_some_and(|c| !is_active(all_components[c]));
+            let row = match row {
+                Row::Displacement { axis, coord } => Row::Displacement {
+                    axis,
+                    coord: coord.map(|(c, s)| (renumber[c], s)),
+                },
+                Row::Angle { row, coord } => Row::Angle {
+                    row,
+                    coord: coord.map(|c| renumber[c]),
+                },
+                Row::Drive { coord, function } => Row::Drive {
+                    coord: renumber[coord],
+                    function,
+                },
+            };
+            if passive {
+                passive_rows.push(row);
+            } else {
+                rows.push(row);
+            }
+        }
+        let loads = components[..n_active]
             .iter()
-            .map(|&c| {
-                def.components[c]
-                    .as_ref()
-                    .map(CoordinateLoads::from_def)
-                    .unwrap_or_default()
-            })
+            .map(|&c| loads_of(c))
             .collect();
         Self {
             name: def.name.clone(),
@@ -100,7 +154,9 @@ impl Joint {
             active: (0..rows.len()).collect(),
             rows,
             components,
+            n_active,
             loads,
+            passive_rows,
         }
     }
 
@@ -253,7 +309,11 @@ impl Constraint for Joint {
     }
 
     fn n_coordinates(&self) -> usize {
-        self.components.len()
+        self.n_active
+    }
+
+    fn n_passive_coordinates(&self) -> usize {
+        self.components.len() - self.n_active
     }
 
     fn n_equations(&self) -> usize {
@@ -513,6 +573,63 @@ impl Constraint for Joint {
                 out[c] = -v.b.dot(&vel) / d;
                 done[c] = true;
             }
+        }
+    }
+
+    fn update_passive_coordinates(&self, nodes: &[NodeState], passive: &mut [Coordinate]) {
+        let f = self.frames_with_rates(nodes);
+        let vel = Row12::from_iterator(
+            [f.v[0], f.omega[0], f.v[1], f.omega[1]]
+                .iter()
+                .flat_map(|v| v.iter().copied()),
+        );
+        // Spatial accelerations: ẍ, and ω̇ = R Ω̇ (ω × ω = 0).
+        let mut acc = Row12::zeros();
+        for (k, s) in self.sides.iter().enumerate() {
+            if let Some(i) = s.node {
+                let (a, wd) = (nodes[i].a, nodes[i].r() * nodes[i].wd);
+                for m in 0..3 {
+                    acc[6 * k + m] = a[m];
+                    acc[6 * k + 3 + m] = wd[m];
+                }
+            }
+        }
+        for row in &self.passive_rows {
+            let c = match row {
+                Row::Displacement {
+                    coord: Some((c, _)),
+                    ..
+                }
+                | Row::Angle { coord: Some(c), .. } => *c,
+                _ => continue,
+            };
+            // Newton on the scalar defining equation, from the current value (a few
+            // iterations; the equations are sin(θ − ν) or linear in ν).
+            for _ in 0..8 {
+                let v = self.row_value(&f, passive, 0.0, row);
+                let Some((_, d)) = v.dnu else { break };
+                if d.abs() < 1e-12 {
+                    break;
+                }
+                let step = v.phi / d;
+                passive[c].q -= step;
+                if step.abs() < 1e-15 * (1.0 + passive[c].q.abs()) {
+                    break;
+                }
+            }
+            let v = self.row_value(&f, passive, 0.0, row);
+            let Some((_, d)) = v.dnu else { continue };
+            if d.abs() < 1e-12 {
+                continue;
+            }
+            // Φ̇ = b·v + Φ_ν ν̇ = 0, then Φ̈ = conv + b·a + Φ_ν ν̈ = 0.
+            passive[c].v = -v.b.dot(&vel) / d;
+            let conv = match row {
+                Row::Displacement { axis, .. } => displacement::convective(&f, *axis),
+                Row::Angle { row, .. } => row.convective(&f, passive[c].q, passive[c].v),
+                Row::Drive { .. } => 0.0,
+            };
+            passive[c].a = -(conv + v.b.dot(&acc)) / d;
         }
     }
 
