@@ -247,3 +247,58 @@ fn initial_assembly_moves_a_sloppy_model_onto_the_joints() {
     println!("angular velocities {wz:?}, exact crank {w2}, rocker {w4}");
     assert!((wz[0] - w2).abs() < 1e-9 && (wz[2] - w4).abs() < 1e-9);
 }
+
+/// A joint frame given in a node's frame (`relative_to`) is the same joint as the one
+/// given globally: a pendulum on a node turned by 30° about z, its hinge axis given as the
+/// node's x axis, swings exactly like the one given with the global axis.
+#[test]
+fn joint_frames_relative_to_a_node_match_global_ones() {
+    let c = 30f64.to_radians().cos();
+    let s = 30f64.to_radians().sin();
+    let text = |joint: &str| {
+        format!(
+            r#"
+[model]
+name = "pendulum"
+gravity = [0.0, 0.0, -9.81]
+[[nodes]]
+name = "bob"
+position = [0.0, 0.0, -1.0]
+orientation = {{ x_axis = [{c}, {s}, 0.0], y_axis = [{ms}, {c}, 0.0] }}
+velocity = [{vx}, {vy}, 0.0]
+[[bodies]]
+name = "bob"
+node = "bob"
+mass = 1.0
+inertia = [[1e-3, 0.0, 0.0], [0.0, 2e-3, 0.0], [0.0, 0.0, 3e-3]]
+[[joints]]
+name = "pivot"
+type = "revolute"
+node_a = "ground"
+node_b = "bob"
+{joint}
+[[analyses]]
+name = "swing"
+type = "dynamic"
+t_end = 0.5
+step = 1e-3
+"#,
+            ms = -s,
+            vx = -s,
+            vy = c
+        )
+    };
+    let global = model(&text(&format!(
+        "position = [0.0, 0.0, 0.0]\naxis = [{c}, {s}, 0.0]"
+    )));
+    let local = model(&text(
+        "relative_to = \"bob\"\nposition = [0.0, 0.0, 1.0]\naxis = [1.0, 0.0, 0.0]",
+    ));
+    let (_, hg) = run(&global);
+    let (_, hl) = run(&local);
+    let (a, b) = (hg.last().unwrap(), hl.last().unwrap());
+    assert!((a.state.nodes[0].x - b.state.nodes[0].x).norm() < 1e-12);
+    assert!((a.state.coords[0].q - b.state.coords[0].q).abs() < 1e-12);
+    // It swung: the velocity was normal to the hinge axis.
+    assert!(a.state.coords[0].q.abs() > 0.1, "{}", a.state.coords[0].q);
+}
