@@ -279,7 +279,7 @@ impl Integrator<'_> {
             let an = self.acc[n6 + j];
             self.acc[n6 + j] = ga.algorithmic_acceleration(an, p.a, c.a);
         }
-        self.sys.update_passive_coordinates(&mut self.trial);
+        self.sys.update_passive_coordinates(&mut self.trial, false);
         std::mem::swap(&mut self.state, &mut self.trial);
     }
 }
@@ -418,7 +418,7 @@ pub fn run_dynamic(
     for (j, c) in it.state.coords.iter().take(sys.n_coordinates).enumerate() {
         it.acc[n6 + j] = c.a;
     }
-    sys.update_passive_coordinates(&mut it.state);
+    sys.update_passive_coordinates(&mut it.state, true);
     it.mu.copy_from_slice(&it.state.lambda);
 
     let mut energy = Energy {
@@ -498,6 +498,7 @@ pub fn run_dynamic(
                 summary.max_constraint_violation = summary.max_constraint_violation.max(viol);
                 let last = it.state.time >= settings.t_end - 1e-12 * span.max(1.0);
                 if step_index.is_multiple_of(settings.output_every) || last {
+                    sys.update_passive_coordinates(&mut it.state, true);
                     energy.kinetic = sys.kinetic_energy(&it.state);
                     energy.potential = sys.potential_energy(&ctx, &it.state);
                     let diag = if settings.solver.diagnostics {

@@ -280,7 +280,7 @@ pub fn run_static(
             &newton_settings,
         ) {
             Ok(report) => {
-                sys.update_passive_coordinates(&mut state);
+                sys.update_passive_coordinates(&mut state, true);
                 lf = target;
                 summary.steps += 1;
                 summary.newton_iterations += report.iterations;

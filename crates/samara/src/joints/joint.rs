@@ -237,6 +237,17 @@ impl Joint {
         }
     }
 
+    /// `Φ` of a row only (no Jacobian), for constraint-violation checks.
+    fn row_phi(&self, f: &FramePair, coords: &[Coordinate], t: f64, row: &Row) -> f64 {
+        match row {
+            Row::Displacement { axis, coord } => {
+                displacement::value(f, *axis) - coord.map_or(0.0, |(c, s)| s * coords[c].q)
+            }
+            Row::Angle { row, coord } => row.value(f, coord.map_or(0.0, |c| coords[c].q))[0],
+            Row::Drive { coord, function } => coords[*coord].q - function.eval(t),
+        }
+    }
+
     fn rotation_of(&self, side: usize, nodes: &[NodeState]) -> Matrix3<f64> {
         match self.sides[side].node {
             Some(i) => *nodes[i].r(),
@@ -282,18 +293,21 @@ impl Joint {
         let nq = 6 * self.nodes.len();
         let Some(b) = b else {
             for (i, &r) in which.iter().enumerate() {
-                phi[i] = self.row_value(&f, coords, ctx.time, &self.rows[r]).phi;
+                phi[i] = self.row_phi(&f, coords, ctx.time, &self.rows[r]);
             }
             return;
         };
-        b.fill(0.0);
+        let m = b.nrows();
+        let bs = b.as_mut_slice();
+        bs.fill(0.0);
         let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
         for (i, &r) in which.iter().enumerate() {
             let v = self.row_value(&f, coords, ctx.time, &self.rows[r]);
             phi[i] = v.phi;
-            self.to_local(&v.b, &rots, |c, x| b[(i, c)] = x);
+            // Column-major: entry (i, c) at c·m + i.
+            self.to_local(&v.b, &rots, |c, x| bs[c * m + i] = x);
             if let Some((c, d)) = v.dnu {
-                b[(i, nq + c)] = d;
+                bs[(nq + c) * m + i] = d;
             }
         }
     }
@@ -576,7 +590,12 @@ impl Constraint for Joint {
         }
     }
 
-    fn update_passive_coordinates(&self, nodes: &[NodeState], passive: &mut [Coordinate]) {
+    fn update_passive_coordinates(
+        &self,
+        nodes: &[NodeState],
+        passive: &mut [Coordinate],
+        rates: bool,
+    ) {
         let f = self.frames_with_rates(nodes);
         let vel = Row12::from_iterator(
             [f.v[0], f.omega[0], f.v[1], f.omega[1]]
@@ -594,6 +613,12 @@ impl Constraint for Joint {
                 }
             }
         }
+        // Principal values from the direction cosines, continued from the current value
+        // (angles keep counting turns).
+        let rel = f.axes[0].transpose() * f.axes[1];
+        let r: [[f64; 3]; 3] = std::array::from_fn(|p| std::array::from_fn(|q| rel[(p, q)]));
+        let dv = f.axes[0].transpose() * f.d();
+        let d3 = [dv.x, dv.y, dv.z];
         for row in &self.passive_rows {
             let c = match row {
                 Row::Displacement {
@@ -603,19 +628,17 @@ impl Constraint for Joint {
                 | Row::Angle { coord: Some(c), .. } => *c,
                 _ => continue,
             };
-            // Newton on the scalar defining equation, from the current value (a few
-            // iterations; the equations are sin(θ − ν) or linear in ν).
-            for _ in 0..8 {
-                let v = self.row_value(&f, passive, 0.0, row);
-                let Some((_, d)) = v.dnu else { break };
-                if d.abs() < 1e-12 {
-                    break;
-                }
-                let step = v.phi / d;
-                passive[c].q -= step;
-                if step.abs() < 1e-15 * (1.0 + passive[c].q.abs()) {
-                    break;
-                }
+            let comp = self.components[self.n_active + c];
+            let principal = measure(self.kind, comp, &r, &d3);
+            passive[c].q = if comp < 3 {
+                principal
+            } else {
+                let turn = 2.0 * std::f64::consts::PI;
+                let delta = principal - passive[c].q;
+                passive[c].q + delta - turn * (delta / turn).round()
+            };
+            if !rates {
+                continue;
             }
             let v = self.row_value(&f, passive, 0.0, row);
             let Some((_, d)) = v.dnu else { continue };

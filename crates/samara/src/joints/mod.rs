@@ -139,8 +139,15 @@ pub trait Constraint: Send + Sync {
     /// (principal values; for initialization).
     fn measure_coordinates(&self, _nodes: &[NodeState], _out: &mut [f64]) {}
     /// Solves the defining equations of the passive coordinates for value (continued from
-    /// the current value, so angles keep counting turns), rate and acceleration.
-    fn update_passive_coordinates(&self, _nodes: &[NodeState], _passive: &mut [Coordinate]) {}
+    /// the current value, so angles keep counting turns) and, with `rates`, rate and
+    /// acceleration.
+    fn update_passive_coordinates(
+        &self,
+        _nodes: &[NodeState],
+        _passive: &mut [Coordinate],
+        _rates: bool,
+    ) {
+    }
     /// Coordinate rates implied by the node velocities (through the defining equations).
     fn measure_coordinate_rates(
         &self,

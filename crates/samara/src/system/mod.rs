@@ -276,9 +276,10 @@ impl System {
         }
     }
 
-    /// Solves the passive coordinates of `s` (value continued from the current one, rate,
-    /// acceleration) from the nodes.
-    pub fn update_passive_coordinates(&self, s: &mut State) {
+    /// Solves the passive coordinates of `s` from the nodes: the value (continued from the
+    /// current one; needed every step so that turns are counted) and, with `rates`, rate
+    /// and acceleration (for output).
+    pub fn update_passive_coordinates(&self, s: &mut State, rates: bool) {
         if self.n_passive == 0 {
             return;
         }
@@ -286,7 +287,7 @@ impl System {
             let np = c.n_passive_coordinates();
             if np > 0 {
                 let p = self.n_coordinates + self.passive_offsets[k];
-                c.update_passive_coordinates(&s.nodes, &mut s.coords[p..p + np]);
+                c.update_passive_coordinates(&s.nodes, &mut s.coords[p..p + np], rates);
             }
         }
     }
