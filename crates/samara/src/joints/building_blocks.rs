@@ -247,7 +247,7 @@ impl AngleRow {
     #[inline]
     fn plain(&self) -> Option<(usize, usize)> {
         match (self.terms, self.constant) {
-            ([(Trig::One(s), p, q), (Trig::Zero, _, _)], Trig::Zero) if s == 1.0 => Some((p, q)),
+            ([(Trig::One(1.0), p, q), (Trig::Zero, _, _)], Trig::Zero) => Some((p, q)),
             _ => None,
         }
     }
