@@ -2,7 +2,7 @@
 //! index-3 constraints, Newton–Raphson per step, and step cutting on Newton failure.
 
 use super::generalized_alpha::GeneralizedAlpha;
-use super::initial::{assemble_initial_state, consistent_accelerations};
+use super::initial::consistent_accelerations;
 use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
@@ -338,7 +338,7 @@ pub fn run_dynamic(
     let mut init_asm = Assembler::new(sys, Formulation::Index3);
     let mut init_lin = LinearSolver::new(init_asm.structure(), settings.solver.linear_solver);
     let mut init_matrix = BlockMatrix::zeros(init_asm.structure().clone());
-    match assemble_initial_state(
+    if !super::assemble_start(
         sys,
         &mut it.state,
         &ctx0,
@@ -346,26 +346,12 @@ pub fn run_dynamic(
         &mut init_asm,
         &mut init_lin,
         &mut init_matrix,
+        &mut summary,
+        t0,
     ) {
-        Ok(report) => {
-            summary.warnings.extend(super::assembly_warnings(
-                sys,
-                &report,
-                settings.solver.tolerance,
-            ));
-            summary.assembly = Some(report);
-        }
-        Err(e) => {
-            fail(
-                &mut summary,
-                t0,
-                format!("cannot assemble the initial configuration: {e}"),
-                Some("check the joint positions and axes, the drives' values at the start time, and that the mechanism can reach them".into()),
-            );
-            summary.final_state = it.state.clone();
-            summary.wall_time = clock.elapsed();
-            return Ok(summary);
-        }
+        summary.final_state = it.state.clone();
+        summary.wall_time = clock.elapsed();
+        return Ok(summary);
     }
     sys.constraint_values(&ctx0, &it.state, &mut it.phi);
     let viol0 = it.phi.iter().fold(0.0f64, |m, x| m.max(x.abs()));

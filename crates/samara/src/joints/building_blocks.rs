@@ -47,6 +47,15 @@ impl FramePair {
         self.x[side] + self.arm[side]
     }
 
+    /// `(vᴬ, ωᴬ, vᴮ, ωᴮ)`, the velocities the 12-entry rows act on.
+    pub fn spatial_velocities(&self) -> Row12 {
+        Row12::from_iterator(
+            [self.v[0], self.omega[0], self.v[1], self.omega[1]]
+                .iter()
+                .flat_map(|v| v.iter().copied()),
+        )
+    }
+
     /// Relative displacement `d = uᴮ − uᴬ`.
     pub fn d(&self) -> Vector3<f64> {
         self.origin(1) - self.origin(0)

@@ -568,11 +568,7 @@ impl Constraint for Joint {
         out: &mut [f64],
     ) {
         let f = self.frames_with_rates(nodes);
-        let vel = Row12::from_iterator(
-            [f.v[0], f.omega[0], f.v[1], f.omega[1]]
-                .iter()
-                .flat_map(|v| v.iter().copied()),
-        );
+        let vel = f.spatial_velocities();
         let mut done = [false; 6];
         for row in &self.rows {
             if row.role() != RowRole::Definition {
@@ -597,11 +593,7 @@ impl Constraint for Joint {
         rates: bool,
     ) {
         let f = self.frames_with_rates(nodes);
-        let vel = Row12::from_iterator(
-            [f.v[0], f.omega[0], f.v[1], f.omega[1]]
-                .iter()
-                .flat_map(|v| v.iter().copied()),
-        );
+        let vel = f.spatial_velocities();
         // Spatial accelerations: ẍ, and ω̇ = R Ω̇ (ω × ω = 0).
         let mut acc = Row12::zeros();
         for (k, s) in self.sides.iter().enumerate() {
