@@ -17,6 +17,13 @@ $samara plot "$tmp/double/swing.nc" position:bob2:x position:bob2:z kinetic_ener
 $samara run examples/heavy_top.toml --out "$tmp/top" --quiet > /dev/null
 $samara plot "$tmp/top/precession.nc" orientation:top:w orientation:top:x orientation:top:y orientation:top:z \
     joint_force:pivot:x joint_force:pivot:y joint_force:pivot:z --out docs/images/heavy_top.png
+$samara run examples/landing_gear.toml --out "$tmp/gear" --quiet > /dev/null
+$samara plot "$tmp/gear/retract.nc" joint_coordinate:trunnion.theta3 joint_coordinate:actuator.d3 \
+    joint_coordinate:oleo.d3 joint_coordinate_force:actuator.d3 joint_coordinate_force:oleo.d3 \
+    --out docs/images/landing_gear.png
+$samara run examples/four_bar.toml --out "$tmp/four_bar" --quiet > /dev/null
+$samara plot "$tmp/four_bar/turn.nc" joint_coordinate:crank_pivot.theta3 joint_coordinate:rocker_pivot.theta3 \
+    joint_coordinate_force:crank_pivot.theta3 --out docs/images/four_bar.png
 $samara run examples/verification/right_angle_cantilever.toml --out "$tmp/rac" --quiet > /dev/null
 python3 docs/images/right_angle_cantilever.py "$tmp/rac/dynamic.nc" docs/images/right_angle_cantilever.png
 python3 docs/images/beam_frames.py

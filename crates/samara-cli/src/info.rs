@@ -39,6 +39,13 @@ pub fn info(reader: &mut ResultsReader) -> Result<(), samara::output::ReadError>
         reader.joint_names.len(),
         list(&reader.joint_names)
     );
+    if !reader.coordinate_names.is_empty() {
+        println!(
+            "  joint coordinates {} : {}",
+            reader.coordinate_names.len(),
+            list(&reader.coordinate_names)
+        );
+    }
     if let Some(steps) = reader.attr_i64("steps") {
         let its = reader.attr_i64("newton_iterations").unwrap_or(0);
         let per = if steps > 0 {

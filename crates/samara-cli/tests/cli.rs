@@ -200,11 +200,86 @@ fn examples_check_clean() {
         "examples/double_pendulum.toml",
         "examples/heavy_top.toml",
         "examples/verification/heavy_top.toml",
+        "examples/slider_crank.toml",
+        "examples/four_bar.toml",
+        "examples/landing_gear.toml",
+        "examples/joint_gallery.toml",
     ] {
         let o = samara(&["check", root().join(m).to_str().unwrap()]);
         assert!(o.status.success(), "{m}: {}", stderr(&o));
         assert!(String::from_utf8_lossy(&o.stdout).contains("ok"));
     }
+}
+
+/// `samara check` says when a model is over-constrained, and by how many equations.
+#[test]
+fn check_warns_about_redundant_constraints() {
+    let o = samara(&[
+        "check",
+        root().join("examples/four_bar.toml").to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("warning") && err.contains("over-constrained by 3 equations"),
+        "{err}"
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("after dropping 3 redundant"));
+}
+
+#[test]
+fn joint_axes_must_be_orthogonal() {
+    assert_bad_at(
+        "axis = [0.0, 1.0, 0.0]",
+        "axis = [0.0, 1.0, 0.0]\naxis_1 = [0.0, 0.5, 1.0]",
+        "axis_1 =",
+        "not orthogonal",
+        Some("orthogonal"),
+    );
+}
+
+#[test]
+fn a_joint_cannot_connect_a_node_to_itself() {
+    assert_bad_at(
+        r#"node_a = "ground""#,
+        r#"node_a = "bob""#,
+        r#"node_b = "bob""#,
+        "connects node 'bob' to itself",
+        None,
+    );
+}
+
+#[test]
+fn nothing_can_be_attached_to_a_constrained_component() {
+    assert_bad_at(
+        "axis = [0.0, 1.0, 0.0]",
+        "axis = [0.0, 1.0, 0.0]\n[joints.d1]\nstiffness = 10.0",
+        "[joints.d1]",
+        "`d1` is constrained by a revolute joint",
+        Some("theta3"),
+    );
+}
+
+#[test]
+fn joint_inputs_are_checked() {
+    // An input port naming an unknown signal.
+    assert_bad_at(
+        "axis = [0.0, 1.0, 0.0]",
+        "axis = [0.0, 1.0, 0.0]\n[joints.theta3]\ninput = \"pilto\"\n[[signals]]\nname = \"pilot\"\nfunction = { type = \"constant\", value = 1.0 }",
+        "\"pilto\"",
+        "unknown signal 'pilto'",
+        Some("did you mean 'pilot'"),
+    );
+    // A screw needs its pitch.
+    assert_bad(r#"type = "revolute""#, r#"type = "screw""#, "pitch", None);
+    // Backlash needs a positive width.
+    assert_bad_at(
+        "axis = [0.0, 1.0, 0.0]",
+        "axis = [0.0, 1.0, 0.0]\n[joints.theta3]\nbacklash = { width = -0.1, stiffness = 1e4 }",
+        "backlash =",
+        "width",
+        None,
+    );
 }
 
 #[test]

@@ -2,7 +2,7 @@
 //! index-3 constraints, Newton–Raphson per step, and step cutting on Newton failure.
 
 use super::generalized_alpha::GeneralizedAlpha;
-use super::initial::{assemble_initial_state, consistent_accelerations};
+use super::initial::consistent_accelerations;
 use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
@@ -83,6 +83,7 @@ impl StepProblem<'_> {
             .coords
             .iter_mut()
             .zip(&self.prev.coords)
+            .take(self.sys.n_coordinates)
             .enumerate()
         {
             c.q = p.q + self.hdq[n6 + j];
@@ -250,6 +251,7 @@ impl Integrator<'_> {
             .coords
             .iter_mut()
             .zip(&self.state.coords)
+            .take(self.sys.n_coordinates)
             .enumerate()
         {
             let an = self.acc[n6 + j];
@@ -343,10 +345,18 @@ impl Integrator<'_> {
             }
         }
         let n6 = 6 * self.state.nodes.len();
-        for (j, (c, p)) in self.trial.coords.iter().zip(&self.state.coords).enumerate() {
+        for (j, (c, p)) in self
+            .trial
+            .coords
+            .iter()
+            .zip(&self.state.coords)
+            .take(self.sys.n_coordinates)
+            .enumerate()
+        {
             let an = self.acc[n6 + j];
             self.acc[n6 + j] = ga.algorithmic_acceleration(an, p.a, c.a);
         }
+        self.sys.update_passive_coordinates(&mut self.trial, false);
         std::mem::swap(&mut self.state, &mut self.trial);
     }
 }
@@ -409,7 +419,7 @@ pub fn run_dynamic(
     let mut init_asm = Assembler::new(sys, Formulation::Index3);
     let mut init_lin = LinearSolver::new(init_asm.structure(), settings.solver.linear_solver);
     let mut init_matrix = BlockMatrix::zeros(init_asm.structure().clone());
-    match assemble_initial_state(
+    if !super::assemble_start(
         sys,
         &mut it.state,
         &ctx0,
@@ -417,26 +427,12 @@ pub fn run_dynamic(
         &mut init_asm,
         &mut init_lin,
         &mut init_matrix,
+        &mut summary,
+        t0,
     ) {
-        Ok(report) => {
-            summary.warnings.extend(super::assembly_warnings(
-                sys,
-                &report,
-                settings.solver.tolerance,
-            ));
-            summary.assembly = Some(report);
-        }
-        Err(e) => {
-            fail(
-                &mut summary,
-                t0,
-                format!("cannot assemble the initial configuration: {e}"),
-                Some("check the joint positions and axes, the drives' values at the start time, and that the mechanism can reach them".into()),
-            );
-            summary.final_state = it.state.clone();
-            summary.wall_time = clock.elapsed();
-            return Ok(summary);
-        }
+        summary.final_state = it.state.clone();
+        summary.wall_time = clock.elapsed();
+        return Ok(summary);
     }
     sys.constraint_values(&ctx0, &it.state, &mut it.phi);
     let viol0 = it.phi.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -486,9 +482,10 @@ pub fn run_dynamic(
         it.acc[6 * i..6 * i + 6].copy_from_slice(&v);
     }
     let n6 = 6 * sys.n_nodes();
-    for (j, c) in it.state.coords.iter().enumerate() {
+    for (j, c) in it.state.coords.iter().take(sys.n_coordinates).enumerate() {
         it.acc[n6 + j] = c.a;
     }
+    sys.update_passive_coordinates(&mut it.state, true);
     it.mu.copy_from_slice(&it.state.lambda);
 
     let mut energy = Energy {
@@ -575,6 +572,7 @@ pub fn run_dynamic(
                 summary.max_constraint_violation = summary.max_constraint_violation.max(viol);
                 let last = it.state.time >= settings.t_end - 1e-12 * span.max(1.0);
                 if step_index.is_multiple_of(settings.output_every) || last {
+                    sys.update_passive_coordinates(&mut it.state, true);
                     energy.kinetic = sys.kinetic_energy(&it.state);
                     energy.potential = sys.potential_energy(&ctx, &it.state);
                     let diag = if settings.solver.diagnostics {

@@ -51,7 +51,7 @@ impl Recorder for History {
         sys.reactions(&ctx, frame.state, frame.mu, &mut all, |k, f, m| {
             reactions[k] = (f, m)
         });
-        let mut coordinate_forces = vec![0.0; sys.n_coordinates];
+        let mut coordinate_forces = vec![0.0; sys.n_coordinates + sys.n_passive];
         sys.coordinate_forces(&ctx, frame.state, frame.mu, &mut coordinate_forces);
         self.frames.push(Frame {
             time: frame.time,

@@ -75,6 +75,28 @@ fn violation(sys: &System, ctx: &EvalContext, state: &State, phi: &mut [f64]) ->
     phi.iter().fold(0.0, |m, x| m.max(x.abs()))
 }
 
+/// `[W Bᵀ; B 0]` at `state` (`scratch` receives a residual that is not used).
+fn projection_matrix(
+    sys: &System,
+    state: &State,
+    ctx: &EvalContext,
+    w: &[f64; 6],
+    asm: &mut Assembler,
+    matrix: &mut BlockMatrix,
+    scratch: &mut [f64],
+) {
+    asm.assemble(
+        sys,
+        state,
+        ctx,
+        &Coefficients::constraints_only(),
+        &[],
+        scratch,
+        Some(matrix),
+    );
+    asm.add_configuration_metric(sys, matrix, w, COORDINATE_WEIGHT);
+}
+
 /// Moves `state` onto the constraints (positions, then velocities); see the module doc.
 /// `asm` must have the index-3 layout.
 pub fn assemble_initial_state(
@@ -109,16 +131,7 @@ pub fn assemble_initial_state(
             });
         }
         report.iterations += 1;
-        asm.assemble(
-            sys,
-            state,
-            ctx,
-            &Coefficients::constraints_only(),
-            &[],
-            &mut rhs,
-            Some(matrix),
-        );
-        asm.add_configuration_metric(sys, matrix, &w, COORDINATE_WEIGHT);
+        projection_matrix(sys, state, ctx, &w, asm, matrix, &mut rhs);
         // Right-hand side [0; −Φ].
         rhs.fill(0.0);
         for k in 0..sys.constraints.len() {
@@ -155,17 +168,10 @@ pub fn assemble_initial_state(
         .map(|(a, b)| ((a.x - b.x).norm(), b.rot.relative_log(&a.rot).norm()))
         .collect();
 
-    // Velocities: one projection onto B v + Φ_t = 0.
-    asm.assemble(
-        sys,
-        state,
-        ctx,
-        &Coefficients::constraints_only(),
-        &[],
-        &mut rhs,
-        Some(matrix),
-    );
-    asm.add_configuration_metric(sys, matrix, &w, COORDINATE_WEIGHT);
+    // Velocities: coordinate rates from the nodes, then one projection onto
+    // B v + Φ_t = 0 (which only changes what the drives or the joints demand).
+    sys.measure_coordinate_rates(state);
+    projection_matrix(sys, state, ctx, &w, asm, matrix, &mut rhs);
     asm.velocity_rows(sys, state, ctx, &mut rhs);
     for x in rhs.iter_mut() {
         *x = -*x;

@@ -162,6 +162,40 @@ pub fn run_all<R: Recorder>(
     Ok(out)
 }
 
+/// Runs the initial assembly (positions and velocities onto the joints) and records its
+/// report and warnings in `summary`; on failure records it at time `t` and returns false.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn assemble_start(
+    sys: &System,
+    state: &mut State,
+    ctx: &crate::elements::EvalContext,
+    tolerance: f64,
+    asm: &mut crate::system::Assembler,
+    lin: &mut crate::solve::LinearSolver,
+    matrix: &mut crate::solve::BlockMatrix,
+    summary: &mut AnalysisSummary,
+    t: f64,
+) -> bool {
+    match assemble_initial_state(sys, state, ctx, tolerance, asm, lin, matrix) {
+        Ok(report) => {
+            summary
+                .warnings
+                .extend(assembly_warnings(sys, &report, tolerance));
+            summary.assembly = Some(report);
+            true
+        }
+        Err(e) => {
+            summary.failure = Some(SolverFailure {
+                analysis: summary.name.clone(),
+                time: t,
+                reason: format!("cannot assemble the initial configuration: {e}"),
+                hint: Some("check the joint positions and axes, the drives' values at the start, and that the mechanism can reach them".into()),
+            });
+            false
+        }
+    }
+}
+
 /// Warnings for nodes the initial assembly moved by more than the tolerance.
 pub(crate) fn assembly_warnings(sys: &System, r: &AssemblyReport, tol: f64) -> Vec<String> {
     let mut out = Vec::new();

@@ -2,7 +2,6 @@
 //! gravity are scaled by the load factor λ_k = k/n, k = 1…n, each increment solved by
 //! Newton from the previous equilibrium; an increment that fails is bisected.
 
-use super::initial::assemble_initial_state;
 use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
@@ -197,7 +196,7 @@ pub fn run_static(
     let mut mu = vec![0.0; sys.n_multipliers];
     let mut summary = AnalysisSummary::new(name, "static");
     let ctx_full = sys.context(settings.time, 1.0);
-    match assemble_initial_state(
+    if !super::assemble_start(
         sys,
         &mut state,
         &ctx_full,
@@ -205,26 +204,12 @@ pub fn run_static(
         &mut asm,
         &mut lin,
         &mut matrix,
+        &mut summary,
+        0.0,
     ) {
-        Ok(report) => {
-            summary.warnings.extend(super::assembly_warnings(
-                sys,
-                &report,
-                settings.solver.tolerance,
-            ));
-            summary.assembly = Some(report);
-        }
-        Err(e) => {
-            summary.failure = Some(SolverFailure {
-                analysis: name.to_string(),
-                time: 0.0,
-                reason: format!("cannot assemble the initial configuration: {e}"),
-                hint: Some("check the joint positions and axes, the drives' values at the analysis time, and that the mechanism can reach them".into()),
-            });
-            summary.final_state = state;
-            summary.wall_time = clock.elapsed();
-            return Ok(summary);
-        }
+        summary.final_state = state;
+        summary.wall_time = clock.elapsed();
+        return Ok(summary);
     }
     // Assembly left velocities consistent with the drives; statics has none.
     for nd in &mut state.nodes {
@@ -280,6 +265,7 @@ pub fn run_static(
             &newton_settings,
         ) {
             Ok(report) => {
+                sys.update_passive_coordinates(&mut state, true);
                 lf = target;
                 summary.steps += 1;
                 summary.newton_iterations += report.iterations;

@@ -47,6 +47,15 @@ impl FramePair {
         self.x[side] + self.arm[side]
     }
 
+    /// `(vᴬ, ωᴬ, vᴮ, ωᴮ)`, the velocities the 12-entry rows act on.
+    pub fn spatial_velocities(&self) -> Row12 {
+        Row12::from_iterator(
+            [self.v[0], self.omega[0], self.v[1], self.omega[1]]
+                .iter()
+                .flat_map(|v| v.iter().copied()),
+        )
+    }
+
     /// Relative displacement `d = uᴮ − uᴬ`.
     pub fn d(&self) -> Vector3<f64> {
         self.origin(1) - self.origin(0)
@@ -243,8 +252,20 @@ impl AngleRow {
         }
     }
 
+    /// A plain direction cosine `R_pq` (no coordinate): the fast path of the locked rows.
+    #[inline]
+    fn plain(&self) -> Option<(usize, usize)> {
+        match (self.terms, self.constant) {
+            ([(Trig::One(1.0), p, q), (Trig::Zero, _, _)], Trig::Zero) => Some((p, q)),
+            _ => None,
+        }
+    }
+
     /// `Φ`, `∂Φ/∂ν`, `∂²Φ/∂ν²` at the frames `f` and coordinate ν.
     pub fn value(&self, f: &FramePair, nu: f64) -> [f64; 3] {
+        if let Some((p, q)) = self.plain() {
+            return [direction_cosine::value(f, p, q), 0.0, 0.0];
+        }
         let mut out = self.constant.eval(nu);
         for &(a, p, q) in &self.terms {
             if a == Trig::Zero {
@@ -261,6 +282,13 @@ impl AngleRow {
 
     /// `Σ a_t^{(d)}(ν) b_t`: the q-Jacobian row for d = 0, its ν-derivative for d = 1.
     pub fn jacobian(&self, f: &FramePair, nu: f64, d: usize) -> Row12 {
+        if let Some((p, q)) = self.plain() {
+            return if d == 0 {
+                direction_cosine::jacobian(f, p, q)
+            } else {
+                Row12::zeros()
+            };
+        }
         let mut b = Row12::zeros();
         for &(a, p, q) in &self.terms {
             if a == Trig::Zero {

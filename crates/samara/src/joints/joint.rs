@@ -49,9 +49,13 @@ pub struct Joint {
     rows: Vec<Row>,
     /// Indices of the enforced rows (all but those dropped as redundant).
     active: Vec<usize>,
-    /// Component (0..6) of each coordinate.
+    /// Component (0..6) of each coordinate, the active ones first.
     components: Vec<usize>,
+    /// Number of active coordinates (unknowns of the Newton system).
+    n_active: usize,
     loads: Vec<CoordinateLoads>,
+    /// Defining rows of the passive coordinates (`coord` indexes the passive list).
+    passive_rows: Vec<Row>,
 }
 
 impl Joint {
@@ -82,15 +86,65 @@ impl Joint {
         let rotations_wanted = def.components[3..].iter().any(|c| c.is_some());
         let drives: [Option<TimeFunction>; 6] =
             std::array::from_fn(|c| def.components[c].as_ref().and_then(|d| d.drive.clone()));
-        let (rows, components) = rows_of(def.kind, def.pitch, rotations_wanted, &drives);
-        let loads = components
+        let (all_rows, all_components) = rows_of(def.kind, def.pitch, rotations_wanted, &drives);
+        let loads_of = |c: usize| {
+            def.components[c]
+                .as_ref()
+                .map(CoordinateLoads::from_def)
+                .unwrap_or_default()
+        };
+        // A coordinate is active when something acts on it: elements, a drive, or (the
+        // screw) another equation of the joint.
+        let is_active = |c: usize| {
+            def.kind == JointType::Screw || drives[c].is_some() || !loads_of(c).is_empty()
+        };
+        let mut renumber = vec![0usize; all_components.len()];
+        let mut components = Vec::new();
+        for (j, &c) in all_components.iter().enumerate() {
+            if is_active(c) {
+                renumber[j] = components.len();
+                components.push(c);
+            }
+        }
+        let n_active = components.len();
+        for (j, &c) in all_components.iter().enumerate() {
+            if !is_active(c) {
+                renumber[j] = components.len() - n_active;
+                components.push(c);
+            }
+        }
+        let mut rows = Vec::new();
+        let mut passive_rows = Vec::new();
+        for row in all_rows {
+            let coord = match &row {
+                Row::Displacement { coord, .. } => coord.map(|(c, _)| c),
+                Row::Angle { coord, .. } => *coord,
+                Row::Drive { coord, .. } => Some(*coord),
+            };
+            let passive = coord.is_some_and(|c| !is_active(all_components[c]));
+            let row = match row {
+                Row::Displacement { axis, coord } => Row::Displacement {
+                    axis,
+                    coord: coord.map(|(c, s)| (renumber[c], s)),
+                },
+                Row::Angle { row, coord } => Row::Angle {
+                    row,
+                    coord: coord.map(|c| renumber[c]),
+                },
+                Row::Drive { coord, function } => Row::Drive {
+                    coord: renumber[coord],
+                    function,
+                },
+            };
+            if passive {
+                passive_rows.push(row);
+            } else {
+                rows.push(row);
+            }
+        }
+        let loads = components[..n_active]
             .iter()
-            .map(|&c| {
-                def.components[c]
-                    .as_ref()
-                    .map(CoordinateLoads::from_def)
-                    .unwrap_or_default()
-            })
+            .map(|&c| loads_of(c))
             .collect();
         Self {
             name: def.name.clone(),
@@ -100,7 +154,9 @@ impl Joint {
             active: (0..rows.len()).collect(),
             rows,
             components,
+            n_active,
             loads,
+            passive_rows,
         }
     }
 
@@ -181,6 +237,17 @@ impl Joint {
         }
     }
 
+    /// `Φ` of a row only (no Jacobian), for constraint-violation checks.
+    fn row_phi(&self, f: &FramePair, coords: &[Coordinate], t: f64, row: &Row) -> f64 {
+        match row {
+            Row::Displacement { axis, coord } => {
+                displacement::value(f, *axis) - coord.map_or(0.0, |(c, s)| s * coords[c].q)
+            }
+            Row::Angle { row, coord } => row.value(f, coord.map_or(0.0, |c| coords[c].q))[0],
+            Row::Drive { coord, function } => coords[*coord].q - function.eval(t),
+        }
+    }
+
     fn rotation_of(&self, side: usize, nodes: &[NodeState]) -> Matrix3<f64> {
         match self.sides[side].node {
             Some(i) => *nodes[i].r(),
@@ -226,18 +293,21 @@ impl Joint {
         let nq = 6 * self.nodes.len();
         let Some(b) = b else {
             for (i, &r) in which.iter().enumerate() {
-                phi[i] = self.row_value(&f, coords, ctx.time, &self.rows[r]).phi;
+                phi[i] = self.row_phi(&f, coords, ctx.time, &self.rows[r]);
             }
             return;
         };
-        b.fill(0.0);
+        let m = b.nrows();
+        let bs = b.as_mut_slice();
+        bs.fill(0.0);
         let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
         for (i, &r) in which.iter().enumerate() {
             let v = self.row_value(&f, coords, ctx.time, &self.rows[r]);
             phi[i] = v.phi;
-            self.to_local(&v.b, &rots, |c, x| b[(i, c)] = x);
+            // Column-major: entry (i, c) at c·m + i.
+            self.to_local(&v.b, &rots, |c, x| bs[c * m + i] = x);
             if let Some((c, d)) = v.dnu {
-                b[(i, nq + c)] = d;
+                bs[(nq + c) * m + i] = d;
             }
         }
     }
@@ -253,7 +323,11 @@ impl Constraint for Joint {
     }
 
     fn n_coordinates(&self) -> usize {
-        self.components.len()
+        self.n_active
+    }
+
+    fn n_passive_coordinates(&self) -> usize {
+        self.components.len() - self.n_active
     }
 
     fn n_equations(&self) -> usize {
@@ -484,6 +558,93 @@ impl Constraint for Joint {
         let d = [dv.x, dv.y, dv.z];
         for (c, &comp) in self.components.iter().enumerate() {
             out[c] = measure(self.kind, comp, &r, &d);
+        }
+    }
+
+    fn measure_coordinate_rates(
+        &self,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        out: &mut [f64],
+    ) {
+        let f = self.frames_with_rates(nodes);
+        let vel = f.spatial_velocities();
+        let mut done = [false; 6];
+        for row in &self.rows {
+            if row.role() != RowRole::Definition {
+                continue;
+            }
+            let v = self.row_value(&f, coords, 0.0, row);
+            if let Some((c, d)) = v.dnu
+                && !done[c]
+                && d.abs() > 1e-12
+            {
+                // Φ̇ = b·(v, ω) + (∂Φ/∂ν) ν̇ = 0.
+                out[c] = -v.b.dot(&vel) / d;
+                done[c] = true;
+            }
+        }
+    }
+
+    fn update_passive_coordinates(
+        &self,
+        nodes: &[NodeState],
+        passive: &mut [Coordinate],
+        rates: bool,
+    ) {
+        let f = self.frames_with_rates(nodes);
+        let vel = f.spatial_velocities();
+        // Spatial accelerations: ẍ, and ω̇ = R Ω̇ (ω × ω = 0).
+        let mut acc = Row12::zeros();
+        for (k, s) in self.sides.iter().enumerate() {
+            if let Some(i) = s.node {
+                let (a, wd) = (nodes[i].a, nodes[i].r() * nodes[i].wd);
+                for m in 0..3 {
+                    acc[6 * k + m] = a[m];
+                    acc[6 * k + 3 + m] = wd[m];
+                }
+            }
+        }
+        // Principal values from the direction cosines, continued from the current value
+        // (angles keep counting turns).
+        let rel = f.axes[0].transpose() * f.axes[1];
+        let r: [[f64; 3]; 3] = std::array::from_fn(|p| std::array::from_fn(|q| rel[(p, q)]));
+        let dv = f.axes[0].transpose() * f.d();
+        let d3 = [dv.x, dv.y, dv.z];
+        for row in &self.passive_rows {
+            let c = match row {
+                Row::Displacement {
+                    coord: Some((c, _)),
+                    ..
+                }
+                | Row::Angle { coord: Some(c), .. } => *c,
+                _ => continue,
+            };
+            let comp = self.components[self.n_active + c];
+            let principal = measure(self.kind, comp, &r, &d3);
+            passive[c].q = if comp < 3 {
+                principal
+            } else {
+                let turn = 2.0 * std::f64::consts::PI;
+                let delta = principal - passive[c].q;
+                passive[c].q + delta - turn * (delta / turn).round()
+            };
+            if !rates {
+                continue;
+            }
+            let v = self.row_value(&f, passive, 0.0, row);
+            let Some((_, d)) = v.dnu else { continue };
+            if d.abs() < 1e-12 {
+                continue;
+            }
+            // Φ̇ = b·v + Φ_ν ν̇ = 0, then Φ̈ = conv + b·a + Φ_ν ν̈ = 0.
+            passive[c].v = -v.b.dot(&vel) / d;
+            let conv = match row {
+                Row::Displacement { axis, .. } => displacement::convective(&f, *axis),
+                Row::Angle { row, .. } => row.convective(&f, passive[c].q, passive[c].v),
+                Row::Drive { .. } => 0.0,
+            };
+            passive[c].a = -(conv + v.b.dot(&acc)) / d;
         }
     }
 

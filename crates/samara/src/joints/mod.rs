@@ -125,12 +125,37 @@ pub trait Constraint: Send + Sync {
     /// Global position of the joint point on side B and the axes of frame A (columns,
     /// global components), for output.
     fn location(&self, nodes: &[NodeState]) -> (Vector3<f64>, Matrix3<f64>);
-    /// Names of the joint coordinates (`<joint>.<component>`).
+    /// Passive coordinates: free components with nothing attached. Nothing depends on
+    /// them, so they are not unknowns of the Newton system; they follow from their
+    /// defining equations after each step ([`Constraint::update_passive_coordinates`]).
+    fn n_passive_coordinates(&self) -> usize {
+        0
+    }
+    /// Names of the joint coordinates (`<joint>.<component>`), the active ones first.
     fn coordinate_names(&self) -> Vec<String> {
         Vec::new()
     }
-    /// Coordinate values implied by the node configuration (initialization).
+    /// Values of all coordinates (active, then passive) implied by the node configuration
+    /// (principal values; for initialization).
     fn measure_coordinates(&self, _nodes: &[NodeState], _out: &mut [f64]) {}
+    /// Solves the defining equations of the passive coordinates for value (continued from
+    /// the current value, so angles keep counting turns) and, with `rates`, rate and
+    /// acceleration.
+    fn update_passive_coordinates(
+        &self,
+        _nodes: &[NodeState],
+        _passive: &mut [Coordinate],
+        _rates: bool,
+    ) {
+    }
+    /// Coordinate rates implied by the node velocities (through the defining equations).
+    fn measure_coordinate_rates(
+        &self,
+        _nodes: &[NodeState],
+        _coords: &[Coordinate],
+        _out: &mut [f64],
+    ) {
+    }
     /// Whether coordinate `c` is driven (its value is prescribed).
     fn is_driven(&self, _c: usize) -> bool {
         false

@@ -945,7 +945,11 @@ impl<'a> Validator<'a> {
             (JointType::Screw, _) => {
                 self.error(
                     format!("{what}: a screw joint needs a finite `pitch` [m/rad]"),
-                    self.key(&e, "pitch").or(e.span.clone()),
+                    if ji.pitch.is_some() {
+                        self.key(&e, "pitch")
+                    } else {
+                        ji.kind.span.clone()
+                    },
                     Some(
                         "d3 = pitch · θ3; e.g. a 2 mm lead is pitch = 0.002 / (2π) = 3.183e-4"
                             .into(),

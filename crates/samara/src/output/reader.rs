@@ -74,6 +74,9 @@ pub struct ResultsReader {
     pub node_names: Vec<String>,
     pub joint_names: Vec<String>,
     pub body_names: Vec<String>,
+    /// Joint coordinates (`<joint>.<component>`) and their units (`m` or `rad`).
+    pub coordinate_names: Vec<String>,
+    pub coordinate_units: Vec<String>,
     /// Beam sections (`<beam>#<k>`), if the model has beams.
     pub section_names: Vec<String>,
     /// Complete output times in the file.
@@ -153,6 +156,8 @@ impl ResultsReader {
         let node_names = names(&mut reader, "node_name");
         let joint_names = names(&mut reader, "joint_name");
         let body_names = names(&mut reader, "body_name");
+        let coordinate_names = names(&mut reader, "coordinate_name");
+        let coordinate_units = names(&mut reader, "coordinate_units");
         let section_names = names(&mut reader, "section_name");
         Ok(Self {
             reader,
@@ -161,6 +166,8 @@ impl ResultsReader {
             node_names,
             joint_names,
             body_names,
+            coordinate_names,
+            coordinate_units,
             section_names,
             records: complete,
         })
@@ -242,6 +249,11 @@ impl ResultsReader {
             }
             match v.dims.len() {
                 1 => out.push(v.name.clone()),
+                2 if v.dims[1] == "coordinate" => {
+                    for c in &self.coordinate_names {
+                        out.push(format!("{}:{c}", v.name));
+                    }
+                }
                 3 => {
                     let items = match v.dims[1].as_str() {
                         "node" => &self.node_names,
@@ -267,7 +279,8 @@ impl ResultsReader {
     }
 
     /// Reads a channel: `variable` for scalar histories, `variable:item:component` for
-    /// node and joint vectors (component x, y, z; w, x, y, z for `orientation`).
+    /// node and joint vectors (component x, y, z; w, x, y, z for `orientation`), and
+    /// `variable:joint.component` for joint coordinates (e.g. `joint_coordinate:pivot.theta3`).
     pub fn channel(&mut self, spec: &str) -> Result<Channel, ReadError> {
         let parts: Vec<&str> = spec.split(':').collect();
         let all = self.channel_names();
@@ -288,8 +301,33 @@ impl ResultsReader {
             ));
         };
         let data = self.read(&info.name)?;
+        let mut units = info.units.clone().unwrap_or_default();
         let values = match (info.dims.len(), parts.len()) {
             (1, 1) => data,
+            (2, 2) if info.dims[1] == "coordinate" => {
+                let Some(i) = self.coordinate_names.iter().position(|n| n == parts[1]) else {
+                    return Err(unknown(
+                        format!(
+                            "'{}' has no joint coordinate named '{}'",
+                            info.name, parts[1]
+                        ),
+                        &all,
+                    ));
+                };
+                // Per-coordinate units: lengths or angles.
+                let linear = self.coordinate_units.get(i).is_some_and(|u| u == "m");
+                units = match (info.name.as_str(), linear) {
+                    ("joint_coordinate", true) => "m".into(),
+                    ("joint_coordinate", false) => "rad".into(),
+                    ("joint_coordinate_rate", true) => "m s-1".into(),
+                    ("joint_coordinate_rate", false) => "rad s-1".into(),
+                    ("joint_coordinate_force", true) => "N".into(),
+                    ("joint_coordinate_force", false) => "N m".into(),
+                    _ => units,
+                };
+                let n = self.coordinate_names.len();
+                (0..self.records).map(|r| data[r * n + i]).collect()
+            }
             (3, 3) => {
                 let items = match info.dims[1].as_str() {
                     "node" => &self.node_names,
@@ -346,7 +384,7 @@ impl ResultsReader {
         };
         Ok(Channel {
             label: spec.to_string(),
-            units: info.units.clone().unwrap_or_default(),
+            units,
             long_name: info.long_name.clone().unwrap_or_default(),
             values,
         })

@@ -149,7 +149,7 @@ impl ResultsFile {
         let joint = (n_joints > 0).then(|| d.add_dim("joint", n_joints));
         let n_bodies = model.bodies.len();
         let body = (n_bodies > 0).then(|| d.add_dim("body", n_bodies));
-        let n_coords = sys.n_coordinates;
+        let n_coords = sys.n_coordinates + sys.n_passive;
         let coordinate = (n_coords > 0).then(|| d.add_dim("coordinate", n_coords));
         let unit_len = d.add_dim("unit_strlen", 3);
 

@@ -509,17 +509,7 @@ impl Assembler {
             for i in 0..m {
                 w.mu[i] = state.lambda[off + i] + coef.penalty * w.phi[i];
             }
-            // Local velocities (node v, Ω, coordinate rates).
-            for (a, &na) in cn.iter().enumerate() {
-                let nd = &state.nodes[na];
-                for j in 0..3 {
-                    w.vel[6 * a + j] = nd.v[j];
-                    w.vel[6 * a + 3 + j] = nd.w[j];
-                }
-            }
-            for (j, q) in coords.iter().enumerate() {
-                w.vel[nq + j] = q.v;
-            }
+            local_velocities(&mut w.vel, cn, state, coords);
             let p = &w.place;
             if stabilized {
                 // λ rows: s_v (B v + Φ_t); η rows: Φ.
@@ -811,16 +801,7 @@ impl Assembler {
             let coords = sys.coords_of(k, state);
             let cn = c.nodes();
             let nq = 6 * cn.len();
-            for (a, &na) in cn.iter().enumerate() {
-                let nd = &state.nodes[na];
-                for j in 0..3 {
-                    w.vel[6 * a + j] = nd.v[j];
-                    w.vel[6 * a + 3 + j] = nd.w[j];
-                }
-            }
-            for (j, q) in coords.iter().enumerate() {
-                w.vel[nq + j] = q.v;
-            }
+            local_velocities(&mut w.vel, cn, state, coords);
             for i in 0..w.m {
                 let mut acc = w.phi_t[i];
                 for j in 0..nq + w.nc {
@@ -829,6 +810,27 @@ impl Assembler {
                 residual[w.place.lam + i] = acc;
             }
         }
+    }
+}
+
+/// The local velocity vector of a constraint: node v (global) and Ω (material) per node,
+/// then the coordinate rates.
+fn local_velocities(
+    vel: &mut [f64],
+    nodes: &[usize],
+    state: &State,
+    coords: &[crate::system::Coordinate],
+) {
+    for (a, &na) in nodes.iter().enumerate() {
+        let nd = &state.nodes[na];
+        for j in 0..3 {
+            vel[6 * a + j] = nd.v[j];
+            vel[6 * a + 3 + j] = nd.w[j];
+        }
+    }
+    let nq = 6 * nodes.len();
+    for (j, q) in coords.iter().enumerate() {
+        vel[nq + j] = q.v;
     }
 }
 

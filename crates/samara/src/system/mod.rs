@@ -36,10 +36,16 @@ pub struct System {
     /// Offset of each constraint's rows (enforced or dropped) in the vector of all rows.
     pub row_offsets: Vec<usize>,
     pub n_rows: usize,
-    /// Offset of each constraint's joint coordinates in the state.
+    /// Offset of each constraint's active joint coordinates (unknowns of the Newton
+    /// system) in the state.
     pub coordinate_offsets: Vec<usize>,
     pub n_coordinates: usize,
-    /// `<joint>.<component>` per coordinate.
+    /// Offset of each constraint's passive coordinates (nothing attached; solved after
+    /// each step), counted from `n_coordinates` in the state.
+    pub passive_offsets: Vec<usize>,
+    pub n_passive: usize,
+    /// `<joint>.<component>` per coordinate of the state: all active ones, then all
+    /// passive ones.
     pub coordinate_names: Vec<String>,
     /// Closed loops of joints, with the equations dropped as redundant.
     pub loops: Vec<ConstraintLoop>,
@@ -130,20 +136,27 @@ impl System {
     ) -> Self {
         let n = node_names.len();
         let mut coordinate_offsets = Vec::with_capacity(constraints.len());
+        let mut passive_offsets = Vec::with_capacity(constraints.len());
         let mut coordinate_names = Vec::new();
-        let mut nc = 0;
+        let mut passive_names = Vec::new();
+        let (mut nc, mut np) = (0, 0);
         for c in &constraints {
             coordinate_offsets.push(nc);
+            passive_offsets.push(np);
+            let names = c.coordinate_names();
+            coordinate_names.extend_from_slice(&names[..c.n_coordinates()]);
+            passive_names.extend_from_slice(&names[c.n_coordinates()..]);
             nc += c.n_coordinates();
-            coordinate_names.extend(c.coordinate_names());
+            np += c.n_passive_coordinates();
         }
+        coordinate_names.extend(passive_names);
         // Redundant equations of closed loops, at the initial configuration.
         let mut coords = vec![Coordinate::default(); nc];
         let mut values = Vec::new();
         for (c, off) in constraints.iter().zip(&coordinate_offsets) {
-            values.resize(c.n_coordinates(), 0.0);
+            values.resize(c.n_coordinates() + c.n_passive_coordinates(), 0.0);
             c.measure_coordinates(initial, &mut values);
-            for (k, v) in values.iter().enumerate() {
+            for (k, v) in values[..c.n_coordinates()].iter().enumerate() {
                 coords[off + k].q = *v;
             }
         }
@@ -226,6 +239,8 @@ impl System {
             n_rows: nr,
             coordinate_offsets,
             n_coordinates: nc,
+            passive_offsets,
+            n_passive: np,
             coordinate_names,
             loops,
             warnings,
@@ -240,14 +255,58 @@ impl System {
         &s.coords[o..o + self.constraints[k].n_coordinates()]
     }
 
-    /// Sets every joint coordinate to the value implied by the nodes of `s`.
+    /// Sets every joint coordinate (active and passive) to the principal value implied by
+    /// the nodes of `s`.
     pub fn measure_coordinates(&self, s: &mut State) {
         let mut values = Vec::new();
-        for (c, off) in self.constraints.iter().zip(&self.coordinate_offsets) {
-            values.resize(c.n_coordinates(), 0.0);
+        for (k, c) in self.constraints.iter().enumerate() {
+            let (na, np) = (c.n_coordinates(), c.n_passive_coordinates());
+            values.resize(na + np, 0.0);
             c.measure_coordinates(&s.nodes, &mut values);
-            for (k, v) in values.iter().enumerate() {
-                s.coords[off + k].q = *v;
+            let (o, p) = (
+                self.coordinate_offsets[k],
+                self.n_coordinates + self.passive_offsets[k],
+            );
+            for (j, v) in values[..na].iter().enumerate() {
+                s.coords[o + j].q = *v;
+            }
+            for (j, v) in values[na..].iter().enumerate() {
+                s.coords[p + j].q = *v;
+            }
+        }
+    }
+
+    /// Solves the passive coordinates of `s` from the nodes: the value (continued from the
+    /// current one; needed every step so that turns are counted) and, with `rates`, rate
+    /// and acceleration (for output).
+    pub fn update_passive_coordinates(&self, s: &mut State, rates: bool) {
+        if self.n_passive == 0 {
+            return;
+        }
+        for (k, c) in self.constraints.iter().enumerate() {
+            let np = c.n_passive_coordinates();
+            if np > 0 {
+                let p = self.n_coordinates + self.passive_offsets[k];
+                c.update_passive_coordinates(&s.nodes, &mut s.coords[p..p + np], rates);
+            }
+        }
+    }
+
+    /// Sets every joint coordinate's rate to the value implied by the node velocities.
+    pub fn measure_coordinate_rates(&self, s: &mut State) {
+        let mut values = Vec::new();
+        for (k, (c, off)) in self
+            .constraints
+            .iter()
+            .zip(&self.coordinate_offsets)
+            .enumerate()
+        {
+            let nc = c.n_coordinates();
+            values.clear();
+            values.extend(self.coords_of(k, s).iter().map(|q| q.v));
+            c.measure_coordinate_rates(&s.nodes, &s.coords[*off..off + nc], &mut values);
+            for (j, v) in values.iter().enumerate() {
+                s.coords[off + j].v = *v;
             }
         }
     }

@@ -46,7 +46,8 @@ pub struct Coordinate {
 pub struct State {
     pub time: f64,
     pub nodes: Vec<NodeState>,
-    /// Joint coordinates, constraint by constraint (see `System::coordinate_offsets`).
+    /// Joint coordinates: the active ones constraint by constraint
+    /// (`System::coordinate_offsets`), then the passive ones (`System::passive_offsets`).
     pub coords: Vec<Coordinate>,
     /// Lagrange multipliers in physical units (force, moment), per constraint row.
     pub lambda: Vec<f64>,
@@ -57,7 +58,7 @@ impl State {
     /// joint coordinates measured from the node configuration.
     pub fn initial(model: &Model, sys: &super::System) -> Self {
         let mut s = Self::nodes_only(model);
-        s.coords = vec![Coordinate::default(); sys.n_coordinates];
+        s.coords = vec![Coordinate::default(); sys.n_coordinates + sys.n_passive];
         s.lambda = vec![0.0; sys.n_multipliers];
         sys.measure_coordinates(&mut s);
         s
