@@ -7,6 +7,8 @@
 //! Tolerance 1e-6 relative, as for every element: central differences at ε = 1e-6 are
 //! accurate to ~1e-10 relative, so a larger mismatch is a wrong tangent.
 
+mod common;
+use common::Lcg;
 use nalgebra::{Matrix3, Matrix6, Vector3};
 use samara::elements::beam::element::{BeamElement, DistributedLoad, ElementSpec, Quadrature};
 use samara::elements::beam::reference_line::ReferenceLine;
@@ -17,20 +19,6 @@ use samara::model::TimeFunction;
 use samara::system::NodeState;
 use samara::tangent_check::check_element;
 use std::sync::Arc;
-
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
-    }
-    fn vec3(&mut self, s: f64) -> Vector3<f64> {
-        Vector3::new(self.next(), self.next(), self.next()) * s
-    }
-}
 
 fn full_stiffness(seed: f64) -> Matrix6<f64> {
     let a = Matrix6::from_fn(|i, j| ((i * 5 + j * 11) as f64 * 0.29 + seed).sin());

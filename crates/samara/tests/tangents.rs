@@ -7,6 +7,8 @@
 //! Tolerance 1e-6 relative: central differences at ε = 1e-6 are accurate to ~1e-10 (see
 //! the module doc of `tangent_check`), so anything above 1e-6 is a wrong tangent.
 
+mod common;
+use common::Lcg;
 use nalgebra::{Matrix3, Vector3};
 use samara::elements::{AppliedLoad, Element, EvalContext, RigidBody, SpringDamper};
 use samara::joints::{Constraint, Joint};
@@ -18,20 +20,6 @@ use samara::system::{Coordinate, NodeState};
 use samara::tangent_check::{check_constraint, check_element};
 
 const TOL: f64 = 1e-6;
-
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
-    }
-    fn vec3(&mut self, scale: f64) -> Vector3<f64> {
-        Vector3::new(self.next(), self.next(), self.next()) * scale
-    }
-}
 
 fn random_nodes(rng: &mut Lcg, n: usize) -> Vec<NodeState> {
     (0..n)

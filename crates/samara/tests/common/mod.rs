@@ -84,3 +84,21 @@ pub fn elliptic_k(k: f64) -> f64 {
     }
     std::f64::consts::PI / (2.0 * a)
 }
+
+/// A small seeded generator of uniform numbers in [−1, 1) (64-bit LCG), so that the
+/// randomized tangent tests are reproducible.
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    pub fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
+    }
+
+    pub fn vec3(&mut self, scale: f64) -> nalgebra::Vector3<f64> {
+        nalgebra::Vector3::new(self.next(), self.next(), self.next()) * scale
+    }
+}
