@@ -623,3 +623,48 @@ fn plot_writes_png_and_svg_and_suggests_channel_names() {
     ]);
     assert!(stderr(&o).contains(".png or .svg"), "{}", stderr(&o));
 }
+
+/// A beam left without mass (no `density`, no `mass`) is fine for statics, but a dynamic
+/// analysis of it stops at once: `samara check` warns, at the beam.
+#[test]
+fn a_massless_beam_in_a_dynamic_analysis_is_flagged() {
+    let text = r#"[model]
+name = "massless"
+
+[[beams]]
+name = "b"
+order = 2
+points = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]
+
+[[beams.sections]]
+station = 0.0
+isotropic = { E = 2e11, G = 8e10, A = 1e-4, I2 = 1e-9, I3 = 1e-9, J = 2e-9, shear_factors = [0.83, 0.83] }
+
+[[joints]]
+name = "clamp"
+type = "fixed"
+node_a = "ground"
+node_b = "b.0"
+
+[[analyses]]
+name = "d"
+type = "dynamic"
+t_end = 0.01
+step = 1e-3
+"#;
+    let (o, path, _dir) = check_text("massless.toml", text);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let line = format!("{}:5:8: warning: beam 'b' has no mass", path.display());
+    assert!(err.contains(&line), "{err}");
+    assert!(err.contains("density"));
+    // The same beam in statics is not flagged.
+    let (o, _, _dir) = check_text(
+        "static.toml",
+        &text.replace(
+            "type = \"dynamic\"\nt_end = 0.01\nstep = 1e-3",
+            "type = \"static\"",
+        ),
+    );
+    assert!(!stderr(&o).contains("no mass"), "{}", stderr(&o));
+}

@@ -256,12 +256,7 @@ impl Joint {
     }
 
     /// Writes a spatial 12-row into the material local row `out` (length 6·nodes + nc).
-    fn to_local<'a>(
-        &self,
-        b12: &Row12,
-        rots: &[Matrix3<f64>; 2],
-        mut put: impl FnMut(usize, f64) + 'a,
-    ) {
+    fn to_local(&self, b12: &Row12, rots: &[Matrix3<f64>; 2], mut put: impl FnMut(usize, f64)) {
         for (x, s) in self.sides.iter().enumerate() {
             if s.node.is_none() {
                 continue;

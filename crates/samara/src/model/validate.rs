@@ -752,6 +752,35 @@ impl<'a> Validator<'a> {
                 model.analyses.push(def);
             }
         }
+        // A beam without `density` or `mass` is massless (right for statics); in a dynamic
+        // analysis its nodes then need mass from elsewhere, or the run stops at once.
+        if let Some(dynamic) = model
+            .analyses
+            .iter()
+            .find(|a| matches!(a.kind, AnalysisKind::Dynamic(_)))
+        {
+            for b in &model.beams {
+                if b.table
+                    .sections
+                    .iter()
+                    .all(|s| s.mass.iter().all(|&x| x == 0.0))
+                {
+                    let span = input
+                        .beams
+                        .iter()
+                        .find(|bi| bi.value.name.value == b.name)
+                        .and_then(|bi| bi.value.name.span.clone());
+                    self.warning(
+                        format!(
+                            "beam '{}' has no mass (no `density` in `isotropic`, no `mass` matrix), and analysis '{}' is dynamic",
+                            b.name, dynamic.name
+                        ),
+                        span,
+                        Some("give the sections a density or a mass matrix; a massless beam only works where every node that can move carries a body".into()),
+                    );
+                }
+            }
+        }
         if input.analyses.is_empty() {
             self.warning("the model has no [[analyses]]: nothing will run", None, Some("add e.g. [[analyses]] name = \"run\", type = \"dynamic\", t_end = 1.0, step = 1e-3".into()));
         }
