@@ -2,6 +2,7 @@
 
 use miette::{LabeledSpan, MietteDiagnostic, NamedSource, Report, Severity as MSeverity};
 use samara::analysis::{AnalysisSummary, SolverFailure};
+use samara::model::error::{MAX_SHOWN_DIAGNOSTICS, not_shown};
 use samara::model::{Diagnostic, Severity, SourceFile};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -24,7 +25,8 @@ pub fn install_hook() {
 
 /// Prints model diagnostics: `file:line:col: error: message`, the source line, the hint.
 pub fn diagnostics(source: &SourceFile, diags: &[Diagnostic]) {
-    for d in diags {
+    let code = SharedText(source.text.clone());
+    for d in diags.iter().take(MAX_SHOWN_DIAGNOSTICS) {
         let located = d.span.as_ref().map(|s| {
             let (l, c) = source.line_col(s.start);
             format!("{}:{l}:{c}", source.path.display())
@@ -52,12 +54,32 @@ pub fn diagnostics(source: &SourceFile, diags: &[Diagnostic]) {
             md = md.with_label(LabeledSpan::at(s.start..s.start + len, "here"));
             let report = Report::new(md).with_source_code(NamedSource::new(
                 source.path.display().to_string(),
-                source.text.to_string(),
+                code.clone(),
             ));
             eprintln!("{report:?}");
         } else if let Some(h) = &d.hint {
             eprintln!("  help: {h}\n");
         }
+    }
+    if let Some(more) = not_shown(diags) {
+        eprintln!("{more}");
+    }
+}
+
+/// The model text shared by every diagnostic's report (no copy per diagnostic).
+#[derive(Clone)]
+struct SharedText(std::sync::Arc<str>);
+
+impl miette::SourceCode for SharedText {
+    fn read_span<'a>(
+        &'a self,
+        span: &miette::SourceSpan,
+        context_lines_before: usize,
+        context_lines_after: usize,
+    ) -> Result<Box<dyn miette::SpanContents<'a> + 'a>, miette::MietteError> {
+        self.0
+            .as_ref()
+            .read_span(span, context_lines_before, context_lines_after)
     }
 }
 

@@ -23,6 +23,7 @@
 
 pub mod analysis;
 pub mod elements;
+pub mod input_files;
 pub mod joints;
 pub mod math;
 pub mod model;
@@ -49,6 +50,13 @@ pub enum Error {
         action: &'static str,
         #[source]
         source: std::io::Error,
+    },
+    /// An input file is not a readable text file (not regular, too large).
+    #[error("cannot read '{}': {source}", path.display())]
+    Input {
+        path: PathBuf,
+        #[source]
+        source: input_files::InputFileError,
     },
     /// A results file could not be written.
     #[error("results file '{}': {message}", path.display())]

@@ -523,6 +523,12 @@ pub fn run_dynamic(
         condition_kind: crate::solve::condition::ConditionKind::Exact2Norm,
         step_size: 0.0,
     });
+    if let Some(what) = super::first_non_finite(sys, &it.state, &energy) {
+        summary.failure = Some(super::non_finite_failure(name, t0, what));
+        summary.final_state = it.state.clone();
+        summary.wall_time = clock.elapsed();
+        return Ok(summary);
+    }
     record(&it, energy, viol0, diag0, recorder)?;
     summary.max_constraint_violation = viol0;
 
@@ -534,7 +540,7 @@ pub fn run_dynamic(
     let mut grid_k: u64 = 0;
     let mut on_grid = true;
     let mut hold_next = false;
-    while it.state.time < settings.t_end - 1e-12 * span.max(1.0) {
+    while it.state.time < settings.t_end {
         let t = it.state.time;
         let mut target = if on_grid && h == settings.step {
             t0 + (grid_k + 1) as f64 * settings.step
@@ -554,6 +560,8 @@ pub fn run_dynamic(
             Ok(report) => {
                 hold_next = false;
                 it.accept();
+                // The step was aimed at `target`; t + (target − t) may miss it by an ulp.
+                it.state.time = target;
                 step_index += 1;
                 summary.steps += 1;
                 summary.newton_iterations += report.iterations;
@@ -570,11 +578,18 @@ pub fn run_dynamic(
                 p_dis = p_dis1;
                 let viol = report.constraint_violation;
                 summary.max_constraint_violation = summary.max_constraint_violation.max(viol);
-                let last = it.state.time >= settings.t_end - 1e-12 * span.max(1.0);
-                if step_index.is_multiple_of(settings.output_every) || last {
+                let last = it.state.time >= settings.t_end;
+                let output = step_index.is_multiple_of(settings.output_every) || last;
+                if output {
                     sys.update_passive_coordinates(&mut it.state, true);
                     energy.kinetic = sys.kinetic_energy(&it.state);
                     energy.potential = sys.potential_energy(&ctx, &it.state);
+                }
+                if let Some(what) = super::first_non_finite(sys, &it.state, &energy) {
+                    summary.failure = Some(super::non_finite_failure(name, it.state.time, what));
+                    break;
+                }
+                if output {
                     let diag = if settings.solver.diagnostics {
                         let (c, kind) = if it.lin.is_factored() {
                             condition_number(&it.matrix, &mut it.lin)

@@ -224,6 +224,55 @@ pub(crate) fn assembly_warnings(sys: &System, r: &AssemblyReport, tol: f64) -> V
     out
 }
 
+/// The first quantity of `state` or `energy` that is not finite, named for a message.
+pub(crate) fn first_non_finite(sys: &System, state: &State, energy: &Energy) -> Option<String> {
+    let bad = |v: &[f64]| !v.iter().all(|x| x.is_finite());
+    for (i, n) in state.nodes.iter().enumerate() {
+        let q = n.rot.quaternion();
+        let parts: [(&str, &[f64]); 6] = [
+            ("position", n.x.as_slice()),
+            ("orientation", q.coords.as_slice()),
+            ("velocity", n.v.as_slice()),
+            ("angular velocity", n.w.as_slice()),
+            ("acceleration", n.a.as_slice()),
+            ("angular acceleration", n.wd.as_slice()),
+        ];
+        if let Some((what, _)) = parts.iter().find(|(_, v)| bad(v)) {
+            return Some(format!("the {what} of node '{}'", sys.node_names[i]));
+        }
+    }
+    if let Some(j) = state
+        .coords
+        .iter()
+        .position(|c| !(c.q.is_finite() && c.v.is_finite() && c.a.is_finite()))
+    {
+        let name = sys.coordinate_names.get(j).map_or("?", |s| s.as_str());
+        return Some(format!("joint coordinate '{name}'"));
+    }
+    if bad(&state.lambda) {
+        return Some("a joint reaction (Lagrange multiplier)".into());
+    }
+    let e = [
+        ("kinetic energy", energy.kinetic),
+        ("potential energy", energy.potential),
+        ("external work", energy.external_work),
+        ("dissipated energy", energy.dissipated),
+    ];
+    e.iter()
+        .find(|(_, x)| !x.is_finite())
+        .map(|(what, x)| format!("the {what} ({x})"))
+}
+
+/// The failure of an analysis whose state stopped being finite.
+pub(crate) fn non_finite_failure(analysis: &str, time: f64, what: String) -> SolverFailure {
+    SolverFailure {
+        analysis: analysis.to_string(),
+        time,
+        reason: format!("{what} is not finite"),
+        hint: Some("the numbers overflowed: check units and magnitudes (masses, stiffnesses, loads, initial velocities), or reduce `step`".into()),
+    }
+}
+
 /// A hint for a Newton failure, naming the block where the matrix is singular.
 pub(crate) fn singular_hint(sys: &System, block: usize) -> String {
     let what = sys.block_name(block);

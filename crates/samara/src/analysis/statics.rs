@@ -293,6 +293,10 @@ pub fn run_static(
                     dissipated: 0.0,
                 };
                 state.time = settings.time;
+                if let Some(what) = super::first_non_finite(sys, &state, &energy) {
+                    summary.failure = Some(super::non_finite_failure(name, lf, what));
+                    break;
+                }
                 recorder.record(
                     sys,
                     &OutputFrame {

@@ -93,10 +93,13 @@ impl Joint {
                 .map(CoordinateLoads::from_def)
                 .unwrap_or_default()
         };
-        // A coordinate is active when something acts on it: elements, a drive, or (the
-        // screw) another equation of the joint.
+        // A coordinate is active when something acts on it: elements, a drive (every
+        // component of a prescribed joint is driven, by default to 0), or (the screw)
+        // another equation of the joint.
         let is_active = |c: usize| {
-            def.kind == JointType::Screw || drives[c].is_some() || !loads_of(c).is_empty()
+            matches!(def.kind, JointType::Screw | JointType::Prescribed)
+                || drives[c].is_some()
+                || !loads_of(c).is_empty()
         };
         let mut renumber = vec![0usize; all_components.len()];
         let mut components = Vec::new();

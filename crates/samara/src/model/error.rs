@@ -3,7 +3,7 @@
 use std::fmt;
 use std::ops::Range;
 use std::path::PathBuf;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Severity {
@@ -53,6 +53,9 @@ impl Diagnostic {
 pub struct SourceFile {
     pub path: PathBuf,
     pub text: Arc<str>,
+    /// Byte offset of the start of every line, computed on first use (so that locating
+    /// many diagnostics costs O(log n) each, not a scan of the file).
+    line_starts: Arc<OnceLock<Vec<usize>>>,
 }
 
 impl SourceFile {
@@ -60,19 +63,27 @@ impl SourceFile {
         Self {
             path: path.into(),
             text: text.into(),
+            line_starts: Arc::default(),
         }
     }
 
     /// 1-based line and column (in characters) of a byte offset.
     pub fn line_col(&self, offset: usize) -> (usize, usize) {
-        let offset = offset.min(self.text.len());
-        let before = &self.text[..floor_char_boundary(&self.text, offset)];
-        let line = before.matches('\n').count() + 1;
-        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-        let col = before[line_start..].chars().count() + 1;
+        let starts = self.line_starts.get_or_init(|| {
+            std::iter::once(0)
+                .chain(self.text.match_indices('\n').map(|(i, _)| i + 1))
+                .collect()
+        });
+        let offset = floor_char_boundary(&self.text, offset.min(self.text.len()));
+        let line = starts.partition_point(|&s| s <= offset);
+        let line_start = starts[line - 1];
+        let col = self.text[line_start..offset].chars().count() + 1;
         (line, col)
     }
 }
+
+/// At most this many diagnostics are printed; the rest are counted.
+pub const MAX_SHOWN_DIAGNOSTICS: usize = 50;
 
 fn floor_char_boundary(s: &str, mut i: usize) -> usize {
     while i > 0 && !s.is_char_boundary(i) {
@@ -104,7 +115,7 @@ impl ModelError {
 /// Plain-text rendering of diagnostics (one block per finding).
 pub fn render_diagnostics(source: &SourceFile, diagnostics: &[Diagnostic]) -> String {
     let mut out = String::new();
-    for d in diagnostics {
+    for d in diagnostics.iter().take(MAX_SHOWN_DIAGNOSTICS) {
         let sev = match d.severity {
             Severity::Error => "error",
             Severity::Warning => "warning",
@@ -132,7 +143,34 @@ pub fn render_diagnostics(source: &SourceFile, diagnostics: &[Diagnostic]) -> St
             out.push_str(&format!("  hint: {h}\n"));
         }
     }
+    if let Some(more) = not_shown(diagnostics) {
+        out.push_str(&more);
+        out.push('\n');
+    }
     out
+}
+
+/// `… and N more errors and M more warnings not shown` when the list was cut.
+pub fn not_shown(diagnostics: &[Diagnostic]) -> Option<String> {
+    let rest = diagnostics.get(MAX_SHOWN_DIAGNOSTICS..)?;
+    if rest.is_empty() {
+        return None;
+    }
+    let errors = rest
+        .iter()
+        .filter(|d| d.severity == Severity::Error)
+        .count();
+    let warnings = rest.len() - errors;
+    let plural = |n: usize, w: &str| format!("{n} more {w}{}", if n == 1 { "" } else { "s" });
+    let parts: Vec<String> = [(errors, "error"), (warnings, "warning")]
+        .iter()
+        .filter(|(n, _)| *n > 0)
+        .map(|(n, w)| plural(*n, w))
+        .collect();
+    Some(format!(
+        "… and {} not shown (the first {MAX_SHOWN_DIAGNOSTICS} are listed)",
+        parts.join(" and ")
+    ))
 }
 
 impl fmt::Display for ModelError {

@@ -25,6 +25,26 @@ use crate::math::Rotation;
 use nalgebra::{Matrix3, Vector3};
 use std::path::Path;
 
+/// The largest magnitude a number in a model may have. Products of a few such numbers
+/// (energies, stiffness times strain) stay finite in f64; no SI quantity of a mechanical
+/// model comes near it.
+pub const MAX_MAGNITUDE: f64 = 1e100;
+
+/// The largest number of nodes a model may have (given and created by beams together):
+/// about 1 GB of iteration matrix, well inside what one machine holds.
+pub const MAX_NODES: usize = 1_000_000;
+
+/// Whether a name can become a file name as it is: letters, digits, `_`, `-` and `.`,
+/// not starting with `.` (so never `.`, `..` or a hidden file), at most 128 characters.
+pub fn is_plain_file_name(name: &str) -> bool {
+    !name.is_empty()
+        && name.len() <= 128
+        && !name.starts_with('.')
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+}
+
 /// Either the fixed inertial frame or one of the model's nodes (by index).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NodeRef {
@@ -313,7 +333,7 @@ impl Model {
             Err(e) => {
                 return Err(ModelError {
                     source,
-                    diagnostics: vec![validate::parse_error_diagnostic(&e)],
+                    diagnostics: vec![validate::parse_error_diagnostic(&e, text)],
                 });
             }
         };
@@ -322,12 +342,38 @@ impl Model {
 
     /// Reads, parses and validates a model file.
     pub fn from_file(path: impl AsRef<Path>) -> Result<LoadedModel, crate::Error> {
+        use crate::input_files::{InputFileError, read_text};
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| crate::Error::Io {
-            path: path.to_path_buf(),
-            action: "read the model file",
-            source: e,
-        })?;
+        let text = match read_text(path) {
+            Ok(t) => t,
+            Err(InputFileError::Io(e)) => {
+                return Err(crate::Error::Io {
+                    path: path.to_path_buf(),
+                    action: "read the model file",
+                    source: e,
+                });
+            }
+            Err(InputFileError::NotUtf8 { offset, .. }) => {
+                let bytes = std::fs::read(path).unwrap_or_default();
+                let text = String::from_utf8_lossy(&bytes[..offset.min(bytes.len())]);
+                return Err(crate::Error::Model(ModelError {
+                    source: SourceFile::new(path, format!("{text}\u{FFFD}")),
+                    diagnostics: vec![
+                        Diagnostic::error(
+                            "the file is not UTF-8 text: this byte is invalid",
+                            Some(offset..offset + 1),
+                        )
+                        .with_hint("save the model file as UTF-8 (TOML files are UTF-8)"),
+                    ],
+                }));
+            }
+            Err(source) => {
+                return Err(crate::Error::Input {
+                    path: path.to_path_buf(),
+                    source,
+                });
+            }
+        };
         Ok(Self::from_toml_str(&text, path)?)
     }
 }

@@ -21,7 +21,17 @@ pub fn validate(input: &ModelInput, source: SourceFile) -> Result<LoadedModel, M
     let mut v = Validator {
         source: &source,
         diags: Vec::new(),
+        suggestions_left: MAX_SUGGESTIONS,
     };
+    // Numbers out of range are the root cause of whatever else they would break: report
+    // them alone.
+    let out_of_range = number_range_diagnostics(&source.text);
+    if !out_of_range.is_empty() {
+        return Err(ModelError {
+            source: source.clone(),
+            diagnostics: out_of_range,
+        });
+    }
     let model = v.model(input);
     if v.diags.iter().any(|d| d.severity == Severity::Error) {
         return Err(ModelError {
@@ -36,9 +46,67 @@ pub fn validate(input: &ModelInput, source: SourceFile) -> Result<LoadedModel, M
     })
 }
 
+/// Every number written in the file must be finite and at most [`MAX_MAGNITUDE`] in
+/// magnitude, whatever key it belongs to: one located error per offending number.
+pub(crate) fn number_range_diagnostics(text: &str) -> Vec<Diagnostic> {
+    use toml::de::{DeTable, DeValue};
+    let mut out = Vec::new();
+    let Ok(doc) = DeTable::parse(text) else {
+        return out; // syntax errors are reported by the parser itself
+    };
+    let mut stack: Vec<&toml::Spanned<DeValue>> = doc.get_ref().values().collect();
+    while let Some(v) = stack.pop() {
+        match v.get_ref() {
+            DeValue::Float(f) => {
+                let raw = f.as_str();
+                let x: f64 = raw.replace('_', "").parse().unwrap_or(f64::NAN);
+                if !(x.is_finite() && x.abs() <= MAX_MAGNITUDE) {
+                    out.push(
+                        Diagnostic::error(
+                            format!("the number `{raw}` is outside the range samara computes with (finite, |x| ≤ {MAX_MAGNITUDE:e})"),
+                            Some(v.span()),
+                        )
+                        .with_hint("inf and nan are not allowed in a model; use SI units, where no input comes near this bound"),
+                    );
+                }
+            }
+            DeValue::Array(a) => stack.extend(a.iter()),
+            DeValue::Table(t) => stack.extend(t.values()),
+            _ => {}
+        }
+    }
+    out.sort_by_key(|d| d.span.as_ref().map_or(0, |s| s.start));
+    out
+}
+
+/// Where a parse error without a location most likely is: the most deeply nested line
+/// (dotted keys and headers, brackets), for the parser's recursion limit.
+fn deepest_line(text: &str) -> Option<std::ops::Range<usize>> {
+    let mut best: Option<(usize, std::ops::Range<usize>)> = None;
+    let mut start = 0;
+    for line in text.split_inclusive('\n') {
+        let depth = line
+            .bytes()
+            .filter(|b| matches!(b, b'.' | b'[' | b'{'))
+            .count();
+        if best.as_ref().is_none_or(|(d, _)| depth > *d) {
+            best = Some((depth, start..start + line.trim_end().len().max(1)));
+        }
+        start += line.len();
+    }
+    best.map(|(_, r)| r)
+}
+
 /// Turns a TOML/serde error into a diagnostic with a hint where one can be guessed.
-pub(crate) fn parse_error_diagnostic(e: &toml::de::Error) -> Diagnostic {
+pub(crate) fn parse_error_diagnostic(e: &toml::de::Error, text: &str) -> Diagnostic {
     let msg = e.message().trim().to_string();
+    if e.span().is_none() && msg.contains("recursion") {
+        return Diagnostic::error(
+            format!("{msg}: the file nests tables or arrays too deeply"),
+            deepest_line(text),
+        )
+        .with_hint("a model needs only a few levels of nesting; check this line's dotted keys and brackets");
+    }
     let mut d = Diagnostic::error(msg.clone(), e.span());
     if let Some(rest) = msg.strip_prefix("unknown field `") {
         if let Some((field, expected)) = rest.split_once('`') {
@@ -85,7 +153,13 @@ fn backticked(s: &str) -> Vec<String> {
 struct Validator<'a> {
     source: &'a SourceFile,
     diags: Vec<Diagnostic>,
+    /// Unknown-name errors that still get a "did you mean" (each costs a pass over the
+    /// names; a file with thousands of bad references must not take quadratic time).
+    suggestions_left: usize,
 }
+
+/// How many unknown references get a spelling suggestion.
+const MAX_SUGGESTIONS: usize = 100;
 
 /// Where an entry's keys live in the file.
 #[derive(Clone)]
@@ -121,9 +195,12 @@ impl<'a> Validator<'a> {
     fn key(&self, entry: &Entry, key: &str) -> Option<Range<usize>> {
         let mut span = entry.span.clone()?;
         // An array-of-tables entry may be spanned by its header only: extend the search to
-        // the next table header.
+        // the next table header. (Inline tables are spanned whole; extending them would
+        // scan the rest of the file for every key.)
         let full = &self.source.text;
-        if let Some(rest) = full.get(span.end..) {
+        if full.get(span.clone()).is_some_and(|t| t.starts_with('['))
+            && let Some(rest) = full.get(span.end..)
+        {
             let next = rest.find("\n[").map_or(full.len(), |i| span.end + i);
             span.end = span.end.max(next);
         }
@@ -155,12 +232,29 @@ impl<'a> Validator<'a> {
         Some(span)
     }
 
+    /// Span of `key = value` in the top-level table `[table]`, if the file has one.
+    fn header_key(&self, table: &str, key: &str) -> Option<Range<usize>> {
+        let text = &self.source.text;
+        let header = format!("[{table}]");
+        let start = text
+            .match_indices(&header)
+            .map(|(i, _)| i)
+            .find(|&i| i == 0 || text.as_bytes()[i - 1] == b'\n')?;
+        let entry = Entry {
+            span: Some(start..start + header.len()),
+        };
+        self.key(&entry, key)
+    }
+
     fn finite(&mut self, entry: &Entry, key: &str, values: &[f64], what: &str) -> bool {
-        if values.iter().all(|x| x.is_finite()) {
+        if values
+            .iter()
+            .all(|x| x.is_finite() && x.abs() <= MAX_MAGNITUDE)
+        {
             true
         } else {
             self.error(
-                format!("{what}: `{key}` must be finite (got {values:?})"),
+                format!("{what}: `{key}` must be finite and at most {MAX_MAGNITUDE:e} in magnitude (got {values:?})"),
                 self.key(entry, key),
                 Some("inf and nan are not allowed in a model".into()),
             );
@@ -207,6 +301,19 @@ impl<'a> Validator<'a> {
         }
     }
 
+    /// A "did you mean" for the first [`MAX_SUGGESTIONS`] unknown names; `None` after.
+    fn suggest<'n>(
+        &mut self,
+        word: &str,
+        candidates: impl IntoIterator<Item = &'n str>,
+    ) -> Option<&'n str> {
+        if self.suggestions_left == 0 {
+            return None;
+        }
+        self.suggestions_left -= 1;
+        did_you_mean(word, candidates)
+    }
+
     fn node_ref(
         &mut self,
         r: &Located<String>,
@@ -219,15 +326,21 @@ impl<'a> Validator<'a> {
         if let Some(&i) = nodes.get(&r.value) {
             return Some(NodeRef::Node(i));
         }
-        let candidates: Vec<&str> = nodes.keys().map(|s| s.as_str()).chain([GROUND]).collect();
-        let hint = match did_you_mean(&r.value, candidates.iter().copied()) {
-            Some(best) => format!("did you mean '{best}'?"),
-            None => {
-                let mut names: Vec<&str> = nodes.keys().map(|s| s.as_str()).collect();
-                names.sort();
-                names.truncate(8);
-                format!("known nodes: {} (and 'ground')", names.join(", "))
+        let hint = if self.suggestions_left > 0 {
+            self.suggestions_left -= 1;
+            let candidates = nodes.keys().map(|s| s.as_str()).chain([GROUND]);
+            match did_you_mean(&r.value, candidates) {
+                Some(best) => format!("did you mean '{best}'?"),
+                None => {
+                    let mut names: Vec<&str> = nodes.keys().map(|s| s.as_str()).collect();
+                    names.sort_unstable();
+                    names.truncate(8);
+                    format!("known nodes: {} (and 'ground')", names.join(", "))
+                }
             }
+        } else {
+            "the node must be listed in [[nodes]] or created by a beam; 'ground' is the fixed frame"
+                .to_string()
         };
         self.error(
             format!("{what}: unknown node '{}'", r.value),
@@ -495,7 +608,12 @@ impl<'a> Validator<'a> {
     fn model(&mut self, input: &ModelInput) -> Model {
         let gravity = Vector3::from(input.model.gravity.unwrap_or([0.0; 3]));
         if !gravity.iter().all(|x| x.is_finite()) {
-            self.error("`gravity` must be finite", None, None);
+            let span = self.header_key("model", "gravity");
+            self.error(
+                format!("`gravity` must be finite (got {:?})", gravity.as_slice()),
+                span,
+                Some("give the gravitational acceleration in m/s², e.g. [0.0, 0.0, -9.81]".into()),
+            );
         }
         let mut model = Model {
             name: input.model.name.clone(),
@@ -1218,7 +1336,7 @@ impl<'a> Validator<'a> {
             Some(name) => match signals.get(&name.value) {
                 Some(f) => Some((name.value.clone(), f.clone())),
                 None => {
-                    let hint = match did_you_mean(&name.value, signals.keys().map(|s| s.as_str())) {
+                    let hint = match self.suggest(&name.value, signals.keys().map(|s| s.as_str())) {
                         Some(b) => format!("did you mean '{b}'?"),
                         None => "declare it in a [[signals]] table: name and function".into(),
                     };
@@ -1262,7 +1380,8 @@ impl<'a> Validator<'a> {
         }
         let eig = SymmetricEigen::new(0.5 * (j + j.transpose())).eigenvalues;
         let min = eig.min();
-        if min <= 0.0 {
+        // Also rejects a NaN from an overflowing eigen-solve.
+        if min.is_nan() || min <= 0.0 {
             self.error(
                 format!("{what}: inertia is not positive definite (principal moments {:.4e}, {:.4e}, {:.4e})", eig[0], eig[1], eig[2]),
                 span,
@@ -1290,8 +1409,16 @@ impl<'a> Validator<'a> {
             span: a.span.clone(),
         };
         let ai = &a.value;
-        let what = format!("analysis '{}'", ai.name.value);
+        let what = format!("analysis '{}'", ai.name.value.escape_debug());
         let kind = ai.kind.value;
+        if !ai.name.value.trim().is_empty() && !is_plain_file_name(&ai.name.value) {
+            self.error(
+                format!("{what}: the name becomes the results file name `<name>.nc` and must be plain"),
+                ai.name.span.clone(),
+                Some("use letters, digits, `_`, `-` and `.` only (no `/`, spaces or control characters, not starting with `.`), at most 128 characters".into()),
+            );
+            return None;
+        }
         let dynamic_keys: [(&str, bool); 8] = [
             ("formulation", ai.formulation.is_some()),
             ("t_start", ai.t_start.is_some()),
@@ -1326,7 +1453,7 @@ impl<'a> Validator<'a> {
             Some(s) => match earlier.iter().position(|x| x.value.name.value == s.value) {
                 Some(i) => Some(i),
                 None => {
-                    let hint = match did_you_mean(
+                    let hint = match self.suggest(
                         &s.value,
                         earlier.iter().map(|x| x.value.name.value.as_str()),
                     ) {
@@ -1439,6 +1566,27 @@ impl<'a> Validator<'a> {
                     );
                     ok = false;
                 }
+                // Every step must move time: at least 64 ulps of the largest time, and no
+                // more steps than could ever be taken.
+                let resolution = 64.0 * f64::EPSILON * t_start.abs().max(t_end.abs());
+                if ok && step.is_finite() && step > 0.0 {
+                    let steps = (t_end - t_start) / step;
+                    if step <= resolution {
+                        self.error(
+                            format!("{what}: `step` ({step:e}) is below the resolution of time near t = {t_end:e} ({resolution:.1e}): t_end cannot be reached"),
+                            self.key(&e, "step"),
+                            Some("use a larger step, or shift `t_start`/`t_end` towards 0".into()),
+                        );
+                        ok = false;
+                    } else if steps > 1e12 {
+                        self.error(
+                            format!("{what}: {steps:.3e} steps of {step:e} s from t_start to t_end; at most 10¹² can be taken"),
+                            self.key(&e, "step"),
+                            Some("use a larger step or a shorter time span".into()),
+                        );
+                        ok = false;
+                    }
+                }
                 let rho = ai.rho_inf.unwrap_or(0.9);
                 if !(0.0..=1.0).contains(&rho) {
                     self.error(
@@ -1448,12 +1596,22 @@ impl<'a> Validator<'a> {
                     );
                     ok = false;
                 }
-                let min_step = ai.min_step.unwrap_or(step / 1024.0);
+                let min_step = match ai.min_step {
+                    Some(m) => m,
+                    None => (step / 1024.0).max(2.0 * resolution).min(step),
+                };
                 if !(min_step.is_finite() && min_step > 0.0 && min_step <= step) {
                     self.error(
                         format!("{what}: `min_step` must be in (0, step] (got {min_step})"),
                         self.key(&e, "min_step"),
                         None,
+                    );
+                    ok = false;
+                } else if ai.min_step.is_some() && min_step <= resolution {
+                    self.error(
+                        format!("{what}: `min_step` ({min_step:e}) is below the resolution of time near t = {t_end:e} ({resolution:.1e})"),
+                        self.key(&e, "min_step"),
+                        Some("a step that small would not move time; use a larger `min_step`".into()),
                     );
                     ok = false;
                 }

@@ -103,12 +103,19 @@ impl ResultsReader {
     /// Opens and checks a results file.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, ReadError> {
         let path = path.as_ref().to_path_buf();
-        if let Err(e) = std::fs::metadata(&path) {
-            return Err(ReadError::Open { path, source: e });
+        match std::fs::metadata(&path) {
+            Err(e) => return Err(ReadError::Open { path, source: e }),
+            Ok(m) if !m.is_file() => {
+                return Err(ReadError::NotNetcdf {
+                    path,
+                    detail: "not a regular file".into(),
+                });
+            }
+            Ok(_) => {}
         }
         let mut reader = FileReader::open(&path).map_err(|e| ReadError::NotNetcdf {
             path: path.clone(),
-            detail: format!("{e:?}"),
+            detail: short_detail(&format!("{e:?}")),
         })?;
         let ds = reader.data_set();
         let format_version = match ds.get_global_attr_i32("format_version") {
@@ -388,5 +395,18 @@ impl ResultsReader {
             long_name: info.long_name.clone().unwrap_or_default(),
             values,
         })
+    }
+}
+
+/// The reason a parser gave, cut to one short line: its debug form can hold the whole
+/// damaged header as raw bytes.
+fn short_detail(detail: &str) -> String {
+    const MAX: usize = 120;
+    let line = detail.lines().next().unwrap_or("").trim();
+    if line.chars().count() <= MAX {
+        line.to_string()
+    } else {
+        let cut: String = line.chars().take(MAX).collect();
+        format!("{cut}…")
     }
 }

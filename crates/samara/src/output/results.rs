@@ -106,6 +106,17 @@ impl ResultsFile {
         sys: &System,
         analysis: &AnalysisDef,
     ) -> Result<Self, crate::Error> {
+        // Validation checks this for model files; a model built in code gets it here, so
+        // that no name can place a file outside `dir`.
+        if !crate::model::is_plain_file_name(&analysis.name) {
+            return Err(crate::Error::Output {
+                path: dir.to_path_buf(),
+                message: format!(
+                    "analysis name {:?} is not a plain file name (letters, digits, `_`, `-`, `.`; not starting with `.`)",
+                    analysis.name
+                ),
+            });
+        }
         std::fs::create_dir_all(dir).map_err(|e| crate::Error::Io {
             path: dir.to_path_buf(),
             action: "create the results directory",

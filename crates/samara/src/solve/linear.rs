@@ -39,6 +39,8 @@ pub struct LinearSolver {
     block: BlockLu,
     sparse: SparseLu,
     active: Active,
+    /// The block whose singular pivot sent the current factorization to the sparse LU.
+    fallback_from: Option<usize>,
     pub stats: LinearStats,
 }
 
@@ -53,6 +55,7 @@ impl LinearSolver {
             block: BlockLu::new(symbolic),
             sparse: SparseLu::default(),
             active: Active::None,
+            fallback_from: None,
             stats: LinearStats::default(),
         }
     }
@@ -69,6 +72,7 @@ impl LinearSolver {
     pub fn factor(&mut self, a: &BlockMatrix) -> Result<(), LinearError> {
         self.stats.factorizations += 1;
         self.active = Active::None;
+        self.fallback_from = None;
         let block_err = match self.kind {
             LinearSolverType::SparseLu => None,
             LinearSolverType::Block | LinearSolverType::Auto => match self.block.factor(a) {
@@ -89,12 +93,21 @@ impl LinearSolver {
         }
         if self.sparse.factor(a) {
             self.active = Active::Sparse;
+            self.fallback_from = block_err;
             Ok(())
         } else {
             Err(LinearError::Singular {
                 block: block_err.unwrap_or(0),
             })
         }
+    }
+
+    /// The block whose pivot the block LU found singular, when the current factorization
+    /// is the sparse-LU fallback for it: the suspect when a solve is not finite.
+    pub fn fallback_block(&self) -> Option<usize> {
+        (self.active == Active::Sparse)
+            .then_some(self.fallback_from)
+            .flatten()
     }
 
     /// Solves `A x = b` in place with the current factorization.

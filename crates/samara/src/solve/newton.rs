@@ -131,7 +131,11 @@ pub fn newton(
         }
         lin.solve_in_place(&mut work.delta);
         if !work.delta.iter().all(|x| x.is_finite()) {
-            return Err(NewtonFailure::NotFinite { iteration: it });
+            // A pivot the block LU rejected that the sparse LU let through is the cause.
+            return Err(match lin.fallback_block() {
+                Some(block) => NewtonFailure::Singular { block },
+                None => NewtonFailure::NotFinite { iteration: it },
+            });
         }
         let eps = problem.apply(&work.delta);
         report.last_correction = eps;

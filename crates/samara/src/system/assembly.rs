@@ -557,6 +557,10 @@ impl Assembler {
                 continue;
             };
             let p = &w.place;
+            if p.block.is_none() {
+                // Every row dropped as redundant and no coordinates: nothing to add.
+                continue;
+            }
             let size = m + nc;
             w.k.fill(0.0);
             c.reaction_tangent(ctx, &state.nodes, coords, &w.mu, &mut w.k);

@@ -73,7 +73,20 @@ impl Validator<'_> {
             );
             return None;
         }
-        let n_nodes = ne * p + 1;
+        let n_nodes = match ne.checked_mul(p).and_then(|n| n.checked_add(1)) {
+            Some(n) if n.saturating_add(model.nodes.len()) <= crate::model::MAX_NODES => n,
+            _ => {
+                self.error(
+                    format!(
+                        "{what}: {ne} element(s) of order {p} would make the model larger than {} nodes",
+                        crate::model::MAX_NODES
+                    ),
+                    self.key(&e, "elements"),
+                    Some("a beam needs elements · order + 1 nodes; high orders with few elements converge fastest".into()),
+                );
+                return None;
+            }
+        };
         let (xi, _) = gauss_lobatto_legendre(p);
         // Geometry: node positions, section frames and η.
         let (positions, frames, etas, names): (
@@ -517,7 +530,7 @@ impl Validator<'_> {
             .parent()
             .unwrap_or(std::path::Path::new("."));
         let path = base.join(&file.value);
-        let text = match std::fs::read_to_string(&path) {
+        let text = match crate::input_files::read_text(&path) {
             Ok(t) => t,
             Err(err) => {
                 self.error(
