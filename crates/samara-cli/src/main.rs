@@ -226,7 +226,7 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
     for def in &model.analyses {
         let initial = match def.start_from {
             Some(i) => finals[i].clone(),
-            None => State::initial(model, &sys),
+            None => sys.initial_state(),
         };
         let mut file = match ResultsFile::create(&out_dir, model, Some(path), &sys, def) {
             Ok(f) => f,

@@ -14,7 +14,7 @@
 //! let loaded = Model::from_file("examples/pendulum.toml")?;
 //! let sys = System::new(&loaded.model);
 //! let def = &loaded.model.analyses[0];
-//! let initial = samara::system::State::initial(&loaded.model, &sys);
+//! let initial = samara::system::sys.initial_state();
 //! let mut history = History::default();
 //! let summary = run_analysis(&sys, def, initial, &mut history, &mut |_| {})?;
 //! println!("{} steps, final time {}", summary.steps, history.last().unwrap().time);
@@ -22,6 +22,7 @@
 //! ```
 
 pub mod analysis;
+pub mod core;
 pub mod elements;
 pub mod input_files;
 pub mod joints;

@@ -7,9 +7,9 @@
 //! O(u/ε) relative to the residual's magnitude (u = 2.2e-16); ε = 1e-6 balances them at
 //! about 1e-10, so a relative mismatch above 1e-6 is a wrong tangent, not noise.
 
-use crate::elements::{Element, EvalContext, LocalTerms, Need};
-use crate::joints::{Constraint, CoordinateTangents};
-use crate::system::{Coordinate, NodeState};
+use crate::core::{
+    Constraint, Coordinate, CoordinateTangents, Element, EvalContext, LocalTerms, Need, NodeState,
+};
 use nalgebra::{DMatrix, Vector3};
 
 /// Finite-difference step.

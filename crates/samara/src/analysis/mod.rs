@@ -148,7 +148,7 @@ pub fn run_all<R: Recorder>(
     for def in &model.analyses {
         let initial = match def.start_from {
             Some(i) => out[i].0.final_state.clone(),
-            None => State::initial(model, sys),
+            None => sys.initial_state(),
         };
         let mut rec = make_recorder(def)?;
         let mut p = |f: f64| progress(def, f);

@@ -9,10 +9,23 @@
 //! ```
 
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
+use crate::core::NodeState;
+use crate::math::TimeFunction;
 use crate::math::skew;
-use crate::model::{LoadFrame, TimeFunction};
-use crate::system::NodeState;
 use nalgebra::Vector3;
+use schemars::JsonSchema;
+use serde::Deserialize;
+
+/// Frame in which an applied load's components are given.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum LoadFrame {
+    /// Fixed global components (a dead load).
+    #[default]
+    Global,
+    /// Components in the node frame, rotating with the node (a follower load).
+    Node,
+}
 
 #[derive(Clone, Debug)]
 pub struct AppliedLoad {

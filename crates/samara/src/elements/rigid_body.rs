@@ -13,8 +13,8 @@
 //! `[[m I, −m R s̃], [m s̃ Rᵀ, J_O]]` is symmetric.
 
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
+use crate::core::NodeState;
 use crate::math::skew;
-use crate::system::NodeState;
 use nalgebra::{Matrix3, Vector3};
 
 #[derive(Clone, Debug)]

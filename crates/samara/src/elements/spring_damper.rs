@@ -6,8 +6,8 @@
 //! is `r_X = σ_X Gₓᵀ (T n)`.
 
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
+use crate::core::NodeState;
 use crate::math::skew;
-use crate::system::NodeState;
 use nalgebra::{Matrix3, Vector3};
 
 #[derive(Clone, Debug)]

@@ -9,7 +9,8 @@
 //!   `g = |ν − ν_c| − w/2`, the contact force `sign(ν − ν_c) k g + c ν̇` (Kelvin–Voigt);
 //! - input port `F_in(t)`, from a signal, acting to increase ν.
 
-use crate::model::{BacklashDef, ComponentDef, ForceLaw, TimeFunction};
+use super::spec::{BacklashDef, ComponentDef, ForceLaw};
+use crate::math::TimeFunction;
 
 /// `[F(x), dF/dx]` of a force law.
 pub fn force_law(law: &ForceLaw, x: f64) -> [f64; 2] {

@@ -12,12 +12,15 @@
 
 use super::building_blocks::{FramePair, Mat12, Row12, displacement};
 use super::coordinate_loads::CoordinateLoads;
-use super::rows::{COMPONENT_NAMES, Row, RowRole, measure, rows_of};
+use super::rows::{COMPONENT_NAMES, Row, measure, rows_of};
+use super::spec::{JointDef, JointType};
 use super::{Constraint, CoordinateTangents};
-use crate::elements::EvalContext;
+use crate::core::EvalContext;
+use crate::core::NodeRef;
+use crate::core::RowRole;
+use crate::core::{Coordinate, NodeState};
+use crate::math::TimeFunction;
 use crate::math::skew;
-use crate::model::{JointDef, JointType, NodeRef, TimeFunction};
-use crate::system::{Coordinate, NodeState};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 /// One side of a joint: a frame fixed to a node, or to the ground.

@@ -5,6 +5,9 @@
 //! comments here become the descriptions of the JSON Schema printed by `samara schema`.
 
 use super::located::Located;
+pub use crate::elements::LoadFrame;
+pub use crate::joints::JointType;
+pub use crate::solve::LinearSolverType;
 use schemars::JsonSchema;
 use serde::Deserialize;
 
@@ -115,70 +118,6 @@ pub struct BodyInput {
     /// Centre of gravity relative to the node, node-frame components [m]; default zero.
     #[serde(default)]
     pub cg_offset: Option<[f64; 3]>,
-}
-
-/// Joint types, in the components of Bottasso's Table I (d_i relative displacement along
-/// e_iᴬ, θ_i relative rotation; C constrained, F free, a joint coordinate):
-///
-/// ```text
-/// type            d1 d2 d3   θ1 θ2 θ3
-/// fixed           C  C  C    C  C  C
-/// revolute        C  C  C    C  C  F
-/// prismatic       C  C  F    C  C  C
-/// screw           C  C  pθ3  C  C  F
-/// cylindrical     C  C  F    C  C  F
-/// planar          F  F  C    C  C  F
-/// spherical       C  C  C    F  F  F
-/// universal       C  C  C    F  F  C     (θ1 about e₁ᴬ, θ2 about e₂ᴮ)
-/// point_on_line   C  C  F    F  F  F
-/// point_on_plane  F  F  C    F  F  F
-/// prescribed      F  F  F    F  F  F     (every component driven)
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum JointType {
-    /// All six relative motions constrained (a clamp when one side is the ground).
-    Fixed,
-    /// Rotation θ3 about the joint axis e₃ free; all else constrained.
-    Revolute,
-    /// Translation d3 along the joint axis e₃ free; all else constrained.
-    Prismatic,
-    /// Rotation θ3 about e₃ free with translation d3 = p θ3 (`pitch` p).
-    Screw,
-    /// Translation d3 along and rotation θ3 about e₃ free.
-    Cylindrical,
-    /// Translations d1, d2 in the plane normal to e₃ and rotation θ3 about e₃ free.
-    Planar,
-    /// Relative translation constrained; relative rotation free.
-    Spherical,
-    /// Cardan joint: rotations θ1 about e₁ᴬ (the cross arm on A) and θ2 about e₂ᴮ (the
-    /// arm on B) free; translation and the rotation about e₃ constrained.
-    Universal,
-    /// The joint point of B stays on the line through A's origin along e₃ᴬ.
-    PointOnLine,
-    /// The joint point of B stays in the plane through A's origin normal to e₃ᴬ.
-    PointOnPlane,
-    /// All six relative components follow time functions (`drive` on each; default 0).
-    Prescribed,
-}
-
-impl JointType {
-    /// The name used in model files.
-    pub fn name(self) -> &'static str {
-        match self {
-            JointType::Fixed => "fixed",
-            JointType::Revolute => "revolute",
-            JointType::Prismatic => "prismatic",
-            JointType::Screw => "screw",
-            JointType::Cylindrical => "cylindrical",
-            JointType::Planar => "planar",
-            JointType::Spherical => "spherical",
-            JointType::Universal => "universal",
-            JointType::PointOnLine => "point_on_line",
-            JointType::PointOnPlane => "point_on_plane",
-            JointType::Prescribed => "prescribed",
-        }
-    }
 }
 
 /// What is attached to one free component (joint coordinate) of a joint. Forces act on
@@ -337,17 +276,6 @@ pub struct SpringInput {
     pub rest_length: Option<f64>,
 }
 
-/// Frame in which an applied load's components are given.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum LoadFrame {
-    /// Fixed global components (a dead load).
-    #[default]
-    Global,
-    /// Components in the node frame, rotating with the node (a follower load).
-    Node,
-}
-
 /// An applied force and/or moment on a node, scaled by a time function.
 #[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -463,20 +391,6 @@ pub enum JacobianUpdate {
     /// Modified Newton: keep the factorization across iterations and steps while Newton
     /// contracts fast; refactor when it slows down, fails, or the step size changes.
     Modified,
-}
-
-/// Linear solver for the iteration matrix.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum LinearSolverType {
-    /// Block LU without inter-block pivoting (fast; needs the augmented-Lagrangian term);
-    /// falls back to the general sparse LU when a pivot block is singular.
-    #[default]
-    Auto,
-    /// Block LU only.
-    Block,
-    /// General sparse LU with partial pivoting (faer).
-    SparseLu,
 }
 
 /// How constraints enter the dynamic equations.

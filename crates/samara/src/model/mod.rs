@@ -4,21 +4,22 @@
 //! diagnostics with file, line and column. Everything downstream (system, analyses) reads
 //! only the validated [`Model`].
 
-pub mod beam;
 pub mod beam_input;
 pub mod error;
 pub mod input;
 pub mod located;
-pub mod time_function;
 mod validate;
 
+pub use crate::core::NodeRef;
+pub use crate::elements::beam::BeamDef;
 pub use crate::joints::COMPONENT_NAMES;
+pub use crate::joints::{BacklashDef, ComponentDef, ForceLaw, JointDef};
+pub use crate::math::TimeFunction;
 pub use error::{Diagnostic, ModelError, Severity, SourceFile};
 pub use input::{
     FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame, ModelInput,
 };
 pub use located::Located;
-pub use time_function::TimeFunction;
 pub use validate::validate;
 
 use crate::math::Rotation;
@@ -45,22 +46,6 @@ pub fn is_plain_file_name(name: &str) -> bool {
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
 }
 
-/// Either the fixed inertial frame or one of the model's nodes (by index).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum NodeRef {
-    Ground,
-    Node(usize),
-}
-
-impl NodeRef {
-    pub fn index(self) -> Option<usize> {
-        match self {
-            NodeRef::Ground => None,
-            NodeRef::Node(i) => Some(i),
-        }
-    }
-}
-
 /// A 6-DOF node and its initial state.
 #[derive(Clone, Debug)]
 pub struct NodeDef {
@@ -83,81 +68,6 @@ pub struct BodyDef {
     pub inertia: Matrix3<f64>,
     /// CG relative to the node, node-frame components.
     pub cg_offset: Vector3<f64>,
-}
-
-/// A force as a function of one scalar (a coordinate or its rate).
-#[derive(Clone, Debug, PartialEq)]
-pub enum ForceLaw {
-    /// `coefficient (x − reference)`.
-    Linear { coefficient: f64, reference: f64 },
-    /// Piecewise linear through (x[i], f[i]) (x strictly increasing), extended linearly.
-    Table { x: Vec<f64>, f: Vec<f64> },
-}
-
-/// Free play `|ν − center| ≤ half_width` with a Kelvin–Voigt contact outside it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct BacklashDef {
-    pub center: f64,
-    pub half_width: f64,
-    pub stiffness: f64,
-    pub damping: f64,
-}
-
-/// What is attached to one free component of a joint.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct ComponentDef {
-    /// Spring force as a function of the coordinate.
-    pub spring: Option<ForceLaw>,
-    /// Damper force as a function of the coordinate rate.
-    pub damper: Option<ForceLaw>,
-    pub backlash: Option<BacklashDef>,
-    /// The coordinate follows this function of time.
-    pub drive: Option<TimeFunction>,
-    /// Input port: signal name and its function.
-    pub input: Option<(String, TimeFunction)>,
-}
-
-/// A joint. Frames are given in the initial configuration, global components: frame A
-/// has origin `position_a`, frame B origin `position_b` (equal unless offsets were given),
-/// both the axes `axes`.
-#[derive(Clone, Debug)]
-pub struct JointDef {
-    pub name: String,
-    pub kind: JointType,
-    pub node_a: NodeRef,
-    pub node_b: NodeRef,
-    pub position_a: Vector3<f64>,
-    pub position_b: Vector3<f64>,
-    /// Columns are the joint axes e₁, e₂, e₃ in global components.
-    pub axes: Matrix3<f64>,
-    /// Screw pitch [m/rad].
-    pub pitch: f64,
-    /// Attachments per component d1, d2, d3, θ1, θ2, θ3 (free components only).
-    pub components: [Option<ComponentDef>; 6],
-}
-
-impl JointDef {
-    /// A joint with coincident frames and nothing attached.
-    pub fn new(
-        name: impl Into<String>,
-        kind: JointType,
-        node_a: NodeRef,
-        node_b: NodeRef,
-        position: Vector3<f64>,
-        axes: Matrix3<f64>,
-    ) -> Self {
-        Self {
-            name: name.into(),
-            kind,
-            node_a,
-            node_b,
-            position_a: position,
-            position_b: position,
-            axes,
-            pitch: 0.0,
-            components: Default::default(),
-        }
-    }
 }
 
 /// A named input signal.
@@ -307,7 +217,7 @@ pub struct Model {
     pub springs: Vec<SpringDef>,
     pub signals: Vec<SignalDef>,
     pub loads: Vec<LoadDef>,
-    pub beams: Vec<beam::BeamDef>,
+    pub beams: Vec<BeamDef>,
     pub analyses: Vec<AnalysisDef>,
 }
 

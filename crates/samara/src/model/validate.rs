@@ -4,7 +4,6 @@
 use super::error::{Diagnostic, ModelError, Severity, SourceFile, did_you_mean};
 use super::input::*;
 use super::located::Located;
-use super::time_function::TimeFunction;
 use super::*;
 use crate::math::Rotation;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};

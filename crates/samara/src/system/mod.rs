@@ -9,11 +9,10 @@
 
 mod assembly;
 pub mod redundancy;
-mod state;
 
+pub use crate::core::{Coordinate, NodeState, State};
 pub use assembly::{Assembler, Coefficients, Formulation};
 pub use redundancy::ConstraintLoop;
-pub use state::{Coordinate, NodeState, State};
 
 use crate::elements::{AppliedLoad, Element, EvalContext, RigidBody, SpringDamper};
 use crate::joints::{Constraint, Joint};
@@ -53,14 +52,16 @@ pub struct System {
     pub warnings: Vec<String>,
     /// Mean translational mass per massive node [kg] (1 if the model has no mass).
     pub characteristic_mass: f64,
+    /// Node states of the model's initial conditions (for [`System::initial_state`]).
+    pub initial_nodes: Vec<NodeState>,
 }
 
 impl System {
     /// Builds the system of a validated model; elements are attached in the model's
     /// initial configuration.
     pub fn new(model: &Model) -> Self {
-        let initial = State::nodes_only(model);
-        let nodes = &initial.nodes;
+        let initial = initial_nodes(model);
+        let nodes = &initial;
         let mut elements: Vec<Box<dyn Element>> = Vec::new();
         let mut bodies = Vec::new();
         for b in &model.bodies {
@@ -121,7 +122,21 @@ impl System {
             sys.characteristic_mass = characteristic_mass(model, &beams);
             sys.beams = beams;
         }
+        sys.initial_nodes = initial;
         sys
+    }
+
+    /// The initial conditions written in the model, at rest in acceleration, with the
+    /// joint coordinates measured from the node configuration.
+    pub fn initial_state(&self) -> State {
+        let mut s = State {
+            time: 0.0,
+            nodes: self.initial_nodes.clone(),
+            coords: vec![Coordinate::default(); self.n_coordinates + self.n_passive],
+            lambda: vec![0.0; self.n_multipliers],
+        };
+        self.measure_coordinates(&mut s);
+        s
     }
 
     /// Assembles a system from elements and constraints built in code; `initial` is the
@@ -245,6 +260,7 @@ impl System {
             loops,
             warnings,
             characteristic_mass,
+            initial_nodes: initial.to_vec(),
         }
     }
 
@@ -507,6 +523,22 @@ impl System {
             format!("block {block}")
         }
     }
+}
+
+/// The nodes' initial conditions (accelerations zero).
+fn initial_nodes(model: &Model) -> Vec<NodeState> {
+    model
+        .nodes
+        .iter()
+        .map(|n| NodeState {
+            x: n.position,
+            rot: n.orientation,
+            v: n.velocity,
+            w: n.orientation.matrix().transpose() * n.angular_velocity,
+            a: Vector3::zeros(),
+            wd: Vector3::zeros(),
+        })
+        .collect()
 }
 
 /// Mean translational mass of the massive nodes, with the beams' mass lumped to their nodes.

@@ -19,10 +19,10 @@ use super::kernel::{
 };
 use super::quaternion::{Quat, conj, dg_w, dgt_f, from_rotation, g_mat, mul, rotation};
 use super::section::{SectionTable, damping_matrix};
+use crate::core::NodeState;
 use crate::elements::{Element, EvalContext, LocalTerms, Need};
 use crate::math::Rotation;
-use crate::model::TimeFunction;
-use crate::system::NodeState;
+use crate::math::TimeFunction;
 use nalgebra::{DMatrix, Matrix3, Matrix4x3, Matrix6, Vector3, Vector6};
 use std::cell::RefCell;
 use std::sync::Arc;

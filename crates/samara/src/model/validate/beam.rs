@@ -11,9 +11,9 @@
     clippy::nonminimal_bool
 )]
 
-use super::super::beam::BeamDef;
 use super::super::beam_input::*;
 use super::{Entry, Validator};
+use crate::elements::beam::BeamDef;
 use crate::elements::beam::element::{DistributedLoad, MAX_ORDER, Quadrature};
 use crate::elements::beam::gll::{gauss_legendre, gauss_lobatto_legendre, lagrange};
 use crate::elements::beam::reference_line::ReferenceLine;
