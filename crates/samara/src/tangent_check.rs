@@ -6,11 +6,34 @@
 //! Central differences with step ε have truncation error O(ε²) and round-off error
 //! O(u/ε) relative to the residual's magnitude (u = 2.2e-16); ε = 1e-6 balances them at
 //! about 1e-10, so a relative mismatch above 1e-6 is a wrong tangent, not noise.
+//!
+//! **Scaling per entry, not by the whole matrix.** A mismatch is measured against the size
+//! that matters for its own entry, not against the largest entry of the matrix: with
+//! realistic sections (EA ~ 1e9 beside GJ ~ 1e3) an error in the torsion terms would
+//! otherwise hide under the axial ones. Scaling each 3×3 (node, translation or rotation)
+//! block by its own size is not enough either: in a shear-deformable beam a rotation
+//! block holds the shear stiffness (rotating a section shears it, ~GA) beside the torsion
+//! term, so a 1 % torsion error reads 4.5e-7 of its block (tests/beam_tangents.rs). The
+//! scale of entry (i, j) is the largest of
+//! - its own size, |Aᵢⱼ| or |Dᵢⱼ| (analytic, finite difference);
+//! - for square matrices, √|Aᵢᵢ Aⱼⱼ| — the symmetric (Jacobi) diagonal scaling, the
+//!   entry's size in the energy norm of the two unknowns it couples;
+//! - `RESOLUTION` times what the finite difference can resolve there: the larger of its
+//!   round-off, u |r| / ε with |r| the largest residual (or Φ, Bᵀμ) of the entry's row
+//!   group — a row's residual can be far larger than the entry (the moment rows of a beam
+//!   carry x′ × F with F ~ EA ε) — and its truncation, estimated by the largest
+//!   |D(ε) − D(2ε)| in the entry's 3×3 block; so an entry the finite difference cannot
+//!   resolve better than its own error reads ~1/`RESOLUTION` = 1e-7;
+//! - 1e-14 of the largest entry of the matrix (entries that are round-off).
+//!
+//! Row and column groups are 3 per node (translation, rotation) and 1 per scalar
+//! (constraint equation, joint coordinate).
 
 use crate::core::{
     Constraint, Coordinate, CoordinateTangents, Element, EvalContext, LocalTerms, Need, NodeState,
 };
 use nalgebra::{DMatrix, Vector3};
+use std::ops::Range;
 
 /// Finite-difference step.
 pub const EPS: f64 = 1e-6;
@@ -37,35 +60,102 @@ fn perturb(nodes: &mut [NodeState], node: usize, dof: usize, h: f64, slot: Slot)
     }
 }
 
-/// Largest entry-wise mismatch between two matrices, relative to the larger of 1 and the
-/// largest analytic entry.
+/// Factor on the finite difference's error estimate in an entry's scale (module doc).
+pub const RESOLUTION: f64 = 1e7;
+
+/// Largest entry-wise mismatch between an analytic matrix and its finite difference,
+/// relative to the entry's scale (module doc); a non-finite mismatch is reported as
+/// infinite.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Mismatch {
     pub relative: f64,
     pub row: usize,
     pub col: usize,
+    /// The scale of the worst entry.
+    pub scale: f64,
 }
 
-fn compare(analytic: &DMatrix<f64>, fd: &DMatrix<f64>) -> Mismatch {
-    let scale = analytic.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+/// Row or column groups: 3 per node (translation, rotation), then one per scalar unknown
+/// or equation.
+fn groups(n_nodes: usize, n_scalars: usize) -> Vec<Range<usize>> {
+    let mut g: Vec<Range<usize>> = (0..2 * n_nodes).map(|k| 3 * k..3 * k + 3).collect();
+    let start = 6 * n_nodes;
+    g.extend((0..n_scalars).map(|k| start + k..start + k + 1));
+    g
+}
+
+/// Compares `analytic` with the finite differences at steps ε (`fd[0]`) and 2ε (`fd[1]`);
+/// `magnitude[i]` is |rᵢ|, the size of the function differenced in row i.
+fn compare(
+    analytic: &DMatrix<f64>,
+    fd: &[DMatrix<f64>; 2],
+    magnitude: &[f64],
+    rows: &[Range<usize>],
+    cols: &[Range<usize>],
+) -> Mismatch {
+    let [fd, fd2] = fd;
+    let global = analytic.amax().max(fd.amax());
+    let square = rows == cols;
     let mut worst = Mismatch {
         relative: 0.0,
         row: 0,
         col: 0,
+        scale: 0.0,
     };
-    for j in 0..analytic.ncols() {
-        for i in 0..analytic.nrows() {
-            let r = (analytic[(i, j)] - fd[(i, j)]).abs() / scale;
-            if r > worst.relative || r.is_nan() {
-                worst = Mismatch {
-                    relative: r,
-                    row: i,
-                    col: j,
-                };
+    for rb in rows {
+        let round_off = rb.clone().fold(0.0f64, |m, i| {
+            m.max(magnitude.get(i).map_or(0.0, |x| x.abs()))
+        }) * f64::EPSILON
+            / EPS;
+        for cb in cols {
+            let mut truncation = 0.0f64;
+            for j in cb.clone() {
+                for i in rb.clone() {
+                    truncation = truncation.max((fd[(i, j)] - fd2[(i, j)]).abs());
+                }
+            }
+            let floor = (RESOLUTION * round_off.max(truncation)).max(1e-14 * global);
+            for j in cb.clone() {
+                for i in rb.clone() {
+                    let diagonal = if square {
+                        (analytic[(i, i)] * analytic[(j, j)]).abs().sqrt()
+                    } else {
+                        0.0
+                    };
+                    let scale = analytic[(i, j)]
+                        .abs()
+                        .max(fd[(i, j)].abs())
+                        .max(diagonal)
+                        .max(floor);
+                    let d = (analytic[(i, j)] - fd[(i, j)]).abs();
+                    let r = if d == 0.0 {
+                        0.0
+                    } else if (d / scale).is_finite() {
+                        d / scale
+                    } else {
+                        f64::INFINITY
+                    };
+                    if r > worst.relative {
+                        worst = Mismatch {
+                            relative: r,
+                            row: i,
+                            col: j,
+                            scale,
+                        };
+                    }
+                }
             }
         }
     }
     worst
+}
+
+/// The largest of some mismatches; NaN counts as infinite (`f64::max` would drop it).
+fn largest(values: &[f64]) -> f64 {
+    values.iter().fold(
+        0.0,
+        |a, &x| if x.is_nan() { f64::INFINITY } else { a.max(x) },
+    )
 }
 
 /// Mismatches of an element's K, C and M.
@@ -78,7 +168,7 @@ pub struct ElementReport {
 
 impl ElementReport {
     pub fn worst(&self) -> f64 {
-        self.k.relative.max(self.c.relative).max(self.m.relative)
+        largest(&[self.k.relative, self.c.relative, self.m.relative])
     }
 }
 
@@ -90,33 +180,35 @@ pub fn check_element(e: &dyn Element, ctx: &EvalContext, nodes: &[NodeState]) ->
     t.clear(Need::ResidualAndTangents);
     e.evaluate(ctx, nodes, Need::ResidualAndTangents, &mut t);
     let mut work = nodes.to_vec();
-    let mut fd = |slot: Slot| -> DMatrix<f64> {
-        let mut out = DMatrix::zeros(n, n);
+    // Central differences at steps ε and 2ε.
+    let mut fd = |slot: Slot| -> [DMatrix<f64>; 2] {
+        let mut out = [DMatrix::zeros(n, n), DMatrix::zeros(n, n)];
         let mut tp = LocalTerms::new(en.len());
         for (b, &node) in en.iter().enumerate() {
             for dof in 0..6 {
-                let mut r = [None, None];
-                for (k, s) in [1.0, -1.0].iter().enumerate() {
-                    work.clone_from_slice(nodes);
-                    perturb(&mut work, node, dof, s * EPS, slot);
-                    tp.clear(Need::Residual);
-                    e.evaluate(ctx, &work, Need::Residual, &mut tp);
-                    r[k] = Some(tp.r.clone());
+                for (o, step) in out.iter_mut().zip([EPS, 2.0 * EPS]) {
+                    let mut r = [None, None];
+                    for (k, s) in [1.0, -1.0].iter().enumerate() {
+                        work.clone_from_slice(nodes);
+                        perturb(&mut work, node, dof, s * step, slot);
+                        tp.clear(Need::Residual);
+                        e.evaluate(ctx, &work, Need::Residual, &mut tp);
+                        r[k] = Some(tp.r.clone());
+                    }
+                    let col = (r[0].take().unwrap_or_default() - r[1].take().unwrap_or_default())
+                        / (2.0 * step);
+                    o.set_column(6 * b + dof, &col);
                 }
-                let col = (r[0].take().unwrap_or_default() - r[1].take().unwrap_or_default())
-                    / (2.0 * EPS);
-                out.set_column(6 * b + dof, &col);
             }
         }
         out
     };
-    let k = fd(Slot::Configuration);
-    let c = fd(Slot::Velocity);
-    let m = fd(Slot::Acceleration);
+    let g = groups(en.len(), 0);
+    let r = t.r.as_slice();
     ElementReport {
-        k: compare(&t.k, &k),
-        c: compare(&t.c, &c),
-        m: compare(&t.m, &m),
+        k: compare(&t.k, &fd(Slot::Configuration), r, &g, &g),
+        c: compare(&t.c, &fd(Slot::Velocity), r, &g, &g),
+        m: compare(&t.m, &fd(Slot::Acceleration), r, &g, &g),
     }
 }
 
@@ -136,13 +228,14 @@ pub struct ConstraintReport {
 
 impl ConstraintReport {
     pub fn worst(&self) -> f64 {
-        self.b
-            .relative
-            .max(self.k.relative)
-            .max(self.convective)
-            .max(self.velocity)
-            .max(self.coordinate_stiffness.relative)
-            .max(self.coordinate_damping.relative)
+        largest(&[
+            self.b.relative,
+            self.k.relative,
+            self.convective,
+            self.velocity,
+            self.coordinate_stiffness.relative,
+            self.coordinate_damping.relative,
+        ])
     }
 }
 
@@ -169,34 +262,37 @@ pub fn check_constraint(
 
     let mut work = nodes.to_vec();
     let mut wc = coords.to_vec();
-    let mut b_fd = DMatrix::zeros(m, n);
-    let mut k_fd = DMatrix::zeros(n, n);
+    // Central differences at steps ε ([0]) and 2ε ([1]).
+    let mut b_fd = [DMatrix::zeros(m, n), DMatrix::zeros(m, n)];
+    let mut k_fd = [DMatrix::zeros(n, n), DMatrix::zeros(n, n)];
     let mut bp = DMatrix::zeros(m, n);
     let mut pp = vec![0.0; m];
     let mu_v = nalgebra::DVector::from_column_slice(mu);
     for col in 0..n {
-        let mut vals = Vec::new();
-        let mut forces = Vec::new();
-        for s in [1.0, -1.0] {
-            work.clone_from_slice(nodes);
-            wc.clone_from_slice(coords);
-            if col < nq {
-                perturb(
-                    &mut work,
-                    cn[col / 6],
-                    col % 6,
-                    s * EPS,
-                    Slot::Configuration,
-                );
-            } else {
-                wc[col - nq].q += s * EPS;
+        for (level, step) in [EPS, 2.0 * EPS].into_iter().enumerate() {
+            let mut vals = Vec::new();
+            let mut forces = Vec::new();
+            for s in [1.0, -1.0] {
+                work.clone_from_slice(nodes);
+                wc.clone_from_slice(coords);
+                if col < nq {
+                    perturb(
+                        &mut work,
+                        cn[col / 6],
+                        col % 6,
+                        s * step,
+                        Slot::Configuration,
+                    );
+                } else {
+                    wc[col - nq].q += s * step;
+                }
+                c.evaluate(ctx, &work, &wc, &mut pp, Some(&mut bp));
+                vals.push(nalgebra::DVector::from_column_slice(&pp));
+                forces.push(bp.transpose() * &mu_v);
             }
-            c.evaluate(ctx, &work, &wc, &mut pp, Some(&mut bp));
-            vals.push(nalgebra::DVector::from_column_slice(&pp));
-            forces.push(bp.transpose() * &mu_v);
+            b_fd[level].set_column(col, &((&vals[0] - &vals[1]) / (2.0 * step)));
+            k_fd[level].set_column(col, &((&forces[0] - &forces[1]) / (2.0 * step)));
         }
-        b_fd.set_column(col, &((&vals[0] - &vals[1]) / (2.0 * EPS)));
-        k_fd.set_column(col, &((&forces[0] - &forces[1]) / (2.0 * EPS)));
     }
 
     // Differences of Φ along x(s) = x + s v, R(s) = R exp(s Ω̃), ν(s) = ν + s ν̇, t + s
@@ -261,34 +357,45 @@ pub fn check_constraint(
             damping: &mut cd,
         }),
     );
-    let mut kfd = DMatrix::zeros(nc.max(1), nc.max(1));
-    let mut cfd = DMatrix::zeros(nc.max(1), nc.max(1));
-    let (mut ka, mut ca) = (kfd.clone(), cfd.clone());
+    // ∂r/∂ν (slot 0) and ∂r/∂ν̇ (slot 1) at steps ε and 2ε.
+    let size = nc.max(1);
+    let mut fds = [
+        [DMatrix::zeros(size, size), DMatrix::zeros(size, size)],
+        [DMatrix::zeros(size, size), DMatrix::zeros(size, size)],
+    ];
+    let (mut ka, mut ca) = (DMatrix::zeros(size, size), DMatrix::zeros(size, size));
     for j in 0..nc {
         ka[(j, j)] = kd[j];
         ca[(j, j)] = cd[j];
-        for (slot, out) in [(0, &mut kfd), (1, &mut cfd)] {
-            let mut rr = [vec![0.0; nc], vec![0.0; nc]];
-            for (side, s) in [1.0, -1.0].iter().enumerate() {
-                wc.clone_from_slice(coords);
-                if slot == 0 {
-                    wc[j].q += s * EPS;
-                } else {
-                    wc[j].v += s * EPS;
+        for (slot, out) in fds.iter_mut().enumerate() {
+            for (o, step) in out.iter_mut().zip([EPS, 2.0 * EPS]) {
+                let mut rr = [vec![0.0; nc], vec![0.0; nc]];
+                for (side, s) in [1.0, -1.0].iter().enumerate() {
+                    wc.clone_from_slice(coords);
+                    if slot == 0 {
+                        wc[j].q += s * step;
+                    } else {
+                        wc[j].v += s * step;
+                    }
+                    c.coordinate_forces(ctx, &wc, &mut rr[side], None);
                 }
-                c.coordinate_forces(ctx, &wc, &mut rr[side], None);
-            }
-            for i in 0..nc {
-                out[(i, j)] = (rr[0][i] - rr[1][i]) / (2.0 * EPS);
+                for i in 0..nc {
+                    o[(i, j)] = (rr[0][i] - rr[1][i]) / (2.0 * step);
+                }
             }
         }
     }
+    let [kfd, cfd] = fds;
+    let equations = groups(0, m);
+    let unknowns = groups(cn.len(), nc);
+    let scalars = groups(0, size);
+    let reaction = (b.transpose() * &mu_v).as_slice().to_vec();
     ConstraintReport {
-        b: compare(&b, &b_fd),
-        k: compare(&k, &k_fd),
+        b: compare(&b, &b_fd, &phi, &equations, &unknowns),
+        k: compare(&k, &k_fd, &reaction, &unknowns, &unknowns),
         convective: conv_err,
         velocity: vel_err,
-        coordinate_stiffness: compare(&ka, &kfd),
-        coordinate_damping: compare(&ca, &cfd),
+        coordinate_stiffness: compare(&ka, &kfd, &r0, &scalars, &scalars),
+        coordinate_damping: compare(&ca, &cfd, &r0, &scalars, &scalars),
     }
 }

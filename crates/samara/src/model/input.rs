@@ -452,12 +452,13 @@ pub struct AnalysisInput {
     /// static: time at which time functions are evaluated (default 0).
     #[serde(default)]
     pub time: Option<f64>,
-    /// Scale constraint rows and multipliers with βh² (default true). Turning it off is
-    /// for conditioning studies.
+    /// dynamic: scale constraint rows and multipliers with βh² (default true). Turning it
+    /// off is for conditioning studies. Not accepted in a static analysis (no step).
     #[serde(default)]
     pub scaling: Option<bool>,
     /// Augmented-Lagrangian penalty factor p ≥ 0 (default 1): the penalty is p times a
-    /// characteristic mass (dynamic) or stiffness (static) of the model.
+    /// characteristic mass (dynamic) or stiffness (static) of the model. Not accepted with
+    /// the stabilized_index2 formulation (which has no penalty term).
     #[serde(default)]
     pub penalty: Option<f64>,
     /// Newton absolute tolerance on increments and constraint violations [m, rad]

@@ -1418,7 +1418,9 @@ impl<'a> Validator<'a> {
             );
             return None;
         }
-        let dynamic_keys: [(&str, bool); 8] = [
+        // `scaling` multiplies rows and multipliers by βh²: there is no step in statics.
+        let dynamic_keys: [(&str, bool); 9] = [
+            ("scaling", ai.scaling.is_some()),
             ("formulation", ai.formulation.is_some()),
             ("t_start", ai.t_start.is_some()),
             ("t_end", ai.t_end.is_some()),
@@ -1623,6 +1625,23 @@ impl<'a> Validator<'a> {
                     );
                     ok = false;
                 }
+                let formulation = ai.formulation.unwrap_or(if rho >= 1.0 {
+                    FormulationType::StabilizedIndex2
+                } else {
+                    FormulationType::Index3
+                });
+                // The stabilized formulation enforces Φ = 0 by projection: no penalty term.
+                if ai.penalty.is_some() && formulation == FormulationType::StabilizedIndex2 {
+                    self.error(
+                        format!("{what}: `penalty` is not used by the stabilized_index2 formulation"),
+                        self.key(&e, "penalty"),
+                        Some(format!(
+                            "the augmented-Lagrangian penalty belongs to formulation = \"index3\"{}; remove `penalty` or choose index3 (with rho_inf < 1)",
+                            if ai.formulation.is_none() { " (rho_inf = 1 selects stabilized_index2)" } else { "" }
+                        )),
+                    );
+                    ok = false;
+                }
                 AnalysisKind::Dynamic(DynamicSettings {
                     t_start,
                     t_end,
@@ -1631,11 +1650,7 @@ impl<'a> Validator<'a> {
                     min_step,
                     output_every,
                     jacobian: ai.jacobian.unwrap_or_default(),
-                    formulation: ai.formulation.unwrap_or(if rho >= 1.0 {
-                        FormulationType::StabilizedIndex2
-                    } else {
-                        FormulationType::Index3
-                    }),
+                    formulation,
                     solver,
                 })
             }

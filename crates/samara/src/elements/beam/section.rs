@@ -245,9 +245,31 @@ mod tests {
             + 0.8 * 0.9 * e[3] * e[3];
         let u = e.dot(&(s.stiffness * e));
         assert!((u - energy).abs() < 1e-14, "{u} vs {energy}");
-        // Mass: translational m = ρA, static moment m η.
-        assert_eq!(s.mass[(0, 0)], 6.0);
-        assert!((s.mass[(3 + 2, 0)] - (-6.0 * 0.1)).abs() < 1e-15 || s.mass[(5, 0)] != 0.0);
+        // Mass, from the momentum of the rigid section moving with (V, ω) (reference-point
+        // velocity and angular velocity, section frame), worked by hand: m = ρA = 6, mass
+        // centre η = (0, y_m, z_m) = (0, 0.2, 0.1).
+        // Linear momentum m (V + ω × η): ω × η = (ω₂ z_m − ω₃ y_m, ω₃·0 − ω₁ z_m, ω₁ y_m),
+        // so the (translation, rotation) block is m [[0, z_m, −y_m], [−z_m, 0, 0], [y_m, 0, 0]].
+        // Angular momentum about the reference point J_cg ω + η × m(V + ω × η): the
+        // (rotation, translation) block is its transpose, and the rotation block is J_cg plus
+        // the parallel-axis term m (|η|² I − η ηᵀ), with J_cg = ρ diag(I₂ + I₃, I₂, I₃) =
+        // diag(2.4, 1.0, 1.4) and m (|η|² I − η ηᵀ) = [[0.3, 0, 0], [0, 0.06, −0.12],
+        // [0, −0.12, 0.24]].
+        #[rustfmt::skip]
+        let expected = Matrix6::new(
+            6.0,  0.0,  0.0,  0.0,   0.6,  -1.2,
+            0.0,  6.0,  0.0, -0.6,   0.0,   0.0,
+            0.0,  0.0,  6.0,  1.2,   0.0,   0.0,
+            0.0, -0.6,  1.2,  2.7,   0.0,   0.0,
+            0.6,  0.0,  0.0,  0.0,   1.06, -0.12,
+           -1.2,  0.0,  0.0,  0.0,  -0.12,  1.64,
+        );
+        // Entries are sums of a few products of short decimals: round-off only.
+        assert!(
+            (s.mass - expected).abs().max() < 1e-14,
+            "{} vs {expected}",
+            s.mass
+        );
     }
 
     #[test]

@@ -1,0 +1,93 @@
+//! Every model file under examples/ (found by walking the folder, so a new example cannot be
+//! forgotten) loads, validates and runs every one of its analyses — chained through
+//! `start_from` as `samara run` does — with each dynamic analysis cut to its first
+//! `STEPS` steps. Static analyses run in full. The command-line run of the README's first
+//! example is in samara-cli/tests/examples.rs.
+
+use samara::analysis::{History, run_all};
+use samara::model::{AnalysisKind, Model};
+use samara::system::System;
+use std::path::{Path, PathBuf};
+
+/// Steps of each dynamic analysis.
+const STEPS: usize = 10;
+
+fn model_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            model_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "toml") {
+            out.push(path);
+        }
+    }
+}
+
+#[test]
+fn every_example_runs() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    let mut files = Vec::new();
+    model_files(&root, &mut files);
+    files.sort();
+    // The walk found the folder's examples (not, say, an empty directory).
+    for name in [
+        "landing_gear.toml",
+        "blade_spinup.toml",
+        "curved_cantilever.toml",
+        "loaded_cantilever.toml",
+        "verification/heavy_top.toml",
+        "bench/chain_revolute_1000.toml",
+        "bench/cantilever_10000.toml",
+    ] {
+        assert!(files.contains(&root.join(name)), "{name} not found");
+    }
+    for path in &files {
+        let rel = path.strip_prefix(&root).unwrap().display().to_string();
+        let loaded = Model::from_file(path).unwrap_or_else(|e| panic!("{rel}: {e}"));
+        let mut m = loaded.model;
+        assert!(!m.analyses.is_empty(), "{rel}: no analysis");
+        for a in &mut m.analyses {
+            if let AnalysisKind::Dynamic(d) = &mut a.kind {
+                d.t_end = d.t_end.min(d.t_start + STEPS as f64 * d.step);
+            }
+        }
+        let sys = System::new(&m);
+        let clock = std::time::Instant::now();
+        let out = run_all(&m, &sys, |_| Ok(History::default()), |_, _| {})
+            .unwrap_or_else(|e| panic!("{rel}: {e}"));
+        assert_eq!(
+            out.len(),
+            m.analyses.len(),
+            "{rel}: an analysis did not run"
+        );
+        for ((s, h), def) in out.iter().zip(&m.analyses) {
+            assert!(s.failure.is_none(), "{rel}, {}: {:?}", def.name, s.failure);
+            let last = h
+                .last()
+                .unwrap_or_else(|| panic!("{rel}: nothing recorded"));
+            match &def.kind {
+                AnalysisKind::Dynamic(d) => {
+                    assert!((last.time - d.t_end).abs() < 1e-9 * d.t_end.abs().max(1.0));
+                    assert!(
+                        s.steps >= STEPS.min(((d.t_end - d.t_start) / d.step).round() as usize)
+                    );
+                }
+                AnalysisKind::Static(_) => {
+                    assert!((last.load_factor - 1.0).abs() < 1e-12, "{rel}");
+                }
+            }
+            let finite = last.state.nodes.iter().all(|n| {
+                n.x.iter()
+                    .chain(n.v.iter())
+                    .chain(n.w.iter())
+                    .all(|x| x.is_finite())
+            });
+            assert!(finite, "{rel}, {}: non-finite state", def.name);
+        }
+        println!(
+            "{rel}: {} analyses, {:.2} s",
+            m.analyses.len(),
+            clock.elapsed().as_secs_f64()
+        );
+    }
+}
