@@ -14,7 +14,7 @@
 //! let loaded = Model::from_file("examples/pendulum.toml")?;
 //! let sys = System::new(&loaded.model);
 //! let def = &loaded.model.analyses[0];
-//! let initial = samara::system::sys.initial_state();
+//! let initial = sys.initial_state();
 //! let mut history = History::default();
 //! let summary = run_analysis(&sys, def, initial, &mut history, &mut |_| {})?;
 //! println!("{} steps, final time {}", summary.steps, history.last().unwrap().time);
