@@ -7,7 +7,7 @@ use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
 };
-use crate::elements::EvalContext;
+use crate::core::EvalContext;
 use crate::math::tangent_operator;
 use crate::model::{DynamicSettings, FormulationType, JacobianUpdate};
 use crate::solve::condition::condition_number;

@@ -21,7 +21,7 @@
 //!    Starting generalized-α from these keeps it second-order accurate (Arnold & Brüls
 //!    2007).
 
-use crate::elements::EvalContext;
+use crate::core::EvalContext;
 use crate::solve::{BlockMatrix, LinearError, LinearSolver};
 use crate::system::{Assembler, Coefficients, State, System};
 use nalgebra::Vector3;

@@ -168,7 +168,7 @@ pub fn run_all<R: Recorder>(
 pub(crate) fn assemble_start(
     sys: &System,
     state: &mut State,
-    ctx: &crate::elements::EvalContext,
+    ctx: &crate::core::EvalContext,
     tolerance: f64,
     asm: &mut crate::system::Assembler,
     lin: &mut crate::solve::LinearSolver,

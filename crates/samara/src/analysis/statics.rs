@@ -6,7 +6,7 @@ use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
 };
-use crate::elements::EvalContext;
+use crate::core::EvalContext;
 use crate::model::StaticSettings;
 use crate::solve::condition::condition_number;
 use crate::solve::newton::{NewtonWork, newton};

@@ -407,10 +407,10 @@ impl Constraint for Joint {
                     let m_sp = Vector3::new(g12[6 * x + 3], g12[6 * x + 4], g12[6 * x + 5]);
                     rr += skew(&(rots[x].transpose() * m_sp));
                 }
-                crate::elements::add_block(k, rx, cy, &tt);
-                crate::elements::add_block(k, rx, cy + 3, &tr);
-                crate::elements::add_block(k, rx + 3, cy, &rt);
-                crate::elements::add_block(k, rx + 3, cy + 3, &rr);
+                crate::core::add_block(k, rx, cy, &tt);
+                crate::core::add_block(k, rx, cy + 3, &tr);
+                crate::core::add_block(k, rx + 3, cy, &rt);
+                crate::core::add_block(k, rx + 3, cy + 3, &rr);
             }
         }
     }
