@@ -260,7 +260,7 @@ fn checker_detects_a_wrong_tangent() {
         fn evaluate(
             &self,
             ctx: &EvalContext,
-            nodes: &[NodeState],
+            nodes: &samara::core::ElementInput,
             need: samara::elements::Need,
             out: &mut samara::elements::LocalTerms,
         ) {

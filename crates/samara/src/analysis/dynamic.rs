@@ -1,7 +1,7 @@
 //! Time integration with the Lie-group generalized-α method on (R³ × SO(3))ᴺ, scaled
 //! index-3 constraints, Newton–Raphson per step, and step cutting on Newton failure.
 
-use super::generalized_alpha::GeneralizedAlpha;
+use super::generalized_alpha::{FirstOrderAlpha, GeneralizedAlpha};
 use super::initial::consistent_accelerations;
 use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
@@ -88,6 +88,16 @@ impl StepProblem<'_> {
         {
             c.q = p.q + self.hdq[n6 + j];
         }
+        let z0 = n6 + self.sys.n_coordinates;
+        for (j, (z, p)) in self
+            .cur
+            .states
+            .iter_mut()
+            .zip(&self.prev.states)
+            .enumerate()
+        {
+            z.z = p.z + self.hdq[z0 + j];
+        }
     }
 }
 
@@ -124,9 +134,13 @@ impl NewtonSystem for StepProblem<'_> {
             n.wd += dth * bp;
         }
         let n6 = 6 * self.cur.nodes.len();
-        for (c, d) in self.cur.coords.iter_mut().zip(&self.dcfg[n6..]) {
+        let nc = self.sys.n_coordinates;
+        for (c, d) in self.cur.coords.iter_mut().zip(&self.dcfg[n6..n6 + nc]) {
             c.v += d * gp;
             c.a += d * bp;
+        }
+        for (z, d) in self.cur.states.iter_mut().zip(&self.dcfg[n6 + nc..]) {
+            z.zd += d * self.coef.state_rate;
         }
         let mut worst: f64 = 0.0;
         for (q, c) in self.hdq.iter_mut().zip(self.change.iter()) {
@@ -153,6 +167,8 @@ struct Integrator<'a> {
     sys: &'a System,
     settings: &'a DynamicSettings,
     ga: GeneralizedAlpha,
+    /// The first-order scheme of the element states (same ρ∞).
+    fo: FirstOrderAlpha,
     asm: Assembler,
     lin: LinearSolver,
     matrix: BlockMatrix,
@@ -257,6 +273,33 @@ impl Integrator<'_> {
             let an = self.acc[n6 + j];
             (self.hdq[n6 + j], c.v, c.a) = predict(n6 + j, p.v, p.a, an, &mut self.extrapolated);
         }
+        // Element states: the same predictors in the first-order scheme.
+        let fo = self.fo;
+        let z0 = n6 + self.sys.n_coordinates;
+        for (j, (z, p)) in self
+            .trial
+            .states
+            .iter_mut()
+            .zip(&self.state.states)
+            .enumerate()
+        {
+            let k = z0 + j;
+            let wn = self.acc[k];
+            let w1 = fo.algorithmic_rate(wn, p.zd, p.zd);
+            self.extrapolated[k] = fo.increment(h, wn, w1);
+            (self.hdq[k], z.zd) = match predictor {
+                Predictor::Extrapolate => (self.extrapolated[k], p.zd),
+                Predictor::Repeat | Predictor::Hold => {
+                    let dz = if predictor == Predictor::Repeat {
+                        self.last_hdq[k] * ratio
+                    } else {
+                        0.0
+                    };
+                    let w1 = (dz / h - (1.0 - fo.gamma) * wn) / fo.gamma;
+                    (dz, fo.rate_of(wn, p.zd, w1))
+                }
+            };
+        }
         let scaling = self.settings.solver.scaling;
         let scale = if scaling { ga.beta * h * h } else { 1.0 };
         let coef = Coefficients {
@@ -267,6 +310,13 @@ impl Integrator<'_> {
             multiplier_scale: scale,
             velocity_scale: if scaling { ga.beta * h / ga.gamma } else { 1.0 },
             penalty: self.penalty(h),
+            // State rows scaled by 1/(∂ż/∂Δz) ~ h, so that their block is ∂r/∂ż + O(h).
+            state_rate: self.fo.rate_prime(h),
+            state_row_scale: if scaling {
+                1.0 / self.fo.rate_prime(h)
+            } else {
+                1.0
+            },
         };
         if h != self.factored_h {
             self.lin.invalidate();
@@ -356,6 +406,11 @@ impl Integrator<'_> {
             let an = self.acc[n6 + j];
             self.acc[n6 + j] = ga.algorithmic_acceleration(an, p.a, c.a);
         }
+        let z0 = n6 + self.sys.n_coordinates;
+        for (j, (z, p)) in self.trial.states.iter().zip(&self.state.states).enumerate() {
+            let wn = self.acc[z0 + j];
+            self.acc[z0 + j] = self.fo.algorithmic_rate(wn, p.zd, z.zd);
+        }
         self.sys.update_passive_coordinates(&mut self.trial, false);
         std::mem::swap(&mut self.state, &mut self.trial);
     }
@@ -383,6 +438,7 @@ pub fn run_dynamic(
         sys,
         settings,
         ga: GeneralizedAlpha::from_rho_inf(settings.rho_inf),
+        fo: FirstOrderAlpha::from_rho_inf(settings.rho_inf),
         lin: LinearSolver::new(asm.structure(), settings.solver.linear_solver),
         matrix: BlockMatrix::zeros(asm.structure().clone()),
         asm,
@@ -484,6 +540,10 @@ pub fn run_dynamic(
     let n6 = 6 * sys.n_nodes();
     for (j, c) in it.state.coords.iter().take(sys.n_coordinates).enumerate() {
         it.acc[n6 + j] = c.a;
+    }
+    let z0 = n6 + sys.n_coordinates;
+    for (j, z) in it.state.states.iter().enumerate() {
+        it.acc[z0 + j] = z.zd;
     }
     sys.update_passive_coordinates(&mut it.state, true);
     it.mu.copy_from_slice(&it.state.lambda);

@@ -10,7 +10,7 @@ mod initial;
 mod statics;
 
 pub use dynamic::run_dynamic;
-pub use generalized_alpha::GeneralizedAlpha;
+pub use generalized_alpha::{FirstOrderAlpha, GeneralizedAlpha};
 pub use history::{Frame, History};
 pub use initial::{
     AssemblyError, AssemblyReport, assemble_initial_state, consistent_accelerations,

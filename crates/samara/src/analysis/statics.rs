@@ -55,8 +55,12 @@ impl NewtonSystem for StaticProblem<'_> {
             n.rot = n.rot.compose_exp(&Vector3::new(d[3], d[4], d[5]));
         }
         let n6 = 6 * self.state.nodes.len();
-        for (c, d) in self.state.coords.iter_mut().zip(&self.dcfg[n6..]) {
+        let nc = self.sys.n_coordinates;
+        for (c, d) in self.state.coords.iter_mut().zip(&self.dcfg[n6..n6 + nc]) {
             c.q += d;
+        }
+        for (z, d) in self.state.states.iter_mut().zip(&self.dcfg[n6 + nc..]) {
+            z.z += d;
         }
         let mut worst: f64 = 0.0;
         for (t, d) in self.total.iter_mut().zip(self.dcfg.iter()) {
@@ -183,6 +187,9 @@ pub fn run_static(
     for c in &mut state.coords {
         c.v = 0.0;
         c.a = 0.0;
+    }
+    for z in &mut state.states {
+        z.zd = 0.0;
     }
     state.time = settings.time;
     let mut asm = Assembler::new(sys, Formulation::Index3);

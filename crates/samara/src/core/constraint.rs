@@ -22,10 +22,12 @@ pub enum RowRole {
     Drive,
 }
 
-/// Tangents of the coordinate forces: `∂r/∂ν` and `∂r/∂ν̇`, diagonal (one per coordinate).
+/// Tangents of the coordinate forces: `∂r/∂ν` and `∂r/∂ν̇`, diagonal (one per coordinate),
+/// and `∂r/∂s` of the input signals (row-major: coordinate c, input j at `c·inputs + j`).
 pub struct CoordinateTangents<'a> {
     pub stiffness: &'a mut [f64],
     pub damping: &'a mut [f64],
+    pub signals: &'a mut [f64],
 }
 
 /// A constraint on a few nodes and its own joint coordinates.
@@ -76,9 +78,14 @@ pub trait Constraint: Send + Sync {
         &self,
         _ctx: &EvalContext,
         _coords: &[Coordinate],
+        _signals: &[f64],
         _r: &mut [f64],
         _tangents: Option<CoordinateTangents>,
     ) {
+    }
+    /// Names of the signals read by the coordinate elements (input ports).
+    fn signal_inputs(&self) -> &[String] {
+        &[]
     }
     /// Potential energy of the coordinate springs and backlash contacts.
     fn potential_energy(&self, _coords: &[Coordinate]) -> f64 {
@@ -89,7 +96,7 @@ pub trait Constraint: Send + Sync {
         0.0
     }
     /// Power of the input ports.
-    fn external_power(&self, _ctx: &EvalContext, _coords: &[Coordinate]) -> f64 {
+    fn external_power(&self, _ctx: &EvalContext, _coords: &[Coordinate], _signals: &[f64]) -> f64 {
         0.0
     }
     /// All rows, including those dropped as redundant (for reactions).

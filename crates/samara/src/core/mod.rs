@@ -6,8 +6,8 @@ mod element;
 mod state;
 
 pub use constraint::{Constraint, CoordinateTangents, RowRole};
-pub use element::{Element, EvalContext, LocalTerms, Need, add_block};
-pub use state::{Coordinate, NodeState, State};
+pub use element::{Element, ElementInput, EvalContext, LocalTerms, Need, SignalTerms, add_block};
+pub use state::{Coordinate, ElementState, NodeState, State};
 
 /// Either the fixed inertial frame or one of the model's nodes (by index).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -40,6 +40,14 @@ pub struct Coordinate {
     pub a: f64,
 }
 
+/// A first-order state z owned by an element (an inflow, a pressure, a filter output, a
+/// damper stretch) and its rate ż.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ElementState {
+    pub z: f64,
+    pub zd: f64,
+}
+
 /// State of the whole system at one time.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct State {
@@ -48,6 +56,8 @@ pub struct State {
     /// Joint coordinates: the active ones constraint by constraint
     /// (`System::coordinate_offsets`), then the passive ones (`System::passive_offsets`).
     pub coords: Vec<Coordinate>,
+    /// Element states, element by element (`System::state_offsets`).
+    pub states: Vec<ElementState>,
     /// Lagrange multipliers in physical units (force, moment), per constraint row.
     pub lambda: Vec<f64>,
 }

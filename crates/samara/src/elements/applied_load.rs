@@ -9,7 +9,7 @@
 //! ```
 
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
-use crate::core::NodeState;
+use crate::core::{ElementInput, NodeState};
 use crate::math::TimeFunction;
 use crate::math::skew;
 use nalgebra::Vector3;
@@ -81,7 +81,8 @@ impl Element for AppliedLoad {
         &self.node
     }
 
-    fn evaluate(&self, ctx: &EvalContext, nodes: &[NodeState], need: Need, out: &mut LocalTerms) {
+    fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+        let nodes = x.nodes;
         let n = &nodes[self.node[0]];
         let f = self.function.eval(ctx.time) * ctx.load_factor;
         let r = n.r();
@@ -109,7 +110,8 @@ impl Element for AppliedLoad {
         }
     }
 
-    fn external_power(&self, ctx: &EvalContext, nodes: &[NodeState]) -> f64 {
+    fn external_power(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
+        let nodes = x.nodes;
         let n = &nodes[self.node[0]];
         let (fg, mg) = self.global_load(ctx, n);
         // Power = F·ẋ_node + M_node·ω, with M about the node including the lever arm.

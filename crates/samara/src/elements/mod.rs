@@ -4,9 +4,11 @@ mod applied_load;
 pub mod beam;
 mod rigid_body;
 mod spring_damper;
+mod time_signal;
 
 pub use applied_load::{AppliedLoad, LoadFrame};
 pub use rigid_body::RigidBody;
 pub use spring_damper::SpringDamper;
+pub use time_signal::TimeSignal;
 
 pub use crate::core::{Element, EvalContext, LocalTerms, Need, add_block};

@@ -6,7 +6,7 @@
 //! is `r_X = σ_X Gₓᵀ (T n)`.
 
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
-use crate::core::NodeState;
+use crate::core::{ElementInput, NodeState};
 use crate::math::skew;
 use nalgebra::{Matrix3, Vector3};
 
@@ -120,7 +120,8 @@ impl Element for SpringDamper {
         &self.nodes
     }
 
-    fn evaluate(&self, _ctx: &EvalContext, nodes: &[NodeState], need: Need, out: &mut LocalTerms) {
+    fn evaluate(&self, _ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+        let nodes = x.nodes;
         let (l, n, ldot, st) = self.geometry(nodes);
         let (k, c) = (self.stiffness, self.damping);
         let tension = k * (l - self.rest_length) + c * ldot;
@@ -177,12 +178,14 @@ impl Element for SpringDamper {
         }
     }
 
-    fn potential_energy(&self, _ctx: &EvalContext, nodes: &[NodeState]) -> f64 {
+    fn potential_energy(&self, _ctx: &EvalContext, x: &ElementInput) -> f64 {
+        let nodes = x.nodes;
         let (l, ..) = self.geometry(nodes);
         0.5 * self.stiffness * (l - self.rest_length).powi(2)
     }
 
-    fn dissipated_power(&self, nodes: &[NodeState]) -> f64 {
+    fn dissipated_power(&self, x: &ElementInput) -> f64 {
+        let nodes = x.nodes;
         let (_, _, ldot, _) = self.geometry(nodes);
         self.damping * ldot * ldot
     }

@@ -9,12 +9,15 @@
 
 mod assembly;
 pub mod redundancy;
+pub mod signals;
 
 pub use crate::core::{Coordinate, NodeState, State};
 pub use assembly::{Assembler, Coefficients, Formulation};
 pub use redundancy::ConstraintLoop;
+pub use signals::{SignalGraph, SignalValues};
 
-use crate::elements::{AppliedLoad, Element, EvalContext, RigidBody, SpringDamper};
+use crate::core::{ElementInput, ElementState};
+use crate::elements::{AppliedLoad, Element, EvalContext, RigidBody, SpringDamper, TimeSignal};
 use crate::joints::{Constraint, Joint};
 use crate::model::{Model, NodeRef};
 use nalgebra::Vector3;
@@ -54,6 +57,13 @@ pub struct System {
     pub characteristic_mass: f64,
     /// Node states of the model's initial conditions (for [`System::initial_state`]).
     pub initial_nodes: Vec<NodeState>,
+    /// Offset of each element's states in [`State::states`].
+    pub state_offsets: Vec<usize>,
+    pub n_states: usize,
+    /// `<element>.<state>` per element state.
+    pub state_names: Vec<String>,
+    /// Who produces and who reads each signal.
+    pub signals: SignalGraph,
 }
 
 impl System {
@@ -96,6 +106,9 @@ impl System {
                 l.function.clone(),
             )));
         }
+        for g in &model.signals {
+            elements.push(Box::new(TimeSignal::new(&g.name, g.function.clone())));
+        }
         let beams: Vec<crate::elements::beam::Beam> = model
             .beams
             .iter()
@@ -129,14 +142,67 @@ impl System {
     /// The initial conditions written in the model, at rest in acceleration, with the
     /// joint coordinates measured from the node configuration.
     pub fn initial_state(&self) -> State {
+        let mut states = vec![ElementState::default(); self.n_states];
+        let mut z = Vec::new();
+        for (e, &off) in self.elements.iter().zip(&self.state_offsets) {
+            z.resize(e.n_states(), 0.0);
+            e.initial_states(&mut z);
+            for (s, &v) in states[off..].iter_mut().zip(&z) {
+                s.z = v;
+            }
+        }
         let mut s = State {
             time: 0.0,
             nodes: self.initial_nodes.clone(),
             coords: vec![Coordinate::default(); self.n_coordinates + self.n_passive],
+            states,
             lambda: vec![0.0; self.n_multipliers],
         };
         self.measure_coordinates(&mut s);
         s
+    }
+
+    /// What element `k` sees of `state`, with `signals` the values of all signals.
+    #[inline]
+    pub fn element_input<'a>(
+        &self,
+        k: usize,
+        state: &'a State,
+        signals: &'a [f64],
+        scratch: &'a mut Vec<f64>,
+    ) -> ElementInput<'a> {
+        let off = self.state_offsets[k];
+        let n = self.elements[k].n_states();
+        let ids = &self.signals.element_inputs[k];
+        scratch.clear();
+        scratch.extend(ids.iter().map(|&j| signals[j]));
+        ElementInput {
+            nodes: &state.nodes,
+            states: &state.states[off..off + n],
+            signals: scratch,
+        }
+    }
+
+    /// Values of all signals at `state` (allocates; the assembler keeps its own scratch).
+    pub fn signal_values(&self, ctx: &EvalContext, state: &State) -> Vec<f64> {
+        if self.signals.names.is_empty() {
+            return Vec::new();
+        }
+        let mut v = self.signals.values(&self.elements);
+        self.signals.evaluate(
+            &self.elements,
+            &self.state_offsets,
+            ctx,
+            state,
+            &mut v,
+            false,
+        );
+        v.values
+    }
+
+    /// Configuration index of element state `i` (of all states).
+    pub fn state_config_index(&self, i: usize) -> usize {
+        6 * self.n_nodes() + self.n_coordinates + i
     }
 
     /// Assembles a system from elements and constraints built in code; `initial` is the
@@ -231,6 +297,32 @@ impl System {
             row_offsets.push(nr);
             nr += c.n_rows();
         }
+        // Element states, element by element, after the nodes and the active coordinates
+        // in the configuration vector.
+        let mut state_offsets = Vec::with_capacity(elements.len());
+        let mut state_names = Vec::new();
+        let mut nz = 0;
+        for e in &elements {
+            state_offsets.push(nz);
+            nz += e.n_states();
+            state_names.extend(e.state_names().iter().map(|s| format!("{}.{s}", e.name())));
+        }
+        let local_config: Vec<Vec<usize>> = elements
+            .iter()
+            .zip(&state_offsets)
+            .map(|(e, &off)| {
+                e.nodes()
+                    .iter()
+                    .flat_map(|&i| (0..6).map(move |d| 6 * i + d))
+                    .chain((0..e.n_states()).map(|i| 6 * n + nc + off + i))
+                    .collect()
+            })
+            .collect();
+        let constraint_inputs: Vec<(String, Vec<String>)> = constraints
+            .iter()
+            .map(|c| (c.name().to_string(), c.signal_inputs().to_vec()))
+            .collect();
+        let signals = SignalGraph::build(&elements, &constraint_inputs, &local_config);
         let mut node_mass = vec![0.0; n];
         for b in &bodies {
             node_mass[b.nodes()[0]] += b.mass();
@@ -258,9 +350,16 @@ impl System {
             n_passive: np,
             coordinate_names,
             loops,
-            warnings,
+            warnings: warnings
+                .into_iter()
+                .chain(signals.issues.iter().map(|i| i.to_string()))
+                .collect(),
             characteristic_mass,
             initial_nodes: initial.to_vec(),
+            state_offsets,
+            n_states: nz,
+            state_names,
+            signals,
         }
     }
 
@@ -372,6 +471,7 @@ impl System {
     /// equilibrium it equals the force the joint transmits along the component.
     pub fn coordinate_forces(&self, ctx: &EvalContext, s: &State, mu: &[f64], out: &mut [f64]) {
         self.drive_forces(mu, out);
+        let signals = self.signal_values(ctx, s);
         for (k, c) in self.constraints.iter().enumerate() {
             let nc = c.n_coordinates();
             if nc == 0 {
@@ -380,7 +480,8 @@ impl System {
             // A joint has at most six coordinates.
             let mut buf = [0.0; 6];
             let r = &mut buf[..nc];
-            c.coordinate_forces(ctx, self.coords_of(k, s), r, None);
+            let sig = self.constraint_signals(k, &signals);
+            c.coordinate_forces(ctx, self.coords_of(k, s), &sig, r, None);
             for (j, x) in r.iter().enumerate() {
                 out[self.coordinate_offsets[k] + j] -= x;
             }
@@ -422,13 +523,22 @@ impl System {
         p
     }
 
+    /// Values of the signals read by constraint `k`, from the values of all signals.
+    pub fn constraint_signals(&self, k: usize, all: &[f64]) -> Vec<f64> {
+        self.signals.constraint_inputs[k]
+            .iter()
+            .map(|&j| all[j])
+            .collect()
+    }
+
     pub fn n_nodes(&self) -> usize {
         self.node_names.len()
     }
 
-    /// Number of configuration unknowns: 6 per node, then the joint coordinates.
+    /// Number of configuration unknowns: 6 per node, then the active joint coordinates,
+    /// then the element states.
     pub fn n_config(&self) -> usize {
-        6 * self.n_nodes() + self.n_coordinates
+        6 * self.n_nodes() + self.n_coordinates + self.n_states
     }
 
     /// Evaluation context at time `t` with load factor `lf`.
@@ -449,34 +559,53 @@ impl System {
             .sum()
     }
 
-    pub fn kinetic_energy(&self, s: &State) -> f64 {
-        self.elements
-            .iter()
-            .map(|e| e.kinetic_energy(&s.nodes))
+    /// Σ f(element, input) over the elements.
+    fn element_sum(
+        &self,
+        s: &State,
+        signals: &[f64],
+        f: impl Fn(&dyn Element, &ElementInput) -> f64,
+    ) -> f64 {
+        let mut scratch = Vec::new();
+        (0..self.elements.len())
+            .map(|k| {
+                let x = self.element_input(k, s, signals, &mut scratch);
+                f(self.elements[k].as_ref(), &x)
+            })
             .sum()
     }
 
+    pub fn kinetic_energy(&self, s: &State) -> f64 {
+        self.element_sum(s, &[], |e, x| e.kinetic_energy(x))
+    }
+
     pub fn potential_energy(&self, ctx: &EvalContext, s: &State) -> f64 {
-        self.elements
-            .iter()
-            .map(|e| e.potential_energy(ctx, &s.nodes))
-            .sum::<f64>()
+        let signals = self.signal_values(ctx, s);
+        self.element_sum(s, &signals, |e, x| e.potential_energy(ctx, x))
             + self.coordinate_sum(s, |c, q| c.potential_energy(q))
     }
 
     pub fn external_power(&self, ctx: &EvalContext, s: &State) -> f64 {
-        self.elements
+        let signals = self.signal_values(ctx, s);
+        let coordinate_inputs: f64 = self
+            .constraints
             .iter()
-            .map(|e| e.external_power(ctx, &s.nodes))
-            .sum::<f64>()
-            + self.coordinate_sum(s, |c, q| c.external_power(ctx, q))
+            .enumerate()
+            .map(|(k, c)| {
+                c.external_power(
+                    ctx,
+                    self.coords_of(k, s),
+                    &self.constraint_signals(k, &signals),
+                )
+            })
+            .sum();
+        self.element_sum(s, &signals, |e, x| e.external_power(ctx, x)) + coordinate_inputs
     }
 
     pub fn dissipated_power(&self, s: &State) -> f64 {
-        self.elements
-            .iter()
-            .map(|e| e.dissipated_power(&s.nodes))
-            .sum::<f64>()
+        let ctx = self.context(s.time, 1.0);
+        let signals = self.signal_values(&ctx, s);
+        self.element_sum(s, &signals, |e, x| e.dissipated_power(x))
             + self.coordinate_sum(s, |c, q| c.dissipated_power(q))
     }
 
