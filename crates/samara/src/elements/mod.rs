@@ -1,12 +1,17 @@
 //! The element library: force elements on nodes (the contract is [`crate::core::Element`]).
 
 mod applied_load;
+pub mod line_of_action;
+mod low_pass;
+mod maxwell;
 pub mod beam;
 mod rigid_body;
 mod spring_damper;
 mod time_signal;
 
 pub use applied_load::{AppliedLoad, LoadFrame};
+pub use low_pass::{LowPassSensor, NodeQuantity, SensorInput};
+pub use maxwell::Maxwell;
 pub use rigid_body::RigidBody;
 pub use spring_damper::SpringDamper;
 pub use time_signal::TimeSignal;
