@@ -35,6 +35,8 @@ struct Vars {
     diagnostics: Option<DiagnosticVars>,
     /// Sectional output of the beams (models with beams only).
     beams: Option<super::beam_vars::BeamVars>,
+    /// Element states and signals (models with them only).
+    states: Option<super::state_vars::StateVars>,
 }
 
 struct CoordinateVars {
@@ -432,6 +434,7 @@ impl ResultsFile {
         });
 
         let beams = super::beam_vars::BeamVars::define(&mut d, sys, time, vec3, quat);
+        let states = super::state_vars::StateVars::define(&mut d, sys, time);
         d.add_global_attr(
             "title",
             text(&format!(
@@ -483,6 +486,10 @@ impl ResultsFile {
             b.write_fixed(&mut writer, sys)
                 .map_err(|e| nc_err(&path, e))?;
         }
+        if let Some(s) = &states {
+            s.write_fixed(&mut writer, sys)
+                .map_err(|e| nc_err(&path, e))?;
+        }
         if let Some(jn) = joint_name {
             let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
             writer
@@ -528,6 +535,7 @@ impl ResultsFile {
                 violation,
                 diagnostics,
                 beams,
+                states,
             },
             buf3: vec![0.0; 3 * n_nodes],
             buf4: vec![0.0; 4 * n_nodes],
@@ -669,6 +677,9 @@ impl Recorder for ResultsFile {
             .map_err(e)?;
         if let Some(b) = &mut self.vars.beams {
             b.record(w, sys, nodes).map_err(e)?;
+        }
+        if let Some(s) = &mut self.vars.states {
+            s.record(w, sys, frame.state, frame.load_factor).map_err(e)?;
         }
         let v = &self.vars;
         if let (Some(dv), Some(dg)) = (&v.diagnostics, frame.diagnostics) {
