@@ -64,7 +64,14 @@ fn low_pass_sensor_tangents() {
         assert!(r.worst() < TOL, "{q:?}: {r:?}");
     }
     // Reading a signal instead of a node.
-    let e = LowPassSensor::new("s", "s.out", SensorInput::Signal("u".into()), 0.2, -3.0, 0.0);
+    let e = LowPassSensor::new(
+        "s",
+        "s.out",
+        SensorInput::Signal("u".into()),
+        0.2,
+        -3.0,
+        0.0,
+    );
     let z = [ElementState { z: 0.4, zd: -1.2 }];
     let r = check_element_with(&e, &ctx(), &[], &z, &[0.7]);
     assert!(r.worst() < TOL, "{r:?}");

@@ -1,10 +1,10 @@
 //! The element library: force elements on nodes (the contract is [`crate::core::Element`]).
 
 mod applied_load;
+pub mod beam;
 pub mod line_of_action;
 mod low_pass;
 mod maxwell;
-pub mod beam;
 mod rigid_body;
 mod spring_damper;
 mod time_signal;

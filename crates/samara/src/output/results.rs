@@ -679,7 +679,8 @@ impl Recorder for ResultsFile {
             b.record(w, sys, nodes).map_err(e)?;
         }
         if let Some(s) = &mut self.vars.states {
-            s.record(w, sys, frame.state, frame.load_factor).map_err(e)?;
+            s.record(w, sys, frame.state, frame.load_factor)
+                .map_err(e)?;
         }
         let v = &self.vars;
         if let (Some(dv), Some(dg)) = (&v.diagnostics, frame.diagnostics) {

@@ -32,16 +32,51 @@ impl StateVars {
         if sys.n_states > 0 {
             let s = d.add_dim("state", sys.n_states);
             let len = d.add_dim("state_strlen", longest(&sys.state_names));
-            name = Some(var(d, "state_name", NcType::Char, &[s, len], "", "element state name, <element>.<state>"));
-            value = Some(var(d, "element_state", NcType::Double, &[time, s], "element-specific", "element state z (units of the element's state; see docs/results.md)"));
-            rate = Some(var(d, "element_state_rate", NcType::Double, &[time, s], "element-specific s-1", "rate of the element state"));
+            name = Some(var(
+                d,
+                "state_name",
+                NcType::Char,
+                &[s, len],
+                "",
+                "element state name, <element>.<state>",
+            ));
+            value = Some(var(
+                d,
+                "element_state",
+                NcType::Double,
+                &[time, s],
+                "element-specific",
+                "element state z (units of the element's state; see docs/results.md)",
+            ));
+            rate = Some(var(
+                d,
+                "element_state_rate",
+                NcType::Double,
+                &[time, s],
+                "element-specific s-1",
+                "rate of the element state",
+            ));
         }
         let (mut signal_name, mut signal) = (None, None);
         if !sys.signals.names.is_empty() {
             let g = d.add_dim("signal", sys.signals.names.len());
             let len = d.add_dim("signal_strlen", longest(&sys.signals.names));
-            signal_name = Some(var(d, "signal_name", NcType::Char, &[g, len], "", "signal name"));
-            signal = Some(var(d, "signal", NcType::Double, &[time, g], "signal-specific", "signal value"));
+            signal_name = Some(var(
+                d,
+                "signal_name",
+                NcType::Char,
+                &[g, len],
+                "",
+                "signal name",
+            ));
+            signal = Some(var(
+                d,
+                "signal",
+                NcType::Double,
+                &[time, g],
+                "signal-specific",
+                "signal value",
+            ));
         }
         Some(Self {
             name,
@@ -68,7 +103,13 @@ impl StateVars {
     }
 
     /// Writes one record.
-    pub fn record(&mut self, w: &mut Writer, sys: &System, state: &State, load_factor: f64) -> Result<(), NcError> {
+    pub fn record(
+        &mut self,
+        w: &mut Writer,
+        sys: &System,
+        state: &State,
+        load_factor: f64,
+    ) -> Result<(), NcError> {
         if let (Some(v), Some(r)) = (self.value, self.rate) {
             for (i, s) in state.states.iter().enumerate() {
                 self.z[i] = s.z;

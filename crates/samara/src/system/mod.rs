@@ -8,11 +8,13 @@
 //! of a joint with a massless coordinate is never singular).
 
 mod assembly;
+pub mod matrices;
 pub mod redundancy;
 pub mod signals;
 
 pub use crate::core::{Coordinate, NodeState, State};
 pub use assembly::{Assembler, Coefficients, Formulation};
+pub use matrices::SystemMatrices;
 pub use redundancy::ConstraintLoop;
 pub use signals::{SignalGraph, SignalValues};
 
