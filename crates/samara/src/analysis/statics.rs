@@ -325,7 +325,7 @@ pub fn run_static(
                 inc /= 2.0;
                 if inc < nominal * MIN_INCREMENT_FRACTION {
                     let hint = match &failure {
-                        NewtonFailure::Singular { block } => Some(singular_hint(sys, *block)),
+                        NewtonFailure::Singular { block } => Some(singular_hint(sys, &asm, *block)),
                         _ => Some(
                             "more `load_steps`, a larger `tolerance`, or a check of the model's stiffness may help".into(),
                         ),

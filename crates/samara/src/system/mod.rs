@@ -13,7 +13,7 @@ pub mod redundancy;
 pub mod signals;
 
 pub use crate::core::{Coordinate, NodeState, State};
-pub use assembly::{Assembler, Coefficients, Formulation};
+pub use assembly::{Assembler, BlockOwner, Coefficients, Formulation};
 pub use matrices::SystemMatrices;
 pub use redundancy::ConstraintLoop;
 pub use signals::{SignalGraph, SignalValues};
@@ -639,19 +639,6 @@ impl System {
                 &mut out[*off..off + m],
                 None,
             );
-        }
-    }
-
-    /// Name of a block of the iteration matrix (node, or joint multipliers) for messages.
-    pub fn block_name(&self, block: usize) -> String {
-        let n = self.n_nodes();
-        let c = self.constraints.len();
-        if block < n {
-            format!("node '{}'", self.node_names[block])
-        } else if c > 0 && block - n < 2 * c {
-            format!("joint '{}'", self.constraints[(block - n) % c].name())
-        } else {
-            format!("block {block}")
         }
     }
 }
