@@ -763,19 +763,39 @@ impl Assembler {
             let nb = blocks.len();
             let slots = &self.element_slots[k];
             let nl = n6 + nz;
-            for (a, ra) in blocks.iter().enumerate() {
-                for (b, cb) in blocks.iter().enumerate() {
-                    let off = slots[a * nb + b];
-                    add_sub(
-                        &mut mat.values[off..off + ra.size * cb.size],
-                        cb.size,
-                        (0, 0),
-                        t.k.as_slice(),
-                        nl,
-                        (ra.local, cb.local),
-                        (ra.size, cb.size),
-                        1.0,
-                    );
+            if nz == 0 {
+                // Node blocks only: 6×6 each (sizes known at compile time: the hot path).
+                let n = en.len();
+                for a in 0..n {
+                    for b in 0..n {
+                        let off = slots[a * n + b];
+                        add_sub(
+                            &mut mat.values[off..off + 36],
+                            6,
+                            (0, 0),
+                            t.k.as_slice(),
+                            nl,
+                            (6 * a, 6 * b),
+                            (6, 6),
+                            1.0,
+                        );
+                    }
+                }
+            } else {
+                for (a, ra) in blocks.iter().enumerate() {
+                    for (b, cb) in blocks.iter().enumerate() {
+                        let off = slots[a * nb + b];
+                        add_sub(
+                            &mut mat.values[off..off + ra.size * cb.size],
+                            cb.size,
+                            (0, 0),
+                            t.k.as_slice(),
+                            nl,
+                            (ra.local, cb.local),
+                            (ra.size, cb.size),
+                            1.0,
+                        );
+                    }
                 }
             }
             // Chain rule through the input signals: rows · (∂r/∂s) (∂s/∂x).
