@@ -75,17 +75,21 @@ impl Mesh {
 
     /// Checks every element: nodes that exist, finite coordinates, and a Jacobian
     /// determinant positive and not vanishingly small at every node and quadrature point.
-    /// Elements numbered clockwise (negative Jacobian everywhere) are renumbered.
+    /// A mesh numbered clockwise throughout (a mirrored mesh) is renumbered; a clockwise
+    /// element among counter-clockwise ones is inverted and reported.
     pub fn check(&mut self) -> Result<(), Vec<BadElement>> {
         let mut bad = Vec::new();
         let n_nodes = self.nodes.len();
         let scale = self.size().max(f64::MIN_POSITIVE);
-        for (ie, e) in self.elements.iter_mut().enumerate() {
+        let tiny = 1e-10 * scale * scale;
+        let mut ranges = Vec::with_capacity(self.elements.len());
+        for (ie, e) in self.elements.iter().enumerate() {
             if let Some(&k) = e.node_list().iter().find(|&&k| k >= n_nodes) {
                 bad.push(BadElement {
                     element: ie,
                     message: format!("refers to node {} which does not exist", k + 1),
                 });
+                ranges.push(None);
                 continue;
             }
             let xy: Vec<[f64; 2]> = e.node_list().iter().map(|&k| self.nodes[k]).collect();
@@ -94,35 +98,47 @@ impl Mesh {
                     element: ie,
                     message: "has a node with non-finite coordinates".into(),
                 });
+                ranges.push(None);
                 continue;
             }
-            let list = e.node_list();
-            let mut sorted = list.to_vec();
+            let mut sorted = e.node_list().to_vec();
             sorted.sort_unstable();
             if sorted.windows(2).any(|w| w[0] == w[1]) {
                 bad.push(BadElement {
                     element: ie,
                     message: "uses the same node twice".into(),
                 });
+                ranges.push(None);
                 continue;
             }
-            let (min, max) = jacobian_range(e.kind, &xy);
-            let tiny = 1e-10 * scale * scale;
-            if min < -tiny && max < -tiny {
-                // Clockwise: renumber.
-                let rev = e.kind.reversed();
+            ranges.push(Some((jacobian_range(e.kind, &xy), element_area(e.kind, &xy))));
+        }
+        let clockwise = |r: &Option<((f64, f64), f64)>| {
+            r.is_some_and(|((min, max), _)| min < -tiny && max < -tiny)
+        };
+        let mirrored = !ranges.is_empty() && ranges.iter().all(clockwise);
+        for (ie, (e, r)) in self.elements.iter_mut().zip(&ranges).enumerate() {
+            let Some(((min, max), area)) = *r else {
+                continue;
+            };
+            if mirrored {
                 let old = e.nodes;
-                for (k, &r) in rev.iter().enumerate() {
-                    e.nodes[k] = old[r];
+                for (k, &q) in e.kind.reversed().iter().enumerate() {
+                    e.nodes[k] = old[q];
                 }
                 continue;
             }
             if !(min > tiny) {
-                let area = element_area(e.kind, &xy).abs();
+                let what = if max < -tiny {
+                    "is inverted (numbered clockwise while the rest of the mesh is counter-clockwise)"
+                } else {
+                    "is degenerate or folded"
+                };
                 bad.push(BadElement {
                     element: ie,
                     message: format!(
-                        "is degenerate or folded: its Jacobian determinant ranges from {min:.3e} to {max:.3e} (area {area:.3e} m²)"
+                        "{what}: its Jacobian determinant ranges from {min:.3e} to {max:.3e} (area {:.3e} m²)",
+                        area.abs()
                     ),
                 });
             }
@@ -226,14 +242,19 @@ impl MeshBuilder {
         k
     }
 
-    /// Adds one element from its node positions (Gmsh order); clockwise elements are
+    /// Adds one element from its node positions (Gmsh order); a clockwise element is
     /// renumbered counter-clockwise.
     pub fn element(&mut self, kind: ElementKind, pts: &[[f64; 2]], attr: ElementAttr) {
+        let reverse = element_area(kind, pts) < 0.0;
+        self.oriented(kind, pts, attr, reverse);
+    }
+
+    fn oriented(&mut self, kind: ElementKind, pts: &[[f64; 2]], attr: ElementAttr, reverse: bool) {
         let mut nodes = [0; MAX_NODES];
         for (k, p) in pts.iter().enumerate().take(kind.n_nodes()) {
             nodes[k] = self.node(*p);
         }
-        if element_area(kind, pts) < 0.0 {
+        if reverse {
             let old = nodes;
             for (k, &r) in kind.reversed().iter().enumerate() {
                 nodes[k] = old[r];
@@ -251,7 +272,9 @@ impl MeshBuilder {
     /// A structured patch of `ni × nj` cells. `pos(i, j)` gives the node position at grid
     /// index (i, j), 0 ≤ i ≤ ni·p, 0 ≤ j ≤ nj·p with p the element order (mid-side and
     /// centre nodes at odd indices); `attr(ci, cj)` the attributes of cell (ci, cj).
-    /// Triangles split each cell along its (0,0)–(1,1) diagonal.
+    /// Triangles split each cell along its (0,0)–(1,1) diagonal. All cells take the
+    /// orientation of the patch as a whole, so a folded cell stays inverted and the mesh
+    /// check reports it.
     pub fn patch(
         &mut self,
         kind: ElementKind,
@@ -261,6 +284,17 @@ impl MeshBuilder {
         attr: impl Fn(usize, usize) -> ElementAttr,
     ) {
         let p = kind.order();
+        let mut signed = 0.0;
+        for ci in 0..ni {
+            for cj in 0..nj {
+                let (i0, j0) = (ci * p, cj * p);
+                let q = [pos(i0, j0), pos(i0 + p, j0), pos(i0 + p, j0 + p), pos(i0, j0 + p)];
+                signed += (0..4)
+                    .map(|k| q[k][0] * q[(k + 1) % 4][1] - q[(k + 1) % 4][0] * q[k][1])
+                    .sum::<f64>();
+            }
+        }
+        let rev = signed < 0.0;
         for ci in 0..ni {
             for cj in 0..nj {
                 let (i0, j0) = (ci * p, cj * p);
@@ -268,7 +302,7 @@ impl MeshBuilder {
                 let att = attr(ci, cj);
                 match kind {
                     ElementKind::Quad4 => {
-                        self.element(kind, &[at(0, 0), at(1, 0), at(1, 1), at(0, 1)], att)
+                        self.oriented(kind, &[at(0, 0), at(1, 0), at(1, 1), at(0, 1)], att, rev)
                     }
                     ElementKind::Quad8 | ElementKind::Quad9 => {
                         let pts = [
@@ -282,22 +316,24 @@ impl MeshBuilder {
                             at(0, 1),
                             at(1, 1),
                         ];
-                        self.element(kind, &pts[..kind.n_nodes()], att)
+                        self.oriented(kind, &pts[..kind.n_nodes()], att, rev)
                     }
                     ElementKind::Tri3 => {
-                        self.element(kind, &[at(0, 0), at(1, 0), at(1, 1)], att);
-                        self.element(kind, &[at(0, 0), at(1, 1), at(0, 1)], att);
+                        self.oriented(kind, &[at(0, 0), at(1, 0), at(1, 1)], att, rev);
+                        self.oriented(kind, &[at(0, 0), at(1, 1), at(0, 1)], att, rev);
                     }
                     ElementKind::Tri6 => {
-                        self.element(
+                        self.oriented(
                             kind,
                             &[at(0, 0), at(2, 0), at(2, 2), at(1, 0), at(2, 1), at(1, 1)],
                             att,
+                            rev,
                         );
-                        self.element(
+                        self.oriented(
                             kind,
                             &[at(0, 0), at(2, 2), at(0, 2), at(1, 1), at(1, 2), at(0, 1)],
                             att,
+                            rev,
                         );
                     }
                 }
@@ -356,31 +392,40 @@ mod tests {
     }
 
     #[test]
-    fn degenerate_and_clockwise_elements() {
+    fn degenerate_inverted_and_mirrored_elements() {
+        let el = |kind, nodes: &[usize]| {
+            let mut n = [0; MAX_NODES];
+            n[..nodes.len()].copy_from_slice(nodes);
+            Element {
+                kind,
+                nodes: n,
+                material: 0,
+                ply_angle: 0.0,
+                wall_angle: 0.0,
+            }
+        };
+        let nodes = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [2.0, 0.0], [2.0, 1.0]];
+        // A flat triangle and a clockwise quadrilateral next to a counter-clockwise one.
         let mut m = Mesh {
-            nodes: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [2.0, 0.0]],
+            nodes: nodes.clone(),
             elements: vec![
-                Element {
-                    kind: ElementKind::Quad4,
-                    nodes: [0, 3, 2, 1, 0, 0, 0, 0, 0],
-                    material: 0,
-                    ply_angle: 0.0,
-                    wall_angle: 0.0,
-                },
-                Element {
-                    kind: ElementKind::Tri3,
-                    nodes: [0, 1, 4, 0, 0, 0, 0, 0, 0],
-                    material: 0,
-                    ply_angle: 0.0,
-                    wall_angle: 0.0,
-                },
+                el(ElementKind::Quad4, &[0, 3, 2, 1]),
+                el(ElementKind::Tri3, &[0, 1, 4]),
+                el(ElementKind::Quad4, &[1, 4, 5, 2]),
             ],
         };
         let bad = m.check().unwrap_err();
-        assert_eq!(bad.len(), 1);
-        assert_eq!(bad[0].element, 1);
-        assert!(bad[0].message.contains("degenerate"), "{}", bad[0].message);
-        // The clockwise quadrilateral was renumbered.
+        assert_eq!(bad.len(), 2);
+        assert_eq!(bad[0].element, 0);
+        assert!(bad[0].message.contains("inverted"), "{}", bad[0].message);
+        assert_eq!(bad[1].element, 1);
+        assert!(bad[1].message.contains("degenerate"), "{}", bad[1].message);
+        // A mesh numbered clockwise throughout is renumbered.
+        let mut m = Mesh {
+            nodes,
+            elements: vec![el(ElementKind::Quad4, &[0, 3, 2, 1]), el(ElementKind::Quad4, &[1, 2, 5, 4])],
+        };
+        assert!(m.check().is_ok());
         assert_eq!(m.elements[0].node_list(), &[0, 1, 2, 3]);
     }
 }

@@ -39,10 +39,13 @@
 use super::element::{ElementKind, MAX_NODES};
 use super::material::{Material, section_stiffness};
 use super::mesh::{Mesh, jacobian};
-use faer::linalg::solvers::SolveCore;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{
+    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
-use faer::{Conj, MatMut, Side};
+use faer::{Conj, MatMut, Par, Side};
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 /// A quadrature point of an element, mapped to the section.
@@ -331,6 +334,7 @@ pub fn solve(mesh: &Mesh, materials: &[Material]) -> Result<Warping, SolveError>
         .iter()
         .map(|e| section_stiffness(&materials[e.material].stiffness, e.ply_angle, e.wall_angle))
         .collect();
+
     let pat = Pattern::new(mesh);
     let n = pat.n;
     let nt = n + 6;
@@ -348,11 +352,20 @@ pub fn solve(mesh: &Mesh, materials: &[Material]) -> Result<Warping, SolveError>
     let mut xy = [[0.0; 2]; MAX_NODES];
     let mut qb = [[0.0; 6]; 3 * MAX_NODES];
     let mut bcol = [[(0usize, 0.0f64); 2]; 3 * MAX_NODES];
+    let mut ee = [[0.0; 3 * MAX_NODES]; 3 * MAX_NODES];
+    let mut re = [[0.0; 6]; 3 * MAX_NODES];
     for (ie, el) in mesh.elements.iter().enumerate() {
         let nn = coords(mesh, ie, &mut xy);
         let nd = 3 * nn;
         let qe = &q[ie];
         let nodes = el.node_list();
+        for row in ee.iter_mut().take(nd) {
+            row[..nd].fill(0.0);
+        }
+        for row in re.iter_mut().take(nd) {
+            *row = [0.0; 6];
+        }
+        let mut ae = Matrix6::<f64>::zeros();
         for g in el.kind.gauss_points() {
             let pt = map_point(el.kind, &xy[..nn], g.xi, g.eta, g.weight);
             let zm = z_matrix(pt.y, pt.z);
@@ -362,37 +375,47 @@ pub fn solve(mesh: &Mesh, materials: &[Material]) -> Result<Warping, SolveError>
                 bcol[a] = b_column(c, pt.dn[k]);
                 let [(r1, v1), (r2, v2)] = bcol[a];
                 for r in 0..6 {
-                    qb[a][r] = qe[(r, r1)] * v1 + qe[(r, r2)] * v2;
+                    qb[a][r] = pt.w * (qe[(r, r1)] * v1 + qe[(r, r2)] * v2);
                 }
             }
-            // E (lower triangle) and R.
-            for b in 0..nd {
+            for a in 0..nd {
+                let [(r1, v1), (r2, v2)] = bcol[a];
+                for b in 0..=a {
+                    ee[a][b] += v1 * qb[b][r1] + v2 * qb[b][r2];
+                }
+                for m in 0..6 {
+                    re[a][m] += pt.w * (v1 * qz[(r1, m)] + v2 * qz[(r2, m)]);
+                }
+            }
+            ae += pt.w * (zm.transpose() * qz);
+        }
+        // Scatter: E (lower triangle of the global numbering) and R.
+        for a in 0..nd {
+            let (ka, ca) = (a / 3, a % 3);
+            let ga = 3 * nodes[ka] + ca;
+            if fixed[ga] {
+                continue;
+            }
+            for b in 0..=a {
                 let (kb, cb) = (b / 3, b % 3);
-                let col = 3 * nodes[kb] + cb;
-                if fixed[col] {
+                let gb = 3 * nodes[kb] + cb;
+                if fixed[gb] {
                     continue;
                 }
-                for a in 0..nd {
-                    let (ka, ca) = (a / 3, a % 3);
-                    let row = 3 * nodes[ka] + ca;
-                    if row < col || fixed[row] {
-                        continue;
-                    }
-                    let [(r1, v1), (r2, v2)] = bcol[a];
-                    let e_ab = v1 * qb[b][r1] + v2 * qb[b][r2];
-                    vals[pat.pos(nodes[ka], ca, nodes[kb], cb)] += pt.w * e_ab;
-                }
-                // R[b][m] = b_bᵀ Q Z e_m.
-                let [(r1, v1), (r2, v2)] = bcol[b];
-                for m in 0..6 {
-                    vals[pat.pos_psi(col, m)] += pt.w * (v1 * qz[(r1, m)] + v2 * qz[(r2, m)]);
-                }
+                let p = if ga >= gb {
+                    pat.pos(nodes[ka], ca, nodes[kb], cb)
+                } else {
+                    pat.pos(nodes[kb], cb, nodes[ka], ca)
+                };
+                vals[p] += ee[a][b];
             }
-            let a6 = zm.transpose() * qz;
-            for a in 0..6 {
-                for b in 0..=a {
-                    vals[pat.pos_psi_psi(a, b)] += pt.w * a6[(a, b)];
-                }
+            for m in 0..6 {
+                vals[pat.pos_psi(ga, m)] += re[a][m];
+            }
+        }
+        for a in 0..6 {
+            for b in 0..=a {
+                vals[pat.pos_psi_psi(a, b)] += ae[(a, b)];
             }
         }
     }
@@ -413,13 +436,8 @@ pub fn solve(mesh: &Mesh, materials: &[Material]) -> Result<Warping, SolveError>
     }
     let sym = SymbolicSparseColMat::new_checked(nt, nt, pat.col_ptr.clone(), None, pat.row_idx.clone());
     let h = SparseColMat::new(sym, vals);
-    let symbolic = SymbolicLlt::try_new(h.symbolic(), Side::Lower)
-        .map_err(|e| SolveError::Factorization(format!("{e:?}")))?;
-    let llt = Llt::try_new_with_symbolic(symbolic, h.as_ref(), Side::Lower)
-        .map_err(|e| SolveError::Factorization(format!("{e:?}")))?;
-    let solve = |rhs: &mut [f64], cols: usize| {
-        llt.solve_in_place_with_conj(Conj::No, MatMut::from_column_major_slice_mut(rhs, nt, cols));
-    };
+    let factor = Factor::new(&pat, h)?;
+    let solve = |rhs: &mut [f64], cols: usize| factor.solve(rhs, cols);
 
     // Rigid-motion normalization: G = ∫ Z_uᵀ Z_u dA.
     let mut gram = Matrix6::<f64>::zeros();
@@ -437,28 +455,31 @@ pub fn solve(mesh: &Mesh, materials: &[Material]) -> Result<Warping, SolveError>
     }
     let gram_inv = gram.try_inverse().ok_or(SolveError::EmptyMesh)?;
     let normalize = |x: &mut [f64], cols: usize| {
-        for c in 0..cols {
-            let col = &mut x[c * nt..(c + 1) * nt];
-            let mut proj = Vector6::<f64>::zeros();
-            let mut xy = [[0.0; 2]; MAX_NODES];
-            for (ie, el) in mesh.elements.iter().enumerate() {
-                let nn = coords(mesh, ie, &mut xy);
-                let nodes = el.node_list();
-                for g in el.kind.gauss_points() {
-                    let pt = map_point(el.kind, &xy[..nn], g.xi, g.eta, g.weight);
+        let mut proj = vec![Vector6::<f64>::zeros(); cols];
+        let mut xy = [[0.0; 2]; MAX_NODES];
+        for (ie, el) in mesh.elements.iter().enumerate() {
+            let nn = coords(mesh, ie, &mut xy);
+            let nodes = el.node_list();
+            for g in el.kind.gauss_points() {
+                let pt = map_point(el.kind, &xy[..nn], g.xi, g.eta, g.weight);
+                let zu = rigid_modes(pt.y, pt.z);
+                for (c, pc) in proj.iter_mut().enumerate() {
+                    let col = &x[c * nt..(c + 1) * nt];
                     let mut u = [0.0; 3];
                     for k in 0..nn {
                         for (i, ui) in u.iter_mut().enumerate() {
                             *ui += pt.n[k] * col[3 * nodes[k] + i];
                         }
                     }
-                    let zu = rigid_modes(pt.y, pt.z);
                     for a in 0..6 {
-                        proj[a] += pt.w * (0..3).map(|i| zu[i][a] * u[i]).sum::<f64>();
+                        pc[a] += pt.w * (zu[0][a] * u[0] + zu[1][a] * u[1] + zu[2][a] * u[2]);
                     }
                 }
             }
-            let r = -(gram_inv * proj);
+        }
+        for (c, pc) in proj.iter().enumerate() {
+            let col = &mut x[c * nt..(c + 1) * nt];
+            let r = -(gram_inv * pc);
             for (k, p) in mesh.nodes.iter().enumerate() {
                 if !used[k] {
                     continue;
@@ -478,15 +499,16 @@ pub fn solve(mesh: &Mesh, materials: &[Material]) -> Result<Warping, SolveError>
     let mut theta1 = Matrix6::zeros();
     theta1[(5, 1)] = -1.0; // M₃′ = −V₂
     theta1[(4, 2)] = 1.0; // M₂′ = V₃
+    // Columns 1 and 2 (V₂, V₃); the other unit loads have w₁ = ψ₁ = 0.
     let mut x1 = vec![0.0; nt * 6];
-    for c in 0..6 {
+    for c in 1..3 {
         for m in 0..6 {
             x1[c * nt + n + m] = theta1[(m, c)];
         }
     }
     let rhs1 = x1.clone();
-    solve(&mut x1, 6);
-    normalize(&mut x1, 6);
+    solve(&mut x1[nt..3 * nt], 2);
+    normalize(&mut x1[nt..3 * nt], 2);
 
     // Zeroth-order right-hand side: [(C − Cᵀ) w₁ + L ψ₁; θ₀ − Lᵀ w₁].
     let mut x0 = vec![0.0; nt * 6];
@@ -548,11 +570,12 @@ pub fn solve(mesh: &Mesh, materials: &[Material]) -> Result<Warping, SolveError>
     solve(&mut x0, 6);
     normalize(&mut x0, 6);
 
-    // Residuals of the full equations (pinned rows included): checks that both
+    // The equations of the pinned unknowns were dropped: their residuals check that both
     // right-hand sides were orthogonal to the rigid motions.
+    let pinned: Vec<usize> = pins(mesh, &used).to_vec();
     let residual = {
-        let r1 = full_residual(mesh, &q, &x1, &rhs1, nt);
-        let r0 = full_residual(mesh, &q, &x0, &rhs0, nt);
+        let r1 = pinned_residual(mesh, &q, &x1, &rhs1, nt, &pinned);
+        let r0 = pinned_residual(mesh, &q, &x0, &rhs0, nt, &pinned);
         r1.max(r0)
     };
 
@@ -631,26 +654,31 @@ fn strain_columns(
     eps
 }
 
-/// Largest |H x − b| over all rows (pins included), relative to max |b| (per column).
-fn full_residual(mesh: &Mesh, q: &[Matrix6<f64>], x: &[f64], b: &[f64], nt: usize) -> f64 {
+/// Largest |(H x − b)_i| over the rows i of `rows`, relative to max |b| (per column).
+fn pinned_residual(
+    mesh: &Mesh,
+    q: &[Matrix6<f64>],
+    x: &[f64],
+    b: &[f64],
+    nt: usize,
+    rows: &[usize],
+) -> f64 {
     let n = nt - 6;
-    let mut worst: f64 = 0.0;
+    let cols = x.len() / nt;
+    let mut r = vec![0.0; cols * rows.len()];
     let mut xy = [[0.0; 2]; MAX_NODES];
-    for c in 0..6 {
-        let xc = &x[c * nt..(c + 1) * nt];
-        let bc = &b[c * nt..(c + 1) * nt];
-        let scale = bc.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        if scale == 0.0 {
+    for (ie, el) in mesh.elements.iter().enumerate() {
+        let nodes = el.node_list();
+        if !nodes.iter().any(|&k| rows.iter().any(|&d| d / 3 == k)) {
             continue;
         }
-        let mut r = vec![0.0; nt];
-        let psi = Vector6::from_iterator((0..6).map(|m| xc[n + m]));
-        for (ie, el) in mesh.elements.iter().enumerate() {
-            let nn = coords(mesh, ie, &mut xy);
-            let nodes = el.node_list();
-            for g in el.kind.gauss_points() {
-                let pt = map_point(el.kind, &xy[..nn], g.xi, g.eta, g.weight);
-                let zm = z_matrix(pt.y, pt.z);
+        let nn = coords(mesh, ie, &mut xy);
+        for g in el.kind.gauss_points() {
+            let pt = map_point(el.kind, &xy[..nn], g.xi, g.eta, g.weight);
+            let zm = z_matrix(pt.y, pt.z);
+            for c in 0..cols {
+                let xc = &x[c * nt..(c + 1) * nt];
+                let psi = Vector6::from_iterator((0..6).map(|m| xc[n + m]));
                 let mut e = zm * psi;
                 for k in 0..nn {
                     for cc in 0..3 {
@@ -662,34 +690,117 @@ fn full_residual(mesh: &Mesh, q: &[Matrix6<f64>], x: &[f64], b: &[f64], nt: usiz
                 let s = q[ie] * e;
                 for k in 0..nn {
                     for cc in 0..3 {
-                        let mut v = 0.0;
-                        for (row, bv) in b_column(cc, pt.dn[k]) {
-                            v += bv * s[row];
+                        let dof = 3 * nodes[k] + cc;
+                        if let Some(i) = rows.iter().position(|&d| d == dof) {
+                            let mut v = 0.0;
+                            for (row, bv) in b_column(cc, pt.dn[k]) {
+                                v += bv * s[row];
+                            }
+                            r[c * rows.len() + i] += pt.w * v;
                         }
-                        r[3 * nodes[k] + cc] += pt.w * v;
                     }
                 }
-                let zs = zm.transpose() * s;
-                for m in 0..6 {
-                    r[n + m] += pt.w * zs[m];
-                }
             }
         }
-        // Only rows of used nodes carry equations.
-        let mut used = vec![false; mesh.nodes.len()];
-        for el in &mesh.elements {
-            for &k in el.node_list() {
-                used[k] = true;
-            }
+    }
+    let mut worst: f64 = 0.0;
+    for c in 0..cols {
+        let bc = &b[c * nt..(c + 1) * nt];
+        let scale = bc.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if scale == 0.0 {
+            continue;
         }
-        for i in 0..nt {
-            if i < n && !used[i / 3] {
-                continue;
-            }
-            worst = worst.max((r[i] - bc[i]).abs() / scale);
+        for (i, &d) in rows.iter().enumerate() {
+            worst = worst.max((r[c * rows.len() + i] - bc[d]).abs() / scale);
         }
     }
     worst
+}
+
+/// Sparse Cholesky factor of the pinned H, ordered by approximate minimum degree on the
+/// node graph (three unknowns per node kept together, ψ last).
+struct Factor {
+    symbolic: SymbolicCholesky<usize>,
+    numeric: Vec<f64>,
+}
+
+impl Factor {
+    fn new(pat: &Pattern, h: SparseColMat<usize, f64>) -> Result<Self, SolveError> {
+        let fail = |e: &dyn std::fmt::Debug| SolveError::Factorization(format!("{e:?}"));
+        let nn = pat.adj.len();
+        let nt = pat.n + 6;
+        // Node graph (lower triangle) for the ordering.
+        let mut col_ptr = Vec::with_capacity(nn + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for l in &pat.adj {
+            row_idx.extend_from_slice(l);
+            col_ptr.push(row_idx.len());
+        }
+        let graph = SymbolicSparseColMat::new_checked(nn, nn, col_ptr, None, row_idx);
+        let mut fwd = vec![0usize; nn];
+        let mut inv = vec![0usize; nn];
+        let mut mem = MemBuffer::try_new(faer::sparse::linalg::amd::order_scratch::<usize>(
+            nn,
+            graph.compute_nnz(),
+        ))
+        .map_err(|e| fail(&e))?;
+        faer::sparse::linalg::amd::order(
+            &mut fwd,
+            &mut inv,
+            graph.as_ref(),
+            Default::default(),
+            MemStack::new(&mut mem),
+        )
+        .map_err(|e| fail(&e))?;
+        let mut pf = Vec::with_capacity(nt);
+        for &k in &fwd {
+            pf.extend([3 * k, 3 * k + 1, 3 * k + 2]);
+        }
+        pf.extend(pat.n..nt);
+        let mut pi = vec![0usize; nt];
+        for (i, &k) in pf.iter().enumerate() {
+            pi[k] = i;
+        }
+        let perm = PermRef::new_checked(&pf, &pi, nt);
+        let symbolic = factorize_symbolic_cholesky(
+            h.symbolic(),
+            Side::Lower,
+            SymmetricOrdering::Custom(perm),
+            Default::default(),
+        )
+        .map_err(|e| fail(&e))?;
+        let mut numeric = vec![0.0; symbolic.len_val()];
+        let par = Par::Seq;
+        let mut mem = MemBuffer::try_new(
+            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+        )
+        .map_err(|e| fail(&e))?;
+        symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut numeric,
+                h.as_ref(),
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .map_err(|e| fail(&e))?;
+        Ok(Self { symbolic, numeric })
+    }
+
+    fn solve(&self, rhs: &mut [f64], cols: usize) {
+        let nt = rhs.len() / cols;
+        let par = Par::Seq;
+        let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(cols, par));
+        LltRef::<'_, usize, f64>::new(&self.symbolic, &self.numeric).solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(rhs, nt, cols),
+            par,
+            MemStack::new(&mut mem),
+        );
+    }
 }
 
 /// Sums over the section: area, mass per length, first and second moments (mass-weighted).

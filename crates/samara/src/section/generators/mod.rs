@@ -2,13 +2,13 @@
 //! frame (origin at the generator's documented reference point), built from structured
 //! patches of the chosen element type.
 
-//TMP pub mod airfoil;
+pub mod airfoil;
 mod solid;
-//TMP mod thin_walled;
+mod thin_walled;
 
-//TMP pub use airfoil::{Airfoil, AirfoilError, SparCap, Surface, Web};
+pub use airfoil::{Airfoil, AirfoilError, SparCap, Surface, Web, airfoil};
 pub use solid::{Circle, Rectangle, Tube, circle, rectangle, tube};
-//TMP pub use thin_walled::{BoxSection, ISection, box_section, i_section};
+pub use thin_walled::{BoxSection, ISection, WallError, box_section, i_section};
 
 use super::element::ElementKind;
 

@@ -1,6 +1,6 @@
 //! Solid rectangle and circle, and the circular tube with a layup.
 
-use super::{Meshing, Ply, layup_grid, layup_thickness, tolerance};
+use super::{Meshing, Ply, layup_grid, tolerance};
 use crate::section::mesh::{ElementAttr, Mesh, MeshBuilder};
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
@@ -116,7 +116,6 @@ pub fn tube(t: &Tube) -> Mesh {
     let (depth, rows) = layup_grid(&t.plies, t.elements_per_ply.max(1), p);
     let mut b = MeshBuilder::new(tolerance(t.outer_radius));
     let np = (n * p) as f64;
-    let _ = layup_thickness(&t.plies);
     b.patch(
         kind,
         n,
