@@ -150,7 +150,13 @@ impl ElementKind {
     }
 
     /// Shape functions `n` and their derivatives `dn[k] = (∂N_k/∂ξ, ∂N_k/∂η)` at (ξ, η).
-    pub fn shape(self, xi: f64, eta: f64, n: &mut [f64; MAX_NODES], dn: &mut [[f64; 2]; MAX_NODES]) {
+    pub fn shape(
+        self,
+        xi: f64,
+        eta: f64,
+        n: &mut [f64; MAX_NODES],
+        dn: &mut [[f64; 2]; MAX_NODES],
+    ) {
         match self {
             Self::Tri3 => {
                 n[0] = 1.0 - xi - eta;
@@ -192,10 +198,7 @@ impl ElementKind {
                     let (a, b) = (1.0 + c[0] * xi, 1.0 + c[1] * eta);
                     let s = c[0] * xi + c[1] * eta - 1.0;
                     n[k] = 0.25 * a * b * s;
-                    dn[k] = [
-                        0.25 * c[0] * b * (s + a),
-                        0.25 * c[1] * a * (s + b),
-                    ];
+                    dn[k] = [0.25 * c[0] * b * (s + a), 0.25 * c[1] * a * (s + b)];
                 }
                 // Mid-side nodes on η = ∓1 (4, 6) and ξ = ±1 (5, 7).
                 for (k, e) in [(4, -1.0), (6, 1.0)] {
@@ -346,10 +349,19 @@ mod tests {
                     let want = if kind.is_triangle() {
                         fact(a) * fact(b) / fact(a + b + 2)
                     } else {
-                        let m = |p: u32| if p % 2 == 1 { 0.0 } else { 2.0 / (p as f64 + 1.0) };
+                        let m = |p: u32| {
+                            if p % 2 == 1 {
+                                0.0
+                            } else {
+                                2.0 / (p as f64 + 1.0)
+                            }
+                        };
                         m(a) * m(b)
                     };
-                    assert!((got - want).abs() < 1e-14, "{kind:?} ξ^{a} η^{b}: {got} vs {want}");
+                    assert!(
+                        (got - want).abs() < 1e-14,
+                        "{kind:?} ξ^{a} η^{b}: {got} vs {want}"
+                    );
                 }
             }
         }

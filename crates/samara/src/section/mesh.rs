@@ -111,7 +111,10 @@ impl Mesh {
                 ranges.push(None);
                 continue;
             }
-            ranges.push(Some((jacobian_range(e.kind, &xy), element_area(e.kind, &xy))));
+            ranges.push(Some((
+                jacobian_range(e.kind, &xy),
+                element_area(e.kind, &xy),
+            )));
         }
         let clockwise = |r: &Option<((f64, f64), f64)>| {
             r.is_some_and(|((min, max), _)| min < -tiny && max < -tiny)
@@ -168,7 +171,11 @@ pub fn jacobian_range(kind: ElementKind, xy: &[[f64; 2]]) -> (f64, f64) {
 }
 
 /// The Jacobian `J = [[∂y/∂ξ, ∂y/∂η], [∂z/∂ξ, ∂z/∂η]]` and its determinant.
-pub fn jacobian(kind: ElementKind, xy: &[[f64; 2]], dn: &[[f64; 2]; MAX_NODES]) -> ([[f64; 2]; 2], f64) {
+pub fn jacobian(
+    kind: ElementKind,
+    xy: &[[f64; 2]],
+    dn: &[[f64; 2]; MAX_NODES],
+) -> ([[f64; 2]; 2], f64) {
     let mut j = [[0.0; 2]; 2];
     for k in 0..kind.n_nodes() {
         for a in 0..2 {
@@ -288,7 +295,12 @@ impl MeshBuilder {
         for ci in 0..ni {
             for cj in 0..nj {
                 let (i0, j0) = (ci * p, cj * p);
-                let q = [pos(i0, j0), pos(i0 + p, j0), pos(i0 + p, j0 + p), pos(i0, j0 + p)];
+                let q = [
+                    pos(i0, j0),
+                    pos(i0 + p, j0),
+                    pos(i0 + p, j0 + p),
+                    pos(i0, j0 + p),
+                ];
                 signed += (0..4)
                     .map(|k| q[k][0] * q[(k + 1) % 4][1] - q[(k + 1) % 4][0] * q[k][1])
                     .sum::<f64>();
@@ -368,8 +380,20 @@ mod tests {
             let v = 0.5 / (nj * p) as f64;
             // Two patches side by side (x from 0 to 1 and 1 to 2), one of them mirrored
             // (clockwise): the builder renumbers it.
-            b.patch(kind, ni, nj, |i, j| [i as f64 * h, j as f64 * v], |_, _| attr());
-            b.patch(kind, ni, nj, |i, j| [2.0 - i as f64 * h, j as f64 * v], |_, _| attr());
+            b.patch(
+                kind,
+                ni,
+                nj,
+                |i, j| [i as f64 * h, j as f64 * v],
+                |_, _| attr(),
+            );
+            b.patch(
+                kind,
+                ni,
+                nj,
+                |i, j| [2.0 - i as f64 * h, j as f64 * v],
+                |_, _| attr(),
+            );
             let mut m = b.finish();
             let grid = 2 * ni * p + 1;
             let per_col = nj * p + 1;
@@ -404,7 +428,14 @@ mod tests {
                 wall_angle: 0.0,
             }
         };
-        let nodes = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [2.0, 0.0], [2.0, 1.0]];
+        let nodes = vec![
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [1.0, 1.0],
+            [0.0, 1.0],
+            [2.0, 0.0],
+            [2.0, 1.0],
+        ];
         // A flat triangle and a clockwise quadrilateral next to a counter-clockwise one.
         let mut m = Mesh {
             nodes: nodes.clone(),
@@ -423,7 +454,10 @@ mod tests {
         // A mesh numbered clockwise throughout is renumbered.
         let mut m = Mesh {
             nodes,
-            elements: vec![el(ElementKind::Quad4, &[0, 3, 2, 1]), el(ElementKind::Quad4, &[1, 2, 5, 4])],
+            elements: vec![
+                el(ElementKind::Quad4, &[0, 3, 2, 1]),
+                el(ElementKind::Quad4, &[1, 2, 5, 4]),
+            ],
         };
         assert!(m.check().is_ok());
         assert_eq!(m.elements[0].node_list(), &[0, 1, 2, 3]);

@@ -15,13 +15,13 @@
 
 pub mod element;
 pub mod generators;
-//TMP pub mod input;
+pub mod input;
 pub mod material;
 pub mod mesh;
-//TMP pub mod mesh_io;
+pub mod mesh_io;
 pub mod properties;
-//TMP pub mod recovery;
-//TMP pub mod results;
+pub mod recovery;
+pub mod results;
 pub mod warping;
 
 use crate::elements::beam::section::Section;

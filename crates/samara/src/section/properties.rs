@@ -54,9 +54,14 @@ pub fn offset_transform(c: [f64; 2]) -> Matrix6<f64> {
 }
 
 /// Principal directions of a symmetric 2×2 matrix: the angle of the eigenvector closest
-/// to the y axis, and the two eigenvalues in that order.
+/// to the y axis, and the two eigenvalues in that order (angle 0 when they are equal).
 fn principal(m: &Matrix2<f64>) -> (f64, [f64; 2]) {
     let eig = SymmetricEigen::new(*m);
+    let (a, b) = (eig.eigenvalues[0], eig.eigenvalues[1]);
+    if (a - b).abs() <= 1e-9 * a.abs().max(b.abs()) {
+        // Every direction is principal: keep the section axes.
+        return (0.0, [m[(0, 0)], m[(1, 1)]]);
+    }
     let v0: Vector2<f64> = eig.eigenvectors.column(0).into();
     let v1: Vector2<f64> = eig.eigenvectors.column(1).into();
     let (first, l0, l1) = if v0[0].abs() >= v1[0].abs() {

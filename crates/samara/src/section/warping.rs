@@ -61,13 +61,22 @@ pub(crate) struct Point {
 
 /// Shape functions and section derivatives at reference point (ξ, η) of an element with
 /// node coordinates `xy`; `weight` the quadrature weight.
-pub(crate) fn map_point(kind: ElementKind, xy: &[[f64; 2]], xi: f64, eta: f64, weight: f64) -> Point {
+pub(crate) fn map_point(
+    kind: ElementKind,
+    xy: &[[f64; 2]],
+    xi: f64,
+    eta: f64,
+    weight: f64,
+) -> Point {
     let mut n = [0.0; MAX_NODES];
     let mut dref = [[0.0; 2]; MAX_NODES];
     kind.shape(xi, eta, &mut n, &mut dref);
     let (j, det) = jacobian(kind, xy, &dref);
     // [∂N/∂y, ∂N/∂z] = [∂N/∂ξ, ∂N/∂η] J⁻¹.
-    let inv = [[j[1][1] / det, -j[0][1] / det], [-j[1][0] / det, j[0][0] / det]];
+    let inv = [
+        [j[1][1] / det, -j[0][1] / det],
+        [-j[1][0] / det, j[0][0] / det],
+    ];
     let mut dn = [[0.0; 2]; MAX_NODES];
     let (mut y, mut z) = (0.0, 0.0);
     for k in 0..kind.n_nodes() {
@@ -139,7 +148,9 @@ pub(crate) fn rigid_modes(y: f64, z: f64) -> [[f64; 6]; 3] {
 pub enum SolveError {
     EmptyMesh,
     /// The mesh falls apart into separate pieces.
-    Disconnected { pieces: usize },
+    Disconnected {
+        pieces: usize,
+    },
     /// The factorization failed (should not happen for a valid mesh and materials).
     Factorization(String),
 }
@@ -241,7 +252,9 @@ impl Pattern {
         if i == j {
             return start + ci - cj;
         }
-        let p = self.adj[j].binary_search(&i).expect("node pair in the pattern");
+        let p = self.adj[j]
+            .binary_search(&i)
+            .expect("node pair in the pattern");
         start + (3 - cj) + 3 * (p - 1) + ci
     }
 
@@ -284,7 +297,10 @@ fn connectivity(mesh: &Mesh) -> (usize, Vec<bool>) {
             }
         }
     }
-    let mut roots: Vec<usize> = (0..nn).filter(|&k| used[k]).map(|k| find(&mut parent, k)).collect();
+    let mut roots: Vec<usize> = (0..nn)
+        .filter(|&k| used[k])
+        .map(|k| find(&mut parent, k))
+        .collect();
     roots.sort_unstable();
     roots.dedup();
     (roots.len(), used)
@@ -297,14 +313,22 @@ fn pins(mesh: &Mesh, used: &[bool]) -> [usize; 6] {
     let nodes = &mesh.nodes;
     let cand = || (0..nodes.len()).filter(|&k| used[k]);
     let a = cand()
-        .min_by(|&p, &q| nodes[p][0].total_cmp(&nodes[q][0]).then(nodes[p][1].total_cmp(&nodes[q][1])))
+        .min_by(|&p, &q| {
+            nodes[p][0]
+                .total_cmp(&nodes[q][0])
+                .then(nodes[p][1].total_cmp(&nodes[q][1]))
+        })
         .expect("a used node");
     let pa = nodes[a];
     let dist = |k: usize| (nodes[k][0] - pa[0]).hypot(nodes[k][1] - pa[1]);
-    let b = cand().max_by(|&p, &q| dist(p).total_cmp(&dist(q))).expect("a used node");
+    let b = cand()
+        .max_by(|&p, &q| dist(p).total_cmp(&dist(q)))
+        .expect("a used node");
     let d = [nodes[b][0] - pa[0], nodes[b][1] - pa[1]];
     let off = |k: usize| ((nodes[k][0] - pa[0]) * d[1] - (nodes[k][1] - pa[1]) * d[0]).abs();
-    let c = cand().max_by(|&p, &q| off(p).total_cmp(&off(q))).expect("a used node");
+    let c = cand()
+        .max_by(|&p, &q| off(p).total_cmp(&off(q)))
+        .expect("a used node");
     // The in-plane rotation moves b perpendicular to d: pin b's component along the larger
     // perpendicular direction.
     let inplane = if d[0].abs() >= d[1].abs() { 2 } else { 1 };
@@ -428,13 +452,18 @@ pub fn solve(mesh: &Mesh, materials: &[Material]) -> Result<Warping, SolveError>
             diag_n += 1;
         }
     }
-    let unit = if diag_n > 0 { diag_sum / diag_n as f64 } else { 1.0 };
+    let unit = if diag_n > 0 {
+        diag_sum / diag_n as f64
+    } else {
+        1.0
+    };
     for col in 0..n {
         if fixed[col] {
             vals[pat.col_ptr[col]] = unit;
         }
     }
-    let sym = SymbolicSparseColMat::new_checked(nt, nt, pat.col_ptr.clone(), None, pat.row_idx.clone());
+    let sym =
+        SymbolicSparseColMat::new_checked(nt, nt, pat.col_ptr.clone(), None, pat.row_idx.clone());
     let h = SparseColMat::new(sym, vals);
     let factor = Factor::new(&pat, h)?;
     let solve = |rhs: &mut [f64], cols: usize| factor.solve(rhs, cols);
@@ -849,7 +878,8 @@ pub fn mass_matrix(s: &Integrals) -> Matrix6<f64> {
     let [iyy, izz, iyz] = s.mass_second;
     let j = Matrix3::new(iyy + izz, 0.0, 0.0, 0.0, izz, -iyz, 0.0, -iyz, iyy);
     let mut out = Matrix6::zeros();
-    out.fixed_view_mut::<3, 3>(0, 0).copy_from(&(Matrix3::identity() * m));
+    out.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(Matrix3::identity() * m));
     out.fixed_view_mut::<3, 3>(0, 3).copy_from(&et.transpose());
     out.fixed_view_mut::<3, 3>(3, 0).copy_from(&et);
     out.fixed_view_mut::<3, 3>(3, 3).copy_from(&j);

@@ -78,24 +78,48 @@ pub struct Airfoil {
 #[derive(Clone, Debug, PartialEq)]
 pub enum AirfoilError {
     TooFewPoints(usize),
-    NonFinite { point: usize },
+    NonFinite {
+        point: usize,
+    },
     /// First and last points apart (chord fractions) and no blunt trailing edge asked for.
-    NotClosed { gap: f64 },
+    NotClosed {
+        gap: f64,
+    },
     /// Segments i (from point i) and j cross at `at` (x/c, y/c).
-    SelfIntersecting { i: usize, j: usize, at: [f64; 2] },
+    SelfIntersecting {
+        i: usize,
+        j: usize,
+        at: [f64; 2],
+    },
     EmptySkin,
-    CapRange { cap: usize, reason: String },
-    WebOutside { web: usize, reason: String },
-    WebsOverlap { a: usize, b: usize },
+    CapRange {
+        cap: usize,
+        reason: String,
+    },
+    WebOutside {
+        web: usize,
+        reason: String,
+    },
+    WebsOverlap {
+        a: usize,
+        b: usize,
+    },
     /// The layers fold: too thick for the contour's curvature near x/c.
-    Folded { near: [f64; 2], depth: f64 },
+    Folded {
+        near: [f64; 2],
+        depth: f64,
+    },
 }
 
 impl std::fmt::Display for AirfoilError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Self::TooFewPoints(n) => write!(f, "the airfoil needs at least 5 distinct points (got {n})"),
-            Self::NonFinite { point } => write!(f, "point {} is not a pair of finite numbers", point + 1),
+            Self::TooFewPoints(n) => {
+                write!(f, "the airfoil needs at least 5 distinct points (got {n})")
+            }
+            Self::NonFinite { point } => {
+                write!(f, "point {} is not a pair of finite numbers", point + 1)
+            }
             Self::NotClosed { gap } => write!(
                 f,
                 "the airfoil contour is not closed: the first and last points are {gap:.4} chords apart"
@@ -145,7 +169,11 @@ impl Contour {
     fn segment(&self, s: f64) -> (usize, f64) {
         let m = self.v.len();
         let s = s.clamp(0.0, self.len());
-        let k = self.s.partition_point(|&x| x <= s).saturating_sub(1).min(m - 1);
+        let k = self
+            .s
+            .partition_point(|&x| x <= s)
+            .saturating_sub(1)
+            .min(m - 1);
         let l = self.s[k + 1] - self.s[k];
         (k, if l > 0.0 { (s - self.s[k]) / l } else { 0.0 })
     }
@@ -594,9 +622,13 @@ pub fn airfoil(a: &Airfoil) -> Result<(Mesh, Vec<String>), AirfoilError> {
                     let e = if edge == 1 { r.1 } else { r.2 };
                     if e > f0 && e < f1 {
                         let new = if on_cap == (edge == 1) { f0 } else { f1 };
+                        let x = |s: f64| c.at(s, 0.0)[0] / chord;
                         notes.push(format!(
-                            "spar cap {} edge moved from s = {e:.4} m to s = {new:.4} m to {} web {}'s foot",
+                            "spar cap {} ({} surface): edge moved from x/c = {:.4} to {:.4} to {} web {}'s foot",
                             k + 1,
+                            if r.0 { "upper" } else { "lower" },
+                            x(e),
+                            x(new),
                             if on_cap { "cover" } else { "clear" },
                             wi + 1
                         ));
@@ -769,7 +801,9 @@ pub fn airfoil(a: &Airfoil) -> Result<(Mesh, Vec<String>), AirfoilError> {
         let n_u = ((su / target).round() as usize).max(1);
         let n_l = (((s_end_lower - sl) / target).round() as usize).max(1);
         let nf = n_u.max(n_l);
-        let up_corners: Vec<f64> = (0..=nf).map(|i| su * (1.0 - i as f64 / nf as f64)).collect();
+        let up_corners: Vec<f64> = (0..=nf)
+            .map(|i| su * (1.0 - i as f64 / nf as f64))
+            .collect();
         let lo_corners: Vec<f64> = (0..=nf)
             .map(|i| sl + (s_end_lower - sl) * i as f64 / nf as f64)
             .collect();
@@ -779,7 +813,10 @@ pub fn airfoil(a: &Airfoil) -> Result<(Mesh, Vec<String>), AirfoilError> {
         let inner_u = *left.last().expect("rows");
         let inner_l = c.at(sl, d_skin);
         if p == 2 {
-            left.push([0.5 * (inner_u[0] + inner_l[0]), 0.5 * (inner_u[1] + inner_l[1])]);
+            left.push([
+                0.5 * (inner_u[0] + inner_l[0]),
+                0.5 * (inner_u[1] + inner_l[1]),
+            ]);
         }
         left.extend(skin_depth.iter().rev().map(|&d| c.at(sl, d)));
         let mut frac = vec![0.0];
@@ -818,7 +855,10 @@ pub fn airfoil(a: &Airfoil) -> Result<(Mesh, Vec<String>), AirfoilError> {
             }
             let u = c.at(up_s[i], 0.0);
             let l = c.at(lo_s[i], 0.0);
-            [u[0] + frac[j] * (l[0] - u[0]), u[1] + frac[j] * (l[1] - u[1])]
+            [
+                u[0] + frac[j] * (l[0] - u[0]),
+                u[1] + frac[j] * (l[1] - u[1]),
+            ]
         };
         let sharp = !c.blunt;
         let quad_cols = if sharp { nf - 1 } else { nf };
@@ -840,11 +880,7 @@ pub fn airfoil(a: &Airfoil) -> Result<(Mesh, Vec<String>), AirfoilError> {
                 let att = row_attr(nf - 1, cj);
                 if p == 2 {
                     let mid = |q: [f64; 2]| [0.5 * (q[0] + tip[0]), 0.5 * (q[1] + tip[1])];
-                    builder.element(
-                        tri,
-                        &[a0, a1, tip, node(i0, j0 + 1), mid(a1), mid(a0)],
-                        att,
-                    );
+                    builder.element(tri, &[a0, a1, tip, node(i0, j0 + 1), mid(a1), mid(a0)], att);
                 } else {
                     builder.element(tri, &[a0, a1, tip], att);
                 }

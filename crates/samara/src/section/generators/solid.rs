@@ -32,7 +32,12 @@ pub fn rectangle(r: &Rectangle) -> Mesh {
         kind,
         ny,
         nz,
-        |i, j| [-0.5 * r.width + i as f64 * hy, -0.5 * r.height + j as f64 * hz],
+        |i, j| {
+            [
+                -0.5 * r.width + i as f64 * hy,
+                -0.5 * r.height + j as f64 * hz,
+            ]
+        },
         |_, _| attr,
     );
     b.finish()

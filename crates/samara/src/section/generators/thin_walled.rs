@@ -32,9 +32,17 @@ pub struct BoxSection {
 #[derive(Clone, Debug, PartialEq)]
 pub enum WallError {
     /// Walls with different numbers of plies (wall index, its count, the bottom's count).
-    PlyCount { wall: usize, plies: usize, first: usize },
+    PlyCount {
+        wall: usize,
+        plies: usize,
+        first: usize,
+    },
     /// The walls fill the section: thickness sum along y or z not below the outer size.
-    TooThick { direction: &'static str, walls: f64, size: f64 },
+    TooThick {
+        direction: &'static str,
+        walls: f64,
+        size: f64,
+    },
 }
 
 impl std::fmt::Display for WallError {
@@ -45,7 +53,11 @@ impl std::fmt::Display for WallError {
                 "the {} wall has {plies} plies but the bottom wall has {first}: all walls of a box need the same number of plies",
                 ["bottom", "right", "top", "left"][*wall]
             ),
-            Self::TooThick { direction, walls, size } => write!(
+            Self::TooThick {
+                direction,
+                walls,
+                size,
+            } => write!(
                 f,
                 "the walls are {walls:e} m thick together along {direction}, not less than the section's {size:e} m"
             ),
@@ -182,7 +194,9 @@ pub fn i_section(s: &ISection) -> Result<Mesh, WallError> {
     let web_y: Vec<f64> = web_depth.iter().map(|d| -0.5 * tw + d).collect();
     let [nf, nw] = [s.elements[0].max(1), s.elements[1].max(1)];
     let uniform = |a: f64, b: f64, n: usize| -> Vec<f64> {
-        (0..=n * p).map(|i| a + (b - a) * i as f64 / (n * p) as f64).collect()
+        (0..=n * p)
+            .map(|i| a + (b - a) * i as f64 / (n * p) as f64)
+            .collect()
     };
     let mut builder = MeshBuilder::new(tolerance(s.width.max(s.height)));
     // Flanges: three blocks along y each.
@@ -195,7 +209,11 @@ pub fn i_section(s: &ISection) -> Result<Mesh, WallError> {
         };
         let n_rows = rows.len();
         let ply_of = |cj: usize| if top { rows[n_rows - 1 - cj] } else { rows[cj] };
-        for ys in [uniform(-w2, -0.5 * tw, nf), web_y.clone(), uniform(0.5 * tw, w2, nf)] {
+        for ys in [
+            uniform(-w2, -0.5 * tw, nf),
+            web_y.clone(),
+            uniform(0.5 * tw, w2, nf),
+        ] {
             tensor_patch(&mut builder, kind, &ys, &zs, |_, cj| {
                 let ply = &plies[ply_of(cj)];
                 ElementAttr {
