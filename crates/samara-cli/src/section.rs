@@ -34,7 +34,9 @@ pub fn stem(path: &Path) -> String {
 
 pub fn run(o: &Options) -> ExitCode {
     if o.recover.is_some() != (o.station.is_some() && o.time.is_some()) {
-        eprintln!("error: --recover RESULTS.nc needs --station and --time (and the other way round)");
+        eprintln!(
+            "error: --recover RESULTS.nc needs --station and --time (and the other way round)"
+        );
         return ExitCode::from(crate::EXIT_MODEL);
     }
     let clock = Instant::now();
@@ -63,14 +65,17 @@ pub fn run(o: &Options) -> ExitCode {
         }
     };
     let solved = clock.elapsed();
-    let out_dir = o.out.clone().unwrap_or_else(|| {
-        o.file
-            .parent()
-            .unwrap_or(Path::new("."))
-            .join("out")
-    });
+    let out_dir = o
+        .out
+        .clone()
+        .unwrap_or_else(|| o.file.parent().unwrap_or(Path::new(".")).join("out"));
     let stem = stem(&o.file);
-    summary(&loaded, &r, meshed.as_secs_f64(), (solved - meshed).as_secs_f64());
+    summary(
+        &loaded,
+        &r,
+        meshed.as_secs_f64(),
+        (solved - meshed).as_secs_f64(),
+    );
     let hash = results::content_hash(&loaded.files);
     let toml = results::results_toml(
         &loaded.name,
@@ -124,7 +129,8 @@ pub fn run(o: &Options) -> ExitCode {
 fn summary(l: &LoadedSection, r: &SectionResult, t_mesh: f64, t_solve: f64) {
     let p = &r.properties;
     let m = &l.model.mesh;
-    let kinds: std::collections::BTreeSet<&str> = m.elements.iter().map(|e| e.kind.name()).collect();
+    let kinds: std::collections::BTreeSet<&str> =
+        m.elements.iter().map(|e| e.kind.name()).collect();
     println!(
         "section '{}' ({}): {} elements ({}), {} nodes, {} material{}; meshed in {:.3} s, solved in {:.3} s",
         l.name,
@@ -133,16 +139,22 @@ fn summary(l: &LoadedSection, r: &SectionResult, t_mesh: f64, t_solve: f64) {
         kinds.into_iter().collect::<Vec<_>>().join(", "),
         m.nodes.len(),
         l.model.materials.len(),
-        if l.model.materials.len() == 1 { "" } else { "s" },
+        if l.model.materials.len() == 1 {
+            ""
+        } else {
+            "s"
+        },
         t_mesh,
         t_solve
     );
-    println!(
-        "  area {:.6e} m², mass {:.6e} kg/m",
-        p.area, p.mass
-    );
+    println!("  area {:.6e} m², mass {:.6e} kg/m", p.area, p.mass);
     let pt = |c: [f64; 2]| format!("({:+.6e}, {:+.6e})", c[0], c[1]);
-    println!("  tension centre {}  shear centre {}  mass centre {}  [m]", pt(p.tension_centre), pt(p.shear_centre), pt(p.mass_centre));
+    println!(
+        "  tension centre {}  shear centre {}  mass centre {}  [m]",
+        pt(p.tension_centre),
+        pt(p.shear_centre),
+        pt(p.mass_centre)
+    );
     println!(
         "  principal bending axes at {:+.4}° from y: EI = {:.6e}, {:.6e} N m²",
         p.elastic_axes_angle.to_degrees(),
@@ -187,10 +199,17 @@ fn recover(
     let mut rd = ResultsReader::open(nc).map_err(|e| e.to_string())?;
     let names = rd.section_names.clone();
     if names.is_empty() {
-        return Err(format!("{} has no beam sections (the model has no beams)", nc.display()));
+        return Err(format!(
+            "{} has no beam sections (the model has no beams)",
+            nc.display()
+        ));
     }
     let eta = rd.read("section_eta").map_err(|e| e.to_string())?;
-    let beam_of = |n: &str| n.rsplit_once('#').map(|(b, _)| b.to_string()).unwrap_or_default();
+    let beam_of = |n: &str| {
+        n.rsplit_once('#')
+            .map(|(b, _)| b.to_string())
+            .unwrap_or_default()
+    };
     let mut beams: Vec<String> = names.iter().map(|n| beam_of(n)).collect();
     beams.dedup();
     let k = if let Some(k) = names.iter().position(|n| n == station) {
@@ -203,17 +222,27 @@ fn recover(
             )
         })?;
         if !(0.0..=1.0).contains(&s) {
-            return Err(format!("--station {s} is outside [0, 1] (normalized arc length)"));
+            return Err(format!(
+                "--station {s} is outside [0, 1] (normalized arc length)"
+            ));
         }
         let b = match beam {
             Some(b) => {
                 if !beams.iter().any(|x| x == b) {
-                    return Err(format!("--beam '{b}' is not in the results; the beams are: {}", beams.join(", ")));
+                    return Err(format!(
+                        "--beam '{b}' is not in the results; the beams are: {}",
+                        beams.join(", ")
+                    ));
                 }
                 b.to_string()
             }
             None if beams.len() == 1 => beams[0].clone(),
-            None => return Err(format!("the results have several beams ({}): name one with --beam", beams.join(", "))),
+            None => {
+                return Err(format!(
+                    "the results have several beams ({}): name one with --beam",
+                    beams.join(", ")
+                ));
+            }
         };
         (0..names.len())
             .filter(|&i| beam_of(&names[i]) == b)
@@ -231,7 +260,14 @@ fn recover(
     let f = rd.read("beam_force").map_err(|e| e.to_string())?;
     let m = rd.read("beam_moment").map_err(|e| e.to_string())?;
     let at = |v: &[f64], c: usize| v[(ti * ns + k) * 3 + c];
-    let theta = Vector6::new(at(&f, 0), at(&f, 1), at(&f, 2), at(&m, 0), at(&m, 1), at(&m, 2));
+    let theta = Vector6::new(
+        at(&f, 0),
+        at(&f, 1),
+        at(&f, 2),
+        at(&m, 0),
+        at(&m, 1),
+        at(&m, 2),
+    );
     if !theta.iter().all(|x| x.is_finite()) {
         return Err("the sectional forces at that station and time are not finite".into());
     }
@@ -254,6 +290,7 @@ fn recover(
     );
     println!("  largest |σxx| {max_axial:.4e} Pa, largest von Mises {vm:.4e} Pa");
     let name = format!("{stem}_recovery");
-    let files = section::recovery::write(out_dir, &name, &l.model, &values).map_err(|e| e.to_string())?;
+    let files =
+        section::recovery::write(out_dir, &name, &l.model, &values).map_err(|e| e.to_string())?;
     Ok(files.to_vec())
 }

@@ -49,7 +49,11 @@ fn outline(l: &LoadedSection, e: usize) -> Vec<(f64, f64)> {
 pub fn plot(l: &LoadedSection, r: &SectionResult, out: &Path) -> Result<(), String> {
     plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular())
         .map_err(|_| "the built-in font could not be loaded".to_string())?;
-    let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = out
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     let size = (1400, 620);
     match ext.as_str() {
         "svg" => draw(SVGBackend::new(out, size).into_drawing_area(), l, r),
@@ -57,7 +61,11 @@ pub fn plot(l: &LoadedSection, r: &SectionResult, out: &Path) -> Result<(), Stri
     }
 }
 
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, l: &LoadedSection, r: &SectionResult) -> Result<(), String>
+fn draw<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    l: &LoadedSection,
+    r: &SectionResult,
+) -> Result<(), String>
 where
     DB::ErrorType: 'static,
 {
@@ -123,12 +131,18 @@ where
         let len = 0.35 * span;
         for (a, style) in [
             (p.elastic_axes_angle, BLACK.stroke_width(2)),
-            (p.elastic_axes_angle + std::f64::consts::FRAC_PI_2, BLACK.stroke_width(1)),
+            (
+                p.elastic_axes_angle + std::f64::consts::FRAC_PI_2,
+                BLACK.stroke_width(1),
+            ),
         ] {
             let (s, c) = a.sin_cos();
             chart
                 .draw_series(std::iter::once(PathElement::new(
-                    vec![(tc.0 - len * c, tc.1 - len * s), (tc.0 + len * c, tc.1 + len * s)],
+                    vec![
+                        (tc.0 - len * c, tc.1 - len * s),
+                        (tc.0 + len * c, tc.1 + len * s),
+                    ],
                     style,
                 )))
                 .map_err(e)?;
@@ -157,7 +171,9 @@ where
                     .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
                     .map_err(e)?
                     .label(m.name.clone())
-                    .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 20, y + 5)], c.filled()));
+                    .legend(move |(x, y)| {
+                        Rectangle::new([(x, y - 5), (x + 20, y + 5)], c.filled())
+                    });
             }
         }
         chart

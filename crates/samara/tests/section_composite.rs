@@ -82,7 +82,10 @@ fn cus_box_beam_against_vabs() {
     let fine = box_beam(80, 2);
     let mut worst: f64 = 0.0;
     for (i, j, yu, prevabs) in VABS {
-        let (c, f) = (coarse.stiffness[(i - 1, j - 1)], fine.stiffness[(i - 1, j - 1)]);
+        let (c, f) = (
+            coarse.stiffness[(i - 1, j - 1)],
+            fine.stiffness[(i - 1, j - 1)],
+        );
         let e = (f - yu).abs() / yu.abs();
         println!(
             "K{i}{j}: {f:+.5e} (coarse {c:+.5e}); VABS {yu:+.4e}, PreVABS {prevabs:+.4e}: {:+.3} %",
@@ -97,7 +100,11 @@ fn cus_box_beam_against_vabs() {
     let k = fine.stiffness;
     for i in 0..6 {
         for j in 0..6 {
-            if i == j || VABS.iter().any(|v| (v.0 - 1, v.1 - 1) == (i, j) || (v.1 - 1, v.0 - 1) == (i, j)) {
+            if i == j
+                || VABS
+                    .iter()
+                    .any(|v| (v.0 - 1, v.1 - 1) == (i, j) || (v.1 - 1, v.0 - 1) == (i, j))
+            {
                 continue;
             }
             let r = k[(i, j)].abs() / (k[(i, i)] * k[(j, j)]).sqrt();
@@ -150,7 +157,9 @@ fn skewed(offset: [f64; 2], angle: f64) -> SectionResult {
 
 fn rel_max(a: &Matrix6<f64>, b: &Matrix6<f64>) -> f64 {
     let scale = Matrix6::from_fn(|i, j| (b[(i, i)] * b[(j, j)]).sqrt());
-    (0..36).map(|k| (a[k] - b[k]).abs() / scale[k].max(f64::MIN_POSITIVE)).fold(0.0, f64::max)
+    (0..36)
+        .map(|k| (a[k] - b[k]).abs() / scale[k].max(f64::MIN_POSITIVE))
+        .fold(0.0, f64::max)
 }
 
 /// Shifting the material by d: `K' = T_dᵀ K T_d`, `M' = T_dᵀ M T_d` (`T_d` the strains of
@@ -161,8 +170,14 @@ fn rel_max(a: &Matrix6<f64>, b: &Matrix6<f64>) -> f64 {
 fn shifted_and_turned_sections_transform_rigidly() {
     let base = skewed([0.0, 0.0], 0.0);
     let k = base.stiffness;
-    let coupled = (0..6).flat_map(|i| (0..6).map(move |j| (i, j))).filter(|&(i, j)| i != j && k[(i, j)].abs() > 1e-6 * (k[(i, i)] * k[(j, j)]).sqrt()).count();
-    assert!(coupled >= 20, "the section is fully coupled ({coupled} coupling terms)");
+    let coupled = (0..6)
+        .flat_map(|i| (0..6).map(move |j| (i, j)))
+        .filter(|&(i, j)| i != j && k[(i, j)].abs() > 1e-6 * (k[(i, i)] * k[(j, j)]).sqrt())
+        .count();
+    assert!(
+        coupled >= 20,
+        "the section is fully coupled ({coupled} coupling terms)"
+    );
     let d = [0.013, -0.021];
     let shifted = skewed(d, 0.0);
     let t = offset_transform(d);
@@ -171,8 +186,15 @@ fn shifted_and_turned_sections_transform_rigidly() {
     println!("shift: stiffness {ek:.2e}, mass {em:.2e}");
     assert!(ek < 1e-9 && em < 1e-9, "{ek:e} {em:e}");
     let (p0, p1) = (base.properties, shifted.properties);
-    for (a, b) in [(p0.tension_centre, p1.tension_centre), (p0.shear_centre, p1.shear_centre), (p0.mass_centre, p1.mass_centre)] {
-        assert!((a[0] + d[0] - b[0]).abs() < 1e-10 && (a[1] + d[1] - b[1]).abs() < 1e-10, "{a:?} + {d:?} vs {b:?}");
+    for (a, b) in [
+        (p0.tension_centre, p1.tension_centre),
+        (p0.shear_centre, p1.shear_centre),
+        (p0.mass_centre, p1.mass_centre),
+    ] {
+        assert!(
+            (a[0] + d[0] - b[0]).abs() < 1e-10 && (a[1] + d[1] - b[1]).abs() < 1e-10,
+            "{a:?} + {d:?} vs {b:?}"
+        );
     }
     let alpha = 0.7f64;
     let turned = skewed([0.0, 0.0], alpha);
@@ -187,12 +209,20 @@ fn shifted_and_turned_sections_transform_rigidly() {
     assert!(ek < 1e-9 && em < 1e-9, "{ek:e} {em:e}");
     let q1 = turned.properties;
     let rot = |a: [f64; 2]| [c * a[0] - s * a[1], s * a[0] + c * a[1]];
-    for (a, b) in [(p0.tension_centre, q1.tension_centre), (p0.shear_centre, q1.shear_centre), (p0.mass_centre, q1.mass_centre)] {
+    for (a, b) in [
+        (p0.tension_centre, q1.tension_centre),
+        (p0.shear_centre, q1.shear_centre),
+        (p0.mass_centre, q1.mass_centre),
+    ] {
         let ra = rot(a);
-        assert!((ra[0] - b[0]).abs() < 1e-10 && (ra[1] - b[1]).abs() < 1e-10, "{ra:?} vs {b:?}");
+        assert!(
+            (ra[0] - b[0]).abs() < 1e-10 && (ra[1] - b[1]).abs() < 1e-10,
+            "{ra:?} vs {b:?}"
+        );
     }
     // The principal axes turn with the section.
     let da = q1.elastic_axes_angle - p0.elastic_axes_angle - alpha;
-    let da = (da + std::f64::consts::FRAC_PI_2).rem_euclid(std::f64::consts::PI) - std::f64::consts::FRAC_PI_2;
+    let da = (da + std::f64::consts::FRAC_PI_2).rem_euclid(std::f64::consts::PI)
+        - std::f64::consts::FRAC_PI_2;
     assert!(da.abs() < 1e-9, "principal axes {da}");
 }

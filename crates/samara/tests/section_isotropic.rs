@@ -111,14 +111,25 @@ fn rectangle_against_elasticity() {
     assert!(rel(k[(0, 0)], E * a) < 1e-12, "EA {}", k[(0, 0)]);
     assert!(rel(k[(4, 4)], E * w * h.powi(3) / 12.0) < 1e-12, "EI2");
     assert!(rel(k[(5, 5)], E * h * w.powi(3) / 12.0) < 1e-12, "EI3");
-    assert!(max_offdiag(&k) < 1e-12, "a doubly symmetric section has no couplings");
+    assert!(
+        max_offdiag(&k) < 1e-12,
+        "a doubly symmetric section has no couplings"
+    );
     let j = j_rectangle(w, h);
     let e_j = rel(k[(3, 3)], g * j);
-    assert!(e_j < 3e-6, "GJ {:.10e} vs {:.10e}: {e_j:.2e}", k[(3, 3)] / g, j);
+    assert!(
+        e_j < 3e-6,
+        "GJ {:.10e} vs {:.10e}: {e_j:.2e}",
+        k[(3, 3)] / g,
+        j
+    );
     // V₂ along the 0.2 m side (2a = 0.1, 2b = 0.2) and V₃ along the 0.1 m side.
     let k2 = k[(1, 1)] / (g * a);
     let k3 = k[(2, 2)] / (g * a);
-    let (r2, r3) = (k_rectangle(0.5 * h, 0.5 * w, nu), k_rectangle(0.5 * w, 0.5 * h, nu));
+    let (r2, r3) = (
+        k_rectangle(0.5 * h, 0.5 * w, nu),
+        k_rectangle(0.5 * w, 0.5 * h, nu),
+    );
     assert!(rel(k2, r2) < 3e-6, "k2 {k2:.9} vs {r2:.9}");
     assert!(rel(k3, r3) < 3e-6, "k3 {k3:.9} vs {r3:.9}");
     let cowper = 10.0 * (1.0 + nu) / (12.0 + 11.0 * nu);
@@ -183,11 +194,17 @@ fn circle_against_elasticity() {
         rel(k[(5, 5)], E * i),
         rel(k[(3, 3)], g * 2.0 * i),
     ];
-    assert!(errs.iter().all(|e| *e < 2e-6), "EA, EI2, EI3, GJ errors {errs:?}");
+    assert!(
+        errs.iter().all(|e| *e < 2e-6),
+        "EA, EI2, EI3, GJ errors {errs:?}"
+    );
     let k2 = k[(1, 1)] / (g * a);
     let k3 = k[(2, 2)] / (g * a);
     let want = k_circle(nu);
-    assert!(rel(k2, want) < 1e-5 && rel(k3, want) < 1e-5, "k {k2} {k3} vs {want}");
+    assert!(
+        rel(k2, want) < 1e-5 && rel(k3, want) < 1e-5,
+        "k {k2} {k3} vs {want}"
+    );
     let cowper = 6.0 * (1.0 + nu) / (7.0 + 6.0 * nu);
     let hutchinson = 6.0 * (1.0 + nu).powi(2) / (7.0 + 12.0 * nu + 4.0 * nu * nu);
     println!(
@@ -255,10 +272,20 @@ fn thin_tube_tends_to_closed_forms() {
         // (96 quadratic elements around: the isoparametric arcs make an O(h⁴) geometric
         // error of 1e-7.)
         let f = 1.0 + ratio * ratio / 4.0;
-        let exact = [rel(got[0], thin[0]), rel(got[1], thin[1] * f), rel(got[2], thin[2] * f)];
-        println!("  against the exact annulus EA, EI, GJ: {:.2e} {:.2e} {:.2e}", exact[0], exact[1], exact[2]);
+        let exact = [
+            rel(got[0], thin[0]),
+            rel(got[1], thin[1] * f),
+            rel(got[2], thin[2] * f),
+        ];
+        println!(
+            "  against the exact annulus EA, EI, GJ: {:.2e} {:.2e} {:.2e}",
+            exact[0], exact[1], exact[2]
+        );
         assert!(exact.iter().all(|e| *e < 1e-6), "{exact:?}");
-        println!("tube t/R = {ratio}: relative differences to the thin-wall forms EA, EI, GJ, GA: {:.3e} {:.3e} {:.3e} {:.3e}", err[0], err[1], err[2], err[3]);
+        println!(
+            "tube t/R = {ratio}: relative differences to the thin-wall forms EA, EI, GJ, GA: {:.3e} {:.3e} {:.3e} {:.3e}",
+            err[0], err[1], err[2], err[3]
+        );
         if let Some(p) = prev {
             // Second-order approach to the thin-wall limit (ratio 4 per halving; 3.5 allows
             // for the discretization error).
@@ -300,7 +327,9 @@ fn torsion_and_shear_converge_at_the_element_order() {
                 assert!(errs[2][c] < 2e-6, "{:e}", errs[2][c]);
                 continue;
             }
-            let orders: Vec<f64> = (1..3).map(|l| (errs[l - 1][c] / errs[l][c]).log2()).collect();
+            let orders: Vec<f64> = (1..3)
+                .map(|l| (errs[l - 1][c] / errs[l][c]).log2())
+                .collect();
             println!(
                 "{kind:?} {}: errors {:.3e} {:.3e} {:.3e}, orders {:.2} {:.2}",
                 ["GJ", "GA3"][c],

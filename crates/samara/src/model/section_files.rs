@@ -22,7 +22,11 @@ pub struct LoadOptions {
 
 /// Resolves every `section = …` of the beams' sections in place; returns the errors, each
 /// located at its `section` value.
-pub fn resolve(input: &mut ModelInput, source: &SourceFile, options: &LoadOptions) -> Vec<Diagnostic> {
+pub fn resolve(
+    input: &mut ModelInput,
+    source: &SourceFile,
+    options: &LoadOptions,
+) -> Vec<Diagnostic> {
     let base = source.path.parent().unwrap_or(Path::new(".")).to_path_buf();
     // Unique files in order of appearance.
     let mut files: Vec<PathBuf> = Vec::new();

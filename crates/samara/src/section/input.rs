@@ -427,7 +427,13 @@ impl Checker {
 
     /// Span of `key = …` (its value) inside an entry, else the entry's span.
     fn key(&self, entry: &Option<Range<usize>>, key: &str) -> Option<Range<usize>> {
-        let span = entry.clone()?;
+        let mut span = entry.clone()?;
+        // A table may be spanned by its header only: search up to the next header.
+        let full = &self.source.text;
+        if let Some(rest) = full.get(span.end..) {
+            let next = rest.find("\n[").map_or(full.len(), |i| span.end + i);
+            span.end = span.end.max(next);
+        }
         let text = self.source.text.get(span.clone())?;
         let mut from = 0;
         while let Some(i) = text[from..].find(key) {
@@ -513,25 +519,7 @@ impl Checker {
             );
             return None;
         }
-        let mat = |c: &mut Self, m: &Located<String>| -> Option<usize> {
-            match names.iter().position(|n| *n == m.value) {
-                Some(i) => Some(i),
-                None => {
-                    let hint = crate::model::error::did_you_mean(
-                        &m.value,
-                        names.iter().map(|s| s.as_str()),
-                    )
-                    .map(|b| format!("did you mean '{b}'?"))
-                    .unwrap_or_else(|| format!("the materials are: {}", names.join(", ")));
-                    c.error(
-                        format!("unknown material '{}'", m.value),
-                        m.span.clone(),
-                        Some(&hint),
-                    );
-                    None
-                }
-            }
-        };
+        let mat = |c: &mut Self, m: &Located<String>| c.material_ref(m, &names);
         let origin = given[0].0.to_string();
         let mesh: Option<Mesh> = if let Some(m) = &input.mesh {
             self.mesh_file(m, &names)
@@ -759,6 +747,22 @@ impl Checker {
         }
     }
 
+    /// The index of a named material; an error with a suggestion if there is none.
+    fn material_ref(&mut self, m: &Located<String>, names: &[String]) -> Option<usize> {
+        if let Some(i) = names.iter().position(|n| *n == m.value) {
+            return Some(i);
+        }
+        let hint = crate::model::error::did_you_mean(&m.value, names.iter().map(|s| s.as_str()))
+            .map(|b| format!("did you mean '{b}'?"))
+            .unwrap_or_else(|| format!("the materials are: {}", names.join(", ")));
+        self.error(
+            format!("unknown material '{}'", m.value),
+            m.span.clone(),
+            Some(&hint),
+        );
+        None
+    }
+
     fn angle(&mut self, a: Option<&Located<f64>>) -> Option<f64> {
         let Some(a) = a else { return Some(0.0) };
         if a.value.is_finite() && (-90.0..=90.0).contains(&a.value) {
@@ -793,23 +797,7 @@ impl Checker {
         let mut ok = true;
         for p in list {
             let v = &p.value;
-            let m = match names.iter().position(|n| *n == v.material.value) {
-                Some(i) => Some(i),
-                None => {
-                    let hint = crate::model::error::did_you_mean(
-                        &v.material.value,
-                        names.iter().map(|s| s.as_str()),
-                    )
-                    .map(|b| format!("did you mean '{b}'?"))
-                    .unwrap_or_else(|| format!("the materials are: {}", names.join(", ")));
-                    self.error(
-                        format!("unknown material '{}'", v.material.value),
-                        v.material.span.clone(),
-                        Some(&hint),
-                    );
-                    None
-                }
-            };
+            let m = self.material_ref(&v.material, names);
             let th_ok = v.thickness.is_finite() && v.thickness > 0.0;
             if !th_ok {
                 self.error(
@@ -993,17 +981,7 @@ impl Checker {
         // Regions → material and angles.
         let mut regions = Vec::new();
         for r in &m.value.regions {
-            let mat = match names.iter().position(|n| *n == r.value.material.value) {
-                Some(i) => Some(i),
-                None => {
-                    self.error(
-                        format!("unknown material '{}'", r.value.material.value),
-                        r.value.material.span.clone(),
-                        Some(&format!("the materials are: {}", names.join(", "))),
-                    );
-                    None
-                }
-            };
+            let mat = self.material_ref(&r.value.material, names);
             let angle = self.angle(r.value.ply_angle.as_ref());
             let wall = r.value.wall_angle.unwrap_or(0.0);
             if !wall.is_finite() {
@@ -1168,14 +1146,7 @@ impl Checker {
         let fill = match &v.trailing_edge_fill {
             None => Some(None),
             Some(f) => {
-                let m = names.iter().position(|n| *n == f.material.value);
-                if m.is_none() {
-                    self.error(
-                        format!("unknown material '{}'", f.material.value),
-                        f.material.span.clone(),
-                        None,
-                    );
-                }
+                let m = self.material_ref(&f.material, names);
                 let ang = self.angle(f.angle.as_ref());
                 m.zip(ang).map(Some)
             }

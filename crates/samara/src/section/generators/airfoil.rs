@@ -478,6 +478,17 @@ pub fn airfoil(a: &Airfoil) -> Result<(Mesh, Vec<String>), AirfoilError> {
         None => None,
     };
     let x_open = x_cut.unwrap_or(x_te);
+    // Vertices outside the layered band (the trailing edge and the solid region) do not
+    // trim the offsets: the layers end at the cut before reaching them.
+    let mut c = c;
+    if let Some((su, sl)) = cut {
+        for k in 0..c.v.len() {
+            if c.s[k] <= su || c.s[k] >= sl {
+                c.tan_half[k] = 0.0;
+            }
+        }
+    }
+    let c = c;
     // Cap arc-length ranges per surface.
     let mut cap_ranges: Vec<Vec<(bool, f64, f64)>> = Vec::new();
     for (k, cap) in a.caps.iter().enumerate() {
