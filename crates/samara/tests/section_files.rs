@@ -503,3 +503,59 @@ fn a_bad_section_file_is_reported_in_the_model() {
         e.render_plain()
     );
 }
+
+/// Recovery: the recovered 3-D stresses, integrated over the section (`∫ Zᵀ σ dA`), give
+/// back the sectional forces they were recovered from — one of the equations the warping
+/// solve satisfies exactly (tolerance 1e-9 of the largest force, round-off).
+#[test]
+fn recovered_stresses_integrate_to_the_sectional_forces() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("a.section.toml");
+    std::fs::write(&p, AIRFOIL).unwrap();
+    let l = input::load(&p).unwrap();
+    let r = analyze(&l.model).unwrap();
+    let theta = nalgebra::Vector6::new(3.0e4, -2.0e3, 5.0e3, 1.2e3, -4.0e3, 2.5e3);
+    let mut sum = nalgebra::Vector6::zeros();
+    for (e, el) in l.model.mesh.elements.iter().enumerate() {
+        let xy: Vec<[f64; 2]> = el
+            .node_list()
+            .iter()
+            .map(|&k| l.model.mesh.nodes[k])
+            .collect();
+        for g in el.kind.gauss_points() {
+            let (y, z, eps) =
+                samara::section::recovery::strain_at(&l.model, &r, e, g.xi, g.eta, &theta);
+            let sigma = r.warping.q[e] * eps;
+            let mut n = [0.0; 9];
+            let mut dn = [[0.0; 2]; 9];
+            el.kind.shape(g.xi, g.eta, &mut n, &mut dn);
+            let det = samara::section::mesh::jacobian(el.kind, &xy, &dn).1;
+            let w = g.weight * det;
+            // Zᵀ σ: N = ∫σxx, V₂ = ∫σxy, V₃ = ∫σxz, T = ∫(y σxz − z σxy), M₂ = ∫z σxx, M₃ = −∫y σxx.
+            sum += w * nalgebra::Vector6::new(
+                sigma[0],
+                sigma[5],
+                sigma[4],
+                y * sigma[4] - z * sigma[5],
+                z * sigma[0],
+                -y * sigma[0],
+            );
+        }
+    }
+    let err = (sum - theta).abs().max() / theta.abs().max();
+    println!("resultants {sum:?} vs {theta:?}: {err:.2e}");
+    assert!(err < 1e-9, "{err:e}");
+    // The nodal values written out agree with the quadrature-point evaluation at nodes.
+    let values = samara::section::recovery::recover(&l.model, &r, &theta);
+    assert_eq!(
+        values.len(),
+        l.model
+            .mesh
+            .elements
+            .iter()
+            .map(|e| e.kind.n_nodes())
+            .sum::<usize>()
+    );
+    let vtu = samara::section::recovery::vtu(&l.model, &values);
+    assert!(vtu.contains("Name=\"stress_material\"") && vtu.contains("NumberOfCells=\""));
+}
