@@ -277,9 +277,13 @@ static TRI3_RULE: [GaussPoint; 3] = [
 
 // Radon's 7-point rule (degree 5): a = (6 ∓ √15)/21, weights (155 ± √15)/2400 on the
 // reference triangle of area ½.
+#[allow(clippy::excessive_precision)]
 const TA: f64 = 0.101_286_507_323_456_34; // (6 − √15)/21
+#[allow(clippy::excessive_precision)]
 const TB: f64 = 0.470_142_064_105_115_1; // (6 + √15)/21
+#[allow(clippy::excessive_precision)]
 const WA: f64 = 0.062_969_590_272_413_58; // (155 − √15)/2400
+#[allow(clippy::excessive_precision)]
 const WB: f64 = 0.066_197_076_394_253_09; // (155 + √15)/2400
 static TRI7_RULE: [GaussPoint; 7] = [
     gp(1.0 / 3.0, 1.0 / 3.0, 9.0 / 80.0),
@@ -292,6 +296,7 @@ static TRI7_RULE: [GaussPoint; 7] = [
 ];
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
 

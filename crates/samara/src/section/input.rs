@@ -15,6 +15,9 @@ use serde::Deserialize;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
+/// Points of an airfoil and where each is written.
+pub type PointsAndSpans = (Vec<[f64; 2]>, Vec<Range<usize>>);
+
 /// The whole section file.
 #[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -1068,11 +1071,8 @@ impl Checker {
         let (e, v) = (&a.span, &a.value);
         let ok = self.positive(v.chord, e, "chord", "airfoil");
         // Coordinates and where each point is written.
-        let (coords, spans, source): (
-            Vec<[f64; 2]>,
-            Vec<Option<Range<usize>>>,
-            Option<SourceFile>,
-        ) = match (&v.coordinates, &v.coordinates_file) {
+        type Points = (Vec<[f64; 2]>, Vec<Option<Range<usize>>>, Option<SourceFile>);
+        let (coords, spans, source): Points = match (&v.coordinates, &v.coordinates_file) {
             (Some(c), None) => (
                 c.value.iter().map(|p| p.value).collect(),
                 c.value.iter().map(|p| p.span.clone()).collect(),
@@ -1239,7 +1239,7 @@ impl Checker {
 
 /// Reads airfoil coordinates (`x y` per line; a first line that is not two numbers is the
 /// name; blank lines and `#` comments are skipped); returns the points and their spans.
-pub fn read_coordinates(text: &str) -> Result<(Vec<[f64; 2]>, Vec<Range<usize>>), MeshFileError> {
+pub fn read_coordinates(text: &str) -> Result<PointsAndSpans, MeshFileError> {
     let mut pts = Vec::new();
     let mut spans = Vec::new();
     let mut start = 0;

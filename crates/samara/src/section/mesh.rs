@@ -131,7 +131,7 @@ impl Mesh {
                 }
                 continue;
             }
-            if !(min > tiny) {
+            if min.is_nan() || min <= tiny {
                 let what = if max < -tiny {
                     "is inverted (numbered clockwise while the rest of the mesh is counter-clockwise)"
                 } else {

@@ -24,6 +24,9 @@ use super::element::{ElementKind, MAX_NODES};
 use std::collections::HashMap;
 use std::ops::Range;
 
+/// A 2-D element as read from a Gmsh file: type, (node tag, where) pairs, entity, where.
+type RawElement = (ElementKind, Vec<(usize, Range<usize>)>, usize, Range<usize>);
+
 /// A mesh as read from a file: elements carry their region's name; materials and angles
 /// are assigned from the regions later.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -287,8 +290,7 @@ pub fn read_gmsh(text: &str) -> Result<MeshFile, MeshFileError> {
     let mut surface_physical: HashMap<usize, Vec<usize>> = HashMap::new();
     let mut node_index: HashMap<usize, usize> = HashMap::new();
     let mut coords: Vec<[f64; 2]> = Vec::new();
-    let mut raw_elements: Vec<(ElementKind, Vec<(usize, Range<usize>)>, usize, Range<usize>)> =
-        Vec::new();
+    let mut raw_elements: Vec<RawElement> = Vec::new();
     let mut seen_format = false;
     while let Some((_, toks)) = t.next_line() {
         let head = t.word(&toks[0]);

@@ -178,7 +178,7 @@ pub fn vtu(model: &SectionModel, values: &[NodeValues]) -> String {
         ("strain_material", |v: &NodeValues| v.strain_material),
         ("stress_material", |v: &NodeValues| v.stress_material),
     ] {
-        array(&mut s, name, 6, values.iter().flat_map(|v| get(v)));
+        array(&mut s, name, 6, values.iter().flat_map(get));
     }
     array(
         &mut s,

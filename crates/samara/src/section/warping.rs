@@ -36,6 +36,9 @@
 //! are θ₀: `½ θ₀ᵀ F θ₀ = ½ ∫ ε₀ᵀ Q ε₀ dA` with `ε₀ = Z ψ₀ + B N w₀ + S N w₁`; the
 //! stiffness is `K = F⁻¹`.
 
+// Index loops over element unknowns and quadrature points read closer to the formulas.
+#![allow(clippy::needless_range_loop)]
+
 use super::element::{ElementKind, MAX_NODES};
 use super::material::{Material, section_stiffness};
 use super::mesh::{Mesh, jacobian};
