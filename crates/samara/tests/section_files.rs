@@ -447,6 +447,12 @@ fn unknown_regions_materials_and_keys_are_named() {
         e.contains("bad.section.toml:8:1: error: unknown key `fromat`"),
         "{e}"
     );
+    let text = format!("[section]\nelement = \"quad9\"\n{}", mesh_section("m.mesh"));
+    let e = errors_of(&text, &[("m.mesh", SQUARE_MESH)]);
+    assert!(
+        e.contains("bad.section.toml:2:11: error: `element` chooses the element of the generators"),
+        "{e}"
+    );
     let two = format!(
         "{}\n[circle]\nradius = 1.0\nmaterial = \"steel\"\n",
         mesh_section("m.mesh")

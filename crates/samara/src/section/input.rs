@@ -524,6 +524,15 @@ impl Checker {
         }
         let mat = |c: &mut Self, m: &Located<String>| c.material_ref(m, &names);
         let origin = given[0].0.to_string();
+        if origin == "mesh"
+            && let Some(e) = header.and_then(|h| h.value.element.as_ref())
+        {
+            self.error(
+                "`element` chooses the element of the generators; a mesh file has its own element types",
+                e.span.clone(),
+                Some("remove `element`, or convert the mesh (e.g. Gmsh's Mesh.ElementOrder)"),
+            );
+        }
         let mesh: Option<Mesh> = if let Some(m) = &input.mesh {
             self.mesh_file(m, &names)
         } else if let Some(r) = &input.rectangle {
