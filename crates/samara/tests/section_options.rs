@@ -142,7 +142,7 @@ fn mesh_counts() {
     let count = |t: &str| solve(t, &[]).1.model.mesh.elements.len();
     let circ = |n: &str| format!("{ORTHO}\n[circle]\nradius = 0.02\nmaterial = \"foam\"\n{n}");
     assert_eq!(count(&circ("")), 64 + 4 * 8 * 3);
-    assert_eq!(count(&circ("elements = 4")), 16 + 4 * 4 * 1);
+    assert_eq!(count(&circ("elements = 4")), 16 + 4 * 4); // core 4 × 4, four patches of 4 × 1
     let tube = |n: &str| {
         format!(
             "{ORTHO}\n[tube]\nouter_radius = 0.02\nlayup = [{{ material = \"cfrp\", thickness = 1e-3, count = 2 }}]\n{n}"

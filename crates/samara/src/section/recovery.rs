@@ -7,7 +7,7 @@
 //! the stress jumps between plies stay sharp) and written as a VTK unstructured grid
 //! (`.vtu`, points (y, z, 0)) and as CSV.
 
-use super::element::ElementKind;
+use super::element::{ElementKind, MAX_NODES};
 use super::material::{material_axes, stress_rotation};
 use super::warping::{b_column, map_point, s_row, z_matrix};
 use super::{SectionModel, SectionResult};
@@ -39,12 +39,11 @@ pub fn strain_at(
     theta: &Vector6<f64>,
 ) -> (f64, f64, Vector6<f64>) {
     let el = &model.mesh.elements[e];
-    let xy: Vec<[f64; 2]> = el
-        .node_list()
-        .iter()
-        .map(|&k| model.mesh.nodes[k])
-        .collect();
-    let pt = map_point(el.kind, &xy, xi, eta, 1.0);
+    let mut xy = [[0.0; 2]; MAX_NODES];
+    for (p, &k) in xy.iter_mut().zip(el.node_list()) {
+        *p = model.mesh.nodes[k];
+    }
+    let pt = map_point(el.kind, &xy[..el.kind.n_nodes()], xi, eta, 1.0);
     let w = &r.warping;
     let n = w.n;
     let zm = z_matrix(pt.y, pt.z);
