@@ -205,6 +205,14 @@ fn recover(
         ));
     }
     let eta = rd.read("section_eta").map_err(|e| e.to_string())?;
+    if eta.len() != names.len() {
+        return Err(format!(
+            "{} is damaged: {} section names but {} stations",
+            nc.display(),
+            names.len(),
+            eta.len()
+        ));
+    }
     let beam_of = |n: &str| {
         n.rsplit_once('#')
             .map(|(b, _)| b.to_string())
@@ -259,14 +267,18 @@ fn recover(
     let ns = names.len();
     let f = rd.read("beam_force").map_err(|e| e.to_string())?;
     let m = rd.read("beam_moment").map_err(|e| e.to_string())?;
-    let at = |v: &[f64], c: usize| v[(ti * ns + k) * 3 + c];
+    let at = |v: &[f64], c: usize| {
+        v.get((ti * ns + k) * 3 + c)
+            .copied()
+            .ok_or_else(|| format!("{} is truncated: no beam forces at that time", nc.display()))
+    };
     let theta = Vector6::new(
-        at(&f, 0),
-        at(&f, 1),
-        at(&f, 2),
-        at(&m, 0),
-        at(&m, 1),
-        at(&m, 2),
+        at(&f, 0)?,
+        at(&f, 1)?,
+        at(&f, 2)?,
+        at(&m, 0)?,
+        at(&m, 1)?,
+        at(&m, 2)?,
     );
     if !theta.iter().all(|x| x.is_finite()) {
         return Err("the sectional forces at that station and time are not finite".into());
@@ -282,7 +294,9 @@ fn recover(
         .fold(0.0f64, f64::max);
     println!(
         "recovery at section {} (η = {:.4}) and t = {} s (nearest output time to {time}):",
-        names[k], eta[k], times[ti]
+        names[k],
+        eta.get(k).copied().unwrap_or(f64::NAN),
+        times[ti]
     );
     println!(
         "  forces  N {:+.4e} V₂ {:+.4e} V₃ {:+.4e} N   moments T {:+.4e} M₂ {:+.4e} M₃ {:+.4e} N m",

@@ -565,3 +565,21 @@ fn recovered_stresses_integrate_to_the_sectional_forces() {
     let vtu = samara::section::recovery::vtu(&l.model, &values);
     assert!(vtu.contains("Name=\"stress_material\"") && vtu.contains("NumberOfCells=\""));
 }
+
+/// Element counts that would exhaust the memory are refused before meshing, with the key
+/// located; so is an absurd ply `count`.
+#[test]
+fn oversized_meshes_are_refused() {
+    let bad = RECT.replace("elements = [32, 16]", "elements = [100000, 100000]");
+    let e = errors_of(&bad, &[]);
+    assert!(e.contains("rectangle: these element counts make about 10000000000 elements, more than the 5000000 allowed"), "{e}");
+    let bad = AIRFOIL.replace("angle = 45.0 }", "angle = 45.0, count = 100000000 }");
+    let e = errors_of(&bad, &[]);
+    assert!(
+        e.contains(&format!(
+            "{}: error: airfoil: `count` must be at most 10000",
+            at("bad.section.toml", &bad, "100000000")
+        )),
+        "{e}"
+    );
+}

@@ -412,7 +412,7 @@ pub fn read_gmsh(text: &str) -> Result<MeshFile, MeshFileError> {
                     }
                     parse_usize(&t, &b[2], "the parametric flag")?;
                     let count = parse_usize(&t, &b[3], "the number of nodes in the block")?;
-                    let mut tags = Vec::with_capacity(count);
+                    let mut tags = Vec::new();
                     for _ in 0..count {
                         let (_, l) = t
                             .next_line()

@@ -109,6 +109,10 @@ pub enum AirfoilError {
         near: [f64; 2],
         depth: f64,
     },
+    /// The upper and lower surfaces cannot be paired at x/c near the trailing edge.
+    NoTrailingEdge {
+        x: f64,
+    },
 }
 
 impl std::fmt::Display for AirfoilError {
@@ -136,6 +140,10 @@ impl std::fmt::Display for AirfoilError {
             Self::CapRange { cap, reason } => write!(f, "spar cap {}: {reason}", cap + 1),
             Self::WebOutside { web, reason } => write!(f, "web {}: {reason}", web + 1),
             Self::WebsOverlap { a, b } => write!(f, "webs {} and {} overlap", a + 1, b + 1),
+            Self::NoTrailingEdge { x } => write!(
+                f,
+                "the upper and lower surfaces cannot be paired at x/c = {x:.4} to close the trailing edge: list the points from the trailing edge over the upper surface to the leading edge and back along the lower surface"
+            ),
             Self::Folded { near, depth } => write!(
                 f,
                 "the layers ({depth:.3e} m deep) fold over near x/c = {:.4}, y/c = {:.4}: they are too thick for the curvature of the contour there",
@@ -467,8 +475,11 @@ pub fn airfoil(a: &Airfoil) -> Result<(Mesh, Vec<String>), AirfoilError> {
     // Arc-length stations of the cut (upper, lower).
     let cut = match x_cut {
         Some(x) => {
-            let su = c.station_at_x(true, x, 0.0).expect("upper surface at x");
-            let sl = c.station_at_x(false, x, 0.0).expect("lower surface at x");
+            let (Some(su), Some(sl)) =
+                (c.station_at_x(true, x, 0.0), c.station_at_x(false, x, 0.0))
+            else {
+                return Err(AirfoilError::NoTrailingEdge { x: x / chord });
+            };
             notes.push(format!(
                 "the skins merge into a solid trailing edge aft of x/c = {:.4}",
                 x / chord

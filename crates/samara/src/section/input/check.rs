@@ -12,6 +12,12 @@ use nalgebra::Matrix6;
 use std::ops::Range;
 use std::path::PathBuf;
 
+/// Largest mesh a section file may ask for.
+pub const MAX_ELEMENTS: usize = 5_000_000;
+
+/// Largest `count` of one ply entry.
+const MAX_COUNT: usize = 10_000;
+
 pub(super) struct Checker {
     pub(super) source: SourceFile,
     pub(super) diags: Vec<Diagnostic>,
@@ -157,7 +163,8 @@ impl Checker {
                     None,
                 );
             }
-            (ok && divisions.iter().all(|&d| d > 0))
+            let fits = self.guard("rectangle", divisions[0] as u128 * divisions[1] as u128, e);
+            (ok && fits && divisions.iter().all(|&d| d > 0))
                 .then_some(())
                 .and(m)
                 .and_then(|m| {
@@ -184,7 +191,8 @@ impl Checker {
                     None,
                 );
             }
-            (ok && n > 0).then_some(()).and(m).and_then(|m| {
+            let fits = self.guard("circle", (n as u128).pow(2) * 3, &c.span);
+            (ok && fits && n > 0).then_some(()).and(m).and_then(|m| {
                 angle.map(|a| {
                     generate::circle(&generate::Circle {
                         radius: c.value.radius,
@@ -211,12 +219,22 @@ impl Checker {
                     true
                 }
             });
-            (ok).then_some(()).and(plies).map(|plies| {
+            let around = t.value.elements_around.unwrap_or(72).max(3);
+            let per = t.value.elements_per_ply.unwrap_or(1).max(1);
+            let fits = match &plies {
+                Some(p) => self.guard(
+                    "tube",
+                    around as u128 * per as u128 * p.len() as u128,
+                    &t.span,
+                ),
+                None => true,
+            };
+            (ok && fits).then_some(()).and(plies).map(|plies| {
                 generate::tube(&generate::Tube {
                     outer_radius: t.value.outer_radius,
                     plies,
-                    elements_around: t.value.elements_around.unwrap_or(72).max(3),
-                    elements_per_ply: t.value.elements_per_ply.unwrap_or(1).max(1),
+                    elements_around: around,
+                    elements_per_ply: per,
                     meshing,
                 })
             })
@@ -245,7 +263,13 @@ impl Checker {
                 };
                 walls.push(list);
             }
-            if !ok || walls.iter().any(|w| w.is_none()) {
+            let [n1, n2] = v.elements.unwrap_or([24, 12]).map(|n| n.max(1) as u128);
+            let plies = walls.iter().flatten().map(|w| w.len()).max().unwrap_or(0) as u128;
+            let per = v.elements_per_ply.unwrap_or(1).max(1) as u128;
+            if !ok
+                || walls.iter().any(|w| w.is_none())
+                || !self.guard("box", 2 * (n1 + n2) * plies * per, e)
+            {
                 None
             } else {
                 let w: Vec<Vec<Ply>> = walls.into_iter().map(|w| w.expect("checked")).collect();
@@ -290,7 +314,14 @@ impl Checker {
             let top = flange(self, &v.top, "top");
             let bottom = flange(self, &v.bottom, "bottom");
             let web = self.layup(&v.web, &names, e, "web", "i_section");
-            match (ok, top, bottom, web) {
+            let [nf, nw] = v.elements.unwrap_or([6, 16]).map(|n| n.max(1) as u128);
+            let per = v.elements_per_ply.unwrap_or(1).max(1) as u128;
+            let rows = [&top, &bottom, &web]
+                .iter()
+                .map(|l| l.as_ref().map_or(0, |l| l.len()))
+                .sum::<usize>() as u128;
+            let fits = self.guard("i_section", (2 * nf + nw + rows) * rows * per, e);
+            match (ok && fits, top, bottom, web) {
                 (true, Some(top), Some(bottom), Some(web)) => {
                     match generate::i_section(&generate::ISection {
                         width: v.width,
@@ -359,6 +390,20 @@ impl Checker {
         }
     }
 
+    /// Refuses meshes too large to build (a typo in an element count must not exhaust the
+    /// memory): at most [`MAX_ELEMENTS`] elements.
+    fn guard(&mut self, what: &str, estimate: u128, span: &Option<Range<usize>>) -> bool {
+        if estimate <= MAX_ELEMENTS as u128 {
+            return true;
+        }
+        self.error(
+            format!("{what}: these element counts make about {estimate} elements, more than the {MAX_ELEMENTS} allowed"),
+            span.clone(),
+            Some("a few thousand to some tens of thousands of elements resolve a section well"),
+        );
+        false
+    }
+
     /// The index of a named material; an error with a suggestion if there is none.
     fn material_ref(&mut self, m: &Located<String>, names: &[String]) -> Option<usize> {
         if let Some(i) = names.iter().position(|n| *n == m.value) {
@@ -422,6 +467,13 @@ impl Checker {
                 );
             }
             let count = v.count.unwrap_or(1);
+            if count > MAX_COUNT {
+                self.error(
+                    format!("{what}: `count` must be at most {MAX_COUNT} (got {count})"),
+                    self.key(&p.span, "count"),
+                    None,
+                );
+            }
             if count == 0 {
                 self.error(
                     format!("{what}: `count` must be at least 1"),
@@ -431,7 +483,7 @@ impl Checker {
             }
             let angle = self.angle(v.angle.as_ref());
             match (m, angle) {
-                (Some(m), Some(a)) if th_ok && count > 0 => {
+                (Some(m), Some(a)) if th_ok && count > 0 && count <= MAX_COUNT => {
                     for _ in 0..count {
                         out.push(Ply {
                             material: m,
@@ -776,6 +828,19 @@ impl Checker {
             elements_per_ply: v.elements_per_ply.unwrap_or(1).max(1),
             meshing,
         };
+        let rows = af.skin.len() + af.caps.iter().map(|c| c.plies.len()).sum::<usize>();
+        let estimate =
+            af.elements_around as u128 * (rows as u128 + 2) * af.elements_per_ply as u128
+                + af.webs
+                    .iter()
+                    .map(|w| {
+                        (w.plies.len() as u128)
+                            * (w.elements.max(1) as u128 + af.elements_around as u128)
+                    })
+                    .sum::<u128>();
+        if !self.guard("airfoil", estimate, e) {
+            return None;
+        }
         match generate::airfoil(&af) {
             Ok((mesh, notes)) => {
                 for n in notes {
@@ -838,7 +903,7 @@ impl Checker {
                         self.key(e, "skin"),
                         Some("use thinner plies, a larger chord, or more points where the contour is sharply curved"),
                     ),
-                    E::TooFewPoints(_) | E::EmptySkin => self.error(format!("airfoil: {err}"), self.key(e, coord_key), None),
+                    E::TooFewPoints(_) | E::EmptySkin | E::NoTrailingEdge { .. } => self.error(format!("airfoil: {err}"), self.key(e, coord_key), None),
                 }
                 None
             }
