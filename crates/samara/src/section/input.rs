@@ -342,7 +342,7 @@ impl std::error::Error for SectionError {}
 
 /// Reads and checks a section file.
 pub fn load(path: &Path) -> Result<LoadedSection, SectionError> {
-    let text = crate::input_files::read_text(path.as_ref()).map_err(|e| SectionError {
+    let text = crate::input_files::read_text(path).map_err(|e| SectionError {
         errors: vec![ModelError {
             source: SourceFile::new(path, ""),
             diagnostics: vec![
