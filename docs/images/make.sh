@@ -27,3 +27,5 @@ $samara plot "$tmp/four_bar/turn.nc" joint_coordinate:crank_pivot.theta3 joint_c
 $samara run examples/verification/right_angle_cantilever.toml --out "$tmp/rac" --quiet > /dev/null
 python3 docs/images/right_angle_cantilever.py "$tmp/rac/dynamic.nc" docs/images/right_angle_cantilever.png
 python3 docs/images/beam_frames.py
+$samara section examples/sections/airfoil.section.toml --out "$tmp/section" --plot > /dev/null 2>&1
+cp "$tmp/section/airfoil.png" docs/images/section_airfoil.png

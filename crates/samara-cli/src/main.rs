@@ -3,11 +3,13 @@
 mod info;
 mod plot;
 mod report;
+mod section;
+mod section_plot;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use samara::analysis::run_analysis;
-use samara::model::{AnalysisKind, LoadedModel, Model, ModelInput};
+use samara::model::{AnalysisKind, LoadOptions, LoadedModel, Model, ModelInput};
 use samara::output::ResultsFile;
 use samara::system::{State, System};
 use std::io::IsTerminal;
@@ -16,7 +18,7 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 /// Exit status: the model (or an input/output file) is unusable.
-const EXIT_MODEL: u8 = 1;
+pub(crate) const EXIT_MODEL: u8 = 1;
 /// Exit status: an analysis stopped before its end.
 const EXIT_SOLVER: u8 = 2;
 
@@ -71,6 +73,33 @@ enum Command {
         /// Results file (NetCDF) written by `samara run`.
         results: PathBuf,
     },
+    /// Cross-sectional analysis: the 6×6 stiffness and mass of a beam section from its
+    /// mesh or layup (docs/sections.md); writes `<stem>.toml` and `<stem>.csv`.
+    Section {
+        /// Section file (TOML).
+        section: PathBuf,
+        /// Output directory [default: out/ beside the section file].
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// Also draw the mesh by material and ply angle, with centres and principal axes
+        /// (`<stem>.png`).
+        #[arg(long)]
+        plot: bool,
+        /// Recover the 3-D strain and stress from the sectional forces of this beam run
+        /// (`<stem>_recovery.vtu` and `.csv`).
+        #[arg(long, value_name = "RESULTS.nc")]
+        recover: Option<PathBuf>,
+        /// Section of the beam run: normalized arc length η (nearest quadrature point) or a
+        /// section name such as `blade#3`.
+        #[arg(long)]
+        station: Option<String>,
+        /// Time of the beam run (nearest output time) [s].
+        #[arg(long)]
+        time: Option<f64>,
+        /// Beam of the run, when it has several.
+        #[arg(long)]
+        beam: Option<String>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -79,6 +108,23 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Run { model, out, quiet } => run(&model, out, quiet),
         Command::Check { model } => check(&model),
+        Command::Section {
+            section,
+            out,
+            plot,
+            recover,
+            station,
+            time,
+            beam,
+        } => section::run(&section::Options {
+            file: section,
+            out,
+            plot,
+            recover,
+            station,
+            time,
+            beam,
+        }),
         Command::Info { results } => {
             let r =
                 samara::output::ResultsReader::open(&results).and_then(|mut r| info::info(&mut r));
@@ -153,9 +199,25 @@ fn main() -> ExitCode {
     }
 }
 
+/// Results directory of a model: `--out`, or `out/` beside the model file.
+fn results_dir(path: &Path, out: Option<PathBuf>) -> PathBuf {
+    out.unwrap_or_else(|| path.parent().unwrap_or(Path::new(".")).join("out"))
+}
+
+/// Section files named by the model are cached in `<results dir>/sections/`; `write`
+/// false only reads the cache (`samara check`).
+fn load_options(results: &Path, write: bool) -> LoadOptions {
+    LoadOptions {
+        section_cache: Some(samara::section::results::Cache {
+            dir: results.join("sections"),
+            write,
+        }),
+    }
+}
+
 /// Loads a model, printing its diagnostics; `None` if it has errors.
-fn load(path: &Path) -> Option<LoadedModel> {
-    match Model::from_file(path) {
+fn load(path: &Path, options: &LoadOptions) -> Option<LoadedModel> {
+    match Model::from_file_with(path, options) {
         Ok(loaded) => {
             report::diagnostics(&loaded.source, &loaded.warnings);
             Some(loaded)
@@ -178,7 +240,7 @@ fn load(path: &Path) -> Option<LoadedModel> {
 }
 
 fn check(path: &Path) -> ExitCode {
-    let Some(loaded) = load(path) else {
+    let Some(loaded) = load(path, &load_options(&results_dir(path, None), false)) else {
         return ExitCode::from(EXIT_MODEL);
     };
     let m = &loaded.model;
@@ -209,11 +271,11 @@ fn check(path: &Path) -> ExitCode {
 }
 
 fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
-    let Some(loaded) = load(path) else {
+    let out_dir = results_dir(path, out);
+    let Some(loaded) = load(path, &load_options(&out_dir, true)) else {
         return ExitCode::from(EXIT_MODEL);
     };
     let model = &loaded.model;
-    let out_dir = out.unwrap_or_else(|| path.parent().unwrap_or(Path::new(".")).join("out"));
     let sys = System::new(model);
     for w in &sys.warnings {
         eprintln!("warning: {w}");

@@ -29,6 +29,7 @@ pub mod joints;
 pub mod math;
 pub mod model;
 pub mod output;
+pub mod section;
 pub mod solve;
 pub mod system;
 pub mod tangent_check;

@@ -17,7 +17,11 @@ fn model_files(dir: &Path, out: &mut Vec<PathBuf>) {
         let path = entry.unwrap().path();
         if path.is_dir() {
             model_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "toml") {
+        } else if path.extension().is_some_and(|e| e == "toml")
+            && !path.to_string_lossy().ends_with(".section.toml")
+        {
+            // Section files (examples/sections/) are not models: samara-cli's
+            // section tests run every one of them.
             out.push(path);
         }
     }

@@ -78,13 +78,17 @@ pub struct BeamInput {
     pub rotation_centre: Option<[f64; 3]>,
 }
 
-/// Sectional properties at one station: either `stiffness` (and `mass`) 6×6 matrices, or
-/// `isotropic` engineering constants.
+/// Sectional properties at one station: either `stiffness` (and `mass`) 6×6 matrices,
+/// `isotropic` engineering constants, or a `section` file.
 #[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SectionInput {
     /// Normalized arc length η ∈ [0, 1] of the station.
     pub station: f64,
+    /// A section file (`SECTION.toml`, path relative to the model file) whose stiffness and
+    /// mass samara's cross-sectional analysis computes (docs/sections.md).
+    #[serde(default)]
+    pub section: Option<Located<String>>,
     /// 6×6 stiffness, section frame, (axial, shear y, shear z, torsion, bending y, bending z).
     #[serde(default)]
     pub stiffness: Option<[[f64; 6]; 6]>,

@@ -8,6 +8,7 @@ pub mod beam_input;
 pub mod error;
 pub mod input;
 pub mod located;
+pub mod section_files;
 mod validate;
 
 pub use crate::core::NodeRef;
@@ -20,6 +21,8 @@ pub use input::{
     FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame, ModelInput,
 };
 pub use located::Located;
+pub use section_files::LoadOptions;
+pub(crate) use validate::parse_error_diagnostic as parse_error;
 pub use validate::validate;
 
 use crate::math::Rotation;
@@ -235,10 +238,20 @@ impl Model {
         self.nodes.iter().position(|n| n.name == name)
     }
 
-    /// Parses and validates model text; `path` is used in diagnostics only.
+    /// Parses and validates model text; `path` is used in diagnostics and to find the
+    /// files the model names (sections files, section files).
     pub fn from_toml_str(text: &str, path: impl AsRef<Path>) -> Result<LoadedModel, ModelError> {
+        Self::from_toml_str_with(text, path, &LoadOptions::default())
+    }
+
+    /// [`Model::from_toml_str`] with options (the section cache).
+    pub fn from_toml_str_with(
+        text: &str,
+        path: impl AsRef<Path>,
+        options: &LoadOptions,
+    ) -> Result<LoadedModel, ModelError> {
         let source = SourceFile::new(path.as_ref(), text);
-        let input: ModelInput = match toml::from_str(text) {
+        let mut input: ModelInput = match toml::from_str(text) {
             Ok(i) => i,
             Err(e) => {
                 return Err(ModelError {
@@ -247,11 +260,28 @@ impl Model {
                 });
             }
         };
-        validate(&input, source)
+        let notes = section_files::resolve(&mut input, &source, options);
+        if notes.iter().any(|d| d.severity == Severity::Error) {
+            return Err(ModelError {
+                source,
+                diagnostics: notes,
+            });
+        }
+        let mut loaded = validate(&input, source)?;
+        loaded.warnings.extend(notes);
+        Ok(loaded)
     }
 
     /// Reads, parses and validates a model file.
     pub fn from_file(path: impl AsRef<Path>) -> Result<LoadedModel, crate::Error> {
+        Self::from_file_with(path, &LoadOptions::default())
+    }
+
+    /// [`Model::from_file`] with options (the section cache).
+    pub fn from_file_with(
+        path: impl AsRef<Path>,
+        options: &LoadOptions,
+    ) -> Result<LoadedModel, crate::Error> {
         use crate::input_files::{InputFileError, read_text};
         let path = path.as_ref();
         let text = match read_text(path) {
@@ -284,6 +314,6 @@ impl Model {
                 });
             }
         };
-        Ok(Self::from_toml_str(&text, path)?)
+        Ok(Self::from_toml_str_with(&text, path, options)?)
     }
 }
