@@ -264,7 +264,7 @@ fn check(path: &Path) -> ExitCode {
         },
         sys.n_coordinates,
         m.springs.len(),
-        m.loads.len(),
+        m.forces.len(),
         m.analyses.len()
     );
     ExitCode::SUCCESS

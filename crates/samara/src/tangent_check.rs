@@ -547,3 +547,111 @@ pub fn check_constraint(
         ),
     }
 }
+
+/// An element or a constraint and the state at which to check its tangents (the cases
+/// each component kind registers, [`crate::model::components::ComponentKind::tangent_cases`]).
+pub enum TangentCase {
+    Element {
+        element: Box<dyn Element>,
+        nodes: Vec<NodeState>,
+        states: Vec<ElementState>,
+        signals: Vec<f64>,
+    },
+    Constraint {
+        constraint: Box<dyn Constraint>,
+        nodes: Vec<NodeState>,
+        coords: Vec<Coordinate>,
+        mu: Vec<f64>,
+    },
+}
+
+impl TangentCase {
+    pub fn element(element: Box<dyn Element>, nodes: Vec<NodeState>) -> Self {
+        Self::Element {
+            element,
+            nodes,
+            states: Vec::new(),
+            signals: Vec::new(),
+        }
+    }
+
+    pub fn constraint(
+        constraint: Box<dyn Constraint>,
+        nodes: Vec<NodeState>,
+        coords: Vec<Coordinate>,
+        mu: Vec<f64>,
+    ) -> Self {
+        Self::Constraint {
+            constraint,
+            nodes,
+            coords,
+            mu,
+        }
+    }
+
+    /// Element states `(z, ż)`.
+    pub fn with_states(mut self, values: Vec<(f64, f64)>) -> Self {
+        if let Self::Element { states, .. } = &mut self {
+            *states = values
+                .into_iter()
+                .map(|(z, zd)| ElementState { z, zd })
+                .collect();
+        }
+        self
+    }
+
+    /// Values of the input signals.
+    pub fn with_signals(mut self, values: Vec<f64>) -> Self {
+        if let Self::Element { signals, .. } = &mut self {
+            *signals = values;
+        }
+        self
+    }
+
+    /// Name of the element or constraint.
+    pub fn name(&self) -> &str {
+        match self {
+            Self::Element { element, .. } => element.name(),
+            Self::Constraint { constraint, .. } => constraint.name(),
+        }
+    }
+
+    /// The largest relative mismatch of every tangent of the case.
+    pub fn check(&self, ctx: &EvalContext) -> f64 {
+        match self {
+            Self::Element {
+                element,
+                nodes,
+                states,
+                signals,
+            } => check_element_with(element.as_ref(), ctx, nodes, states, signals).worst(),
+            Self::Constraint {
+                constraint,
+                nodes,
+                coords,
+                mu,
+            } => check_constraint(constraint.as_ref(), ctx, nodes, coords, mu).worst(),
+        }
+    }
+}
+
+/// A node in a reproducible, generic state (position, orientation, velocities and
+/// accelerations of order one) from `seed`.
+pub fn random_node(seed: u64) -> NodeState {
+    let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(1);
+    let mut next = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
+    };
+    let mut v3 = |scale: f64| Vector3::new(next(), next(), next()) * scale;
+    NodeState {
+        x: v3(1.0),
+        rot: crate::math::Rotation::exp(&v3(2.0)),
+        v: v3(1.0),
+        w: v3(2.0),
+        a: v3(1.0),
+        wd: v3(1.0),
+    }
+}

@@ -139,7 +139,7 @@ fn attachments(rng: &mut Lcg, c: usize) -> ComponentDef {
             offset: 0.1,
             start: 0.0,
         }),
-        input: Some(("u".into(), TimeFunction::Constant(2.5))),
+        input: Some("u".into()),
     }
 }
 

@@ -91,7 +91,7 @@ impl CoordinateLoads {
             spring: def.spring.clone(),
             damper: def.damper.clone(),
             backlash: def.backlash.clone(),
-            input: def.input.as_ref().map(|(name, _)| name.clone()),
+            input: def.input.clone(),
         }
     }
 

@@ -99,8 +99,8 @@ pub struct ComponentDef {
     pub backlash: Option<BacklashDef>,
     /// The coordinate follows this function of time.
     pub drive: Option<TimeFunction>,
-    /// Input port: signal name and its function.
-    pub input: Option<(String, TimeFunction)>,
+    /// Input port: the name of the signal whose value is the force/torque.
+    pub input: Option<String>,
 }
 
 /// A joint. Frames are given in the initial configuration, global components: frame A

@@ -4,7 +4,7 @@
 //! diagnostics with file, line and column. Everything downstream (system, analyses) reads
 //! only the validated [`Model`].
 
-pub mod beam_input;
+pub mod components;
 pub mod error;
 pub mod input;
 pub mod located;
@@ -16,17 +16,21 @@ pub use crate::elements::beam::BeamDef;
 pub use crate::joints::COMPONENT_NAMES;
 pub use crate::joints::{BacklashDef, ComponentDef, ForceLaw, JointDef};
 pub use crate::math::TimeFunction;
+pub use components::beam::input as beam_input;
+pub use components::body::BodyDef;
+pub use components::force::LoadDef;
+pub use components::signal::SignalDef;
+pub use components::spring::SpringDef;
+pub use components::{Model, ModelInput};
 pub use error::{Diagnostic, ModelError, Severity, SourceFile};
-pub use input::{
-    FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame, ModelInput,
-};
+pub use input::{FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame};
 pub use located::Located;
 pub use section_files::LoadOptions;
 pub(crate) use validate::parse_error_diagnostic as parse_error;
-pub use validate::validate;
+pub use validate::{Checker, Entry, validate};
 
 use crate::math::Rotation;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use std::path::Path;
 
 /// The largest magnitude a number in a model may have. Products of a few such numbers
@@ -59,52 +63,6 @@ pub struct NodeDef {
     pub velocity: Vector3<f64>,
     /// Global frame.
     pub angular_velocity: Vector3<f64>,
-}
-
-/// A rigid body on a node.
-#[derive(Clone, Debug)]
-pub struct BodyDef {
-    pub name: String,
-    pub node: usize,
-    pub mass: f64,
-    /// About the CG, node-frame components.
-    pub inertia: Matrix3<f64>,
-    /// CG relative to the node, node-frame components.
-    pub cg_offset: Vector3<f64>,
-}
-
-/// A named input signal.
-#[derive(Clone, Debug)]
-pub struct SignalDef {
-    pub name: String,
-    pub function: TimeFunction,
-}
-
-/// A point-to-point spring-damper.
-#[derive(Clone, Debug)]
-pub struct SpringDef {
-    pub name: String,
-    pub node_a: NodeRef,
-    pub node_b: NodeRef,
-    /// Global attachment points in the initial configuration.
-    pub point_a: Vector3<f64>,
-    pub point_b: Vector3<f64>,
-    pub stiffness: f64,
-    pub damping: f64,
-    pub rest_length: f64,
-}
-
-/// An applied force and moment on a node.
-#[derive(Clone, Debug)]
-pub struct LoadDef {
-    pub name: String,
-    pub node: usize,
-    pub force: Vector3<f64>,
-    pub moment: Vector3<f64>,
-    pub frame: LoadFrame,
-    /// Global point of application in the initial configuration.
-    pub point: Vector3<f64>,
-    pub function: TimeFunction,
 }
 
 /// Newton and constraint settings shared by all analyses.
@@ -206,22 +164,6 @@ impl AnalysisDef {
             AnalysisKind::Static(_) => "static",
         }
     }
-}
-
-/// A validated model.
-#[derive(Clone, Debug, Default)]
-pub struct Model {
-    pub name: String,
-    pub description: Option<String>,
-    pub gravity: Vector3<f64>,
-    pub nodes: Vec<NodeDef>,
-    pub bodies: Vec<BodyDef>,
-    pub joints: Vec<JointDef>,
-    pub springs: Vec<SpringDef>,
-    pub signals: Vec<SignalDef>,
-    pub loads: Vec<LoadDef>,
-    pub beams: Vec<BeamDef>,
-    pub analyses: Vec<AnalysisDef>,
 }
 
 /// A validated model and the warnings found while checking it.

@@ -19,9 +19,9 @@ pub use redundancy::ConstraintLoop;
 pub use signals::{SignalGraph, SignalValues};
 
 use crate::core::{ElementInput, ElementState};
-use crate::elements::{AppliedLoad, Element, EvalContext, RigidBody, SpringDamper, TimeSignal};
-use crate::joints::{Constraint, Joint};
-use crate::model::{Model, NodeRef};
+use crate::elements::{Element, EvalContext, RigidBody};
+use crate::joints::Constraint;
+use crate::model::Model;
 use nalgebra::Vector3;
 
 /// Elements, constraints and the layout of the unknowns.
@@ -72,72 +72,28 @@ impl System {
     /// Builds the system of a validated model; elements are attached in the model's
     /// initial configuration.
     pub fn new(model: &Model) -> Self {
-        let initial = initial_nodes(model);
-        let nodes = &initial;
-        let mut elements: Vec<Box<dyn Element>> = Vec::new();
-        let mut bodies = Vec::new();
-        for b in &model.bodies {
-            let body = RigidBody::new(&b.name, b.node, b.mass, b.inertia, b.cg_offset);
-            bodies.push(body.clone());
-            elements.push(Box::new(body));
-        }
-        let local_offset = |r: NodeRef, p: Vector3<f64>| -> Option<(usize, Vector3<f64>)> {
-            r.index()
-                .map(|i| (i, nodes[i].r().transpose() * (p - nodes[i].x)))
-        };
-        for s in &model.springs {
-            elements.push(Box::new(SpringDamper::new(
-                &s.name,
-                local_offset(s.node_a, s.point_a),
-                local_offset(s.node_b, s.point_b),
-                [s.point_a, s.point_b],
-                s.stiffness,
-                s.damping,
-                s.rest_length,
-            )));
-        }
-        for l in &model.loads {
-            let n = &nodes[l.node];
-            elements.push(Box::new(AppliedLoad::new(
-                &l.name,
-                l.node,
-                l.force,
-                l.moment,
-                l.frame,
-                n.r().transpose() * (l.point - n.x),
-                l.function.clone(),
-            )));
-        }
-        for g in &model.signals {
-            elements.push(Box::new(TimeSignal::new(&g.name, g.function.clone())));
-        }
-        let beams: Vec<crate::elements::beam::Beam> = model
-            .beams
-            .iter()
-            .map(|b| crate::elements::beam::Beam::build(b, nodes))
-            .collect();
-        for b in &beams {
-            for e in &b.elements {
-                elements.push(Box::new(e.clone()));
-            }
-        }
-        let mut constraints: Vec<Box<dyn Constraint>> = Vec::new();
-        for j in &model.joints {
-            constraints.push(Box::new(Joint::new(j, nodes)));
-        }
+        let initial = crate::model::components::initial_nodes(model);
+        let mut parts = crate::model::components::Build::new(&initial);
+        crate::model::components::build_all(model, &mut parts);
+        let crate::model::components::Build {
+            elements,
+            constraints,
+            bodies,
+            beams,
+            ..
+        } = parts;
         let mut sys = Self::from_parts(
             model.nodes.iter().map(|n| n.name.clone()).collect(),
             elements,
             constraints,
             bodies,
             model.gravity,
-            nodes,
+            &initial,
         );
         if !beams.is_empty() {
             sys.characteristic_mass = characteristic_mass(model, &beams);
             sys.beams = beams;
         }
-        sys.initial_nodes = initial;
         sys
     }
 
@@ -641,22 +597,6 @@ impl System {
             );
         }
     }
-}
-
-/// The nodes' initial conditions (accelerations zero).
-fn initial_nodes(model: &Model) -> Vec<NodeState> {
-    model
-        .nodes
-        .iter()
-        .map(|n| NodeState {
-            x: n.position,
-            rot: n.orientation,
-            v: n.velocity,
-            w: n.orientation.matrix().transpose() * n.angular_velocity,
-            a: Vector3::zeros(),
-            wd: Vector3::zeros(),
-        })
-        .collect()
 }
 
 /// Mean translational mass of the massive nodes, with the beams' mass lumped to their nodes.
