@@ -9,7 +9,7 @@ mod section_plot;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use samara::analysis::run_analysis;
-use samara::model::{AnalysisKind, LoadOptions, LoadedModel, Model, ModelInput};
+use samara::model::{LoadOptions, LoadedModel, Model, ModelInput};
 use samara::output::ResultsFile;
 use samara::system::{State, System};
 use std::io::IsTerminal;
@@ -264,7 +264,7 @@ fn check(path: &Path) -> ExitCode {
         },
         sys.n_coordinates,
         m.springs.len(),
-        m.loads.len(),
+        m.forces.len(),
         m.analyses.len()
     );
     ExitCode::SUCCESS
@@ -288,7 +288,7 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
     for def in &model.analyses {
         let initial = match def.start_from {
             Some(i) => finals[i].clone(),
-            None => State::initial(model, &sys),
+            None => sys.initial_state(),
         };
         let mut file = match ResultsFile::create(&out_dir, model, Some(path), &sys, def) {
             Ok(f) => f,
@@ -347,10 +347,7 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
             report::solver_failure(f, &written, records);
             failed = true;
         }
-        let end_time = match &def.kind {
-            AnalysisKind::Dynamic(d) => d.t_end,
-            AnalysisKind::Static(s) => s.time,
-        };
+        let end_time = def.end_time();
         rows.push(report::Row {
             summary: summary.clone(),
             path: written,

@@ -8,7 +8,7 @@
 
 use samara::analysis::{History, run_analysis};
 use samara::model::Model;
-use samara::system::{State, System};
+use samara::system::System;
 use std::path::Path;
 use std::time::Instant;
 
@@ -65,14 +65,8 @@ fn main() {
                 for _ in 0..repeats {
                     let mut hist = History::default();
                     let clock = Instant::now();
-                    let s = run_analysis(
-                        &sys,
-                        def,
-                        State::initial(&model, &sys),
-                        &mut hist,
-                        &mut |_| {},
-                    )
-                    .expect("in-memory recording");
+                    let s = run_analysis(&sys, def, sys.initial_state(), &mut hist, &mut |_| {})
+                        .expect("in-memory recording");
                     best = best.min(clock.elapsed().as_secs_f64());
                     kept = Some((s, hist));
                 }

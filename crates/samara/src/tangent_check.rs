@@ -29,9 +29,10 @@
 //! Row and column groups are 3 per node (translation, rotation) and 1 per scalar
 //! (constraint equation, joint coordinate).
 
-use crate::elements::{Element, EvalContext, LocalTerms, Need};
-use crate::joints::{Constraint, CoordinateTangents};
-use crate::system::{Coordinate, NodeState};
+use crate::core::{
+    Constraint, Coordinate, CoordinateTangents, Element, ElementInput, ElementState, EvalContext,
+    LocalTerms, Need, NodeState, SignalTerms,
+};
 use nalgebra::{DMatrix, Vector3};
 use std::ops::Range;
 
@@ -158,57 +159,172 @@ fn largest(values: &[f64]) -> f64 {
     )
 }
 
-/// Mismatches of an element's K, C and M.
+/// Mismatches of an element's K, C, M, its ∂r/∂s, and (for producers) the derivatives of
+/// its signals.
 #[derive(Clone, Copy, Debug)]
 pub struct ElementReport {
     pub k: Mismatch,
     pub c: Mismatch,
     pub m: Mismatch,
+    /// ∂r/∂s of the input signals.
+    pub ds: Mismatch,
+    /// Derivatives of the produced signals: K, C, M channels and ∂s_out/∂s_in.
+    pub signal_k: Mismatch,
+    pub signal_c: Mismatch,
+    pub signal_m: Mismatch,
+    pub signal_ds: Mismatch,
 }
 
 impl ElementReport {
     pub fn worst(&self) -> f64 {
-        largest(&[self.k.relative, self.c.relative, self.m.relative])
+        largest(&[
+            self.k.relative,
+            self.c.relative,
+            self.m.relative,
+            self.ds.relative,
+            self.signal_k.relative,
+            self.signal_c.relative,
+            self.signal_m.relative,
+            self.signal_ds.relative,
+        ])
     }
 }
 
-/// Checks an element's tangents at the given node states.
+/// Checks an element with nodes only at the given node states.
 pub fn check_element(e: &dyn Element, ctx: &EvalContext, nodes: &[NodeState]) -> ElementReport {
+    check_element_with(e, ctx, nodes, &[], &[])
+}
+
+/// The local unknown `col` of an element perturbed by `h` in `slot`: node dofs on the
+/// manifold, state values (configuration slot) and rates (velocity slot); a state has no
+/// acceleration, so that slot leaves it alone.
+fn perturb_local(
+    nodes: &mut [NodeState],
+    states: &mut [ElementState],
+    element_nodes: &[usize],
+    col: usize,
+    h: f64,
+    slot: Slot,
+) {
+    let n6 = 6 * element_nodes.len();
+    if col < n6 {
+        perturb(nodes, element_nodes[col / 6], col % 6, h, slot);
+    } else {
+        let z = &mut states[col - n6];
+        match slot {
+            Slot::Configuration => z.z += h,
+            Slot::Velocity => z.zd += h,
+            Slot::Acceleration => {}
+        }
+    }
+}
+
+/// Checks an element at the given node states, own states and input-signal values:
+/// K, C, M against central differences of its residual, `∂r/∂s` against differences in the
+/// inputs, and the derivatives of the signals it produces the same way.
+pub fn check_element_with(
+    e: &dyn Element,
+    ctx: &EvalContext,
+    nodes: &[NodeState],
+    states: &[ElementState],
+    signals: &[f64],
+) -> ElementReport {
     let en = e.nodes().to_vec();
-    let n = 6 * en.len();
-    let mut t = LocalTerms::new(en.len());
+    let nz = e.n_states();
+    let n_in = e.signal_inputs().len();
+    let n_out = e.signal_outputs().len();
+    let zero_states = vec![ElementState::default(); nz];
+    let states = if states.len() == nz {
+        states
+    } else {
+        &zero_states
+    };
+    let zero_signals = vec![0.0; n_in];
+    let signals = if signals.len() == n_in {
+        signals
+    } else {
+        &zero_signals
+    };
+    let n = 6 * en.len() + nz;
+    let mut t = LocalTerms::for_element(e);
     t.clear(Need::ResidualAndTangents);
-    e.evaluate(ctx, nodes, Need::ResidualAndTangents, &mut t);
+    let mut st = SignalTerms::for_element(e);
+    {
+        let x = ElementInput {
+            nodes,
+            states,
+            signals,
+        };
+        e.evaluate(ctx, &x, Need::ResidualAndTangents, &mut t);
+        st.clear();
+        e.signals(ctx, &x, &mut st);
+    }
     let mut work = nodes.to_vec();
-    // Central differences at steps ε and 2ε.
-    let mut fd = |slot: Slot| -> [DMatrix<f64>; 2] {
-        let mut out = [DMatrix::zeros(n, n), DMatrix::zeros(n, n)];
-        let mut tp = LocalTerms::new(en.len());
-        for (b, &node) in en.iter().enumerate() {
-            for dof in 0..6 {
-                for (o, step) in out.iter_mut().zip([EPS, 2.0 * EPS]) {
-                    let mut r = [None, None];
-                    for (k, s) in [1.0, -1.0].iter().enumerate() {
-                        work.clone_from_slice(nodes);
-                        perturb(&mut work, node, dof, s * step, slot);
-                        tp.clear(Need::Residual);
-                        e.evaluate(ctx, &work, Need::Residual, &mut tp);
-                        r[k] = Some(tp.r.clone());
+    let mut wz = states.to_vec();
+    let mut ws = signals.to_vec();
+    let mut tp = LocalTerms::for_element(e);
+    let mut sp = SignalTerms::for_element(e);
+    // Residual and produced signals at a perturbed input, as one vector.
+    let mut eval = |work: &[NodeState], wz: &[ElementState], ws: &[f64]| -> Vec<f64> {
+        let x = ElementInput {
+            nodes: work,
+            states: wz,
+            signals: ws,
+        };
+        tp.clear(Need::Residual);
+        e.evaluate(ctx, &x, Need::Residual, &mut tp);
+        sp.clear();
+        e.signals(ctx, &x, &mut sp);
+        tp.r.iter().chain(sp.values.iter()).copied().collect()
+    };
+    // Central differences at steps ε and 2ε: rows are the residual then the signals.
+    let rows = n + n_out;
+    let mut fd = |slot: Option<Slot>, cols: usize| -> [DMatrix<f64>; 2] {
+        let mut out = [DMatrix::zeros(rows, cols), DMatrix::zeros(rows, cols)];
+        for col in 0..cols {
+            for (o, step) in out.iter_mut().zip([EPS, 2.0 * EPS]) {
+                let mut r = [Vec::new(), Vec::new()];
+                for (k, s) in [1.0, -1.0].iter().enumerate() {
+                    work.clone_from_slice(nodes);
+                    wz.clone_from_slice(states);
+                    ws.clone_from_slice(signals);
+                    match slot {
+                        Some(slot) => perturb_local(&mut work, &mut wz, &en, col, s * step, slot),
+                        None => ws[col] += s * step,
                     }
-                    let col = (r[0].take().unwrap_or_default() - r[1].take().unwrap_or_default())
-                        / (2.0 * step);
-                    o.set_column(6 * b + dof, &col);
+                    r[k] = eval(&work, &wz, &ws);
+                }
+                for i in 0..rows {
+                    o[(i, col)] = (r[0][i] - r[1][i]) / (2.0 * step);
                 }
             }
         }
         out
     };
-    let g = groups(en.len(), 0);
+    let split = |m: [DMatrix<f64>; 2]| -> ([DMatrix<f64>; 2], [DMatrix<f64>; 2]) {
+        let c = m[0].ncols();
+        let top = |x: &DMatrix<f64>| x.view((0, 0), (n, c)).into_owned();
+        let bottom = |x: &DMatrix<f64>| x.view((n, 0), (n_out, c)).into_owned();
+        ([top(&m[0]), top(&m[1])], [bottom(&m[0]), bottom(&m[1])])
+    };
+    let (k_fd, sk_fd) = split(fd(Some(Slot::Configuration), n));
+    let (c_fd, sc_fd) = split(fd(Some(Slot::Velocity), n));
+    let (m_fd, sm_fd) = split(fd(Some(Slot::Acceleration), n));
+    let (ds_fd, sds_fd) = split(fd(None, n_in));
+    let g = groups(en.len(), nz);
+    let inputs = groups(0, n_in);
+    let outputs = groups(0, n_out);
     let r = t.r.as_slice();
+    let sv = st.values.as_slice();
     ElementReport {
-        k: compare(&t.k, &fd(Slot::Configuration), r, &g, &g),
-        c: compare(&t.c, &fd(Slot::Velocity), r, &g, &g),
-        m: compare(&t.m, &fd(Slot::Acceleration), r, &g, &g),
+        k: compare(&t.k, &k_fd, r, &g, &g),
+        c: compare(&t.c, &c_fd, r, &g, &g),
+        m: compare(&t.m, &m_fd, r, &g, &g),
+        ds: compare(&t.ds, &ds_fd, r, &g, &inputs),
+        signal_k: compare(&st.k, &sk_fd, sv, &outputs, &g),
+        signal_c: compare(&st.c, &sc_fd, sv, &outputs, &g),
+        signal_m: compare(&st.m, &sm_fd, sv, &outputs, &g),
+        signal_ds: compare(&st.ds, &sds_fd, sv, &outputs, &inputs),
     }
 }
 
@@ -224,6 +340,8 @@ pub struct ConstraintReport {
     /// ∂r/∂ν and ∂r/∂ν̇ of the coordinate elements.
     pub coordinate_stiffness: Mismatch,
     pub coordinate_damping: Mismatch,
+    /// ∂r/∂s of the input ports.
+    pub coordinate_signals: Mismatch,
 }
 
 impl ConstraintReport {
@@ -235,6 +353,7 @@ impl ConstraintReport {
             self.velocity,
             self.coordinate_stiffness.relative,
             self.coordinate_damping.relative,
+            self.coordinate_signals.relative,
         ])
     }
 }
@@ -348,15 +467,37 @@ pub fn check_constraint(
     let mut r0 = vec![0.0; nc];
     let mut kd = vec![0.0; nc];
     let mut cd = vec![0.0; nc];
+    let n_in = c.signal_inputs().len();
+    // Input signals at fixed, non-zero values.
+    let signals: Vec<f64> = (0..n_in).map(|i| 0.7 + 0.1 * i as f64).collect();
+    let mut sd = vec![0.0; nc * n_in];
     c.coordinate_forces(
         ctx,
         coords,
+        &signals,
         &mut r0,
         Some(CoordinateTangents {
             stiffness: &mut kd,
             damping: &mut cd,
+            signals: &mut sd,
         }),
     );
+    // ∂r/∂s against differences in the input values (r is affine in them here, so one
+    // step size suffices for both levels).
+    let mut sig_a = DMatrix::zeros(nc.max(1), n_in.max(1));
+    let mut sig_fd = DMatrix::zeros(nc.max(1), n_in.max(1));
+    for i in 0..n_in {
+        let mut ws = signals.clone();
+        let mut rr = [vec![0.0; nc], vec![0.0; nc]];
+        for (side, s) in [1.0, -1.0].iter().enumerate() {
+            ws[i] = signals[i] + s * EPS;
+            c.coordinate_forces(ctx, coords, &ws, &mut rr[side], None);
+        }
+        for j in 0..nc {
+            sig_a[(j, i)] = sd[j * n_in + i];
+            sig_fd[(j, i)] = (rr[0][j] - rr[1][j]) / (2.0 * EPS);
+        }
+    }
     // ∂r/∂ν (slot 0) and ∂r/∂ν̇ (slot 1) at steps ε and 2ε.
     let size = nc.max(1);
     let mut fds = [
@@ -377,7 +518,7 @@ pub fn check_constraint(
                     } else {
                         wc[j].v += s * step;
                     }
-                    c.coordinate_forces(ctx, &wc, &mut rr[side], None);
+                    c.coordinate_forces(ctx, &wc, &signals, &mut rr[side], None);
                 }
                 for i in 0..nc {
                     o[(i, j)] = (rr[0][i] - rr[1][i]) / (2.0 * step);
@@ -397,5 +538,146 @@ pub fn check_constraint(
         velocity: vel_err,
         coordinate_stiffness: compare(&ka, &kfd, &r0, &scalars, &scalars),
         coordinate_damping: compare(&ca, &cfd, &r0, &scalars, &scalars),
+        coordinate_signals: compare(
+            &sig_a,
+            &[sig_fd.clone(), sig_fd],
+            &r0,
+            &scalars,
+            &groups(0, n_in.max(1)),
+        ),
+    }
+}
+
+/// An element or a constraint and the state at which to check its tangents (the cases
+/// each component kind registers, [`crate::model::components::ComponentKind::tangent_cases`]).
+pub enum TangentCase {
+    Element {
+        element: Box<dyn Element>,
+        nodes: Vec<NodeState>,
+        states: Vec<ElementState>,
+        signals: Vec<f64>,
+    },
+    Constraint {
+        constraint: Box<dyn Constraint>,
+        nodes: Vec<NodeState>,
+        coords: Vec<Coordinate>,
+        mu: Vec<f64>,
+    },
+}
+
+impl TangentCase {
+    pub fn element(element: Box<dyn Element>, nodes: Vec<NodeState>) -> Self {
+        Self::Element {
+            element,
+            nodes,
+            states: Vec::new(),
+            signals: Vec::new(),
+        }
+    }
+
+    pub fn constraint(
+        constraint: Box<dyn Constraint>,
+        nodes: Vec<NodeState>,
+        coords: Vec<Coordinate>,
+        mu: Vec<f64>,
+    ) -> Self {
+        Self::Constraint {
+            constraint,
+            nodes,
+            coords,
+            mu,
+        }
+    }
+
+    /// Element states `(z, ż)`.
+    pub fn with_states(mut self, values: Vec<(f64, f64)>) -> Self {
+        if let Self::Element { states, .. } = &mut self {
+            *states = values
+                .into_iter()
+                .map(|(z, zd)| ElementState { z, zd })
+                .collect();
+        }
+        self
+    }
+
+    /// Values of the input signals.
+    pub fn with_signals(mut self, values: Vec<f64>) -> Self {
+        if let Self::Element { signals, .. } = &mut self {
+            *signals = values;
+        }
+        self
+    }
+
+    /// Name of the element or constraint.
+    pub fn name(&self) -> &str {
+        match self {
+            Self::Element { element, .. } => element.name(),
+            Self::Constraint { constraint, .. } => constraint.name(),
+        }
+    }
+
+    /// The largest relative mismatches of the case's tangents (per entry, differences at
+    /// ε = 1e-6) and of its rate terms (constraints' convective and velocity terms,
+    /// differences along the motion at ε = 1e-4, floor ≈ 1e-8).
+    pub fn check(&self, ctx: &EvalContext) -> CaseReport {
+        match self {
+            Self::Element {
+                element,
+                nodes,
+                states,
+                signals,
+            } => CaseReport {
+                tangents: check_element_with(element.as_ref(), ctx, nodes, states, signals).worst(),
+                rates: 0.0,
+            },
+            Self::Constraint {
+                constraint,
+                nodes,
+                coords,
+                mu,
+            } => {
+                let r = check_constraint(constraint.as_ref(), ctx, nodes, coords, mu);
+                CaseReport {
+                    tangents: largest(&[
+                        r.b.relative,
+                        r.k.relative,
+                        r.coordinate_stiffness.relative,
+                        r.coordinate_damping.relative,
+                        r.coordinate_signals.relative,
+                    ]),
+                    rates: largest(&[r.convective, r.velocity]),
+                }
+            }
+        }
+    }
+}
+
+/// Result of [`TangentCase::check`].
+#[derive(Clone, Copy, Debug)]
+pub struct CaseReport {
+    /// Largest relative mismatch of the tangent matrices.
+    pub tangents: f64,
+    /// Largest relative mismatch of the rate terms (constraints only).
+    pub rates: f64,
+}
+
+/// A node in a reproducible, generic state (position, orientation, velocities and
+/// accelerations of order one) from `seed`.
+pub fn random_node(seed: u64) -> NodeState {
+    let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(1);
+    let mut next = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
+    };
+    let mut v3 = |scale: f64| Vector3::new(next(), next(), next()) * scale;
+    NodeState {
+        x: v3(1.0),
+        rot: crate::math::Rotation::exp(&v3(2.0)),
+        v: v3(1.0),
+        w: v3(2.0),
+        a: v3(1.0),
+        wd: v3(1.0),
     }
 }

@@ -9,7 +9,7 @@ use nalgebra::{UnitQuaternion, Vector3, Vector4};
 use netcdf3::FileReader;
 use samara::analysis::run_analysis;
 use samara::output::ResultsFile;
-use samara::system::{State, System};
+use samara::system::System;
 
 const L: f64 = 2.0;
 const EI: f64 = 2.0e5;
@@ -79,7 +79,7 @@ fn run_to_file(toml: &str) -> Sections {
     let s = run_analysis(
         &sys,
         &m.analyses[0],
-        State::initial(&m, &sys),
+        sys.initial_state(),
         &mut file,
         &mut |_| {},
     )

@@ -259,7 +259,7 @@ fn a_torsion_error_beside_a_stiff_axial_block_is_caught() {
         fn evaluate(
             &self,
             ctx: &EvalContext,
-            nodes: &[NodeState],
+            nodes: &samara::core::ElementInput,
             need: samara::elements::Need,
             out: &mut samara::elements::LocalTerms,
         ) {
@@ -284,7 +284,7 @@ fn a_torsion_error_beside_a_stiff_axial_block_is_caught() {
         t.clear(samara::elements::Need::ResidualAndTangents);
         e.evaluate(
             &ctx(),
-            &nodes,
+            &samara::core::ElementInput::nodes(&nodes),
             samara::elements::Need::ResidualAndTangents,
             &mut t,
         );
@@ -327,8 +327,17 @@ fn rigid_motion_is_strain_free() {
             })
             .collect();
         let mut terms = samara::elements::LocalTerms::new(5);
-        e.evaluate(&ctx0, &nodes, samara::elements::Need::Residual, &mut terms);
+        e.evaluate(
+            &ctx0,
+            &samara::core::ElementInput::nodes(&nodes),
+            samara::elements::Need::Residual,
+            &mut terms,
+        );
         assert!(terms.r.norm() < 1e-10, "{}", terms.r.norm());
-        assert!(e.potential_energy(&ctx0, &nodes).abs() < 1e-20);
+        assert!(
+            e.potential_energy(&ctx0, &samara::core::ElementInput::nodes(&nodes))
+                .abs()
+                < 1e-20
+        );
     }
 }

@@ -227,7 +227,7 @@ fn exercise(text: &str) -> Result<(), String> {
     for def in &m.analyses {
         let initial = match def.start_from {
             Some(i) => finals[i].clone(),
-            None => State::initial(&m, &sys),
+            None => sys.initial_state(),
         };
         let mut h = History::default();
         let s = run_analysis(&sys, def, initial, &mut h, &mut |_| {})

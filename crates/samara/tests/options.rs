@@ -9,7 +9,7 @@ use common::model;
 use nalgebra::Vector3;
 use samara::analysis::{AnalysisSummary, History, run_analysis};
 use samara::model::Model;
-use samara::system::{State, System};
+use samara::system::System;
 
 /// Runs the first analysis; unlike `common::run`, a solver failure is returned, not a panic.
 fn attempt(text: &str) -> (AnalysisSummary, History) {
@@ -19,7 +19,7 @@ fn attempt(text: &str) -> (AnalysisSummary, History) {
     let s = run_analysis(
         &sys,
         &m.analyses[0],
-        State::initial(&m, &sys),
+        sys.initial_state(),
         &mut h,
         &mut |_| {},
     )

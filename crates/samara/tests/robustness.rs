@@ -6,7 +6,7 @@ use common::*;
 use samara::analysis::{History, run_analysis};
 use samara::model::{AnalysisKind, Model};
 use samara::output::ResultsFile;
-use samara::system::{State, System};
+use samara::system::System;
 
 const BOB: &str = r#"[model]
 name = "prescribed"
@@ -101,7 +101,7 @@ fn a_joint_whose_rows_are_all_dropped_does_not_panic() {
     let r = run_analysis(
         &sys,
         &m.analyses[0],
-        State::initial(&m, &sys),
+        sys.initial_state(),
         &mut h,
         &mut |_| {},
     );

@@ -7,7 +7,7 @@ use samara::analysis::{History, run_analysis};
 use samara::model::{LoadOptions, Model};
 use samara::section::results::{Cache, results_csv, solve_cached};
 use samara::section::{analyze, analyze_all, input};
-use samara::system::{State, System};
+use samara::system::System;
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -74,7 +74,7 @@ fn tip_displacement(text: &str, path: &Path, options: &LoadOptions) -> Vector3<f
     let s = run_analysis(
         &sys,
         &m.analyses[0],
-        State::initial(&m, &sys),
+        sys.initial_state(),
         &mut h,
         &mut |_| {},
     )

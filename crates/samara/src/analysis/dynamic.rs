@@ -1,13 +1,13 @@
 //! Time integration with the Lie-group generalized-α method on (R³ × SO(3))ᴺ, scaled
 //! index-3 constraints, Newton–Raphson per step, and step cutting on Newton failure.
 
-use super::generalized_alpha::GeneralizedAlpha;
+use super::generalized_alpha::{FirstOrderAlpha, GeneralizedAlpha};
 use super::initial::consistent_accelerations;
 use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
 };
-use crate::elements::EvalContext;
+use crate::core::EvalContext;
 use crate::math::tangent_operator;
 use crate::model::{DynamicSettings, FormulationType, JacobianUpdate};
 use crate::solve::condition::condition_number;
@@ -88,6 +88,16 @@ impl StepProblem<'_> {
         {
             c.q = p.q + self.hdq[n6 + j];
         }
+        let z0 = n6 + self.sys.n_coordinates;
+        for (j, (z, p)) in self
+            .cur
+            .states
+            .iter_mut()
+            .zip(&self.prev.states)
+            .enumerate()
+        {
+            z.z = p.z + self.hdq[z0 + j];
+        }
     }
 }
 
@@ -124,9 +134,13 @@ impl NewtonSystem for StepProblem<'_> {
             n.wd += dth * bp;
         }
         let n6 = 6 * self.cur.nodes.len();
-        for (c, d) in self.cur.coords.iter_mut().zip(&self.dcfg[n6..]) {
+        let nc = self.sys.n_coordinates;
+        for (c, d) in self.cur.coords.iter_mut().zip(&self.dcfg[n6..n6 + nc]) {
             c.v += d * gp;
             c.a += d * bp;
+        }
+        for (z, d) in self.cur.states.iter_mut().zip(&self.dcfg[n6 + nc..]) {
+            z.zd += d * self.coef.state_rate;
         }
         let mut worst: f64 = 0.0;
         for (q, c) in self.hdq.iter_mut().zip(self.change.iter()) {
@@ -153,6 +167,8 @@ struct Integrator<'a> {
     sys: &'a System,
     settings: &'a DynamicSettings,
     ga: GeneralizedAlpha,
+    /// The first-order scheme of the element states (same ρ∞).
+    fo: FirstOrderAlpha,
     asm: Assembler,
     lin: LinearSolver,
     matrix: BlockMatrix,
@@ -257,6 +273,33 @@ impl Integrator<'_> {
             let an = self.acc[n6 + j];
             (self.hdq[n6 + j], c.v, c.a) = predict(n6 + j, p.v, p.a, an, &mut self.extrapolated);
         }
+        // Element states: the same predictors in the first-order scheme.
+        let fo = self.fo;
+        let z0 = n6 + self.sys.n_coordinates;
+        for (j, (z, p)) in self
+            .trial
+            .states
+            .iter_mut()
+            .zip(&self.state.states)
+            .enumerate()
+        {
+            let k = z0 + j;
+            let wn = self.acc[k];
+            let w1 = fo.algorithmic_rate(wn, p.zd, p.zd);
+            self.extrapolated[k] = fo.increment(h, wn, w1);
+            (self.hdq[k], z.zd) = match predictor {
+                Predictor::Extrapolate => (self.extrapolated[k], p.zd),
+                Predictor::Repeat | Predictor::Hold => {
+                    let dz = if predictor == Predictor::Repeat {
+                        self.last_hdq[k] * ratio
+                    } else {
+                        0.0
+                    };
+                    let w1 = (dz / h - (1.0 - fo.gamma) * wn) / fo.gamma;
+                    (dz, fo.rate_of(wn, p.zd, w1))
+                }
+            };
+        }
         let scaling = self.settings.solver.scaling;
         let scale = if scaling { ga.beta * h * h } else { 1.0 };
         let coef = Coefficients {
@@ -267,6 +310,13 @@ impl Integrator<'_> {
             multiplier_scale: scale,
             velocity_scale: if scaling { ga.beta * h / ga.gamma } else { 1.0 },
             penalty: self.penalty(h),
+            // State rows scaled by 1/(∂ż/∂Δz) ~ h, so that their block is ∂r/∂ż + O(h).
+            state_rate: self.fo.rate_prime(h),
+            state_row_scale: if scaling {
+                1.0 / self.fo.rate_prime(h)
+            } else {
+                1.0
+            },
         };
         if h != self.factored_h {
             self.lin.invalidate();
@@ -356,22 +406,26 @@ impl Integrator<'_> {
             let an = self.acc[n6 + j];
             self.acc[n6 + j] = ga.algorithmic_acceleration(an, p.a, c.a);
         }
+        let z0 = n6 + self.sys.n_coordinates;
+        for (j, (z, p)) in self.trial.states.iter().zip(&self.state.states).enumerate() {
+            let wn = self.acc[z0 + j];
+            self.acc[z0 + j] = self.fo.algorithmic_rate(wn, p.zd, z.zd);
+        }
         self.sys.update_passive_coordinates(&mut self.trial, false);
         std::mem::swap(&mut self.state, &mut self.trial);
     }
 }
 
-/// Integrates from `initial` over `[t_start, t_end]`.
-pub fn run_dynamic(
-    sys: &System,
-    name: &str,
-    settings: &DynamicSettings,
+/// Sets up the integrator from `initial` at time `t0` with consistent initial
+/// conditions (assembly, velocities, accelerations and state rates). On failure the reason
+/// is in `summary` and the state reached is returned.
+fn start<'a>(
+    sys: &'a System,
+    settings: &'a DynamicSettings,
     mut initial: State,
-    recorder: &mut dyn Recorder,
-    progress: Progress,
-) -> Result<AnalysisSummary, crate::Error> {
-    let clock = Instant::now();
-    let t0 = settings.t_start;
+    t0: f64,
+    summary: &mut AnalysisSummary,
+) -> Result<(Integrator<'a>, f64), State> {
     initial.time = t0;
     let formulation = match settings.formulation {
         FormulationType::Index3 => Formulation::Index3,
@@ -383,6 +437,7 @@ pub fn run_dynamic(
         sys,
         settings,
         ga: GeneralizedAlpha::from_rho_inf(settings.rho_inf),
+        fo: FirstOrderAlpha::from_rho_inf(settings.rho_inf),
         lin: LinearSolver::new(asm.structure(), settings.solver.linear_solver),
         matrix: BlockMatrix::zeros(asm.structure().clone()),
         asm,
@@ -403,10 +458,10 @@ pub fn run_dynamic(
         last_hdq: vec![0.0; sys.n_config()],
         last_h: 0.0,
     };
-    let mut summary = AnalysisSummary::new(name, "dynamic");
+    let name = summary.name.clone();
     let fail = |summary: &mut AnalysisSummary, time: f64, reason: String, hint: Option<String>| {
         summary.failure = Some(SolverFailure {
-            analysis: name.to_string(),
+            analysis: name.clone(),
             time,
             reason,
             hint,
@@ -427,12 +482,10 @@ pub fn run_dynamic(
         &mut init_asm,
         &mut init_lin,
         &mut init_matrix,
-        &mut summary,
+        summary,
         t0,
     ) {
-        summary.final_state = it.state.clone();
-        summary.wall_time = clock.elapsed();
-        return Ok(summary);
+        return Err(it.state);
     }
     sys.constraint_values(&ctx0, &it.state, &mut it.phi);
     let viol0 = it.phi.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -447,7 +500,6 @@ pub fn run_dynamic(
         &mut res0,
     );
     summary.factorizations += init_lin.stats.factorizations;
-    drop((init_asm, init_lin, init_matrix));
     let finite = it
         .state
         .nodes
@@ -458,24 +510,23 @@ pub fn run_dynamic(
     match init {
         Err(LinearError::Singular { block }) => {
             fail(
-                &mut summary,
+                summary,
                 t0,
                 "cannot compute consistent initial accelerations: the mass matrix with the constraints is singular".into(),
-                Some(singular_hint(sys, block)),
+                Some(singular_hint(sys, &init_asm, block)),
             );
         }
         Ok(()) if !finite => fail(
-            &mut summary,
+            summary,
             t0,
             "consistent initial accelerations are not finite (singular mass matrix)".into(),
             Some("every node in a dynamic analysis needs mass in each direction that is not constrained".into()),
         ),
         Ok(()) => {}
     }
+    drop((init_asm, init_lin, init_matrix));
     if summary.failure.is_some() {
-        summary.final_state = it.state.clone();
-        summary.wall_time = clock.elapsed();
-        return Ok(summary);
+        return Err(it.state);
     }
     for (i, nd) in it.state.nodes.iter().enumerate() {
         let v = [nd.a.x, nd.a.y, nd.a.z, nd.wd.x, nd.wd.y, nd.wd.z];
@@ -485,9 +536,44 @@ pub fn run_dynamic(
     for (j, c) in it.state.coords.iter().take(sys.n_coordinates).enumerate() {
         it.acc[n6 + j] = c.a;
     }
+    let z0 = n6 + sys.n_coordinates;
+    for (j, z) in it.state.states.iter().enumerate() {
+        it.acc[z0 + j] = z.zd;
+    }
     sys.update_passive_coordinates(&mut it.state, true);
     it.mu.copy_from_slice(&it.state.lambda);
+    Ok((it, viol0))
+}
 
+/// Integrates from `initial` over `[t_start, t_end]`.
+pub fn run_dynamic(
+    sys: &System,
+    name: &str,
+    settings: &DynamicSettings,
+    initial: State,
+    recorder: &mut dyn Recorder,
+    progress: Progress,
+) -> Result<AnalysisSummary, crate::Error> {
+    let clock = Instant::now();
+    let t0 = settings.t_start;
+    let mut summary = AnalysisSummary::new(name, "dynamic");
+    let fail = |summary: &mut AnalysisSummary, time: f64, reason: String, hint: Option<String>| {
+        summary.failure = Some(SolverFailure {
+            analysis: name.to_string(),
+            time,
+            reason,
+            hint,
+        });
+    };
+    let (mut it, viol0) = match start(sys, settings, initial, settings.t_start, &mut summary) {
+        Ok(x) => x,
+        Err(state) => {
+            summary.final_state = state;
+            summary.wall_time = clock.elapsed();
+            return Ok(summary);
+        }
+    };
+    let ctx0 = sys.context(t0, 1.0);
     let mut energy = Energy {
         kinetic: sys.kinetic_energy(&it.state),
         potential: sys.potential_energy(&ctx0, &it.state),
@@ -630,7 +716,7 @@ pub fn run_dynamic(
                 let next = h_try / 2.0;
                 if next < settings.min_step {
                     let hint = match &failure {
-                        NewtonFailure::Singular { block } => Some(singular_hint(sys, *block)),
+                        NewtonFailure::Singular { block } => Some(singular_hint(sys, &it.asm, *block)),
                         NewtonFailure::NotFinite { .. } => Some(
                             "the solution blew up: check units, masses and stiffnesses, or reduce `step`".into(),
                         ),
@@ -657,4 +743,161 @@ pub fn run_dynamic(
     summary.final_state = it.state;
     summary.wall_time = clock.elapsed();
     Ok(summary)
+}
+
+/// What one [`Simulation::step`] did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepReport {
+    /// Time reached (the requested end of the step).
+    pub time: f64,
+    /// Accepted sub-steps (1 unless Newton failures made the step be cut).
+    pub sub_steps: usize,
+    pub newton_iterations: usize,
+    pub rejected: usize,
+    /// max |Φ| at the end of the step.
+    pub constraint_violation: f64,
+}
+
+/// A dynamic analysis driven one step at a time, state in and out: for scripting and
+/// co-simulation. The same integrator as [`run_dynamic`] (Lie-group generalized-α with
+/// the settings' ρ∞, formulation, tolerances and Newton variant); it records nothing.
+///
+/// ```no_run
+/// # let loaded = samara::model::Model::from_file("examples/pendulum.toml")?;
+/// # let sys = samara::system::System::new(&loaded.model);
+/// # let samara::model::AnalysisKind::Dynamic(settings) = &loaded.model.analyses[0].kind else { panic!() };
+/// let mut sim = samara::analysis::Simulation::new(&sys, settings, sys.initial_state())?;
+/// while sim.time() < 1.0 {
+///     sim.step(1e-3)?;
+///     let bob = &sim.state().nodes[0];
+///     // … exchange data with another code, then possibly sim.set_state(…) …
+/// }
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub struct Simulation<'a> {
+    it: Integrator<'a>,
+    name: String,
+}
+
+impl<'a> Simulation<'a> {
+    /// Starts at `settings.t_start` from `initial`, made consistent (assembly onto the
+    /// joints, velocities, accelerations and state rates).
+    pub fn new(
+        sys: &'a System,
+        settings: &'a DynamicSettings,
+        initial: State,
+    ) -> Result<Self, SolverFailure> {
+        let mut summary = AnalysisSummary::new("simulation", "dynamic");
+        match start(sys, settings, initial, settings.t_start, &mut summary) {
+            Ok((it, _)) => Ok(Self {
+                it,
+                name: summary.name,
+            }),
+            Err(_) => Err(summary.failure.unwrap_or_else(|| SolverFailure {
+                analysis: "simulation".into(),
+                time: settings.t_start,
+                reason: "the initial conditions could not be made consistent".into(),
+                hint: None,
+            })),
+        }
+    }
+
+    pub fn time(&self) -> f64 {
+        self.it.state.time
+    }
+
+    /// The state at [`Self::time`].
+    pub fn state(&self) -> &State {
+        &self.it.state
+    }
+
+    /// Augmented multipliers μ = λ + ρΦ per enforced constraint equation (physical units).
+    pub fn multipliers(&self) -> &[f64] {
+        &self.it.mu
+    }
+
+    /// Advances by `h`: one step, or — when Newton fails even from the held configuration
+    /// — sub-steps halved down to the settings' `min_step` that together reach `t + h`.
+    pub fn step(&mut self, h: f64) -> Result<StepReport, SolverFailure> {
+        let it = &mut self.it;
+        let t0 = it.state.time;
+        let target = t0 + h;
+        let mut report = StepReport {
+            time: target,
+            sub_steps: 0,
+            newton_iterations: 0,
+            rejected: 0,
+            constraint_violation: 0.0,
+        };
+        if !(h > 0.0 && target > t0) {
+            return Err(self.failure(t0, format!("the step {h:e} does not move time")));
+        }
+        let mut hh = h;
+        let mut hold = false;
+        let mut good = 0usize;
+        while it.state.time < target {
+            let t = it.state.time;
+            let mut end = t + hh;
+            if end > target || target - end < 1e-9 * hh {
+                end = target;
+            }
+            let predictor = if hold { Predictor::Hold } else { it.predictor };
+            match it.step(end - t, predictor) {
+                Ok(r) => {
+                    it.accept();
+                    it.state.time = end;
+                    hold = false;
+                    report.sub_steps += 1;
+                    report.newton_iterations += r.iterations;
+                    report.constraint_violation = r.constraint_violation;
+                    good += 1;
+                    if hh < h && good >= REGROW_AFTER {
+                        hh = (2.0 * hh).min(h);
+                        good = 0;
+                    }
+                }
+                Err(f) => {
+                    report.rejected += 1;
+                    it.lin.invalidate();
+                    if predictor != Predictor::Hold {
+                        hold = true;
+                        continue;
+                    }
+                    hold = true;
+                    hh /= 2.0;
+                    good = 0;
+                    if hh < it.settings.min_step {
+                        return Err(self.failure(t, format!("{f} (step cut to {hh:.3e} s)")));
+                    }
+                }
+            }
+        }
+        it.sys.update_passive_coordinates(&mut it.state, true);
+        Ok(report)
+    }
+
+    /// Replaces the state (for instance after a co-simulation exchange) and makes it
+    /// consistent again from its time on, like a new start.
+    pub fn set_state(&mut self, state: State) -> Result<(), SolverFailure> {
+        let (settings, sys, t) = (self.it.settings, self.it.sys, state.time);
+        let mut summary = AnalysisSummary::new(&self.name, "dynamic");
+        match start(sys, settings, state, t, &mut summary) {
+            Ok((it, _)) => {
+                self.it = it;
+                Ok(())
+            }
+            Err(_) => Err(summary.failure.unwrap_or_else(|| {
+                self.failure(t, "the state could not be made consistent".into())
+            })),
+        }
+    }
+
+    fn failure(&self, time: f64, reason: String) -> SolverFailure {
+        SolverFailure {
+            analysis: self.name.clone(),
+            time,
+            reason,
+            hint: None,
+        }
+    }
 }

@@ -68,3 +68,107 @@ impl GeneralizedAlpha {
             / (1.0 - self.alpha_m)
     }
 }
+
+/// First-order generalized-α for element states (Jansen, Whiting & Hulbert 2000), written
+/// like the structural scheme with an algorithmic rate `w` and the residual at t_{n+1}:
+///
+/// ```text
+/// z_{n+1} = z_n + h(1 − γ) w_n + hγ w_{n+1}
+/// (1 − α_m) w_{n+1} + α_m w_n = (1 − α_f) ż_{n+1} + α_f ż_n
+/// ```
+///
+/// with α_m = (3ρ∞ − 1)/(2(1 + ρ∞)), α_f = ρ∞/(1 + ρ∞), γ = 1/(1 + ρ∞) — one minus
+/// JWH's α's, the same change of variables that takes Chung–Hulbert to Arnold–Brüls. For
+/// ż = λz it is second order (γ = ½ + α_f − α_m) and both eigenvalues of its amplification
+/// matrix tend to −ρ∞ as hλ → −∞, so the states are damped like the structure.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FirstOrderAlpha {
+    pub alpha_m: f64,
+    pub alpha_f: f64,
+    pub gamma: f64,
+}
+
+impl FirstOrderAlpha {
+    pub fn from_rho_inf(rho: f64) -> Self {
+        Self {
+            alpha_m: (3.0 * rho - 1.0) / (2.0 * (1.0 + rho)),
+            alpha_f: rho / (1.0 + rho),
+            gamma: 1.0 / (1.0 + rho),
+        }
+    }
+
+    /// ∂ż_{n+1}/∂Δz = (1 − α_m)/(hγ(1 − α_f)).
+    pub fn rate_prime(&self, h: f64) -> f64 {
+        (1.0 - self.alpha_m) / (h * self.gamma * (1.0 - self.alpha_f))
+    }
+
+    /// Algorithmic rate w_{n+1} from the recurrence.
+    #[inline]
+    pub fn algorithmic_rate(&self, w_n: f64, zd_n: f64, zd_np1: f64) -> f64 {
+        (self.alpha_f * zd_n - self.alpha_m * w_n + (1.0 - self.alpha_f) * zd_np1)
+            / (1.0 - self.alpha_m)
+    }
+
+    /// The rate ż_{n+1} that gives the algorithmic rate `w_np1`.
+    #[inline]
+    pub fn rate_of(&self, w_n: f64, zd_n: f64, w_np1: f64) -> f64 {
+        ((1.0 - self.alpha_m) * w_np1 + self.alpha_m * w_n - self.alpha_f * zd_n)
+            / (1.0 - self.alpha_f)
+    }
+
+    /// The increment z_{n+1} − z_n for the algorithmic rate `w_np1`.
+    #[inline]
+    pub fn increment(&self, h: f64, w_n: f64, w_np1: f64) -> f64 {
+        h * ((1.0 - self.gamma) * w_n + self.gamma * w_np1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The amplification of ż = λz: second order at small hλ, −ρ∞ at hλ → −∞
+    /// (the properties derived in the doc comment), for several ρ∞.
+    #[test]
+    fn first_order_scheme_is_second_order_and_damps_like_rho_inf() {
+        for rho in [0.0, 0.3, 0.6, 0.9, 1.0] {
+            let a = FirstOrderAlpha::from_rho_inf(rho);
+            // One step of size 1 of ż = (hλ) z (time measured in steps).
+            let step = |hl: f64, z: f64, w: f64| -> (f64, f64) {
+                // ż_{n+1} = λ z_{n+1}; unknown z1: z1 = z + h(1−γ)w + hγ w1,
+                // w1 = ((1−α_f) λ z1 + α_f λ z − α_m w)/(1−α_m), with h = 1, λ = hl.
+                let c = a.gamma * (1.0 - a.alpha_f) * hl / (1.0 - a.alpha_m);
+                let rhs = z
+                    + (1.0 - a.gamma) * w
+                    + a.gamma * (a.alpha_f * hl * z - a.alpha_m * w) / (1.0 - a.alpha_m);
+                let z1 = rhs / (1.0 - c);
+                let w1 = ((1.0 - a.alpha_f) * hl * z1 + a.alpha_f * hl * z - a.alpha_m * w)
+                    / (1.0 - a.alpha_m);
+                (z1, w1)
+            };
+            // Global error at t = 1 of ż = −z with N steps falls as N⁻².
+            let err = |n: usize| {
+                let (mut z, mut w) = (1.0, -1.0 / n as f64);
+                for _ in 0..n {
+                    (z, w) = step(-1.0 / n as f64, z, w);
+                }
+                (z - (-1.0f64).exp()).abs()
+            };
+            let order = (err(200) / err(400)).log2();
+            assert!((order - 2.0).abs() < 0.05, "ρ∞ = {rho}: order {order}");
+            // Spectral radius at hλ = −1e8: eigenvalues of the amplification matrix of
+            // (z, w) from its trace and determinant (a double root, −ρ∞).
+            let hl = -1e8;
+            let (a11, a21) = step(hl, 1.0, 0.0);
+            let (a12, a22) = step(hl, 0.0, 1.0);
+            let (tr, det) = (a11 + a22, a11 * a22 - a12 * a21);
+            let disc = (0.25 * tr * tr - det).max(0.0).sqrt();
+            let radius = (0.5 * tr).abs() + disc;
+            assert!(
+                (radius - rho).abs() < 1e-6,
+                "ρ∞ = {rho}: spectral radius {radius}"
+            );
+            assert!(tr < 0.0 || rho == 0.0, "ρ∞ = {rho}: the root is −ρ∞ ({tr})");
+        }
+    }
+}

@@ -1,6 +1,6 @@
 //! In-memory recorder: keeps every output frame, for the library API and the tests.
 
-use super::{Energy, OutputFrame, Recorder, StepDiagnostics};
+use super::{ArraySpec, Energy, OutputFrame, Recorder, StepDiagnostics};
 use crate::system::{State, System};
 use nalgebra::Vector3;
 
@@ -24,6 +24,8 @@ pub struct Frame {
 #[derive(Clone, Debug, Default)]
 pub struct History {
     pub frames: Vec<Frame>,
+    /// Arrays written by the analysis (not time records), by name.
+    pub arrays: Vec<(ArraySpec, Vec<f64>)>,
 }
 
 impl History {
@@ -44,6 +46,16 @@ impl History {
 }
 
 impl Recorder for History {
+    fn write_array(
+        &mut self,
+        _sys: &System,
+        spec: &ArraySpec,
+        values: &[f64],
+    ) -> Result<(), crate::Error> {
+        self.arrays.push((spec.clone(), values.to_vec()));
+        Ok(())
+    }
+
     fn record(&mut self, sys: &System, frame: &OutputFrame) -> Result<(), crate::Error> {
         let ctx = sys.context(frame.state.time, frame.load_factor);
         let mut reactions = vec![(Vector3::zeros(), Vector3::zeros()); sys.constraints.len()];

@@ -21,7 +21,7 @@
 //!    Starting generalized-α from these keeps it second-order accurate (Arnold & Brüls
 //!    2007).
 
-use crate::elements::EvalContext;
+use crate::core::EvalContext;
 use crate::solve::{BlockMatrix, LinearError, LinearSolver};
 use crate::system::{Assembler, Coefficients, State, System};
 use nalgebra::Vector3;
@@ -121,6 +121,7 @@ pub fn assemble_initial_state(
     let w = [1.0, 1.0, 1.0, l * l, l * l, l * l];
     let start = state.clone();
     let n6 = 6 * sys.n_nodes();
+    let nc = sys.n_coordinates;
     report.violation_before = violation(sys, ctx, state, &mut phi);
     let mut viol = report.violation_before;
     while viol > tolerance {
@@ -155,7 +156,7 @@ pub fn assemble_initial_state(
             nd.x += Vector3::new(d[0], d[1], d[2]);
             nd.rot = nd.rot.compose_exp(&Vector3::new(d[3], d[4], d[5]));
         }
-        for (c, d) in state.coords.iter_mut().zip(&cfg[n6..]) {
+        for (c, d) in state.coords.iter_mut().zip(&cfg[n6..n6 + nc]) {
             c.q += d;
         }
         viol = violation(sys, ctx, state, &mut phi);
@@ -185,7 +186,7 @@ pub fn assemble_initial_state(
         nd.v += Vector3::new(d[0], d[1], d[2]);
         nd.w += Vector3::new(d[3], d[4], d[5]);
     }
-    for (c, d) in state.coords.iter_mut().zip(&cfg[n6..]) {
+    for (c, d) in state.coords.iter_mut().zip(&cfg[n6..n6 + nc]) {
         c.v += d;
         report.velocity_change = report.velocity_change.max(d.abs());
     }
@@ -193,8 +194,8 @@ pub fn assemble_initial_state(
     Ok(report)
 }
 
-/// Solves for v̇, ν̈ and λ at `state` (positions and velocities given) and stores them in
-/// it. On failure returns the block whose pivot is singular.
+/// Solves for v̇, ν̈, the element states' rates ż and λ at `state` (positions,
+/// velocities and state values given) and stores them in it. On failure returns the block whose pivot is singular.
 pub fn consistent_accelerations(
     sys: &System,
     state: &mut State,
@@ -211,6 +212,9 @@ pub fn consistent_accelerations(
     for c in &mut state.coords {
         c.a = 0.0;
     }
+    for z in &mut state.states {
+        z.zd = 0.0;
+    }
     state.lambda.fill(0.0);
     let coef = Coefficients {
         mass: 1.0,
@@ -220,6 +224,9 @@ pub fn consistent_accelerations(
         multiplier_scale: 1.0,
         velocity_scale: 1.0,
         penalty: 0.0,
+        // The element states' rates ż are unknowns of this problem like v̇.
+        state_rate: 1.0,
+        state_row_scale: 1.0,
     };
     asm.assemble(sys, state, ctx, &coef, &[], residual, Some(matrix));
     asm.acceleration_rows(sys, state, ctx, residual);
@@ -239,6 +246,11 @@ pub fn consistent_accelerations(
     for (k, off) in sys.coordinate_offsets.iter().enumerate() {
         for (j, r) in asm.coordinate_range(k).enumerate() {
             state.coords[off + j].a = residual[r];
+        }
+    }
+    for (k, &off) in sys.state_offsets.iter().enumerate() {
+        for (j, r) in asm.state_range(sys, k).enumerate() {
+            state.states[off + j].zd = residual[r];
         }
     }
     let mut lam = std::mem::take(&mut state.lambda);

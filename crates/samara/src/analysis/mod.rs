@@ -7,19 +7,21 @@ mod dynamic;
 pub mod generalized_alpha;
 mod history;
 mod initial;
+mod stage;
 mod statics;
 
-pub use dynamic::run_dynamic;
-pub use generalized_alpha::GeneralizedAlpha;
+pub use dynamic::{Simulation, StepReport, run_dynamic};
+pub use generalized_alpha::{FirstOrderAlpha, GeneralizedAlpha};
 pub use history::{Frame, History};
 pub use initial::{
     AssemblyError, AssemblyReport, assemble_initial_state, consistent_accelerations,
 };
+pub use stage::{Analysis, ArraySpec, DynamicAnalysis, StaticAnalysis};
 pub use statics::run_static;
 
-use crate::model::{AnalysisDef, AnalysisKind, Model};
+use crate::model::{AnalysisDef, Model};
 use crate::solve::condition::ConditionKind;
-use crate::system::{State, System};
+use crate::system::{Assembler, BlockOwner, State, System};
 use std::time::Duration;
 
 /// Energy bookkeeping at one output time.
@@ -63,7 +65,15 @@ pub struct OutputFrame<'a> {
 
 /// Receives the results of an analysis as they are computed.
 pub trait Recorder {
+    /// One time record.
     fn record(&mut self, sys: &System, frame: &OutputFrame) -> Result<(), crate::Error>;
+    /// The values of an array declared by the analysis ([`Analysis::arrays`]).
+    fn write_array(
+        &mut self,
+        sys: &System,
+        spec: &ArraySpec,
+        values: &[f64],
+    ) -> Result<(), crate::Error>;
 }
 
 /// Why an analysis stopped early.
@@ -122,7 +132,7 @@ impl AnalysisSummary {
 /// Progress callback: fraction of the analysis done, in [0, 1].
 pub type Progress<'a> = &'a mut dyn FnMut(f64);
 
-/// Runs one analysis of `model` from `initial`.
+/// Runs one analysis from `initial`.
 pub fn run_analysis(
     sys: &System,
     def: &AnalysisDef,
@@ -130,10 +140,7 @@ pub fn run_analysis(
     recorder: &mut dyn Recorder,
     progress: Progress,
 ) -> Result<AnalysisSummary, crate::Error> {
-    match &def.kind {
-        AnalysisKind::Dynamic(s) => run_dynamic(sys, &def.name, s, initial, recorder, progress),
-        AnalysisKind::Static(s) => run_static(sys, &def.name, s, initial, recorder, progress),
-    }
+    def.stage().run(sys, initial, recorder, progress)
 }
 
 /// Runs every analysis of a model in order, chaining `start_from`. `make_recorder` is
@@ -148,7 +155,7 @@ pub fn run_all<R: Recorder>(
     for def in &model.analyses {
         let initial = match def.start_from {
             Some(i) => out[i].0.final_state.clone(),
-            None => State::initial(model, sys),
+            None => sys.initial_state(),
         };
         let mut rec = make_recorder(def)?;
         let mut p = |f: f64| progress(def, f);
@@ -168,7 +175,7 @@ pub fn run_all<R: Recorder>(
 pub(crate) fn assemble_start(
     sys: &System,
     state: &mut State,
-    ctx: &crate::elements::EvalContext,
+    ctx: &crate::core::EvalContext,
     tolerance: f64,
     asm: &mut crate::system::Assembler,
     lin: &mut crate::solve::LinearSolver,
@@ -274,15 +281,17 @@ pub(crate) fn non_finite_failure(analysis: &str, time: f64, what: String) -> Sol
 }
 
 /// A hint for a Newton failure, naming the block where the matrix is singular.
-pub(crate) fn singular_hint(sys: &System, block: usize) -> String {
-    let what = sys.block_name(block);
-    if block < sys.n_nodes() {
-        format!(
+pub(crate) fn singular_hint(sys: &System, asm: &Assembler, block: usize) -> String {
+    let what = asm.block_name(sys, block);
+    match asm.block_owner(block) {
+        Some(BlockOwner::Node(_)) => format!(
             "the iteration matrix is singular at {what}: some direction of that node has no mass, stiffness or constraint (a free massless node, or a mechanism in a static analysis)"
-        )
-    } else {
-        format!(
+        ),
+        Some(BlockOwner::States(_)) => format!(
+            "the iteration matrix is singular at {what}: its state equations do not determine the states"
+        ),
+        _ => format!(
             "the iteration matrix is singular at {what}: its constraint equations are dependent (redundant joints) or its nodes cannot move in the constrained directions"
-        )
+        ),
     }
 }

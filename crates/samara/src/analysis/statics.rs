@@ -6,7 +6,7 @@ use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
 };
-use crate::elements::EvalContext;
+use crate::core::EvalContext;
 use crate::model::StaticSettings;
 use crate::solve::condition::condition_number;
 use crate::solve::newton::{NewtonWork, newton};
@@ -55,8 +55,12 @@ impl NewtonSystem for StaticProblem<'_> {
             n.rot = n.rot.compose_exp(&Vector3::new(d[3], d[4], d[5]));
         }
         let n6 = 6 * self.state.nodes.len();
-        for (c, d) in self.state.coords.iter_mut().zip(&self.dcfg[n6..]) {
+        let nc = self.sys.n_coordinates;
+        for (c, d) in self.state.coords.iter_mut().zip(&self.dcfg[n6..n6 + nc]) {
             c.q += d;
+        }
+        for (z, d) in self.state.states.iter_mut().zip(&self.dcfg[n6 + nc..]) {
+            z.z += d;
         }
         let mut worst: f64 = 0.0;
         for (t, d) in self.total.iter_mut().zip(self.dcfg.iter()) {
@@ -183,6 +187,9 @@ pub fn run_static(
     for c in &mut state.coords {
         c.v = 0.0;
         c.a = 0.0;
+    }
+    for z in &mut state.states {
+        z.zd = 0.0;
     }
     state.time = settings.time;
     let mut asm = Assembler::new(sys, Formulation::Index3);
@@ -318,7 +325,7 @@ pub fn run_static(
                 inc /= 2.0;
                 if inc < nominal * MIN_INCREMENT_FRACTION {
                     let hint = match &failure {
-                        NewtonFailure::Singular { block } => Some(singular_hint(sys, *block)),
+                        NewtonFailure::Singular { block } => Some(singular_hint(sys, &asm, *block)),
                         _ => Some(
                             "more `load_steps`, a larger `tolerance`, or a check of the model's stiffness may help".into(),
                         ),

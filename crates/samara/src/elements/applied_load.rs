@@ -9,10 +9,23 @@
 //! ```
 
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
+use crate::core::{ElementInput, NodeState};
+use crate::math::TimeFunction;
 use crate::math::skew;
-use crate::model::{LoadFrame, TimeFunction};
-use crate::system::NodeState;
 use nalgebra::Vector3;
+use schemars::JsonSchema;
+use serde::Deserialize;
+
+/// Frame in which an applied load's components are given.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum LoadFrame {
+    /// Fixed global components (a dead load).
+    #[default]
+    Global,
+    /// Components in the node frame, rotating with the node (a follower load).
+    Node,
+}
 
 #[derive(Clone, Debug)]
 pub struct AppliedLoad {
@@ -68,7 +81,8 @@ impl Element for AppliedLoad {
         &self.node
     }
 
-    fn evaluate(&self, ctx: &EvalContext, nodes: &[NodeState], need: Need, out: &mut LocalTerms) {
+    fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+        let nodes = x.nodes;
         let n = &nodes[self.node[0]];
         let f = self.function.eval(ctx.time) * ctx.load_factor;
         let r = n.r();
@@ -96,7 +110,8 @@ impl Element for AppliedLoad {
         }
     }
 
-    fn external_power(&self, ctx: &EvalContext, nodes: &[NodeState]) -> f64 {
+    fn external_power(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
+        let nodes = x.nodes;
         let n = &nodes[self.node[0]];
         let (fg, mg) = self.global_load(ctx, n);
         // Power = F·ẋ_node + M_node·ω, with M about the node including the lever arm.

@@ -13,8 +13,8 @@
 //! `[[m I, −m R s̃], [m s̃ Rᵀ, J_O]]` is symmetric.
 
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
+use crate::core::{ElementInput, NodeState};
 use crate::math::skew;
-use crate::system::NodeState;
 use nalgebra::{Matrix3, Vector3};
 
 #[derive(Clone, Debug)]
@@ -76,7 +76,8 @@ impl Element for RigidBody {
         &self.node
     }
 
-    fn evaluate(&self, ctx: &EvalContext, nodes: &[NodeState], need: Need, out: &mut LocalTerms) {
+    fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+        let nodes = x.nodes;
         let n = &nodes[self.node[0]];
         let r = n.r();
         let m = self.mass;
@@ -109,13 +110,15 @@ impl Element for RigidBody {
         add_block(&mut out.k, 3, 3, &(st * skew(&rt_a) * m));
     }
 
-    fn kinetic_energy(&self, nodes: &[NodeState]) -> f64 {
+    fn kinetic_energy(&self, x: &ElementInput) -> f64 {
+        let nodes = x.nodes;
         let n = &nodes[self.node[0]];
         let vc = n.v + n.r() * n.w.cross(&self.s);
         0.5 * self.mass * vc.norm_squared() + 0.5 * n.w.dot(&(self.j_cg * n.w))
     }
 
-    fn potential_energy(&self, ctx: &EvalContext, nodes: &[NodeState]) -> f64 {
+    fn potential_energy(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
+        let nodes = x.nodes;
         -self.mass * ctx.load_factor * ctx.gravity.dot(&self.cg_position(&nodes[self.node[0]]))
     }
 }

@@ -7,9 +7,10 @@
 //! - damper `F_d`: linear `c ν̇` or a table over ν̇;
 //! - backlash: free play `|ν − ν_c| ≤ w/2`; outside it, with penetration
 //!   `g = |ν − ν_c| − w/2`, the contact force `sign(ν − ν_c) k g + c ν̇` (Kelvin–Voigt);
-//! - input port `F_in(t)`, from a signal, acting to increase ν.
+//! - input port `F_in = s`, the value of a named signal, acting to increase ν
+//!   (`∂r/∂s = −1`; the system applies the chain rule to the signal's producer).
 
-use crate::model::{BacklashDef, ComponentDef, ForceLaw, TimeFunction};
+use super::spec::{BacklashDef, ComponentDef, ForceLaw};
 
 /// `[F(x), dF/dx]` of a force law.
 pub fn force_law(law: &ForceLaw, x: f64) -> [f64; 2] {
@@ -80,7 +81,8 @@ pub struct CoordinateLoads {
     pub spring: Option<ForceLaw>,
     pub damper: Option<ForceLaw>,
     pub backlash: Option<BacklashDef>,
-    pub input: Option<TimeFunction>,
+    /// The input port's signal: its name.
+    pub input: Option<String>,
 }
 
 impl CoordinateLoads {
@@ -89,7 +91,7 @@ impl CoordinateLoads {
             spring: def.spring.clone(),
             damper: def.damper.clone(),
             backlash: def.backlash.clone(),
-            input: def.input.as_ref().map(|(_, f)| f.clone()),
+            input: def.input.clone(),
         }
     }
 
@@ -100,8 +102,8 @@ impl CoordinateLoads {
             && self.input.is_none()
     }
 
-    /// `[r, ∂r/∂ν, ∂r/∂ν̇]` at time t.
-    pub fn residual(&self, t: f64, nu: f64, nu_dot: f64) -> [f64; 3] {
+    /// `[r, ∂r/∂ν, ∂r/∂ν̇]`, with `input` the value of the input port's signal (if any).
+    pub fn residual(&self, input: f64, nu: f64, nu_dot: f64) -> [f64; 3] {
         let mut out = [0.0; 3];
         if let Some(s) = &self.spring {
             let [f, k] = force_law(s, nu);
@@ -119,8 +121,8 @@ impl CoordinateLoads {
             out[1] += k;
             out[2] += c;
         }
-        if let Some(f) = &self.input {
-            out[0] -= f.eval(t);
+        if self.input.is_some() {
+            out[0] -= input;
         }
         out
     }
@@ -152,8 +154,13 @@ impl CoordinateLoads {
         p
     }
 
-    pub fn external_power(&self, t: f64, nu_dot: f64) -> f64 {
-        self.input.as_ref().map_or(0.0, |f| f.eval(t) * nu_dot)
+    /// Power of the input port, `F_in ν̇`.
+    pub fn external_power(&self, input: f64, nu_dot: f64) -> f64 {
+        if self.input.is_some() {
+            input * nu_dot
+        } else {
+            0.0
+        }
     }
 }
 
@@ -200,14 +207,14 @@ mod tests {
                 stiffness: 1e3,
                 damping: 3.0,
             }),
-            input: Some(TimeFunction::Constant(2.0)),
+            input: Some("push".into()),
         };
         let h = 1e-7;
         for (nu, nd) in [(0.45, 0.3), (-0.37, -1.1), (0.05, 2.0), (1.3, 0.0)] {
-            let r = loads.residual(0.0, nu, nd);
-            let k = (loads.residual(0.0, nu + h, nd)[0] - loads.residual(0.0, nu - h, nd)[0])
+            let r = loads.residual(2.0, nu, nd);
+            let k = (loads.residual(2.0, nu + h, nd)[0] - loads.residual(2.0, nu - h, nd)[0])
                 / (2.0 * h);
-            let c = (loads.residual(0.0, nu, nd + h)[0] - loads.residual(0.0, nu, nd - h)[0])
+            let c = (loads.residual(2.0, nu, nd + h)[0] - loads.residual(2.0, nu, nd - h)[0])
                 / (2.0 * h);
             assert!(
                 (r[1] - k).abs() < 1e-5 * k.abs().max(1.0),

@@ -12,12 +12,15 @@
 
 use super::building_blocks::{FramePair, Mat12, Row12, displacement};
 use super::coordinate_loads::CoordinateLoads;
-use super::rows::{COMPONENT_NAMES, Row, RowRole, measure, rows_of};
+use super::rows::{COMPONENT_NAMES, Row, measure, rows_of};
+use super::spec::{JointDef, JointType};
 use super::{Constraint, CoordinateTangents};
-use crate::elements::EvalContext;
+use crate::core::EvalContext;
+use crate::core::NodeRef;
+use crate::core::RowRole;
+use crate::core::{Coordinate, NodeState};
+use crate::math::TimeFunction;
 use crate::math::skew;
-use crate::model::{JointDef, JointType, NodeRef, TimeFunction};
-use crate::system::{Coordinate, NodeState};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 /// One side of a joint: a frame fixed to a node, or to the ground.
@@ -54,6 +57,9 @@ pub struct Joint {
     /// Number of active coordinates (unknowns of the Newton system).
     n_active: usize,
     loads: Vec<CoordinateLoads>,
+    /// Signals read by the input ports, and the input index of each active coordinate.
+    inputs: Vec<String>,
+    input_of: Vec<Option<usize>>,
     /// Defining rows of the passive coordinates (`coord` indexes the passive list).
     passive_rows: Vec<Row>,
 }
@@ -145,9 +151,21 @@ impl Joint {
                 rows.push(row);
             }
         }
-        let loads = components[..n_active]
+        let loads: Vec<CoordinateLoads> = components[..n_active]
             .iter()
             .map(|&c| loads_of(c))
+            .collect();
+        let mut inputs: Vec<String> = Vec::new();
+        let input_of = loads
+            .iter()
+            .map(|l| {
+                l.input.as_ref().map(|name| {
+                    inputs.iter().position(|n| n == name).unwrap_or_else(|| {
+                        inputs.push(name.clone());
+                        inputs.len() - 1
+                    })
+                })
+            })
             .collect();
         Self {
             name: def.name.clone(),
@@ -159,6 +177,8 @@ impl Joint {
             components,
             n_active,
             loads,
+            inputs,
+            input_of,
             passive_rows,
         }
     }
@@ -404,10 +424,10 @@ impl Constraint for Joint {
                     let m_sp = Vector3::new(g12[6 * x + 3], g12[6 * x + 4], g12[6 * x + 5]);
                     rr += skew(&(rots[x].transpose() * m_sp));
                 }
-                crate::elements::add_block(k, rx, cy, &tt);
-                crate::elements::add_block(k, rx, cy + 3, &tr);
-                crate::elements::add_block(k, rx + 3, cy, &rt);
-                crate::elements::add_block(k, rx + 3, cy + 3, &rr);
+                crate::core::add_block(k, rx, cy, &tt);
+                crate::core::add_block(k, rx, cy + 3, &tr);
+                crate::core::add_block(k, rx + 3, cy, &rt);
+                crate::core::add_block(k, rx + 3, cy + 3, &rr);
             }
         }
     }
@@ -443,22 +463,32 @@ impl Constraint for Joint {
 
     fn coordinate_forces(
         &self,
-        ctx: &EvalContext,
+        _ctx: &EvalContext,
         coords: &[Coordinate],
+        signals: &[f64],
         r: &mut [f64],
         mut tangents: Option<CoordinateTangents>,
     ) {
+        let n_in = self.inputs.len();
         for (c, loads) in self.loads.iter().enumerate() {
             if loads.is_empty() {
                 continue;
             }
-            let [f, k, d] = loads.residual(ctx.time, coords[c].q, coords[c].v);
+            let input = self.input_of[c].map_or(0.0, |i| signals[i]);
+            let [f, k, d] = loads.residual(input, coords[c].q, coords[c].v);
             r[c] += f;
             if let Some(t) = tangents.as_mut() {
                 t.stiffness[c] += k;
                 t.damping[c] += d;
+                if let Some(i) = self.input_of[c] {
+                    t.signals[c * n_in + i] -= 1.0;
+                }
             }
         }
+    }
+
+    fn signal_inputs(&self) -> &[String] {
+        &self.inputs
     }
 
     fn potential_energy(&self, coords: &[Coordinate]) -> f64 {
@@ -477,11 +507,12 @@ impl Constraint for Joint {
             .sum()
     }
 
-    fn external_power(&self, ctx: &EvalContext, coords: &[Coordinate]) -> f64 {
+    fn external_power(&self, _ctx: &EvalContext, coords: &[Coordinate], signals: &[f64]) -> f64 {
         self.loads
             .iter()
             .zip(coords)
-            .map(|(l, c)| l.external_power(ctx.time, c.v))
+            .zip(&self.input_of)
+            .map(|((l, c), i)| l.external_power(i.map_or(0.0, |i| signals[i]), c.v))
             .sum()
     }
 

@@ -14,9 +14,10 @@
 //!   `sin θ2 − sin ν2`, `c₂ sin(θ3 − ν3)`; singular at θ2 = ±90° (gimbal lock), so these
 //!   coordinates exist only when something is attached to a rotation of the joint.
 
+use super::JointType;
 use super::building_blocks::{AngleRow, Trig};
-use crate::model::JointType;
-use crate::model::TimeFunction;
+use crate::core::RowRole;
+use crate::math::TimeFunction;
 
 /// Names of the six relative components, in order.
 pub const COMPONENT_NAMES: [&str; 6] = ["d1", "d2", "d3", "theta1", "theta2", "theta3"];
@@ -36,17 +37,6 @@ pub enum Row {
         coord: usize,
         function: TimeFunction,
     },
-}
-
-/// What a row does.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RowRole {
-    /// Constrains a component to zero (may be dropped when redundant).
-    Constraint,
-    /// Defines a joint coordinate.
-    Definition,
-    /// Drives a joint coordinate.
-    Drive,
 }
 
 impl Row {

@@ -1,9 +1,11 @@
-//! Rotation and small linear-algebra kernels.
+//! Rotation and small linear-algebra kernels, and scalar time functions.
 //!
 //! Pure functions only; everything here is independent of the model and of the analyses.
 
 pub mod so3;
+pub mod time_function;
 
 pub use so3::{
     Rotation, exp_map, log_map, quaternion_from_matrix, skew, tangent_inverse, tangent_operator,
 };
+pub use time_function::TimeFunction;

@@ -4,34 +4,32 @@
 //! diagnostics with file, line and column. Everything downstream (system, analyses) reads
 //! only the validated [`Model`].
 
-pub mod beam;
-pub mod beam_input;
-pub mod error;
+pub mod components;
 pub mod input;
-pub mod located;
 pub mod section_files;
-pub mod time_function;
 mod validate;
 
+pub use crate::core::NodeRef;
+pub use crate::diagnostics::Located;
+pub use crate::diagnostics::{Diagnostic, MAX_MAGNITUDE, ModelError, Severity, SourceFile};
+pub use crate::diagnostics::{error, located};
+pub use crate::elements::beam::BeamDef;
 pub use crate::joints::COMPONENT_NAMES;
-pub use error::{Diagnostic, ModelError, Severity, SourceFile};
-pub use input::{
-    FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame, ModelInput,
-};
-pub use located::Located;
+pub use crate::joints::{BacklashDef, ComponentDef, ForceLaw, JointDef};
+pub use crate::math::TimeFunction;
+pub use components::beam::input as beam_input;
+pub use components::body::BodyDef;
+pub use components::force::LoadDef;
+pub use components::signal::SignalDef;
+pub use components::spring::SpringDef;
+pub use components::{Model, ModelInput};
+pub use input::{FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame};
 pub use section_files::LoadOptions;
-pub use time_function::TimeFunction;
-pub(crate) use validate::parse_error_diagnostic as parse_error;
-pub use validate::validate;
+pub use validate::{Checker, Entry, validate};
 
 use crate::math::Rotation;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use std::path::Path;
-
-/// The largest magnitude a number in a model may have. Products of a few such numbers
-/// (energies, stiffness times strain) stay finite in f64; no SI quantity of a mechanical
-/// model comes near it.
-pub const MAX_MAGNITUDE: f64 = 1e100;
 
 /// The largest number of nodes a model may have (given and created by beams together):
 /// about 1 GB of iteration matrix, well inside what one machine holds.
@@ -48,22 +46,6 @@ pub fn is_plain_file_name(name: &str) -> bool {
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
 }
 
-/// Either the fixed inertial frame or one of the model's nodes (by index).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum NodeRef {
-    Ground,
-    Node(usize),
-}
-
-impl NodeRef {
-    pub fn index(self) -> Option<usize> {
-        match self {
-            NodeRef::Ground => None,
-            NodeRef::Node(i) => Some(i),
-        }
-    }
-}
-
 /// A 6-DOF node and its initial state.
 #[derive(Clone, Debug)]
 pub struct NodeDef {
@@ -74,127 +56,6 @@ pub struct NodeDef {
     pub velocity: Vector3<f64>,
     /// Global frame.
     pub angular_velocity: Vector3<f64>,
-}
-
-/// A rigid body on a node.
-#[derive(Clone, Debug)]
-pub struct BodyDef {
-    pub name: String,
-    pub node: usize,
-    pub mass: f64,
-    /// About the CG, node-frame components.
-    pub inertia: Matrix3<f64>,
-    /// CG relative to the node, node-frame components.
-    pub cg_offset: Vector3<f64>,
-}
-
-/// A force as a function of one scalar (a coordinate or its rate).
-#[derive(Clone, Debug, PartialEq)]
-pub enum ForceLaw {
-    /// `coefficient (x − reference)`.
-    Linear { coefficient: f64, reference: f64 },
-    /// Piecewise linear through (x[i], f[i]) (x strictly increasing), extended linearly.
-    Table { x: Vec<f64>, f: Vec<f64> },
-}
-
-/// Free play `|ν − center| ≤ half_width` with a Kelvin–Voigt contact outside it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct BacklashDef {
-    pub center: f64,
-    pub half_width: f64,
-    pub stiffness: f64,
-    pub damping: f64,
-}
-
-/// What is attached to one free component of a joint.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct ComponentDef {
-    /// Spring force as a function of the coordinate.
-    pub spring: Option<ForceLaw>,
-    /// Damper force as a function of the coordinate rate.
-    pub damper: Option<ForceLaw>,
-    pub backlash: Option<BacklashDef>,
-    /// The coordinate follows this function of time.
-    pub drive: Option<TimeFunction>,
-    /// Input port: signal name and its function.
-    pub input: Option<(String, TimeFunction)>,
-}
-
-/// A joint. Frames are given in the initial configuration, global components: frame A
-/// has origin `position_a`, frame B origin `position_b` (equal unless offsets were given),
-/// both the axes `axes`.
-#[derive(Clone, Debug)]
-pub struct JointDef {
-    pub name: String,
-    pub kind: JointType,
-    pub node_a: NodeRef,
-    pub node_b: NodeRef,
-    pub position_a: Vector3<f64>,
-    pub position_b: Vector3<f64>,
-    /// Columns are the joint axes e₁, e₂, e₃ in global components.
-    pub axes: Matrix3<f64>,
-    /// Screw pitch [m/rad].
-    pub pitch: f64,
-    /// Attachments per component d1, d2, d3, θ1, θ2, θ3 (free components only).
-    pub components: [Option<ComponentDef>; 6],
-}
-
-impl JointDef {
-    /// A joint with coincident frames and nothing attached.
-    pub fn new(
-        name: impl Into<String>,
-        kind: JointType,
-        node_a: NodeRef,
-        node_b: NodeRef,
-        position: Vector3<f64>,
-        axes: Matrix3<f64>,
-    ) -> Self {
-        Self {
-            name: name.into(),
-            kind,
-            node_a,
-            node_b,
-            position_a: position,
-            position_b: position,
-            axes,
-            pitch: 0.0,
-            components: Default::default(),
-        }
-    }
-}
-
-/// A named input signal.
-#[derive(Clone, Debug)]
-pub struct SignalDef {
-    pub name: String,
-    pub function: TimeFunction,
-}
-
-/// A point-to-point spring-damper.
-#[derive(Clone, Debug)]
-pub struct SpringDef {
-    pub name: String,
-    pub node_a: NodeRef,
-    pub node_b: NodeRef,
-    /// Global attachment points in the initial configuration.
-    pub point_a: Vector3<f64>,
-    pub point_b: Vector3<f64>,
-    pub stiffness: f64,
-    pub damping: f64,
-    pub rest_length: f64,
-}
-
-/// An applied force and moment on a node.
-#[derive(Clone, Debug)]
-pub struct LoadDef {
-    pub name: String,
-    pub node: usize,
-    pub force: Vector3<f64>,
-    pub moment: Vector3<f64>,
-    pub frame: LoadFrame,
-    /// Global point of application in the initial configuration.
-    pub point: Vector3<f64>,
-    pub function: TimeFunction,
 }
 
 /// Newton and constraint settings shared by all analyses.
@@ -296,22 +157,14 @@ impl AnalysisDef {
             AnalysisKind::Static(_) => "static",
         }
     }
-}
 
-/// A validated model.
-#[derive(Clone, Debug, Default)]
-pub struct Model {
-    pub name: String,
-    pub description: Option<String>,
-    pub gravity: Vector3<f64>,
-    pub nodes: Vec<NodeDef>,
-    pub bodies: Vec<BodyDef>,
-    pub joints: Vec<JointDef>,
-    pub springs: Vec<SpringDef>,
-    pub signals: Vec<SignalDef>,
-    pub loads: Vec<LoadDef>,
-    pub beams: Vec<beam::BeamDef>,
-    pub analyses: Vec<AnalysisDef>,
+    /// The time the analysis ends at (a static analysis: the time its loads are taken at).
+    pub fn end_time(&self) -> f64 {
+        match &self.kind {
+            AnalysisKind::Dynamic(d) => d.t_end,
+            AnalysisKind::Static(s) => s.time,
+        }
+    }
 }
 
 /// A validated model and the warnings found while checking it.
@@ -346,7 +199,7 @@ impl Model {
             Err(e) => {
                 return Err(ModelError {
                     source,
-                    diagnostics: vec![validate::parse_error_diagnostic(&e, text)],
+                    diagnostics: vec![crate::diagnostics::parse_error_diagnostic(&e, text)],
                 });
             }
         };

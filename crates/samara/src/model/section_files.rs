@@ -7,8 +7,8 @@
 //! `<cache dir>/<content hash>.toml`; `samara run` keeps it in `<results dir>/sections/`
 //! and writes it, `samara check` only reads it (docs/sections.md).
 
+use super::ModelInput;
 use super::error::{Diagnostic, SourceFile};
-use super::input::ModelInput;
 use crate::section::results::{Cache, Solved, solve_cached};
 use nalgebra::Matrix6;
 use std::path::{Path, PathBuf};

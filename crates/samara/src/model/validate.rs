@@ -4,23 +4,23 @@
 use super::error::{Diagnostic, ModelError, Severity, SourceFile, did_you_mean};
 use super::input::*;
 use super::located::Located;
-use super::time_function::TimeFunction;
 use super::*;
+use crate::diagnostics::number_range_diagnostics;
 use crate::math::Rotation;
-use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, Vector3};
 use std::collections::HashMap;
 use std::ops::Range;
-
-mod beam;
 
 /// The name of the fixed inertial frame in node references.
 pub const GROUND: &str = "ground";
 
 /// Validates a parsed model file.
 pub fn validate(input: &ModelInput, source: SourceFile) -> Result<LoadedModel, ModelError> {
-    let mut v = Validator {
+    let mut v = Checker {
         source: &source,
         diags: Vec::new(),
+        node_map: HashMap::new(),
+        signal_names: HashMap::new(),
         suggestions_left: MAX_SUGGESTIONS,
     };
     // Numbers out of range are the root cause of whatever else they would break: report
@@ -46,113 +46,16 @@ pub fn validate(input: &ModelInput, source: SourceFile) -> Result<LoadedModel, M
     })
 }
 
-/// Every number written in the file must be finite and at most [`MAX_MAGNITUDE`] in
-/// magnitude, whatever key it belongs to: one located error per offending number.
-pub(crate) fn number_range_diagnostics(text: &str) -> Vec<Diagnostic> {
-    use toml::de::{DeTable, DeValue};
-    let mut out = Vec::new();
-    let Ok(doc) = DeTable::parse(text) else {
-        return out; // syntax errors are reported by the parser itself
-    };
-    let mut stack: Vec<&toml::Spanned<DeValue>> = doc.get_ref().values().collect();
-    while let Some(v) = stack.pop() {
-        match v.get_ref() {
-            DeValue::Float(f) => {
-                let raw = f.as_str();
-                let x: f64 = raw.replace('_', "").parse().unwrap_or(f64::NAN);
-                if !(x.is_finite() && x.abs() <= MAX_MAGNITUDE) {
-                    out.push(
-                        Diagnostic::error(
-                            format!("the number `{raw}` is outside the range samara computes with (finite, |x| ≤ {MAX_MAGNITUDE:e})"),
-                            Some(v.span()),
-                        )
-                        .with_hint("inf and nan are not allowed in a model; use SI units, where no input comes near this bound"),
-                    );
-                }
-            }
-            DeValue::Array(a) => stack.extend(a.iter()),
-            DeValue::Table(t) => stack.extend(t.values()),
-            _ => {}
-        }
-    }
-    out.sort_by_key(|d| d.span.as_ref().map_or(0, |s| s.start));
-    out
-}
-
-/// Where a parse error without a location most likely is: the most deeply nested line
-/// (dotted keys and headers, brackets), for the parser's recursion limit.
-fn deepest_line(text: &str) -> Option<std::ops::Range<usize>> {
-    let mut best: Option<(usize, std::ops::Range<usize>)> = None;
-    let mut start = 0;
-    for line in text.split_inclusive('\n') {
-        let depth = line
-            .bytes()
-            .filter(|b| matches!(b, b'.' | b'[' | b'{'))
-            .count();
-        if best.as_ref().is_none_or(|(d, _)| depth > *d) {
-            best = Some((depth, start..start + line.trim_end().len().max(1)));
-        }
-        start += line.len();
-    }
-    best.map(|(_, r)| r)
-}
-
-/// Turns a TOML/serde error into a diagnostic with a hint where one can be guessed.
-pub(crate) fn parse_error_diagnostic(e: &toml::de::Error, text: &str) -> Diagnostic {
-    let msg = e.message().trim().to_string();
-    if e.span().is_none() && msg.contains("recursion") {
-        return Diagnostic::error(
-            format!("{msg}: the file nests tables or arrays too deeply"),
-            deepest_line(text),
-        )
-        .with_hint("a model needs only a few levels of nesting; check this line's dotted keys and brackets");
-    }
-    let mut d = Diagnostic::error(msg.clone(), e.span());
-    if let Some(rest) = msg.strip_prefix("unknown field `") {
-        if let Some((field, expected)) = rest.split_once('`') {
-            let candidates = backticked(expected);
-            d.message = format!("unknown key `{field}`");
-            d = match did_you_mean(field, candidates.iter().map(|s| s.as_str())) {
-                Some(best) => d.with_hint(format!("did you mean `{best}`?")),
-                None => d.with_hint(format!(
-                    "the keys allowed here are: {}",
-                    candidates.join(", ")
-                )),
-            };
-        }
-    } else if let Some(rest) = msg.strip_prefix("unknown variant `") {
-        if let Some((word, expected)) = rest.split_once('`') {
-            let candidates = backticked(expected);
-            d.message = format!("unknown value `{word}`");
-            d = match did_you_mean(word, candidates.iter().map(|s| s.as_str())) {
-                Some(best) => d.with_hint(format!("did you mean `{best}`?")),
-                None => d.with_hint(format!("expected one of: {}", candidates.join(", "))),
-            };
-        }
-    } else if let Some(rest) = msg.strip_prefix("missing field `") {
-        if let Some((field, _)) = rest.split_once('`') {
-            d.message = format!("missing required key `{field}`");
-            d = d.with_hint(format!(
-                "add `{field} = …` to this table (see docs/model-reference.md)"
-            ));
-        }
-    } else if msg.contains("invalid type") || msg.contains("expected") {
-        d = d.with_hint("check the value's type: numbers are written like 1.0 or 2e-3, vectors like [0.0, 1.0, 0.0], names in quotes");
-    }
-    d
-}
-
-fn backticked(s: &str) -> Vec<String> {
-    s.split('`')
-        .enumerate()
-        .filter(|(i, _)| i % 2 == 1)
-        .map(|(_, w)| w.to_string())
-        .collect()
-}
-
-struct Validator<'a> {
-    source: &'a SourceFile,
-    diags: Vec<Diagnostic>,
+/// The validation context shared by every component kind: diagnostics with their
+/// locations, the nodes known so far, the signals produced, and the checks many kinds use
+/// (node references, orientations, time functions, finite numbers).
+pub struct Checker<'a> {
+    pub(crate) source: &'a SourceFile,
+    pub(crate) diags: Vec<Diagnostic>,
+    /// Node name → index (beams add the nodes they create).
+    pub(crate) node_map: HashMap<String, usize>,
+    /// Every signal the model produces, with where it is declared.
+    pub(crate) signal_names: HashMap<String, Option<Range<usize>>>,
     /// Unknown-name errors that still get a "did you mean" (each costs a pass over the
     /// names; a file with thousands of bad references must not take quadratic time).
     suggestions_left: usize,
@@ -163,12 +66,12 @@ const MAX_SUGGESTIONS: usize = 100;
 
 /// Where an entry's keys live in the file.
 #[derive(Clone)]
-struct Entry {
-    span: Option<Range<usize>>,
+pub struct Entry {
+    pub(crate) span: Option<Range<usize>>,
 }
 
-impl<'a> Validator<'a> {
-    fn error(
+impl<'a> Checker<'a> {
+    pub(crate) fn error(
         &mut self,
         message: impl Into<String>,
         span: Option<Range<usize>>,
@@ -179,7 +82,7 @@ impl<'a> Validator<'a> {
         self.diags.push(d);
     }
 
-    fn warning(
+    pub(crate) fn warning(
         &mut self,
         message: impl Into<String>,
         span: Option<Range<usize>>,
@@ -192,7 +95,7 @@ impl<'a> Validator<'a> {
 
     /// Span of `key = value` inside an entry, pointing at the value; the entry's span if
     /// the key cannot be found (e.g. the model was built in code).
-    fn key(&self, entry: &Entry, key: &str) -> Option<Range<usize>> {
+    pub(crate) fn key(&self, entry: &Entry, key: &str) -> Option<Range<usize>> {
         let mut span = entry.span.clone()?;
         // An array-of-tables entry may be spanned by its header only: extend the search to
         // the next table header. (Inline tables are spanned whole; extending them would
@@ -233,7 +136,7 @@ impl<'a> Validator<'a> {
     }
 
     /// Span of `key = value` in the top-level table `[table]`, if the file has one.
-    fn header_key(&self, table: &str, key: &str) -> Option<Range<usize>> {
+    pub(crate) fn header_key(&self, table: &str, key: &str) -> Option<Range<usize>> {
         let text = &self.source.text;
         let header = format!("[{table}]");
         let start = text
@@ -246,7 +149,7 @@ impl<'a> Validator<'a> {
         self.key(&entry, key)
     }
 
-    fn finite(&mut self, entry: &Entry, key: &str, values: &[f64], what: &str) -> bool {
+    pub(crate) fn finite(&mut self, entry: &Entry, key: &str, values: &[f64], what: &str) -> bool {
         if values
             .iter()
             .all(|x| x.is_finite() && x.abs() <= MAX_MAGNITUDE)
@@ -262,7 +165,7 @@ impl<'a> Validator<'a> {
         }
     }
 
-    fn unique_names<T>(
+    pub(crate) fn unique_names<T>(
         &mut self,
         items: &[Located<T>],
         name: impl Fn(&T) -> &Located<String>,
@@ -302,7 +205,7 @@ impl<'a> Validator<'a> {
     }
 
     /// A "did you mean" for the first [`MAX_SUGGESTIONS`] unknown names; `None` after.
-    fn suggest<'n>(
+    pub(crate) fn suggest<'n>(
         &mut self,
         word: &str,
         candidates: impl IntoIterator<Item = &'n str>,
@@ -314,7 +217,15 @@ impl<'a> Validator<'a> {
         did_you_mean(word, candidates)
     }
 
-    fn node_ref(
+    /// A node reference resolved against the nodes known so far.
+    pub(crate) fn node_ref(&mut self, r: &Located<String>, what: &str) -> Option<NodeRef> {
+        let map = std::mem::take(&mut self.node_map);
+        let out = self.node_ref_in(r, &map, what);
+        self.node_map = map;
+        out
+    }
+
+    pub(crate) fn node_ref_in(
         &mut self,
         r: &Located<String>,
         nodes: &HashMap<String, usize>,
@@ -350,7 +261,12 @@ impl<'a> Validator<'a> {
         None
     }
 
-    fn orientation(&mut self, o: &OrientationInput, entry: &Entry, what: &str) -> Option<Rotation> {
+    pub(crate) fn orientation(
+        &mut self,
+        o: &OrientationInput,
+        entry: &Entry,
+        what: &str,
+    ) -> Option<Rotation> {
         let forms = [
             o.quaternion.is_some(),
             o.rotation_vector.is_some(),
@@ -434,7 +350,7 @@ impl<'a> Validator<'a> {
         Some(Rotation::from_matrix(&m))
     }
 
-    fn time_function(
+    pub(crate) fn time_function(
         &mut self,
         f: &Located<TimeFunctionInput>,
         what: &str,
@@ -624,7 +540,6 @@ impl<'a> Validator<'a> {
 
         // Nodes.
         self.unique_names(&input.nodes, |n| &n.name, "node");
-        let mut node_map = HashMap::new();
         for n in &input.nodes {
             let e = Entry {
                 span: n.span.clone(),
@@ -649,7 +564,7 @@ impl<'a> Validator<'a> {
                 Some(o) => self.orientation(o, &e, &what).unwrap_or_default(),
                 None => Rotation::identity(),
             };
-            node_map
+            self.node_map
                 .entry(ni.name.value.clone())
                 .or_insert(model.nodes.len());
             model.nodes.push(NodeDef {
@@ -661,207 +576,8 @@ impl<'a> Validator<'a> {
             });
         }
 
-        // Beams (may create nodes).
-        self.beams(input, &mut model, &mut node_map);
-
-        // Bodies.
-        self.unique_names(&input.bodies, |b| &b.name, "body");
-        for b in &input.bodies {
-            let e = Entry {
-                span: b.span.clone(),
-            };
-            let bi = &b.value;
-            let what = format!("body '{}'", bi.name.value);
-            let node = self.node_ref(&bi.node, &node_map, &what);
-            if node == Some(NodeRef::Ground) {
-                self.error(format!("{what}: a body cannot be attached to the ground"), bi.node.span.clone(), Some("attach it to a node; fix the node to the ground with a `fixed` joint if it must not move".into()));
-            }
-            if !(bi.mass.is_finite() && bi.mass > 0.0) {
-                self.error(
-                    format!("{what}: mass must be positive (got {})", bi.mass),
-                    self.key(&e, "mass"),
-                    Some("a massless attachment needs no body; give the mass in kg".into()),
-                );
-            }
-            let inertia = Matrix3::from_fn(|i, j| bi.inertia[i][j]);
-            self.check_inertia(&inertia, &e, &what);
-            let cg = bi.cg_offset.unwrap_or([0.0; 3]);
-            self.finite(&e, "cg_offset", &cg, &what);
-            if let Some(NodeRef::Node(node)) = node {
-                model.bodies.push(BodyDef {
-                    name: bi.name.value.clone(),
-                    node,
-                    mass: bi.mass,
-                    inertia: 0.5 * (inertia + inertia.transpose()),
-                    cg_offset: Vector3::from(cg),
-                });
-            }
-        }
-
-        // Signals.
-        self.unique_names(&input.signals, |g| &g.name, "signal");
-        let mut signals: HashMap<String, TimeFunction> = HashMap::new();
-        for g in &input.signals {
-            let what = format!("signal '{}'", g.value.name.value);
-            if let Some(f) = self.time_function(&g.value.function, &what) {
-                signals.insert(g.value.name.value.clone(), f.clone());
-                model.signals.push(SignalDef {
-                    name: g.value.name.value.clone(),
-                    function: f,
-                });
-            }
-        }
-
-        // Joints.
-        self.unique_names(&input.joints, |j| &j.name, "joint");
-        for j in &input.joints {
-            if let Some(def) = self.joint(j, &node_map, &model, &signals) {
-                model.joints.push(def);
-            }
-        }
-
-        // Springs.
-        self.unique_names(&input.springs, |s| &s.name, "spring");
-        for s in &input.springs {
-            let e = Entry {
-                span: s.span.clone(),
-            };
-            let si = &s.value;
-            let what = format!("spring '{}'", si.name.value);
-            let a = self.node_ref(&si.node_a, &node_map, &what);
-            let b = self.node_ref(&si.node_b, &node_map, &what);
-            let (Some(a), Some(b)) = (a, b) else { continue };
-            if a == b {
-                self.error(
-                    format!("{what} connects a node to itself"),
-                    si.node_b.span.clone(),
-                    Some("a spring needs two different nodes (or a node and 'ground')".into()),
-                );
-                continue;
-            }
-            let default_point = |r: NodeRef| {
-                r.index()
-                    .map(|i| model.nodes[i].position)
-                    .unwrap_or_default()
-            };
-            let pa = si
-                .point_a
-                .map(Vector3::from)
-                .unwrap_or_else(|| default_point(a));
-            let pb = si
-                .point_b
-                .map(Vector3::from)
-                .unwrap_or_else(|| default_point(b));
-            if a == NodeRef::Ground && si.point_a.is_none() {
-                self.error(
-                    format!("{what}: the ground end needs `point_a`"),
-                    e.span.clone(),
-                    Some("give the global position of the anchor point".into()),
-                );
-            }
-            if b == NodeRef::Ground && si.point_b.is_none() {
-                self.error(
-                    format!("{what}: the ground end needs `point_b`"),
-                    e.span.clone(),
-                    Some("give the global position of the anchor point".into()),
-                );
-            }
-            self.finite(&e, "point_a", pa.as_slice(), &what);
-            self.finite(&e, "point_b", pb.as_slice(), &what);
-            if !(si.stiffness.is_finite() && si.stiffness >= 0.0) {
-                self.error(
-                    format!("{what}: stiffness must be ≥ 0 (got {})", si.stiffness),
-                    self.key(&e, "stiffness"),
-                    None,
-                );
-            }
-            let damping = si.damping.unwrap_or(0.0);
-            if !(damping.is_finite() && damping >= 0.0) {
-                self.error(
-                    format!("{what}: damping must be ≥ 0 (got {damping})"),
-                    self.key(&e, "damping"),
-                    None,
-                );
-            }
-            let l0 = (pb - pa).norm();
-            if l0 < 1e-12 {
-                self.error(
-                    format!("{what}: its two points coincide, so its direction is undefined"),
-                    e.span.clone(),
-                    Some("give distinct `point_a` and `point_b`".into()),
-                );
-            }
-            let rest = si.rest_length.unwrap_or(l0);
-            if !(rest.is_finite() && rest >= 0.0) {
-                self.error(
-                    format!("{what}: rest_length must be ≥ 0 (got {rest})"),
-                    self.key(&e, "rest_length"),
-                    None,
-                );
-            }
-            model.springs.push(SpringDef {
-                name: si.name.value.clone(),
-                node_a: a,
-                node_b: b,
-                point_a: pa,
-                point_b: pb,
-                stiffness: si.stiffness,
-                damping,
-                rest_length: rest,
-            });
-        }
-
-        // Applied loads.
-        self.unique_names(&input.forces, |f| &f.name, "force");
-        for f in &input.forces {
-            let e = Entry {
-                span: f.span.clone(),
-            };
-            let fi = &f.value;
-            let what = format!("force '{}'", fi.name.value);
-            let node = self.node_ref(&fi.node, &node_map, &what);
-            if fi.force.is_none() && fi.moment.is_none() {
-                self.error(
-                    format!("{what}: give `force`, `moment`, or both"),
-                    e.span.clone(),
-                    None,
-                );
-            }
-            let force = fi.force.unwrap_or([0.0; 3]);
-            let moment = fi.moment.unwrap_or([0.0; 3]);
-            self.finite(&e, "force", &force, &what);
-            self.finite(&e, "moment", &moment, &what);
-            let function = match &fi.function {
-                Some(func) => self.time_function(func, &what).unwrap_or_default(),
-                None => TimeFunction::Constant(1.0),
-            };
-            match node {
-                Some(NodeRef::Node(n)) => {
-                    let point = fi
-                        .point
-                        .map(Vector3::from)
-                        .unwrap_or(model.nodes[n].position);
-                    self.finite(&e, "point", point.as_slice(), &what);
-                    model.loads.push(LoadDef {
-                        name: fi.name.value.clone(),
-                        node: n,
-                        force: Vector3::from(force),
-                        moment: Vector3::from(moment),
-                        frame: fi.frame.unwrap_or_default(),
-                        point,
-                        function,
-                    });
-                }
-                Some(NodeRef::Ground) => {
-                    self.error(
-                        format!("{what}: a load on the ground has no effect"),
-                        fi.node.span.clone(),
-                        Some("apply it to a node".into()),
-                    );
-                }
-                None => {}
-            }
-        }
+        // Components, in the order of the registry.
+        super::components::validate_all(input, self, &mut model);
 
         // Analyses.
         self.unique_names(&input.analyses, |a| &a.name, "analysis");
@@ -870,35 +586,7 @@ impl<'a> Validator<'a> {
                 model.analyses.push(def);
             }
         }
-        // A beam without `density` or `mass` is massless (right for statics); in a dynamic
-        // analysis its nodes then need mass from elsewhere, or the run stops at once.
-        if let Some(dynamic) = model
-            .analyses
-            .iter()
-            .find(|a| matches!(a.kind, AnalysisKind::Dynamic(_)))
-        {
-            for b in &model.beams {
-                if b.table
-                    .sections
-                    .iter()
-                    .all(|s| s.mass.iter().all(|&x| x == 0.0))
-                {
-                    let span = input
-                        .beams
-                        .iter()
-                        .find(|bi| bi.value.name.value == b.name)
-                        .and_then(|bi| bi.value.name.span.clone());
-                    self.warning(
-                        format!(
-                            "beam '{}' has no mass (no `density` in `isotropic`, no `mass` matrix), and analysis '{}' is dynamic",
-                            b.name, dynamic.name
-                        ),
-                        span,
-                        Some("give the sections a density or a mass matrix; a massless beam only works where every node that can move carries a body".into()),
-                    );
-                }
-            }
-        }
+        super::components::finish_all(input, self, &model);
         if input.analyses.is_empty() {
             self.warning("the model has no [[analyses]]: nothing will run", None, Some("add e.g. [[analyses]] name = \"run\", type = \"dynamic\", t_end = 1.0, step = 1e-3".into()));
         }
@@ -906,29 +594,7 @@ impl<'a> Validator<'a> {
             self.warning("the model has no nodes", None, None);
         }
         // Nodes that nothing touches are free and massless: their equations are singular.
-        let mut used = vec![false; model.nodes.len()];
-        for b in &model.bodies {
-            used[b.node] = true;
-        }
-        for s in &model.springs {
-            for r in [s.node_a, s.node_b] {
-                if let Some(i) = r.index() {
-                    used[i] = true;
-                }
-            }
-        }
-        for j in &model.joints {
-            for r in [j.node_a, j.node_b] {
-                if let Some(i) = r.index() {
-                    used[i] = true;
-                }
-            }
-        }
-        for b in &model.beams {
-            for &i in &b.nodes {
-                used[i] = true;
-            }
-        }
+        let used = super::components::nodes_used(&model);
         for (i, n) in input.nodes.iter().enumerate() {
             if i < used.len() && !used[i] {
                 self.error(
@@ -942,7 +608,13 @@ impl<'a> Validator<'a> {
     }
 
     /// A unit vector from a `key = [x, y, z]` entry, or an error.
-    fn unit_axis(&mut self, v: [f64; 3], e: &Entry, key: &str, what: &str) -> Option<Vector3<f64>> {
+    pub(crate) fn unit_axis(
+        &mut self,
+        v: [f64; 3],
+        e: &Entry,
+        key: &str,
+        what: &str,
+    ) -> Option<Vector3<f64>> {
         let ax = Vector3::from(v);
         let n = ax.norm();
         if !n.is_finite() || n < 1e-12 {
@@ -954,450 +626,6 @@ impl<'a> Validator<'a> {
             return None;
         }
         Some(ax / n)
-    }
-
-    fn joint(
-        &mut self,
-        j: &Located<JointInput>,
-        node_map: &HashMap<String, usize>,
-        model: &Model,
-        signals: &HashMap<String, TimeFunction>,
-    ) -> Option<JointDef> {
-        let e = Entry {
-            span: j.span.clone(),
-        };
-        let ji = &j.value;
-        let kind = ji.kind.value;
-        let what = format!("joint '{}'", ji.name.value);
-        let a = self.node_ref(&ji.node_a, node_map, &what);
-        let b = self.node_ref(&ji.node_b, node_map, &what);
-        let (a, b) = (a?, b?);
-        if a == b {
-            let msg = if a == NodeRef::Ground {
-                format!("{what} connects the ground to itself")
-            } else {
-                format!("{what} connects node '{}' to itself", ji.node_a.value)
-            };
-            self.error(
-                msg,
-                ji.node_b.span.clone(),
-                Some("a joint needs two different nodes (or a node and 'ground')".into()),
-            );
-            return None;
-        }
-        // Frame in which position and axes are given.
-        let (origin, rot) = match &ji.relative_to {
-            None => (Vector3::zeros(), Matrix3::identity()),
-            Some(r) => match self.node_ref(r, node_map, &what)? {
-                NodeRef::Ground => (Vector3::zeros(), Matrix3::identity()),
-                NodeRef::Node(i) => (
-                    model.nodes[i].position,
-                    *model.nodes[i].orientation.matrix(),
-                ),
-            },
-        };
-        let position = match ji.position {
-            Some(p) => {
-                if !self.finite(&e, "position", &p, &what) {
-                    return None;
-                }
-                origin + rot * Vector3::from(p)
-            }
-            None => {
-                let n = b.index().or(a.index()).unwrap_or(0);
-                model.nodes.get(n).map(|n| n.position).unwrap_or_default()
-            }
-        };
-        if ji.orientation.is_some() && (ji.axis.is_some() || ji.axis_1.is_some()) {
-            self.error(
-                format!("{what}: give either `axis` (and `axis_1`) or `orientation`, not both"),
-                self.key(&e, "orientation"),
-                None,
-            );
-            return None;
-        }
-        let needs_axis = !matches!(
-            kind,
-            JointType::Fixed | JointType::Spherical | JointType::Prescribed
-        );
-        let local_axes = if let Some(axis) = ji.axis {
-            let e3 = self.unit_axis(axis, &e, "axis", &what)?;
-            match ji.axis_1 {
-                None => frame_from_axis(&e3),
-                Some(a1) => {
-                    let e1 = self.unit_axis(a1, &e, "axis_1", &what)?;
-                    let c = e1.dot(&e3);
-                    if c.abs() > 1e-6 {
-                        self.error(
-                            format!(
-                                "{what}: `axis_1` is not orthogonal to `axis` (cosine {c:.3e}, angle {:.4}°)",
-                                c.clamp(-1.0, 1.0).acos().to_degrees()
-                            ),
-                            self.key(&e, "axis_1"),
-                            Some("the joint axes must be orthogonal to within 1e-6; give e₁ normal to e₃".into()),
-                        );
-                        return None;
-                    }
-                    let e1 = (e1 - e3 * c).normalize();
-                    Matrix3::from_columns(&[e1, e3.cross(&e1), e3])
-                }
-            }
-        } else if ji.axis_1.is_some() {
-            self.error(
-                format!("{what}: `axis_1` needs `axis`"),
-                self.key(&e, "axis_1"),
-                Some("give the joint axis e₃ as `axis` too".into()),
-            );
-            return None;
-        } else if let Some(o) = &ji.orientation {
-            *self.orientation(o, &e, &what)?.matrix()
-        } else {
-            if needs_axis {
-                self.error(
-                    format!("{what}: a {} joint needs `axis` (or `orientation`, whose z axis is the joint axis)", kind.name()),
-                    e.span.clone(),
-                    Some("add e.g. `axis = [0.0, 1.0, 0.0]`".into()),
-                );
-                return None;
-            }
-            Matrix3::identity()
-        };
-        let axes = rot * local_axes;
-        // Per-side origins.
-        let side = |this: &mut Self,
-                    r: NodeRef,
-                    off: Option<[f64; 3]>,
-                    key: &str|
-         -> Option<Vector3<f64>> {
-            match off {
-                None => Some(position),
-                Some(o) => {
-                    if !this.finite(&e, key, &o, &what) {
-                        return None;
-                    }
-                    Some(match r {
-                        NodeRef::Ground => Vector3::from(o),
-                        NodeRef::Node(i) => {
-                            model.nodes[i].position
-                                + model.nodes[i].orientation.matrix() * Vector3::from(o)
-                        }
-                    })
-                }
-            }
-        };
-        let position_a = side(self, a, ji.offset_a, "offset_a")?;
-        let position_b = side(self, b, ji.offset_b, "offset_b")?;
-        let pitch = match (kind, ji.pitch) {
-            (JointType::Screw, Some(p)) if p.is_finite() => p,
-            (JointType::Screw, _) => {
-                self.error(
-                    format!("{what}: a screw joint needs a finite `pitch` [m/rad]"),
-                    if ji.pitch.is_some() {
-                        self.key(&e, "pitch")
-                    } else {
-                        ji.kind.span.clone()
-                    },
-                    Some(
-                        "d3 = pitch · θ3; e.g. a 2 mm lead is pitch = 0.002 / (2π) = 3.183e-4"
-                            .into(),
-                    ),
-                );
-                return None;
-            }
-            (_, Some(_)) => {
-                self.error(
-                    format!("{what}: `pitch` is only used by screw joints"),
-                    self.key(&e, "pitch"),
-                    None,
-                );
-                return None;
-            }
-            (_, None) => 0.0,
-        };
-        let inputs = [&ji.d1, &ji.d2, &ji.d3, &ji.theta1, &ji.theta2, &ji.theta3];
-        let mut components: [Option<ComponentDef>; 6] = Default::default();
-        let mut ok = true;
-        for (c, input) in inputs.iter().enumerate() {
-            let Some(ci) = input else { continue };
-            let name = crate::joints::COMPONENT_NAMES[c];
-            let free =
-                crate::joints::rows::is_free(kind, c) && !(kind == JointType::Screw && c == 2);
-            if !free {
-                let list: Vec<&str> = (0..6)
-                    .filter(|&k| {
-                        crate::joints::rows::is_free(kind, k)
-                            && !(kind == JointType::Screw && k == 2)
-                    })
-                    .map(|k| crate::joints::COMPONENT_NAMES[k])
-                    .collect();
-                let hint = if list.is_empty() {
-                    format!("a {} joint has no free component", kind.name())
-                } else {
-                    format!(
-                        "the free components of a {} joint are: {}",
-                        kind.name(),
-                        list.join(", ")
-                    )
-                };
-                self.error(
-                    format!("{what}: `{name}` is constrained by a {} joint; nothing can be attached to it", kind.name()),
-                    ci.span.clone().or(e.span.clone()),
-                    Some(hint),
-                );
-                ok = false;
-                continue;
-            }
-            let cw = format!("{what}, `{name}`");
-            match self.component(ci, &cw, signals) {
-                Some(d) => components[c] = Some(d),
-                None => ok = false,
-            }
-        }
-        if !ok {
-            return None;
-        }
-        Some(JointDef {
-            name: ji.name.value.clone(),
-            kind,
-            node_a: a,
-            node_b: b,
-            position_a,
-            position_b,
-            axes,
-            pitch,
-            components,
-        })
-    }
-
-    /// A piecewise-linear force law from `[[x, F], …]`.
-    fn force_table(
-        &mut self,
-        pts: &[[f64; 2]],
-        e: &Entry,
-        key: &str,
-        what: &str,
-    ) -> Option<ForceLaw> {
-        if pts.len() < 2 {
-            self.error(
-                format!("{what}: `{key}` needs at least two points"),
-                self.key(e, key),
-                Some("points are [[x0, F0], [x1, F1], …] with x0 < x1 < …".into()),
-            );
-            return None;
-        }
-        if !pts.iter().flatten().all(|x| x.is_finite()) {
-            self.error(
-                format!("{what}: `{key}` must be finite"),
-                self.key(e, key),
-                None,
-            );
-            return None;
-        }
-        if pts.windows(2).any(|w| w[1][0] <= w[0][0]) {
-            self.error(
-                format!("{what}: the first column of `{key}` must be strictly increasing"),
-                self.key(e, key),
-                Some("points are [[x0, F0], [x1, F1], …] with x0 < x1 < …".into()),
-            );
-            return None;
-        }
-        Some(ForceLaw::Table {
-            x: pts.iter().map(|p| p[0]).collect(),
-            f: pts.iter().map(|p| p[1]).collect(),
-        })
-    }
-
-    fn component(
-        &mut self,
-        ci: &Located<ComponentInput>,
-        what: &str,
-        signals: &HashMap<String, TimeFunction>,
-    ) -> Option<ComponentDef> {
-        let e = Entry {
-            span: ci.span.clone(),
-        };
-        let c = &ci.value;
-        let mut ok = true;
-        let mut nonneg = |this: &mut Self, v: Option<f64>, key: &str| -> Option<f64> {
-            let x = v?;
-            if !(x.is_finite() && x >= 0.0) {
-                this.error(
-                    format!("{what}: `{key}` must be ≥ 0 (got {x})"),
-                    this.key(&e, key),
-                    None,
-                );
-                ok = false;
-                return None;
-            }
-            Some(x)
-        };
-        let stiffness = nonneg(self, c.stiffness, "stiffness");
-        let damping = nonneg(self, c.damping, "damping");
-        let rest = c.rest.unwrap_or(0.0);
-        if !rest.is_finite() {
-            self.error(
-                format!("{what}: `rest` must be finite"),
-                self.key(&e, "rest"),
-                None,
-            );
-            ok = false;
-        }
-        if c.rest.is_some() && c.stiffness.is_none() {
-            self.error(
-                format!(
-                    "{what}: `rest` is the rest value of a linear spring and needs `stiffness`"
-                ),
-                self.key(&e, "rest"),
-                None,
-            );
-            ok = false;
-        }
-        let mut spring = stiffness.map(|k| ForceLaw::Linear {
-            coefficient: k,
-            reference: rest,
-        });
-        if let Some(t) = &c.spring_table {
-            if c.stiffness.is_some() {
-                self.error(
-                    format!("{what}: give either `stiffness` or `spring_table`, not both"),
-                    self.key(&e, "spring_table"),
-                    None,
-                );
-                ok = false;
-            }
-            spring = self.force_table(t, &e, "spring_table", what);
-            ok &= spring.is_some();
-        }
-        let mut damper = damping.map(|c| ForceLaw::Linear {
-            coefficient: c,
-            reference: 0.0,
-        });
-        if let Some(t) = &c.damper_table {
-            if c.damping.is_some() {
-                self.error(
-                    format!("{what}: give either `damping` or `damper_table`, not both"),
-                    self.key(&e, "damper_table"),
-                    None,
-                );
-                ok = false;
-            }
-            damper = self.force_table(t, &e, "damper_table", what);
-            ok &= damper.is_some();
-        }
-        let backlash = match &c.backlash {
-            None => None,
-            Some(b) => {
-                let bad = |this: &mut Self, msg: String| {
-                    this.error(
-                        format!("{what}: backlash {msg}"),
-                        this.key(&e, "backlash"),
-                        Some(
-                            "backlash = { width = 0.01, stiffness = 1e6, damping = 100.0 }".into(),
-                        ),
-                    );
-                };
-                let damping = b.damping.unwrap_or(0.0);
-                let center = b.center.unwrap_or(0.0);
-                if !(b.width.is_finite() && b.width > 0.0) {
-                    bad(self, format!("`width` must be positive (got {})", b.width));
-                    ok = false;
-                    None
-                } else if !(b.stiffness.is_finite() && b.stiffness > 0.0) {
-                    bad(
-                        self,
-                        format!("`stiffness` must be positive (got {})", b.stiffness),
-                    );
-                    ok = false;
-                    None
-                } else if !(damping.is_finite() && damping >= 0.0 && center.is_finite()) {
-                    bad(self, "`damping` must be ≥ 0 and `center` finite".into());
-                    ok = false;
-                    None
-                } else {
-                    Some(BacklashDef {
-                        center,
-                        half_width: 0.5 * b.width,
-                        stiffness: b.stiffness,
-                        damping,
-                    })
-                }
-            }
-        };
-        let drive = match &c.drive {
-            None => None,
-            Some(f) => {
-                let d = self.time_function(f, &format!("{what} drive"));
-                ok &= d.is_some();
-                d
-            }
-        };
-        let input = match &c.input {
-            None => None,
-            Some(name) => match signals.get(&name.value) {
-                Some(f) => Some((name.value.clone(), f.clone())),
-                None => {
-                    let hint = match self.suggest(&name.value, signals.keys().map(|s| s.as_str())) {
-                        Some(b) => format!("did you mean '{b}'?"),
-                        None => "declare it in a [[signals]] table: name and function".into(),
-                    };
-                    self.error(
-                        format!("{what}: unknown signal '{}'", name.value),
-                        name.span.clone(),
-                        Some(hint),
-                    );
-                    ok = false;
-                    None
-                }
-            },
-        };
-        ok.then_some(ComponentDef {
-            spring,
-            damper,
-            backlash,
-            drive,
-            input,
-        })
-    }
-
-    fn check_inertia(&mut self, j: &Matrix3<f64>, e: &Entry, what: &str) {
-        let span = self.key(e, "inertia");
-        if !j.iter().all(|x| x.is_finite()) {
-            self.error(format!("{what}: inertia must be finite"), span, None);
-            return;
-        }
-        let scale = j.abs().max().max(f64::MIN_POSITIVE);
-        let asym = (j - j.transpose()).abs().max();
-        if asym > 1e-9 * scale {
-            self.error(
-                format!("{what}: inertia is not symmetric (largest |Jᵢⱼ − Jⱼᵢ| = {asym:.3e})"),
-                span,
-                Some(
-                    "give the full symmetric tensor about the CG; products of inertia appear twice"
-                        .into(),
-                ),
-            );
-            return;
-        }
-        let eig = SymmetricEigen::new(0.5 * (j + j.transpose())).eigenvalues;
-        let min = eig.min();
-        // Also rejects a NaN from an overflowing eigen-solve.
-        if min.is_nan() || min <= 0.0 {
-            self.error(
-                format!("{what}: inertia is not positive definite (principal moments {:.4e}, {:.4e}, {:.4e})", eig[0], eig[1], eig[2]),
-                span,
-                Some("every principal moment of inertia of a rigid body must be positive".into()),
-            );
-            return;
-        }
-        let mut p = [eig[0], eig[1], eig[2]];
-        p.sort_by(f64::total_cmp);
-        if p[0] + p[1] < p[2] * (1.0 - 1e-9) {
-            self.warning(
-                format!("{what}: principal moments {:.4e}, {:.4e}, {:.4e} violate the triangle inequality (J₁ + J₂ ≥ J₃), so no real body has them", p[0], p[1], p[2]),
-                span,
-                None,
-            );
-        }
     }
 
     fn analysis(
@@ -1701,7 +929,7 @@ pub fn frame_from_axis(e3: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 /// Frame from two of its axes (indices i < j); the first is kept, the second orthogonalized.
-fn frame_from_two_axes(
+pub(crate) fn frame_from_two_axes(
     i: usize,
     a: &Vector3<f64>,
     j: usize,

@@ -34,7 +34,9 @@ pub(super) struct BeamVars {
     buf4: Vec<f64>,
 }
 
-fn add(
+/// Defines a variable with its `units` (if any), `long_name` and, for doubles, a NaN
+/// `_FillValue`.
+pub(super) fn add(
     d: &mut Definition,
     name: &str,
     ty: NcType,

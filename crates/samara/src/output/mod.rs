@@ -4,6 +4,7 @@
 //! - `results`: the layout of a samara results file, one per analysis, as a
 //!   [`crate::analysis::Recorder`];
 //! - `beam_vars`: the beams' sectional variables of a results file (models with beams);
+//! - `state_vars`: element states and signals of a results file (models with them);
 //! - `reader`: reading results files back (metadata, variables, named channels);
 //! - `vtk`: ParaView time series (`.pvd` + `.vtu`) from a results file.
 
@@ -11,6 +12,7 @@ mod beam_vars;
 pub mod netcdf;
 mod reader;
 mod results;
+mod state_vars;
 mod vtk;
 
 pub use reader::{Channel, ReadError, ResultsReader, VariableInfo};

@@ -428,6 +428,22 @@ impl Definition {
         DimId(self.schema.dims.len() - 1)
     }
 
+    /// The fixed dimension `name` of length `len`: the existing one if it is defined
+    /// already (a different length is an error), a new one otherwise.
+    pub fn dim(&mut self, name: &str, len: usize) -> DimId {
+        match self.schema.dims.iter().position(|d| d.name == name) {
+            Some(i) => {
+                if self.schema.dims[i].len != Some(len) {
+                    self.errors.push(format!(
+                        "dimension '{name}' of length {len} is defined already with another length"
+                    ));
+                }
+                DimId(i)
+            }
+            None => self.add_dim(name, len),
+        }
+    }
+
     /// Add the UNLIMITED (record) dimension; at most one per file.
     pub fn add_record_dim(&mut self, name: &str) -> DimId {
         let taken = self.schema.dims.iter().any(|d| d.name == name);

@@ -79,6 +79,12 @@ pub struct ResultsReader {
     pub coordinate_units: Vec<String>,
     /// Beam sections (`<beam>#<k>`), if the model has beams.
     pub section_names: Vec<String>,
+    /// Element states (`<element>.<state>`) and signals, if the model has them.
+    pub state_names: Vec<String>,
+    pub signal_names: Vec<String>,
+    /// Element outputs (`<element>.<output>`) and their units, if the model has them.
+    pub output_names: Vec<String>,
+    pub output_units: Vec<String>,
     /// Complete output times in the file.
     pub records: usize,
 }
@@ -166,6 +172,10 @@ impl ResultsReader {
         let coordinate_names = names(&mut reader, "coordinate_name");
         let coordinate_units = names(&mut reader, "coordinate_units");
         let section_names = names(&mut reader, "section_name");
+        let state_names = names(&mut reader, "state_name");
+        let signal_names = names(&mut reader, "signal_name");
+        let output_names = names(&mut reader, "output_name");
+        let output_units = names(&mut reader, "output_units");
         Ok(Self {
             reader,
             path,
@@ -176,6 +186,10 @@ impl ResultsReader {
             coordinate_names,
             coordinate_units,
             section_names,
+            state_names,
+            signal_names,
+            output_names,
+            output_units,
             records: complete,
         })
     }
@@ -256,8 +270,8 @@ impl ResultsReader {
             }
             match v.dims.len() {
                 1 => out.push(v.name.clone()),
-                2 if v.dims[1] == "coordinate" => {
-                    for c in &self.coordinate_names {
+                2 => {
+                    for c in self.items_of(&v.dims[1]) {
                         out.push(format!("{}:{c}", v.name));
                     }
                 }
@@ -285,9 +299,22 @@ impl ResultsReader {
         out
     }
 
+    /// Names along a per-item dimension of 2-D time histories.
+    fn items_of(&self, dim: &str) -> &[String] {
+        match dim {
+            "coordinate" => &self.coordinate_names,
+            "state" => &self.state_names,
+            "signal" => &self.signal_names,
+            "output" => &self.output_names,
+            _ => &[],
+        }
+    }
+
     /// Reads a channel: `variable` for scalar histories, `variable:item:component` for
     /// node and joint vectors (component x, y, z; w, x, y, z for `orientation`), and
-    /// `variable:joint.component` for joint coordinates (e.g. `joint_coordinate:pivot.theta3`).
+    /// `variable:name` for joint coordinates (e.g. `joint_coordinate:pivot.theta3`),
+    /// element states (`element_state:strut.pressure`), signals (`signal:sensor.out`) and
+    /// element outputs (`element_output:strut.tension`).
     pub fn channel(&mut self, spec: &str) -> Result<Channel, ReadError> {
         let parts: Vec<&str> = spec.split(':').collect();
         let all = self.channel_names();
@@ -311,16 +338,18 @@ impl ResultsReader {
         let mut units = info.units.clone().unwrap_or_default();
         let values = match (info.dims.len(), parts.len()) {
             (1, 1) => data,
-            (2, 2) if info.dims[1] == "coordinate" => {
-                let Some(i) = self.coordinate_names.iter().position(|n| n == parts[1]) else {
+            (2, 2) => {
+                let items = self.items_of(&info.dims[1]);
+                let Some(i) = items.iter().position(|n| n == parts[1]) else {
                     return Err(unknown(
                         format!(
-                            "'{}' has no joint coordinate named '{}'",
-                            info.name, parts[1]
+                            "'{}' has no {} named '{}'",
+                            info.name, info.dims[1], parts[1]
                         ),
                         &all,
                     ));
                 };
+                let n = items.len();
                 // Per-coordinate units: lengths or angles.
                 let linear = self.coordinate_units.get(i).is_some_and(|u| u == "m");
                 units = match (info.name.as_str(), linear) {
@@ -330,9 +359,9 @@ impl ResultsReader {
                     ("joint_coordinate_rate", false) => "rad s-1".into(),
                     ("joint_coordinate_force", true) => "N".into(),
                     ("joint_coordinate_force", false) => "N m".into(),
+                    ("element_output", _) => self.output_units.get(i).cloned().unwrap_or(units),
                     _ => units,
                 };
-                let n = self.coordinate_names.len();
                 (0..self.records).map(|r| data[r * n + i]).collect()
             }
             (3, 3) => {

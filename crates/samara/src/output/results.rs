@@ -3,7 +3,7 @@
 //! `docs/results.md`; [`FORMAT_VERSION`] changes whenever it changes incompatibly.
 
 use super::netcdf::{AttrValue, Definition, DimId, NcError, NcType, VarId, Writer};
-use crate::analysis::{AnalysisSummary, OutputFrame, Recorder};
+use crate::analysis::{Analysis, AnalysisSummary, ArraySpec, OutputFrame, Recorder};
 use crate::model::{AnalysisDef, Model};
 use crate::system::System;
 use std::path::{Path, PathBuf};
@@ -35,6 +35,10 @@ struct Vars {
     diagnostics: Option<DiagnosticVars>,
     /// Sectional output of the beams (models with beams only).
     beams: Option<super::beam_vars::BeamVars>,
+    /// Element states and signals (models with them only).
+    states: Option<super::state_vars::StateVars>,
+    /// Arrays of the analysis that are not time records, by name.
+    arrays: Vec<(String, VarId, usize)>,
 }
 
 struct CoordinateVars {
@@ -106,14 +110,25 @@ impl ResultsFile {
         sys: &System,
         analysis: &AnalysisDef,
     ) -> Result<Self, crate::Error> {
+        Self::create_for(dir, model, model_file, sys, analysis.stage().as_ref())
+    }
+
+    /// [`Self::create`] for any analysis stage (its arrays are defined in the header).
+    pub fn create_for(
+        dir: &Path,
+        model: &Model,
+        model_file: Option<&Path>,
+        sys: &System,
+        analysis: &dyn Analysis,
+    ) -> Result<Self, crate::Error> {
         // Validation checks this for model files; a model built in code gets it here, so
         // that no name can place a file outside `dir`.
-        if !crate::model::is_plain_file_name(&analysis.name) {
+        if !crate::model::is_plain_file_name(analysis.name()) {
             return Err(crate::Error::Output {
                 path: dir.to_path_buf(),
                 message: format!(
                     "analysis name {:?} is not a plain file name (letters, digits, `_`, `-`, `.`; not starting with `.`)",
-                    analysis.name
+                    analysis.name()
                 ),
             });
         }
@@ -122,7 +137,7 @@ impl ResultsFile {
             action: "create the results directory",
             source: e,
         })?;
-        let path = Self::path_for(dir, analysis);
+        let path = dir.join(format!("{}.nc", analysis.name()));
         let mut backup = None;
         if path.exists() {
             let b = backup_name(&path);
@@ -133,11 +148,8 @@ impl ResultsFile {
             })?;
             backup = Some(b);
         }
-        let diagnostics = match &analysis.kind {
-            crate::model::AnalysisKind::Dynamic(d) => d.solver.diagnostics,
-            crate::model::AnalysisKind::Static(s) => s.solver.diagnostics,
-        };
-        let is_static = analysis.type_name() == "static";
+        let diagnostics = analysis.diagnostics();
+        let is_static = analysis.has_load_factor();
         let n_nodes = sys.n_nodes();
         let n_joints = model.joints.len();
 
@@ -432,11 +444,29 @@ impl ResultsFile {
         });
 
         let beams = super::beam_vars::BeamVars::define(&mut d, sys, time, vec3, quat);
+        let states = super::state_vars::StateVars::define(&mut d, sys, time);
+        let arrays: Vec<(String, VarId, usize)> = analysis
+            .arrays(sys)
+            .iter()
+            .map(|a| {
+                let dims: Vec<DimId> = a.dims.iter().map(|(n, l)| d.dim(n, *l)).collect();
+                let v = var(
+                    &mut d,
+                    &a.name,
+                    NcType::Double,
+                    &dims,
+                    &a.units,
+                    &a.long_name,
+                );
+                (a.name.clone(), v, a.len())
+            })
+            .collect();
         d.add_global_attr(
             "title",
             text(&format!(
                 "samara results: {} / {}",
-                model.name, analysis.name
+                model.name,
+                analysis.name()
             )),
         );
         d.add_global_attr("Conventions", text("CF-1.8"));
@@ -449,8 +479,8 @@ impl ResultsFile {
         if let Some(f) = model_file {
             d.add_global_attr("model_file", text(&f.display().to_string()));
         }
-        d.add_global_attr("analysis", text(&analysis.name));
-        d.add_global_attr("analysis_type", text(analysis.type_name()));
+        d.add_global_attr("analysis", text(analysis.name()));
+        d.add_global_attr("analysis_type", text(analysis.kind()));
         d.add_global_attr(
             "gravity",
             AttrValue::Double(model.gravity.iter().copied().collect()),
@@ -481,6 +511,10 @@ impl ResultsFile {
         let mut beams = beams;
         if let Some(b) = &mut beams {
             b.write_fixed(&mut writer, sys)
+                .map_err(|e| nc_err(&path, e))?;
+        }
+        if let Some(s) = &states {
+            s.write_fixed(&mut writer, sys)
                 .map_err(|e| nc_err(&path, e))?;
         }
         if let Some(jn) = joint_name {
@@ -528,6 +562,8 @@ impl ResultsFile {
                 violation,
                 diagnostics,
                 beams,
+                states,
+                arrays,
             },
             buf3: vec![0.0; 3 * n_nodes],
             buf4: vec![0.0; 4 * n_nodes],
@@ -601,6 +637,34 @@ impl ResultsFile {
 }
 
 impl Recorder for ResultsFile {
+    fn write_array(
+        &mut self,
+        _sys: &System,
+        spec: &ArraySpec,
+        values: &[f64],
+    ) -> Result<(), crate::Error> {
+        let path = self.path.clone();
+        let Some((_, v, len)) = self.vars.arrays.iter().find(|a| a.0 == spec.name) else {
+            return Err(crate::Error::Output {
+                path,
+                message: format!("array '{}' was not declared by the analysis", spec.name),
+            });
+        };
+        if *len != values.len() {
+            return Err(crate::Error::Output {
+                path,
+                message: format!(
+                    "array '{}' has {} values, {len} declared",
+                    spec.name,
+                    values.len()
+                ),
+            });
+        }
+        self.writer
+            .put_fixed_f64(*v, values)
+            .map_err(|e| nc_err(&path, e))
+    }
+
     fn record(&mut self, sys: &System, frame: &OutputFrame) -> Result<(), crate::Error> {
         let v = &self.vars;
         let w = &mut self.writer;
@@ -669,6 +733,10 @@ impl Recorder for ResultsFile {
             .map_err(e)?;
         if let Some(b) = &mut self.vars.beams {
             b.record(w, sys, nodes).map_err(e)?;
+        }
+        if let Some(s) = &mut self.vars.states {
+            s.record(w, sys, frame.state, frame.load_factor)
+                .map_err(e)?;
         }
         let v = &self.vars;
         if let (Some(dv), Some(dg)) = (&v.diagnostics, frame.diagnostics) {

@@ -7,8 +7,23 @@
 use super::block_lu::{BlockLu, BlockLuSymbolic};
 use super::sparse_lu::SparseLu;
 use super::{BlockMatrix, BlockStructure};
-use crate::model::LinearSolverType;
+use schemars::JsonSchema;
+use serde::Deserialize;
 use std::sync::Arc;
+
+/// Linear solver for the iteration matrix.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum LinearSolverType {
+    /// Block LU without inter-block pivoting (fast; needs the augmented-Lagrangian term);
+    /// falls back to the general sparse LU when a pivot block is singular.
+    #[default]
+    Auto,
+    /// Block LU only.
+    Block,
+    /// General sparse LU with partial pivoting (faer).
+    SparseLu,
+}
 
 /// Why a factorization failed.
 #[derive(Clone, Debug, thiserror::Error)]

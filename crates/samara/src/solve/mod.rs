@@ -17,5 +17,5 @@ mod sparse_lu;
 
 pub use block_lu::{BlockLu, BlockLuSymbolic, SingularBlock};
 pub use block_matrix::{BlockKind, BlockMatrix, BlockStructure, StructureError};
-pub use linear::{LinearError, LinearSolver, LinearStats};
+pub use linear::{LinearError, LinearSolver, LinearSolverType, LinearStats};
 pub use newton::{NewtonFailure, NewtonReport, NewtonSettings, NewtonSystem, newton};

@@ -36,7 +36,7 @@
 //! statics). With the scaling on, `s_r = s_λ = βh²` and `s_v = βh/γ`, which keeps every
 //! block O(1) as h → 0; off, all are 1.
 
-use super::{State, System};
+use super::{SignalValues, State, System};
 use crate::elements::{EvalContext, LocalTerms, Need};
 use crate::joints::CoordinateTangents;
 use crate::solve::{BlockKind, BlockMatrix, BlockStructure};
@@ -72,10 +72,14 @@ pub struct Coefficients {
     pub velocity_scale: f64,
     /// `ρ`: augmented-Lagrangian penalty, physical units (force per unit Φ).
     pub penalty: f64,
+    /// Multiplies the element-state columns of C: `∂ż/∂Δz` (0 in statics, where ż = 0).
+    pub state_rate: f64,
+    /// `s_z`, multiplies the element-state rows.
+    pub state_row_scale: f64,
 }
 
 impl Coefficients {
-    /// Static equilibrium `r(q) + Bᵀμ = 0`.
+    /// Static equilibrium `r(q) + Bᵀμ = 0` (element states with ż = 0).
     pub fn statics(penalty: f64) -> Self {
         Self {
             mass: 0.0,
@@ -85,6 +89,8 @@ impl Coefficients {
             multiplier_scale: 1.0,
             velocity_scale: 1.0,
             penalty,
+            state_rate: 0.0,
+            state_row_scale: 1.0,
         }
     }
 
@@ -145,17 +151,65 @@ struct ConstraintWork {
     proj_diag: usize,
 }
 
+/// One block of an element's local unknowns: its block in the iteration matrix, its first
+/// local index and its size (6 for a node, the number of states for its states).
+#[derive(Clone, Copy, Debug)]
+struct LocalBlock {
+    block: usize,
+    local: usize,
+    size: usize,
+}
+
+/// Where a signal's derivative with respect to one support unknown lands for one consumer:
+/// the support position, the column within its block and that block's size, and the value
+/// offset of (each consumer row block, that block).
+#[derive(Clone, Debug)]
+struct SupportSlot {
+    pos: usize,
+    col: usize,
+    width: usize,
+    slots: Vec<usize>,
+}
+
+/// Owner of a block of the iteration matrix (for messages).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlockOwner {
+    Node(usize),
+    Joint(usize),
+    Projection(usize),
+    States(usize),
+}
+
 /// Reusable workspace for assembling one system in one formulation: nothing is
 /// allocated per call.
 pub struct Assembler {
     formulation: Formulation,
     structure: Arc<BlockStructure>,
-    /// Element scratch, one per distinct element size (node count), shared by every element
-    /// of that size: the working set stays small however many elements there are.
+    /// Element scratch, one per distinct element size (local unknowns, input signals),
+    /// shared by every element of that size: the working set stays small however many
+    /// elements there are.
     terms: Vec<LocalTerms>,
     /// Index into `terms` of each element.
     term_of: Vec<usize>,
+    /// Local blocks of each element and the value offset of each (row block, column
+    /// block) pair, row-major over the element's blocks.
+    element_blocks: Vec<Vec<LocalBlock>>,
     element_slots: Vec<Vec<usize>>,
+    /// Per element with states: the Newton-vector offset of its state block.
+    state_place: Vec<Option<usize>>,
+    /// Per element and input signal: where the chain-rule terms go.
+    element_signal_slots: Vec<Vec<Vec<SupportSlot>>>,
+    /// Per constraint and input signal: where the chain-rule terms go (joint block rows).
+    constraint_signal_slots: Vec<Vec<Vec<SupportSlot>>>,
+    /// Block and in-block column of every configuration unknown.
+    config_place: Vec<(usize, usize)>,
+    owners: Vec<BlockOwner>,
+    /// Signal scratch: values, derivatives, and derivatives combined for the matrix.
+    signal_values: SignalValues,
+    signal_combined: Vec<Vec<f64>>,
+    inputs: Vec<f64>,
+    constraint_inputs: Vec<f64>,
+    cf_ds: Vec<f64>,
     constraints: Vec<ConstraintWork>,
     /// Stabilized only: (η_k, η_l) couplings of constraints k ≠ l sharing a node, as
     /// (k, l, value offset, local node index in k, local node index in l).
@@ -168,18 +222,9 @@ impl Assembler {
         let stabilized = formulation == Formulation::StabilizedIndex2;
         let mut sizes = vec![6; n];
         let mut kinds = vec![BlockKind::Primary; n];
+        let mut owners: Vec<BlockOwner> = (0..n).map(BlockOwner::Node).collect();
         let mut couplings = Vec::new();
-        for e in &sys.elements {
-            let en = e.nodes();
-            for (i, &a) in en.iter().enumerate() {
-                for &b in &en[i + 1..] {
-                    if a != b {
-                        couplings.push((a, b));
-                    }
-                }
-            }
-        }
-        // Blocks of the constraints: multipliers + coordinates, then projections.
+        // Blocks of the constraints: multipliers + coordinates.
         let mut places: Vec<Place> = vec![Place::default(); sys.constraints.len()];
         for (k, c) in sys.constraints.iter().enumerate() {
             let size = c.n_equations() + c.n_coordinates();
@@ -187,6 +232,17 @@ impl Assembler {
                 places[k].block = Some(sizes.len());
                 sizes.push(size);
                 kinds.push(BlockKind::Multiplier);
+                owners.push(BlockOwner::Joint(k));
+            }
+        }
+        // Blocks of the element states, one per element that has states.
+        let mut state_block = vec![None; sys.elements.len()];
+        for (k, e) in sys.elements.iter().enumerate() {
+            if e.n_states() > 0 {
+                state_block[k] = Some(sizes.len());
+                sizes.push(e.n_states());
+                kinds.push(BlockKind::Primary);
+                owners.push(BlockOwner::States(k));
             }
         }
         if stabilized {
@@ -195,6 +251,66 @@ impl Assembler {
                     places[k].projection = Some(sizes.len());
                     sizes.push(c.n_equations());
                     kinds.push(BlockKind::Multiplier);
+                    owners.push(BlockOwner::Projection(k));
+                }
+            }
+        }
+        // Block (and column in it) of every configuration unknown.
+        let mut config_place: Vec<(usize, usize)> = (0..6 * n).map(|i| (i / 6, i % 6)).collect();
+        config_place.resize(sys.n_config(), (0, 0));
+        for (k, c) in sys.constraints.iter().enumerate() {
+            if let Some(b) = places[k].block {
+                for j in 0..c.n_coordinates() {
+                    config_place[6 * n + sys.coordinate_offsets[k] + j] = (b, c.n_equations() + j);
+                }
+            }
+        }
+        for (k, e) in sys.elements.iter().enumerate() {
+            if let Some(b) = state_block[k] {
+                for i in 0..e.n_states() {
+                    config_place[sys.state_config_index(sys.state_offsets[k] + i)] = (b, i);
+                }
+            }
+        }
+        let element_blocks: Vec<Vec<LocalBlock>> = sys
+            .elements
+            .iter()
+            .enumerate()
+            .map(|(k, e)| {
+                let en = e.nodes();
+                let mut b: Vec<LocalBlock> = en
+                    .iter()
+                    .enumerate()
+                    .map(|(a, &na)| LocalBlock {
+                        block: na,
+                        local: 6 * a,
+                        size: 6,
+                    })
+                    .collect();
+                if let Some(sb) = state_block[k] {
+                    b.push(LocalBlock {
+                        block: sb,
+                        local: 6 * en.len(),
+                        size: e.n_states(),
+                    });
+                }
+                b
+            })
+            .collect();
+        for (k, blocks) in element_blocks.iter().enumerate() {
+            for (i, a) in blocks.iter().enumerate() {
+                for b in &blocks[i + 1..] {
+                    if a.block != b.block {
+                        couplings.push((a.block, b.block));
+                    }
+                }
+            }
+            // A consumer's rows couple to the supports of its input signals.
+            for &j in &sys.signals.element_inputs[k] {
+                for &c in &sys.signals.support[j] {
+                    for a in blocks {
+                        couplings.push((a.block, config_place[c].0));
+                    }
                 }
             }
         }
@@ -215,6 +331,13 @@ impl Assembler {
             }
             if let (Some(p), Some(blk)) = (places[k].projection, places[k].block) {
                 couplings.push((p, blk));
+            }
+            if let Some(blk) = places[k].block {
+                for &j in &sys.signals.constraint_inputs[k] {
+                    for &cfg in &sys.signals.support[j] {
+                        couplings.push((blk, config_place[cfg].0));
+                    }
+                }
             }
         }
         // Constraints sharing a node: (k, l, local index in k, local index in l).
@@ -241,6 +364,7 @@ impl Assembler {
                 ));
             }
         }
+        couplings.retain(|(a, b)| a != b);
         let structure = Arc::new(
             BlockStructure::new(sizes, kinds, &couplings)
                 .expect("block structure of a validated model is consistent"),
@@ -258,29 +382,73 @@ impl Assembler {
         }
         let slot =
             |i: usize, j: usize| s.entry(i, j).expect("pattern contains every coupled block");
-        let mut sizes_seen: Vec<usize> = Vec::new();
+        let mut sizes_seen: Vec<(usize, usize)> = Vec::new();
         let term_of = sys
             .elements
             .iter()
             .map(|e| {
-                let n = e.nodes().len();
-                sizes_seen.iter().position(|&m| m == n).unwrap_or_else(|| {
-                    sizes_seen.push(n);
-                    sizes_seen.len() - 1
-                })
+                let key = (6 * e.nodes().len() + e.n_states(), e.signal_inputs().len());
+                sizes_seen
+                    .iter()
+                    .position(|&m| m == key)
+                    .unwrap_or_else(|| {
+                        sizes_seen.push(key);
+                        sizes_seen.len() - 1
+                    })
             })
             .collect();
-        let terms = sizes_seen.iter().map(|&n| LocalTerms::new(n)).collect();
-        let element_slots = sys
-            .elements
+        let terms = sizes_seen
             .iter()
-            .map(|e| {
-                let en = e.nodes();
-                en.iter()
-                    .flat_map(|&a| en.iter().map(move |&b| (a, b)))
+            .map(|&(n, i)| LocalTerms::with_sizes(n, i))
+            .collect();
+        let element_slots = element_blocks
+            .iter()
+            .map(|blocks| {
+                blocks
+                    .iter()
+                    .flat_map(|a| blocks.iter().map(move |b| (a.block, b.block)))
                     .map(|(a, b)| slot(a, b))
                     .collect()
             })
+            .collect();
+        let support_slots = |rows: &[usize], signal: usize| -> Vec<SupportSlot> {
+            sys.signals.support[signal]
+                .iter()
+                .enumerate()
+                .map(|(pos, &c)| {
+                    let (b, col) = config_place[c];
+                    SupportSlot {
+                        pos,
+                        col,
+                        width: s.block_size(b),
+                        slots: rows.iter().map(|&r| slot(r, b)).collect(),
+                    }
+                })
+                .collect()
+        };
+        let element_signal_slots = element_blocks
+            .iter()
+            .enumerate()
+            .map(|(k, blocks)| {
+                let rows: Vec<usize> = blocks.iter().map(|b| b.block).collect();
+                sys.signals.element_inputs[k]
+                    .iter()
+                    .map(|&j| support_slots(&rows, j))
+                    .collect()
+            })
+            .collect();
+        let constraint_signal_slots = (0..sys.constraints.len())
+            .map(|k| match places[k].block {
+                Some(blk) => sys.signals.constraint_inputs[k]
+                    .iter()
+                    .map(|&j| support_slots(&[blk], j))
+                    .collect(),
+                None => Vec::new(),
+            })
+            .collect();
+        let state_place = state_block
+            .iter()
+            .map(|b| b.map(|b| s.block_offset(b)))
             .collect();
         let constraints = sys
             .constraints
@@ -337,14 +505,64 @@ impl Assembler {
                 (k, l, slot(pk, pl), a, b)
             })
             .collect();
+        let signal_values = sys.signals.values(&sys.elements);
+        let signal_combined = sys
+            .signals
+            .support
+            .iter()
+            .map(|s| vec![0.0; s.len()])
+            .collect();
         Self {
             formulation,
             structure,
             terms,
             term_of,
+            element_blocks,
             element_slots,
+            state_place,
+            element_signal_slots,
+            constraint_signal_slots,
+            config_place,
+            owners,
+            signal_values,
+            signal_combined,
+            inputs: Vec::new(),
+            constraint_inputs: Vec::new(),
+            cf_ds: Vec::new(),
             constraints,
             nu_pairs,
+        }
+    }
+
+    /// Block of the iteration matrix and column in it of configuration unknown `i`.
+    pub fn config_place(&self, i: usize) -> (usize, usize) {
+        self.config_place[i]
+    }
+
+    /// What a block of the iteration matrix belongs to.
+    pub fn block_owner(&self, block: usize) -> Option<BlockOwner> {
+        self.owners.get(block).copied()
+    }
+
+    /// Name of a block for messages.
+    pub fn block_name(&self, sys: &System, block: usize) -> String {
+        match self.block_owner(block) {
+            Some(BlockOwner::Node(i)) => format!("node '{}'", sys.node_names[i]),
+            Some(BlockOwner::Joint(k)) | Some(BlockOwner::Projection(k)) => {
+                format!("joint '{}'", sys.constraints[k].name())
+            }
+            Some(BlockOwner::States(k)) => {
+                format!("the states of element '{}'", sys.elements[k].name())
+            }
+            None => format!("block {block}"),
+        }
+    }
+
+    /// Range of element k's states in the Newton vector (empty without states).
+    pub fn state_range(&self, sys: &System, k: usize) -> Range<usize> {
+        match self.state_place[k] {
+            Some(o) => o..o + sys.elements[k].n_states(),
+            None => 0..0,
         }
     }
 
@@ -392,6 +610,11 @@ impl Assembler {
             let r = self.coordinate_range(k);
             cfg[n6 + off..n6 + off + r.len()].copy_from_slice(&v[r]);
         }
+        for k in 0..sys.elements.len() {
+            let r = self.state_range(sys, k);
+            let o = sys.state_config_index(sys.state_offsets[k]);
+            cfg[o..o + r.len()].copy_from_slice(&v[r]);
+        }
     }
 
     /// Gathers the multipliers of a Newton vector `v` in `sys.multiplier_offsets` order.
@@ -425,6 +648,19 @@ impl Assembler {
                 matrix.values[w.diag + d * size + d] += w_coord;
             }
         }
+        // Element states do not enter the constraints: keep them (unit weight).
+        for (k, e) in sys.elements.iter().enumerate() {
+            if e.n_states() == 0 {
+                continue;
+            }
+            let blocks = &self.element_blocks[k];
+            let nb = blocks.len();
+            let o = self.element_slots[k][nb * nb - 1];
+            let nz = e.n_states();
+            for i in 0..nz {
+                matrix.values[o + i * nz + i] += 1.0;
+            }
+        }
     }
 
     /// Assembles the residual (always) and the iteration matrix (if given).
@@ -454,20 +690,48 @@ impl Assembler {
         }
         let sr = coef.row_scale;
 
+        // Signals first (in producer order), with their derivatives combined like the
+        // columns they belong to.
+        let has_signals = !sys.signals.names.is_empty();
+        if has_signals {
+            sys.signals.evaluate(
+                &sys.elements,
+                &sys.state_offsets,
+                ctx,
+                state,
+                &mut self.signal_values,
+                matrix.is_some(),
+            );
+            if matrix.is_some() {
+                self.combine_signal_gradients(sys, coef, tangent_ops);
+            }
+        }
+        let n_node_cfg = 6 * sys.n_nodes() + sys.n_coordinates;
         for (k, e) in sys.elements.iter().enumerate() {
             let t = &mut self.terms[self.term_of[k]];
             t.clear(need);
-            e.evaluate(ctx, &state.nodes, need, t);
+            let x = sys.element_input(k, state, &self.signal_values.values, &mut self.inputs);
+            e.evaluate(ctx, &x, need, t);
             let en = e.nodes();
             for (a, &na) in en.iter().enumerate() {
                 for i in 0..6 {
                     residual[6 * na + i] += sr * t.r[6 * a + i];
                 }
             }
-            if let Some(mat) = matrix.as_deref_mut() {
-                apply_tangent_ops(&mut t.k, en, tangent_ops);
+            let nz = e.n_states();
+            if let Some(o) = self.state_place[k] {
+                for i in 0..nz {
+                    residual[o + i] += coef.state_row_scale * t.r[6 * en.len() + i];
+                }
+            }
+            let Some(mat) = matrix.as_deref_mut() else {
+                continue;
+            };
+            apply_tangent_ops(&mut t.k, en, tangent_ops);
+            let (cm, cc, ck) = (sr * coef.mass, sr * coef.damping, sr * coef.stiffness);
+            let n6 = 6 * en.len();
+            if nz == 0 {
                 // K_eff = s_r (c_M M + c_C C + c_K K), combined in place in `k`.
-                let (cm, cc, ck) = (sr * coef.mass, sr * coef.damping, sr * coef.stiffness);
                 for ((k, m), c) in
                     t.k.as_mut_slice()
                         .iter_mut()
@@ -476,8 +740,32 @@ impl Assembler {
                 {
                     *k = ck * *k + cm * m + cc * c;
                 }
+            } else {
+                // Node columns as above; state columns: c_K ∂r/∂z + (∂ż/∂Δz) ∂r/∂ż. State
+                // rows are scaled by s_z instead of s_r.
+                let nl = n6 + nz;
+                for j in 0..nl {
+                    let (cmj, ccj) = if j < n6 {
+                        (coef.mass, coef.damping)
+                    } else {
+                        (0.0, coef.state_rate)
+                    };
+                    for i in 0..nl {
+                        let rs = if i < n6 { sr } else { coef.state_row_scale };
+                        t.k[(i, j)] = rs
+                            * (coef.stiffness * t.k[(i, j)]
+                                + cmj * t.m[(i, j)]
+                                + ccj * t.c[(i, j)]);
+                    }
+                }
+            }
+            let blocks = &self.element_blocks[k];
+            let nb = blocks.len();
+            let slots = &self.element_slots[k];
+            let nl = n6 + nz;
+            if nz == 0 {
+                // Node blocks only: 6×6 each (sizes known at compile time: the hot path).
                 let n = en.len();
-                let slots = &self.element_slots[k];
                 for a in 0..n {
                     for b in 0..n {
                         let off = slots[a * n + b];
@@ -486,15 +774,53 @@ impl Assembler {
                             6,
                             (0, 0),
                             t.k.as_slice(),
-                            6 * n,
+                            nl,
                             (6 * a, 6 * b),
                             (6, 6),
                             1.0,
                         );
                     }
                 }
+            } else {
+                for (a, ra) in blocks.iter().enumerate() {
+                    for (b, cb) in blocks.iter().enumerate() {
+                        let off = slots[a * nb + b];
+                        add_sub(
+                            &mut mat.values[off..off + ra.size * cb.size],
+                            cb.size,
+                            (0, 0),
+                            t.k.as_slice(),
+                            nl,
+                            (ra.local, cb.local),
+                            (ra.size, cb.size),
+                            1.0,
+                        );
+                    }
+                }
+            }
+            // Chain rule through the input signals: rows · (∂r/∂s) (∂s/∂x).
+            for (j, supports) in self.element_signal_slots[k].iter().enumerate() {
+                let g = &self.signal_combined[sys.signals.element_inputs[k][j]];
+                for sp in supports {
+                    let gv = g[sp.pos];
+                    if gv == 0.0 {
+                        continue;
+                    }
+                    for (a, ra) in blocks.iter().enumerate() {
+                        let rs = if ra.local < n6 {
+                            sr
+                        } else {
+                            coef.state_row_scale
+                        };
+                        for i in 0..ra.size {
+                            let d = t.ds[(ra.local + i, j)];
+                            mat.values[sp.slots[a] + i * sp.width + sp.col] += rs * d * gv;
+                        }
+                    }
+                }
             }
         }
+        let _ = n_node_cfg;
 
         for (k, c) in sys.constraints.iter().enumerate() {
             let w = &mut self.constraints[k];
@@ -540,15 +866,25 @@ impl Assembler {
                 };
                 residual[row] += sr * acc;
             }
+            let n_in = sys.signals.constraint_inputs[k].len();
             if nc > 0 {
                 w.cf.fill(0.0);
                 w.cf_k.fill(0.0);
                 w.cf_c.fill(0.0);
+                self.constraint_inputs.clear();
+                self.constraint_inputs.extend(
+                    sys.signals.constraint_inputs[k]
+                        .iter()
+                        .map(|&j| self.signal_values.values[j]),
+                );
+                self.cf_ds.clear();
+                self.cf_ds.resize(nc * n_in, 0.0);
                 let tangents = matrix.is_some().then_some(CoordinateTangents {
                     stiffness: &mut w.cf_k,
                     damping: &mut w.cf_c,
+                    signals: &mut self.cf_ds,
                 });
-                c.coordinate_forces(ctx, coords, &mut w.cf, tangents);
+                c.coordinate_forces(ctx, coords, &self.constraint_inputs, &mut w.cf, tangents);
                 for j in 0..nc {
                     residual[p.coord + j] += sr * w.cf[j];
                 }
@@ -616,6 +952,19 @@ impl Assembler {
                 for j in 0..nc {
                     d[(m + j) * size + m + j] +=
                         sr * (coef.stiffness * w.cf_k[j] + coef.damping * w.cf_c[j]);
+                }
+                // Chain rule through the input ports' signals.
+                for (i, supports) in self.constraint_signal_slots[k].iter().enumerate() {
+                    let g = &self.signal_combined[sys.signals.constraint_inputs[k][i]];
+                    for sp in supports {
+                        for j in 0..nc {
+                            let ds = self.cf_ds[j * n_in + i];
+                            if ds != 0.0 {
+                                mat.values[sp.slots[0] + (m + j) * sp.width + sp.col] +=
+                                    sr * ds * g[sp.pos];
+                            }
+                        }
+                    }
                 }
             }
             // (config, λ): (s_r/s_λ) Bᵀ.
@@ -725,6 +1074,52 @@ impl Assembler {
             && stabilized
         {
             self.add_projection_couplings(mat);
+        }
+    }
+
+    /// `∂s/∂Δ` of every signal for the iteration matrix: the K channel times the tangent
+    /// operator on node rotations, plus the C and M channels with the coefficients of the
+    /// column's kind (second order: γ', β'; element states: ∂ż/∂Δz, 0).
+    fn combine_signal_gradients(
+        &mut self,
+        sys: &System,
+        coef: &Coefficients,
+        tangent_ops: &[Matrix3<f64>],
+    ) {
+        let n6 = 6 * sys.n_nodes();
+        let first_state = n6 + sys.n_coordinates;
+        for (s, support) in sys.signals.support.iter().enumerate() {
+            let g = &self.signal_values.gradients[s];
+            let out = &mut self.signal_combined[s];
+            let mut p = 0;
+            while p < support.len() {
+                let c = support[p];
+                if c < n6 && c % 6 == 3 && p + 2 < support.len() && support[p + 2] == c + 2 {
+                    // A node's rotation triplet: gₖᵀ T.
+                    let node = c / 6;
+                    let t = tangent_ops
+                        .get(node)
+                        .copied()
+                        .unwrap_or_else(Matrix3::identity);
+                    for j in 0..3 {
+                        let mut acc = 0.0;
+                        for i in 0..3 {
+                            acc += g[p + i][0] * t[(i, j)];
+                        }
+                        out[p + j] = coef.stiffness * acc
+                            + coef.damping * g[p + j][1]
+                            + coef.mass * g[p + j][2];
+                    }
+                    p += 3;
+                    continue;
+                }
+                out[p] = if c >= first_state {
+                    coef.stiffness * g[p][0] + coef.state_rate * g[p][1]
+                } else {
+                    coef.stiffness * g[p][0] + coef.damping * g[p][1] + coef.mass * g[p][2]
+                };
+                p += 1;
+            }
         }
     }
 

@@ -8,16 +8,20 @@
 //! of a joint with a massless coordinate is never singular).
 
 mod assembly;
+pub mod matrices;
 pub mod redundancy;
-mod state;
+pub mod signals;
 
-pub use assembly::{Assembler, Coefficients, Formulation};
+pub use crate::core::{Coordinate, NodeState, State};
+pub use assembly::{Assembler, BlockOwner, Coefficients, Formulation};
+pub use matrices::SystemMatrices;
 pub use redundancy::ConstraintLoop;
-pub use state::{Coordinate, NodeState, State};
+pub use signals::{SignalGraph, SignalValues};
 
-use crate::elements::{AppliedLoad, Element, EvalContext, RigidBody, SpringDamper};
-use crate::joints::{Constraint, Joint};
-use crate::model::{Model, NodeRef};
+use crate::core::{ElementInput, ElementState};
+use crate::elements::{Element, EvalContext, RigidBody};
+use crate::joints::Constraint;
+use crate::model::Model;
 use nalgebra::Vector3;
 
 /// Elements, constraints and the layout of the unknowns.
@@ -53,75 +57,115 @@ pub struct System {
     pub warnings: Vec<String>,
     /// Mean translational mass per massive node [kg] (1 if the model has no mass).
     pub characteristic_mass: f64,
+    /// Node states of the model's initial conditions (for [`System::initial_state`]).
+    pub initial_nodes: Vec<NodeState>,
+    /// Offset of each element's states in [`State::states`].
+    pub state_offsets: Vec<usize>,
+    pub n_states: usize,
+    /// `<element>.<state>` per element state.
+    pub state_names: Vec<String>,
+    /// Who produces and who reads each signal.
+    pub signals: SignalGraph,
+    /// First output of each element in the list of outputs (results only).
+    pub output_offsets: Vec<usize>,
+    /// `<element>.<output>`, with units.
+    pub output_names: Vec<String>,
+    pub output_units: Vec<String>,
 }
 
 impl System {
     /// Builds the system of a validated model; elements are attached in the model's
     /// initial configuration.
     pub fn new(model: &Model) -> Self {
-        let initial = State::nodes_only(model);
-        let nodes = &initial.nodes;
-        let mut elements: Vec<Box<dyn Element>> = Vec::new();
-        let mut bodies = Vec::new();
-        for b in &model.bodies {
-            let body = RigidBody::new(&b.name, b.node, b.mass, b.inertia, b.cg_offset);
-            bodies.push(body.clone());
-            elements.push(Box::new(body));
-        }
-        let local_offset = |r: NodeRef, p: Vector3<f64>| -> Option<(usize, Vector3<f64>)> {
-            r.index()
-                .map(|i| (i, nodes[i].r().transpose() * (p - nodes[i].x)))
-        };
-        for s in &model.springs {
-            elements.push(Box::new(SpringDamper::new(
-                &s.name,
-                local_offset(s.node_a, s.point_a),
-                local_offset(s.node_b, s.point_b),
-                [s.point_a, s.point_b],
-                s.stiffness,
-                s.damping,
-                s.rest_length,
-            )));
-        }
-        for l in &model.loads {
-            let n = &nodes[l.node];
-            elements.push(Box::new(AppliedLoad::new(
-                &l.name,
-                l.node,
-                l.force,
-                l.moment,
-                l.frame,
-                n.r().transpose() * (l.point - n.x),
-                l.function.clone(),
-            )));
-        }
-        let beams: Vec<crate::elements::beam::Beam> = model
-            .beams
-            .iter()
-            .map(|b| crate::elements::beam::Beam::build(b, nodes))
-            .collect();
-        for b in &beams {
-            for e in &b.elements {
-                elements.push(Box::new(e.clone()));
-            }
-        }
-        let mut constraints: Vec<Box<dyn Constraint>> = Vec::new();
-        for j in &model.joints {
-            constraints.push(Box::new(Joint::new(j, nodes)));
-        }
+        let initial = crate::model::components::initial_nodes(model);
+        let mut parts = crate::model::components::Build::new(&initial);
+        crate::model::components::build_all(model, &mut parts);
+        let crate::model::components::Build {
+            elements,
+            constraints,
+            bodies,
+            beams,
+            ..
+        } = parts;
         let mut sys = Self::from_parts(
             model.nodes.iter().map(|n| n.name.clone()).collect(),
             elements,
             constraints,
             bodies,
             model.gravity,
-            nodes,
+            &initial,
         );
         if !beams.is_empty() {
             sys.characteristic_mass = characteristic_mass(model, &beams);
             sys.beams = beams;
         }
         sys
+    }
+
+    /// The initial conditions written in the model, at rest in acceleration, with the
+    /// joint coordinates measured from the node configuration.
+    pub fn initial_state(&self) -> State {
+        let mut states = vec![ElementState::default(); self.n_states];
+        let mut z = Vec::new();
+        for (e, &off) in self.elements.iter().zip(&self.state_offsets) {
+            z.resize(e.n_states(), 0.0);
+            e.initial_states(&mut z);
+            for (s, &v) in states[off..].iter_mut().zip(&z) {
+                s.z = v;
+            }
+        }
+        let mut s = State {
+            time: 0.0,
+            nodes: self.initial_nodes.clone(),
+            coords: vec![Coordinate::default(); self.n_coordinates + self.n_passive],
+            states,
+            lambda: vec![0.0; self.n_multipliers],
+        };
+        self.measure_coordinates(&mut s);
+        s
+    }
+
+    /// What element `k` sees of `state`, with `signals` the values of all signals.
+    #[inline]
+    pub fn element_input<'a>(
+        &self,
+        k: usize,
+        state: &'a State,
+        signals: &'a [f64],
+        scratch: &'a mut Vec<f64>,
+    ) -> ElementInput<'a> {
+        let off = self.state_offsets[k];
+        let n = self.elements[k].n_states();
+        let ids = &self.signals.element_inputs[k];
+        scratch.clear();
+        scratch.extend(ids.iter().map(|&j| signals[j]));
+        ElementInput {
+            nodes: &state.nodes,
+            states: &state.states[off..off + n],
+            signals: scratch,
+        }
+    }
+
+    /// Values of all signals at `state` (allocates; the assembler keeps its own scratch).
+    pub fn signal_values(&self, ctx: &EvalContext, state: &State) -> Vec<f64> {
+        if self.signals.names.is_empty() {
+            return Vec::new();
+        }
+        let mut v = self.signals.values(&self.elements);
+        self.signals.evaluate(
+            &self.elements,
+            &self.state_offsets,
+            ctx,
+            state,
+            &mut v,
+            false,
+        );
+        v.values
+    }
+
+    /// Configuration index of element state `i` (of all states).
+    pub fn state_config_index(&self, i: usize) -> usize {
+        6 * self.n_nodes() + self.n_coordinates + i
     }
 
     /// Assembles a system from elements and constraints built in code; `initial` is the
@@ -216,6 +260,42 @@ impl System {
             row_offsets.push(nr);
             nr += c.n_rows();
         }
+        // Element states, element by element, after the nodes and the active coordinates
+        // in the configuration vector.
+        let mut state_offsets = Vec::with_capacity(elements.len());
+        let mut state_names = Vec::new();
+        let mut nz = 0;
+        for e in &elements {
+            state_offsets.push(nz);
+            nz += e.n_states();
+            state_names.extend(e.state_names().iter().map(|s| format!("{}.{s}", e.name())));
+        }
+        // Output quantities, element by element (results only).
+        let mut output_offsets = Vec::with_capacity(elements.len());
+        let (mut output_names, mut output_units) = (Vec::new(), Vec::new());
+        for e in &elements {
+            output_offsets.push(output_names.len());
+            for (o, u) in e.output_names() {
+                output_names.push(format!("{}.{o}", e.name()));
+                output_units.push(u.to_string());
+            }
+        }
+        let local_config: Vec<Vec<usize>> = elements
+            .iter()
+            .zip(&state_offsets)
+            .map(|(e, &off)| {
+                e.nodes()
+                    .iter()
+                    .flat_map(|&i| (0..6).map(move |d| 6 * i + d))
+                    .chain((0..e.n_states()).map(|i| 6 * n + nc + off + i))
+                    .collect()
+            })
+            .collect();
+        let constraint_inputs: Vec<(String, Vec<String>)> = constraints
+            .iter()
+            .map(|c| (c.name().to_string(), c.signal_inputs().to_vec()))
+            .collect();
+        let signals = SignalGraph::build(&elements, &constraint_inputs, &local_config);
         let mut node_mass = vec![0.0; n];
         for b in &bodies {
             node_mass[b.nodes()[0]] += b.mass();
@@ -243,8 +323,19 @@ impl System {
             n_passive: np,
             coordinate_names,
             loops,
-            warnings,
+            warnings: warnings
+                .into_iter()
+                .chain(signals.issues.iter().map(|i| i.to_string()))
+                .collect(),
             characteristic_mass,
+            initial_nodes: initial.to_vec(),
+            state_offsets,
+            n_states: nz,
+            state_names,
+            signals,
+            output_offsets,
+            output_names,
+            output_units,
         }
     }
 
@@ -356,6 +447,7 @@ impl System {
     /// equilibrium it equals the force the joint transmits along the component.
     pub fn coordinate_forces(&self, ctx: &EvalContext, s: &State, mu: &[f64], out: &mut [f64]) {
         self.drive_forces(mu, out);
+        let signals = self.signal_values(ctx, s);
         for (k, c) in self.constraints.iter().enumerate() {
             let nc = c.n_coordinates();
             if nc == 0 {
@@ -364,7 +456,8 @@ impl System {
             // A joint has at most six coordinates.
             let mut buf = [0.0; 6];
             let r = &mut buf[..nc];
-            c.coordinate_forces(ctx, self.coords_of(k, s), r, None);
+            let sig = self.constraint_signals(k, &signals);
+            c.coordinate_forces(ctx, self.coords_of(k, s), &sig, r, None);
             for (j, x) in r.iter().enumerate() {
                 out[self.coordinate_offsets[k] + j] -= x;
             }
@@ -406,13 +499,22 @@ impl System {
         p
     }
 
+    /// Values of the signals read by constraint `k`, from the values of all signals.
+    pub fn constraint_signals(&self, k: usize, all: &[f64]) -> Vec<f64> {
+        self.signals.constraint_inputs[k]
+            .iter()
+            .map(|&j| all[j])
+            .collect()
+    }
+
     pub fn n_nodes(&self) -> usize {
         self.node_names.len()
     }
 
-    /// Number of configuration unknowns: 6 per node, then the joint coordinates.
+    /// Number of configuration unknowns: 6 per node, then the active joint coordinates,
+    /// then the element states.
     pub fn n_config(&self) -> usize {
-        6 * self.n_nodes() + self.n_coordinates
+        6 * self.n_nodes() + self.n_coordinates + self.n_states
     }
 
     /// Evaluation context at time `t` with load factor `lf`.
@@ -433,34 +535,73 @@ impl System {
             .sum()
     }
 
-    pub fn kinetic_energy(&self, s: &State) -> f64 {
-        self.elements
-            .iter()
-            .map(|e| e.kinetic_energy(&s.nodes))
+    /// Σ f(element, input) over the elements.
+    fn element_sum(
+        &self,
+        s: &State,
+        signals: &[f64],
+        f: impl Fn(&dyn Element, &ElementInput) -> f64,
+    ) -> f64 {
+        let mut scratch = Vec::new();
+        (0..self.elements.len())
+            .map(|k| {
+                let x = self.element_input(k, s, signals, &mut scratch);
+                f(self.elements[k].as_ref(), &x)
+            })
             .sum()
     }
 
+    pub fn kinetic_energy(&self, s: &State) -> f64 {
+        // Elements see their input signals in every evaluation (kinetic energy
+        // included), so the signals are evaluated at the state's time.
+        let signals = self.signal_values(&self.context(s.time, 1.0), s);
+        self.element_sum(s, &signals, |e, x| e.kinetic_energy(x))
+    }
+
     pub fn potential_energy(&self, ctx: &EvalContext, s: &State) -> f64 {
-        self.elements
-            .iter()
-            .map(|e| e.potential_energy(ctx, &s.nodes))
-            .sum::<f64>()
+        let signals = self.signal_values(ctx, s);
+        self.element_sum(s, &signals, |e, x| e.potential_energy(ctx, x))
             + self.coordinate_sum(s, |c, q| c.potential_energy(q))
     }
 
     pub fn external_power(&self, ctx: &EvalContext, s: &State) -> f64 {
-        self.elements
+        let signals = self.signal_values(ctx, s);
+        let coordinate_inputs: f64 = self
+            .constraints
             .iter()
-            .map(|e| e.external_power(ctx, &s.nodes))
-            .sum::<f64>()
-            + self.coordinate_sum(s, |c, q| c.external_power(ctx, q))
+            .enumerate()
+            .map(|(k, c)| {
+                c.external_power(
+                    ctx,
+                    self.coords_of(k, s),
+                    &self.constraint_signals(k, &signals),
+                )
+            })
+            .sum();
+        self.element_sum(s, &signals, |e, x| e.external_power(ctx, x)) + coordinate_inputs
+    }
+
+    /// Values of every element's outputs at `s` (`out.len()` = number of outputs).
+    pub fn element_outputs(&self, ctx: &EvalContext, s: &State, out: &mut [f64]) {
+        if self.output_names.is_empty() {
+            return;
+        }
+        let signals = self.signal_values(ctx, s);
+        let mut scratch = Vec::new();
+        for (k, e) in self.elements.iter().enumerate() {
+            let off = self.output_offsets[k];
+            let n = self.output_offsets.get(k + 1).copied().unwrap_or(out.len()) - off;
+            if n > 0 {
+                let x = self.element_input(k, s, &signals, &mut scratch);
+                e.outputs(ctx, &x, &mut out[off..off + n]);
+            }
+        }
     }
 
     pub fn dissipated_power(&self, s: &State) -> f64 {
-        self.elements
-            .iter()
-            .map(|e| e.dissipated_power(&s.nodes))
-            .sum::<f64>()
+        let ctx = self.context(s.time, 1.0);
+        let signals = self.signal_values(&ctx, s);
+        self.element_sum(s, &signals, |e, x| e.dissipated_power(x))
             + self.coordinate_sum(s, |c, q| c.dissipated_power(q))
     }
 
@@ -492,19 +633,6 @@ impl System {
                 &mut out[*off..off + m],
                 None,
             );
-        }
-    }
-
-    /// Name of a block of the iteration matrix (node, or joint multipliers) for messages.
-    pub fn block_name(&self, block: usize) -> String {
-        let n = self.n_nodes();
-        let c = self.constraints.len();
-        if block < n {
-            format!("node '{}'", self.node_names[block])
-        } else if c > 0 && block - n < 2 * c {
-            format!("joint '{}'", self.constraints[(block - n) % c].name())
-        } else {
-            format!("block {block}")
         }
     }
 }

@@ -16,9 +16,7 @@
 //! out is the minimum-norm one: `λ = (Bᵀ)⁺ (B_keptᵀ λ_kept)` over all rows of the loop,
 //! multipliers in SI units (N for displacement rows, N m for rotation rows).
 
-use crate::elements::EvalContext;
-use crate::joints::{Constraint, RowRole};
-use crate::system::{Coordinate, NodeState};
+use crate::core::{Constraint, Coordinate, EvalContext, NodeState, RowRole};
 use nalgebra::{DMatrix, DVector};
 
 /// Relative size of a row's new direction below which it is counted as dependent.

@@ -3,7 +3,7 @@
 
 use samara::analysis::{AnalysisSummary, History, run_analysis};
 use samara::model::{AnalysisKind, Model};
-use samara::system::{State, System};
+use samara::system::System;
 
 /// Parses and validates a model from TOML text (panics with the diagnostics otherwise).
 pub fn model(toml: &str) -> Model {
@@ -44,7 +44,7 @@ pub fn run_nth(m: &Model, k: usize) -> (AnalysisSummary, History) {
     let s = run_analysis(
         &sys,
         &m.analyses[k],
-        State::initial(m, &sys),
+        sys.initial_state(),
         &mut h,
         &mut |_| {},
     )

@@ -19,10 +19,10 @@ use super::kernel::{
 };
 use super::quaternion::{Quat, conj, dg_w, dgt_f, from_rotation, g_mat, mul, rotation};
 use super::section::{SectionTable, damping_matrix};
+use crate::core::{ElementInput, NodeState};
 use crate::elements::{Element, EvalContext, LocalTerms, Need};
 use crate::math::Rotation;
-use crate::model::TimeFunction;
-use crate::system::NodeState;
+use crate::math::TimeFunction;
 use nalgebra::{DMatrix, Matrix3, Matrix4x3, Matrix6, Vector3, Vector6};
 use std::cell::RefCell;
 use std::sync::Arc;
@@ -733,14 +733,16 @@ impl Element for BeamElement {
         &self.nodes
     }
 
-    fn evaluate(&self, ctx: &EvalContext, nodes: &[NodeState], need: Need, out: &mut LocalTerms) {
+    fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+        let nodes = x.nodes;
         with_work(self.nodes.len(), |g| {
             self.gather(nodes, g);
             self.evaluate_gathered(ctx, need, g, out);
         })
     }
 
-    fn kinetic_energy(&self, nodes: &[NodeState]) -> f64 {
+    fn kinetic_energy(&self, x: &ElementInput) -> f64 {
+        let nodes = x.nodes;
         with_work(self.nodes.len(), |g| {
             self.gather(nodes, g);
             self.inertial
@@ -754,7 +756,8 @@ impl Element for BeamElement {
         })
     }
 
-    fn potential_energy(&self, ctx: &EvalContext, nodes: &[NodeState]) -> f64 {
+    fn potential_energy(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
+        let nodes = x.nodes;
         with_work(self.nodes.len(), |g| {
             self.gather(nodes, g);
             let mut eo = ElasticOut::default();
@@ -782,7 +785,8 @@ impl Element for BeamElement {
         })
     }
 
-    fn external_power(&self, ctx: &EvalContext, nodes: &[NodeState]) -> f64 {
+    fn external_power(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
+        let nodes = x.nodes;
         if self.loads.is_empty() {
             return 0.0;
         }
@@ -805,7 +809,8 @@ impl Element for BeamElement {
         })
     }
 
-    fn dissipated_power(&self, nodes: &[NodeState]) -> f64 {
+    fn dissipated_power(&self, x: &ElementInput) -> f64 {
+        let nodes = x.nodes;
         if self.elastic.iter().all(|e| e.d.is_none()) {
             return 0.0;
         }
@@ -837,19 +842,19 @@ impl Element for Arc<BeamElement> {
     fn nodes(&self) -> &[usize] {
         self.as_ref().nodes()
     }
-    fn evaluate(&self, ctx: &EvalContext, nodes: &[NodeState], need: Need, out: &mut LocalTerms) {
-        self.as_ref().evaluate(ctx, nodes, need, out)
+    fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+        self.as_ref().evaluate(ctx, x, need, out)
     }
-    fn kinetic_energy(&self, nodes: &[NodeState]) -> f64 {
-        self.as_ref().kinetic_energy(nodes)
+    fn kinetic_energy(&self, x: &ElementInput) -> f64 {
+        self.as_ref().kinetic_energy(x)
     }
-    fn potential_energy(&self, ctx: &EvalContext, nodes: &[NodeState]) -> f64 {
-        self.as_ref().potential_energy(ctx, nodes)
+    fn potential_energy(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
+        self.as_ref().potential_energy(ctx, x)
     }
-    fn external_power(&self, ctx: &EvalContext, nodes: &[NodeState]) -> f64 {
-        self.as_ref().external_power(ctx, nodes)
+    fn external_power(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
+        self.as_ref().external_power(ctx, x)
     }
-    fn dissipated_power(&self, nodes: &[NodeState]) -> f64 {
-        self.as_ref().dissipated_power(nodes)
+    fn dissipated_power(&self, x: &ElementInput) -> f64 {
+        self.as_ref().dissipated_power(x)
     }
 }

@@ -43,12 +43,13 @@ pub mod kernel;
 pub mod quaternion;
 pub mod reference_line;
 pub mod section;
+pub mod spec;
 
+use crate::core::NodeState;
 use crate::math::Rotation;
-use crate::model::beam::BeamDef;
-use crate::system::NodeState;
 use element::{BeamElement, ElementSpec, SectionState};
 use nalgebra::Vector3;
+pub use spec::BeamDef;
 use std::sync::Arc;
 
 /// The elements of one beam (for output; the same elements are in the system's list).

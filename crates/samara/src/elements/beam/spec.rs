@@ -1,8 +1,8 @@
-//! A validated beam: its nodes (shared or created), reference section frames, sections,
-//! damping and loads — everything `System` needs to build the elements.
+//! A beam as the system builds it: its nodes (shared or created), reference section
+//! frames, sections, damping and loads.
 
-use crate::elements::beam::element::{DistributedLoad, Quadrature};
-use crate::elements::beam::section::SectionTable;
+use super::element::{DistributedLoad, Quadrature};
+use super::section::SectionTable;
 use crate::math::Rotation;
 
 #[derive(Clone, Debug)]

@@ -1,7 +1,6 @@
-//! Kinematic state of the nodes, the joint coordinates and the multipliers.
+//! The numbers of a system at one time: node states, joint coordinates, multipliers.
 
 use crate::math::Rotation;
-use crate::model::Model;
 use nalgebra::{Matrix3, Vector3};
 
 /// State of one 6-DOF node.
@@ -41,6 +40,14 @@ pub struct Coordinate {
     pub a: f64,
 }
 
+/// A first-order state z owned by an element (an inflow, a pressure, a filter output, a
+/// damper stretch) and its rate ż.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ElementState {
+    pub z: f64,
+    pub zd: f64,
+}
+
 /// State of the whole system at one time.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct State {
@@ -49,39 +56,8 @@ pub struct State {
     /// Joint coordinates: the active ones constraint by constraint
     /// (`System::coordinate_offsets`), then the passive ones (`System::passive_offsets`).
     pub coords: Vec<Coordinate>,
+    /// Element states, element by element (`System::state_offsets`).
+    pub states: Vec<ElementState>,
     /// Lagrange multipliers in physical units (force, moment), per constraint row.
     pub lambda: Vec<f64>,
-}
-
-impl State {
-    /// The initial conditions written in the model, at rest in acceleration, with the
-    /// joint coordinates measured from the node configuration.
-    pub fn initial(model: &Model, sys: &super::System) -> Self {
-        let mut s = Self::nodes_only(model);
-        s.coords = vec![Coordinate::default(); sys.n_coordinates + sys.n_passive];
-        s.lambda = vec![0.0; sys.n_multipliers];
-        sys.measure_coordinates(&mut s);
-        s
-    }
-
-    /// The nodes' initial conditions only (no coordinates, no multipliers).
-    pub(crate) fn nodes_only(model: &Model) -> Self {
-        Self {
-            time: 0.0,
-            nodes: model
-                .nodes
-                .iter()
-                .map(|n| NodeState {
-                    x: n.position,
-                    rot: n.orientation,
-                    v: n.velocity,
-                    w: n.orientation.matrix().transpose() * n.angular_velocity,
-                    a: Vector3::zeros(),
-                    wd: Vector3::zeros(),
-                })
-                .collect(),
-            coords: Vec::new(),
-            lambda: Vec::new(),
-        }
-    }
 }

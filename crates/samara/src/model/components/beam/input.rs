@@ -1,7 +1,7 @@
 //! The `[[beams]]` tables of the model file (schema only; checked in `validate::beam`).
 
-use super::input::TimeFunctionInput;
-use super::located::Located;
+use crate::model::input::TimeFunctionInput;
+use crate::model::located::Located;
 use schemars::JsonSchema;
 use serde::Deserialize;
 

@@ -11,9 +11,8 @@
     clippy::nonminimal_bool
 )]
 
-use super::super::beam::BeamDef;
-use super::super::beam_input::*;
-use super::{Entry, Validator};
+use super::input::*;
+use crate::elements::beam::BeamDef;
 use crate::elements::beam::element::{DistributedLoad, MAX_ORDER, Quadrature};
 use crate::elements::beam::gll::{gauss_legendre, gauss_lobatto_legendre, lagrange};
 use crate::elements::beam::reference_line::ReferenceLine;
@@ -21,29 +20,16 @@ use crate::elements::beam::section::{
     IsotropicSection, Section, SectionTable, check_mass, check_stiffness,
 };
 use crate::math::Rotation;
-use crate::model::{Model, ModelInput, NodeDef, TimeFunction};
+use crate::model::validate::{Checker, Entry};
+use crate::model::{Model, NodeDef, TimeFunction};
 use nalgebra::{Matrix3, Matrix6, Vector3};
 use std::collections::HashMap;
 
 /// Columns of a sections CSV file: station, then C and M row by row.
 pub const CSV_COLUMNS: usize = 73;
 
-impl Validator<'_> {
-    pub(super) fn beams(
-        &mut self,
-        input: &ModelInput,
-        model: &mut Model,
-        node_map: &mut HashMap<String, usize>,
-    ) {
-        self.unique_names(&input.beams, |b| &b.name, "beam");
-        for b in &input.beams {
-            if let Some(def) = self.beam(b, model, node_map) {
-                model.beams.push(def);
-            }
-        }
-    }
-
-    fn beam(
+impl Checker<'_> {
+    pub(super) fn beam(
         &mut self,
         b: &crate::model::Located<BeamInput>,
         model: &mut Model,
@@ -191,7 +177,7 @@ impl Validator<'_> {
                 }
                 let mut idx = Vec::new();
                 for n in list {
-                    match self.node_ref(n, node_map, &what) {
+                    match self.node_ref_in(n, node_map, &what) {
                         Some(crate::model::NodeRef::Node(i)) => idx.push(i),
                         Some(crate::model::NodeRef::Ground) => {
                             self.error(
@@ -296,7 +282,7 @@ impl Validator<'_> {
                 }
                 idx.push(i);
             } else {
-                if name == super::GROUND {
+                if name == crate::model::validate::GROUND {
                     self.error(
                         format!("{what}: the ground cannot be a beam node"),
                         span,

@@ -1,0 +1,176 @@
+//! The constraint contract: holonomic (possibly rheonomic) constraints `Φ(q, ν, t) = 0`
+//! enforced with Lagrange multipliers, and the joint coordinates ν they own (seed eq. 13).
+//!
+//! A constraint returns `Φ`, its Jacobian `B = ∂Φ/∂(q, ν)` (columns: 6 per node — δx
+//! global, δθ material — then one per joint coordinate), the tangent `∂(Bᵀμ)/∂(q, ν)` at
+//! fixed multipliers, the parts of `Φ̇` and `Φ̈` that do not multiply velocities or
+//! accelerations, and the forces of the elements attached to its coordinates (springs,
+//! dampers, backlash, input ports). Scaling, the augmented-Lagrangian term and the
+//! assembly of `Bᵀμ` are done generically by the assembler.
+
+use super::{Coordinate, EvalContext, NodeState};
+use nalgebra::{DMatrix, Matrix3, Vector3};
+
+/// What a row does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RowRole {
+    /// Constrains a component to zero (may be dropped when redundant).
+    Constraint,
+    /// Defines a joint coordinate.
+    Definition,
+    /// Drives a joint coordinate.
+    Drive,
+}
+
+/// Tangents of the coordinate forces: `∂r/∂ν` and `∂r/∂ν̇`, diagonal (one per coordinate),
+/// and `∂r/∂s` of the input signals (row-major: coordinate c, input j at `c·inputs + j`).
+pub struct CoordinateTangents<'a> {
+    pub stiffness: &'a mut [f64],
+    pub damping: &'a mut [f64],
+    pub signals: &'a mut [f64],
+}
+
+/// A constraint on a few nodes and its own joint coordinates.
+pub trait Constraint: Send + Sync {
+    fn name(&self) -> &str;
+    /// Nodes touched, in the order of the local columns of `B`.
+    fn nodes(&self) -> &[usize];
+    /// Number of joint coordinates owned (their columns follow the node columns).
+    fn n_coordinates(&self) -> usize {
+        0
+    }
+    /// Number of scalar equations enforced (multipliers).
+    fn n_equations(&self) -> usize;
+    /// `Φ` and, if given, `B` (`n_equations × (6·nodes + n_coordinates)`, overwritten).
+    fn evaluate(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        phi: &mut [f64],
+        b: Option<&mut DMatrix<f64>>,
+    );
+    /// Adds `∂(Bᵀμ)/∂(q, ν)` at fixed `μ` into `k` (square, `6·nodes + n_coordinates`).
+    fn reaction_tangent(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        mu: &[f64],
+        k: &mut DMatrix<f64>,
+    );
+    /// `Φ̈ − B (v̇, ν̈)`: the part of the constraint acceleration without accelerations
+    /// (convective terms and `∂²Φ/∂t²`).
+    fn acceleration_term(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        out: &mut [f64],
+    );
+    /// `∂Φ/∂t` (non-zero for drives).
+    fn velocity_term(&self, _ctx: &EvalContext, out: &mut [f64]) {
+        out.fill(0.0);
+    }
+    /// Residual rows of the coordinates from attached elements, `r = f_int(ν, ν̇) − f_in(t)`,
+    /// added into `r`; with `tangents`, `∂r/∂ν` and `∂r/∂ν̇` added too.
+    fn coordinate_forces(
+        &self,
+        _ctx: &EvalContext,
+        _coords: &[Coordinate],
+        _signals: &[f64],
+        _r: &mut [f64],
+        _tangents: Option<CoordinateTangents>,
+    ) {
+    }
+    /// Names of the signals read by the coordinate elements (input ports).
+    fn signal_inputs(&self) -> &[String] {
+        &[]
+    }
+    /// Potential energy of the coordinate springs and backlash contacts.
+    fn potential_energy(&self, _coords: &[Coordinate]) -> f64 {
+        0.0
+    }
+    /// Power dissipated by coordinate dampers and contact damping (≥ 0).
+    fn dissipated_power(&self, _coords: &[Coordinate]) -> f64 {
+        0.0
+    }
+    /// Power of the input ports.
+    fn external_power(&self, _ctx: &EvalContext, _coords: &[Coordinate], _signals: &[f64]) -> f64 {
+        0.0
+    }
+    /// All rows, including those dropped as redundant (for reactions).
+    fn n_rows(&self) -> usize {
+        self.n_equations()
+    }
+    /// What row `r` (among all rows) does.
+    fn row_role(&self, _r: usize) -> RowRole {
+        RowRole::Constraint
+    }
+    /// Stops enforcing the given constraint rows (found redundant).
+    fn drop_rows(&mut self, rows: &[usize]);
+    /// Index of each enforced equation among all rows.
+    fn active_rows(&self) -> &[usize];
+    /// `Φ` and `B` of all rows (enforced or not), same layout as [`Constraint::evaluate`].
+    fn evaluate_all_rows(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        phi: &mut [f64],
+        b: &mut DMatrix<f64>,
+    ) {
+        self.evaluate(ctx, nodes, coords, phi, Some(b));
+    }
+    /// Force and moment exerted on side B by side A (about B's frame origin), in frame-A
+    /// components, for multipliers of all rows `mu_all` in physical units.
+    fn reactions(
+        &self,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        mu_all: &[f64],
+    ) -> (Vector3<f64>, Vector3<f64>);
+    /// Global position of the joint point on side B and the axes of frame A (columns,
+    /// global components), for output.
+    fn location(&self, nodes: &[NodeState]) -> (Vector3<f64>, Matrix3<f64>);
+    /// Passive coordinates: free components with nothing attached. Nothing depends on
+    /// them, so they are not unknowns of the Newton system; they follow from their
+    /// defining equations after each step ([`Constraint::update_passive_coordinates`]).
+    fn n_passive_coordinates(&self) -> usize {
+        0
+    }
+    /// Names of the joint coordinates (`<joint>.<component>`), the active ones first.
+    fn coordinate_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// Values of all coordinates (active, then passive) implied by the node configuration
+    /// (principal values; for initialization).
+    fn measure_coordinates(&self, _nodes: &[NodeState], _out: &mut [f64]) {}
+    /// Solves the defining equations of the passive coordinates for value (continued from
+    /// the current value, so angles keep counting turns) and, with `rates`, rate and
+    /// acceleration.
+    fn update_passive_coordinates(
+        &self,
+        _nodes: &[NodeState],
+        _passive: &mut [Coordinate],
+        _rates: bool,
+    ) {
+    }
+    /// Coordinate rates implied by the node velocities (through the defining equations).
+    fn measure_coordinate_rates(
+        &self,
+        _nodes: &[NodeState],
+        _coords: &[Coordinate],
+        _out: &mut [f64],
+    ) {
+    }
+    /// Whether coordinate `c` is driven (its value is prescribed).
+    fn is_driven(&self, _c: usize) -> bool {
+        false
+    }
+    /// Row of all rows that drives coordinate `c`, if any (its multiplier is the
+    /// actuator force).
+    fn drive_row(&self, _c: usize) -> Option<usize> {
+        None
+    }
+}

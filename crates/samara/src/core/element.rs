@@ -1,0 +1,227 @@
+//! The element contract: an element touches a few nodes and, given their state, returns
+//! its residual
+//!
+//! `r(q, v, v̇, t) = M(q) v̇ + g(q, v, t) − f(q, v, t)`
+//!
+//! (6 rows per node: force in global components, then moment about the node in node-frame
+//! components — the virtual work of a material rotation increment) and its tangent blocks
+//! `K = ∂r/∂q`, `C = ∂r/∂v`, `M = ∂r/∂v̇`, where perturbations of a node are
+//! `(δx, δθ)` with `x ← x + δx`, `R ← R exp(δθ̃)` and velocities `(v, Ω)` (global linear,
+//! material angular). Elements never know which analysis calls them.
+//!
+//! **Element states.** An element may own first-order states z (ARCHITECTURE.md, "Element
+//! states"). Its local unknowns are then its nodes (6 each) followed by its states, and its
+//! residual gains one row per state, `r_z(q, v, z, ż, t) = 0`; the same `K`, `C`, `M`
+//! blocks carry `∂r/∂z` (in K) and `∂r/∂ż` (in C) for the state columns, so every
+//! analysis treats node and state unknowns alike.
+//!
+//! **Signals.** An element may read named scalar signals (in [`ElementInput::signals`])
+//! and returns `∂r/∂s` in [`LocalTerms::ds`]; it may produce signals from its own
+//! unknowns ([`Element::signals`]) with their derivatives. The system orders producers so
+//! every signal is known before it is read and applies the chain rule.
+
+use super::{ElementState, NodeState};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+/// Model-wide inputs of an element evaluation.
+#[derive(Clone, Copy, Debug)]
+pub struct EvalContext {
+    /// Time (for statics, the time at which loads are evaluated).
+    pub time: f64,
+    /// Gravitational acceleration, global.
+    pub gravity: Vector3<f64>,
+    /// Multiplies all applied loads and gravity (static load continuation); 1 in dynamics.
+    pub load_factor: f64,
+}
+
+/// Which outputs an evaluation must fill.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Need {
+    Residual,
+    ResidualAndTangents,
+}
+
+/// What an element sees of the system's state.
+#[derive(Clone, Copy, Debug)]
+pub struct ElementInput<'a> {
+    /// Every node of the system (the element indexes its own, [`Element::nodes`]).
+    pub nodes: &'a [NodeState],
+    /// The element's own states, in [`Element::state_names`] order.
+    pub states: &'a [ElementState],
+    /// Values of the signals the element reads, in [`Element::signal_inputs`] order.
+    pub signals: &'a [f64],
+}
+
+impl<'a> ElementInput<'a> {
+    /// Input of an element with nodes only.
+    pub fn nodes(nodes: &'a [NodeState]) -> Self {
+        Self {
+            nodes,
+            states: &[],
+            signals: &[],
+        }
+    }
+}
+
+/// Local residual and tangents of one element: `n = 6·nodes + states` local unknowns
+/// (nodes first, then the element's states), `r` and `K = ∂r/∂q`, `C = ∂r/∂v`, `M = ∂r/∂v̇`
+/// (for state columns: `∂r/∂z` in K, `∂r/∂ż` in C), and `ds = ∂r/∂s` (n × inputs).
+#[derive(Clone, Debug)]
+pub struct LocalTerms {
+    pub r: DVector<f64>,
+    pub k: DMatrix<f64>,
+    pub c: DMatrix<f64>,
+    pub m: DMatrix<f64>,
+    pub ds: DMatrix<f64>,
+}
+
+impl LocalTerms {
+    /// Terms of an element with `n_nodes` nodes and nothing else.
+    pub fn new(n_nodes: usize) -> Self {
+        Self::with_sizes(6 * n_nodes, 0)
+    }
+
+    /// Terms of `n` local unknowns reading `inputs` signals.
+    pub fn with_sizes(n: usize, inputs: usize) -> Self {
+        Self {
+            r: DVector::zeros(n),
+            k: DMatrix::zeros(n, n),
+            c: DMatrix::zeros(n, n),
+            m: DMatrix::zeros(n, n),
+            ds: DMatrix::zeros(n, inputs),
+        }
+    }
+
+    /// Terms sized for `e`.
+    pub fn for_element(e: &dyn Element) -> Self {
+        Self::with_sizes(6 * e.nodes().len() + e.n_states(), e.signal_inputs().len())
+    }
+
+    pub fn clear(&mut self, need: Need) {
+        // Through the slices: a plain memset (nalgebra's `fill` iterates element-wise).
+        self.r.as_mut_slice().fill(0.0);
+        if need == Need::ResidualAndTangents {
+            self.k.as_mut_slice().fill(0.0);
+            self.c.as_mut_slice().fill(0.0);
+            self.m.as_mut_slice().fill(0.0);
+            self.ds.as_mut_slice().fill(0.0);
+        }
+    }
+
+    /// `r[6a + off .. +3] += v`.
+    #[inline]
+    pub fn add_r(&mut self, row: usize, v: &Vector3<f64>) {
+        for i in 0..3 {
+            self.r[row + i] += v[i];
+        }
+    }
+}
+
+/// Adds a 3×3 block into a local matrix at (row, col).
+#[inline]
+pub fn add_block(m: &mut DMatrix<f64>, row: usize, col: usize, b: &Matrix3<f64>) {
+    for j in 0..3 {
+        for i in 0..3 {
+            m[(row + i, col + j)] += b[(i, j)];
+        }
+    }
+}
+
+/// Values and derivatives of the signals an element produces: per output `o`, the value
+/// and its derivatives with respect to the element's local unknowns (`k`: value, `c`:
+/// rate, `m`: acceleration channel, as in [`LocalTerms`]) and to its input signals (`ds`).
+#[derive(Clone, Debug)]
+pub struct SignalTerms {
+    pub values: Vec<f64>,
+    pub k: DMatrix<f64>,
+    pub c: DMatrix<f64>,
+    pub m: DMatrix<f64>,
+    pub ds: DMatrix<f64>,
+}
+
+impl SignalTerms {
+    /// Terms sized for `e`.
+    pub fn for_element(e: &dyn Element) -> Self {
+        let (o, n, i) = (
+            e.signal_outputs().len(),
+            6 * e.nodes().len() + e.n_states(),
+            e.signal_inputs().len(),
+        );
+        Self {
+            values: vec![0.0; o],
+            k: DMatrix::zeros(o, n),
+            c: DMatrix::zeros(o, n),
+            m: DMatrix::zeros(o, n),
+            ds: DMatrix::zeros(o, i),
+        }
+    }
+
+    pub fn clear(&mut self) {
+        self.values.fill(0.0);
+        for m in [&mut self.k, &mut self.c, &mut self.m, &mut self.ds] {
+            m.as_mut_slice().fill(0.0);
+        }
+    }
+}
+
+/// A force element.
+pub trait Element: Send + Sync {
+    /// Name given in the model (for messages).
+    fn name(&self) -> &str;
+    /// Indices of the nodes the element touches, in the order of its local rows.
+    fn nodes(&self) -> &[usize];
+    /// Number of first-order states the element owns.
+    fn n_states(&self) -> usize {
+        0
+    }
+    /// Names of the states (`"pressure"`; the system writes `<element>.pressure`).
+    fn state_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// Initial values of the states (zero unless overridden).
+    fn initial_states(&self, out: &mut [f64]) {
+        out.fill(0.0);
+    }
+    /// Names of the signals the element reads.
+    fn signal_inputs(&self) -> &[String] {
+        &[]
+    }
+    /// Names of the signals the element produces.
+    fn signal_outputs(&self) -> &[String] {
+        &[]
+    }
+    /// Whether an output depends directly on the inputs' values (not only through the
+    /// element's states). A loop of signals must pass through an element without
+    /// feedthrough.
+    fn feedthrough(&self) -> bool {
+        true
+    }
+    /// Values of the produced signals and their derivatives; `out` is cleared by the caller.
+    fn signals(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut SignalTerms) {}
+    /// Residual and (if asked) tangents; `out` is cleared by the caller.
+    fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms);
+    /// Kinetic energy.
+    fn kinetic_energy(&self, _x: &ElementInput) -> f64 {
+        0.0
+    }
+    /// Potential energy of conservative forces (gravity, springs).
+    fn potential_energy(&self, _ctx: &EvalContext, _x: &ElementInput) -> f64 {
+        0.0
+    }
+    /// Power of the applied (non-conservative, external) loads.
+    fn external_power(&self, _ctx: &EvalContext, _x: &ElementInput) -> f64 {
+        0.0
+    }
+    /// Power dissipated by dampers (≥ 0).
+    fn dissipated_power(&self, _x: &ElementInput) -> f64 {
+        0.0
+    }
+    /// Names and units of the element's output quantities (`("tension", "N")`; written
+    /// as `element_output` named `<element>.tension`). Outputs are for the results only:
+    /// no equation depends on them.
+    fn output_names(&self) -> Vec<(String, &'static str)> {
+        Vec::new()
+    }
+    /// Values of the outputs, in the order of [`Element::output_names`].
+    fn outputs(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut [f64]) {}
+}

@@ -1,0 +1,36 @@
+//! A signal that is a given function of time, `s = f(t)` (the `[[signals]]` of a model):
+//! it touches no unknown, so its derivatives are zero.
+
+use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, SignalTerms};
+use crate::math::TimeFunction;
+
+#[derive(Clone, Debug)]
+pub struct TimeSignal {
+    name: [String; 1],
+    function: TimeFunction,
+}
+
+impl TimeSignal {
+    pub fn new(name: &str, function: TimeFunction) -> Self {
+        Self {
+            name: [name.to_string()],
+            function,
+        }
+    }
+}
+
+impl Element for TimeSignal {
+    fn name(&self) -> &str {
+        &self.name[0]
+    }
+    fn nodes(&self) -> &[usize] {
+        &[]
+    }
+    fn signal_outputs(&self) -> &[String] {
+        &self.name
+    }
+    fn signals(&self, ctx: &EvalContext, _x: &ElementInput, out: &mut SignalTerms) {
+        out.values[0] = self.function.eval(ctx.time);
+    }
+    fn evaluate(&self, _ctx: &EvalContext, _x: &ElementInput, _need: Need, _out: &mut LocalTerms) {}
+}

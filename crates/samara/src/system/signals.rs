@@ -1,0 +1,298 @@
+//! Signals: named scalars that elements compute from their own unknowns and that other
+//! elements and constraints read in the same Newton iteration (ARCHITECTURE.md, "Element
+//! states").
+//!
+//! A signal s produced by element p depends on p's local unknowns x_p and on p's input
+//! signals: `s = g(x_p, s_in)`. Its derivative with respect to the configuration
+//! unknowns follows by the chain rule in evaluation order,
+//!
+//! `∂s/∂x = ∂g/∂x_p + Σ_j (∂g/∂s_j) ∂s_j/∂x`,
+//!
+//! in three channels like the element tangents (K: value, C: rate, M: acceleration). The
+//! *support* of a signal is the set of configuration unknowns it depends on; a consumer's
+//! rows couple to every unknown of the supports of its inputs. Producers are evaluated in
+//! an order where every input with feedthrough is known first; a loop of signals through
+//! elements that all have feedthrough has no such order and is reported.
+
+use crate::core::{Element, ElementInput, EvalContext, SignalTerms, State};
+
+/// Index of a node unknown, a joint coordinate or an element state in the configuration
+/// vector `[6 per node | active joint coordinates | element states]`.
+pub type ConfigIndex = usize;
+
+/// What went wrong when connecting the signals (a validated model has none of these).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SignalIssue {
+    /// A consumer reads a signal nobody produces (it reads 0).
+    Unknown { consumer: String, signal: String },
+    /// Two producers of one name (the first is used).
+    Duplicate { signal: String },
+    /// Signals that depend on each other without a state in between.
+    Loop { signals: Vec<String> },
+}
+
+impl std::fmt::Display for SignalIssue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SignalIssue::Unknown { consumer, signal } => {
+                write!(
+                    f,
+                    "'{consumer}' reads signal '{signal}', which nothing produces"
+                )
+            }
+            SignalIssue::Duplicate { signal } => write!(f, "signal '{signal}' is produced twice"),
+            SignalIssue::Loop { signals } => write!(
+                f,
+                "the signals {} form an algebraic loop (no element with a state breaks it)",
+                signals.join(" → ")
+            ),
+        }
+    }
+}
+
+/// The signals of a system: who produces what, who reads what, in which order to compute
+/// them, and on which unknowns each depends.
+#[derive(Clone, Debug, Default)]
+pub struct SignalGraph {
+    pub names: Vec<String>,
+    /// Producing element and its output index, per signal (`None`: unknown, reads 0).
+    pub producer: Vec<Option<(usize, usize)>>,
+    /// Signal ids read by each element, in its `signal_inputs` order.
+    pub element_inputs: Vec<Vec<usize>>,
+    /// Signal id of each output of each element (`None` for a duplicate name).
+    pub element_outputs: Vec<Vec<Option<usize>>>,
+    /// Signal ids read by each constraint.
+    pub constraint_inputs: Vec<Vec<usize>>,
+    /// Producing elements in evaluation order.
+    pub order: Vec<usize>,
+    /// Sorted configuration indices each signal depends on.
+    pub support: Vec<Vec<ConfigIndex>>,
+    /// Per signal: position in its support of each local unknown of its producer.
+    local_pos: Vec<Vec<usize>>,
+    /// Per signal and producer input j: position in the signal's support of each entry of
+    /// input j's support.
+    input_pos: Vec<Vec<Vec<usize>>>,
+    /// Issues found while connecting.
+    pub issues: Vec<SignalIssue>,
+}
+
+/// Values and configuration derivatives of all signals at one state (scratch reused across
+/// evaluations: nothing is allocated per call).
+#[derive(Clone, Debug, Default)]
+pub struct SignalValues {
+    pub values: Vec<f64>,
+    /// Per signal, per support entry: `[∂s/∂q, ∂s/∂v, ∂s/∂v̇]` (for states: value, rate, 0).
+    pub gradients: Vec<Vec<[f64; 3]>>,
+    terms: Vec<Option<SignalTerms>>,
+    inputs: Vec<f64>,
+}
+
+impl SignalGraph {
+    /// Connects the signals of `elements` and `constraint_inputs` (names read by each
+    /// constraint). `local_config[e]` lists the configuration index of each local unknown
+    /// of element e.
+    pub fn build(
+        elements: &[Box<dyn Element>],
+        constraint_inputs: &[(String, Vec<String>)],
+        local_config: &[Vec<ConfigIndex>],
+    ) -> Self {
+        let mut g = SignalGraph::default();
+        let mut id = std::collections::HashMap::new();
+        for (k, e) in elements.iter().enumerate() {
+            let mut outs = Vec::new();
+            for (o, name) in e.signal_outputs().iter().enumerate() {
+                if id.contains_key(name) {
+                    g.issues.push(SignalIssue::Duplicate {
+                        signal: name.clone(),
+                    });
+                    outs.push(None);
+                    continue;
+                }
+                id.insert(name.clone(), g.names.len());
+                outs.push(Some(g.names.len()));
+                g.names.push(name.clone());
+                g.producer.push(Some((k, o)));
+            }
+            g.element_outputs.push(outs);
+        }
+        let mut resolve = |g: &mut SignalGraph, consumer: &str, name: &String| -> usize {
+            if let Some(&s) = id.get(name) {
+                return s;
+            }
+            g.issues.push(SignalIssue::Unknown {
+                consumer: consumer.to_string(),
+                signal: name.clone(),
+            });
+            id.insert(name.clone(), g.names.len());
+            g.names.push(name.clone());
+            g.producer.push(None);
+            g.names.len() - 1
+        };
+        for e in elements {
+            let ids = e
+                .signal_inputs()
+                .iter()
+                .map(|n| resolve(&mut g, e.name(), n))
+                .collect();
+            g.element_inputs.push(ids);
+        }
+        for (name, inputs) in constraint_inputs {
+            let ids = inputs.iter().map(|n| resolve(&mut g, name, n)).collect();
+            g.constraint_inputs.push(ids);
+        }
+        g.order_producers(elements);
+        // Supports in evaluation order.
+        let ns = g.names.len();
+        g.support = vec![Vec::new(); ns];
+        g.local_pos = vec![Vec::new(); ns];
+        g.input_pos = vec![Vec::new(); ns];
+        for &k in &g.order.clone() {
+            let outs = elements[k].signal_outputs().len();
+            for o in 0..outs {
+                let Some(s) = g.id_of(k, o) else { continue };
+                let mut sup: Vec<ConfigIndex> = local_config[k].clone();
+                for &j in &g.element_inputs[k] {
+                    sup.extend_from_slice(&g.support[j]);
+                }
+                sup.sort_unstable();
+                sup.dedup();
+                let pos = |c: &ConfigIndex| sup.binary_search(c).unwrap_or(usize::MAX);
+                g.local_pos[s] = local_config[k].iter().map(pos).collect();
+                g.input_pos[s] = g.element_inputs[k]
+                    .iter()
+                    .map(|&j| g.support[j].iter().map(pos).collect())
+                    .collect();
+                g.support[s] = sup;
+            }
+        }
+        g
+    }
+
+    fn id_of(&self, element: usize, output: usize) -> Option<usize> {
+        self.element_outputs[element][output]
+    }
+
+    /// Topological order of the producers over feedthrough edges (Kahn); the elements of a
+    /// loop are appended at the end and the loop is reported.
+    fn order_producers(&mut self, elements: &[Box<dyn Element>]) {
+        let producers: Vec<usize> = (0..elements.len())
+            .filter(|&k| !elements[k].signal_outputs().is_empty())
+            .collect();
+        // An edge p → k when k has feedthrough and reads an output of p.
+        let mut indegree = vec![0usize; elements.len()];
+        let mut next: Vec<Vec<usize>> = vec![Vec::new(); elements.len()];
+        for &k in &producers {
+            if !elements[k].feedthrough() {
+                continue;
+            }
+            for &s in &self.element_inputs[k] {
+                if let Some((p, _)) = self.producer[s]
+                    && !elements[p].signal_outputs().is_empty()
+                {
+                    next[p].push(k);
+                    indegree[k] += 1;
+                }
+            }
+        }
+        let mut ready: Vec<usize> = producers
+            .iter()
+            .copied()
+            .filter(|&k| indegree[k] == 0)
+            .rev()
+            .collect();
+        let mut done = vec![false; elements.len()];
+        while let Some(p) = ready.pop() {
+            self.order.push(p);
+            done[p] = true;
+            for &k in &next[p] {
+                indegree[k] -= 1;
+                if indegree[k] == 0 {
+                    ready.push(k);
+                }
+            }
+        }
+        let stuck: Vec<usize> = producers.into_iter().filter(|&k| !done[k]).collect();
+        if !stuck.is_empty() {
+            let signals = stuck
+                .iter()
+                .flat_map(|&k| elements[k].signal_outputs().iter().cloned())
+                .collect();
+            self.issues.push(SignalIssue::Loop { signals });
+            self.order.extend(stuck);
+        }
+    }
+
+    /// Scratch for [`SignalGraph::evaluate`].
+    pub fn values(&self, elements: &[Box<dyn Element>]) -> SignalValues {
+        let mut terms: Vec<Option<SignalTerms>> = (0..elements.len()).map(|_| None).collect();
+        for &k in &self.order {
+            terms[k] = Some(SignalTerms::for_element(elements[k].as_ref()));
+        }
+        SignalValues {
+            values: vec![0.0; self.names.len()],
+            gradients: self
+                .support
+                .iter()
+                .map(|s| vec![[0.0; 3]; s.len()])
+                .collect(),
+            terms,
+            inputs: Vec::new(),
+        }
+    }
+
+    /// Values (and, with `gradients`, derivatives) of every signal at `state`;
+    /// `state_offsets[k]` is where element k's states start in `state.states`.
+    pub fn evaluate(
+        &self,
+        elements: &[Box<dyn Element>],
+        state_offsets: &[usize],
+        ctx: &EvalContext,
+        state: &State,
+        out: &mut SignalValues,
+        gradients: bool,
+    ) {
+        for &k in &self.order {
+            let e = elements[k].as_ref();
+            let Some(t) = out.terms[k].as_mut() else {
+                continue;
+            };
+            t.clear();
+            out.inputs.clear();
+            out.inputs
+                .extend(self.element_inputs[k].iter().map(|&j| out.values[j]));
+            let off = state_offsets[k];
+            let x = ElementInput {
+                nodes: &state.nodes,
+                states: &state.states[off..off + e.n_states()],
+                signals: &out.inputs,
+            };
+            e.signals(ctx, &x, t);
+            for o in 0..t.values.len() {
+                let Some(s) = self.id_of(k, o) else { continue };
+                out.values[s] = t.values[o];
+                if !gradients {
+                    continue;
+                }
+                let mut g = std::mem::take(&mut out.gradients[s]);
+                g.iter_mut().for_each(|x| *x = [0.0; 3]);
+                for (l, &p) in self.local_pos[s].iter().enumerate() {
+                    g[p][0] += t.k[(o, l)];
+                    g[p][1] += t.c[(o, l)];
+                    g[p][2] += t.m[(o, l)];
+                }
+                for (j, &sj) in self.element_inputs[k].iter().enumerate() {
+                    let d = t.ds[(o, j)];
+                    if d == 0.0 {
+                        continue;
+                    }
+                    for (gi, &p) in out.gradients[sj].iter().zip(&self.input_pos[s][j]) {
+                        for c in 0..3 {
+                            g[p][c] += d * gi[c];
+                        }
+                    }
+                }
+                out.gradients[s] = g;
+            }
+        }
+    }
+}
