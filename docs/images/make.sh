@@ -24,6 +24,8 @@ $samara plot "$tmp/gear/retract.nc" joint_coordinate:trunnion.theta3 joint_coord
 $samara run examples/four_bar.toml --out "$tmp/four_bar" --quiet > /dev/null
 $samara plot "$tmp/four_bar/turn.nc" joint_coordinate:crank_pivot.theta3 joint_coordinate:rocker_pivot.theta3 \
     joint_coordinate_force:crank_pivot.theta3 --out docs/images/four_bar.png
+$samara run examples/adaptive_kick.toml --out "$tmp/kick" --quiet > /dev/null
+$samara plot "$tmp/kick/kick.nc" step_size position:mass:x --out docs/images/adaptive_kick.png
 $samara run examples/verification/right_angle_cantilever.toml --out "$tmp/rac" --quiet > /dev/null
 python3 docs/images/right_angle_cantilever.py "$tmp/rac/dynamic.nc" docs/images/right_angle_cantilever.png
 python3 docs/images/beam_frames.py

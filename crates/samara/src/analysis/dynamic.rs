@@ -366,6 +366,44 @@ impl Integrator<'_> {
 
     /// Accepts the trial step: chooses the next predictor, updates the algorithmic
     /// accelerations and swaps states.
+    /// Local error estimate of the step just solved (trial against state), relative to
+    /// the tolerance: max over the unknowns of |e| / (tol_abs + tol_rel |q|), > 1 rejects.
+    ///
+    /// Second-order unknowns (node translations and rotations, joint coordinates): the
+    /// Newmark-family estimate e = (β − 1/6) h² (q̈_{n+1} − q̈_n) of Zienkiewicz & Xie
+    /// (1991), as used for generalized-α by Géradin & Cardona (2001, §5.9): the leading
+    /// O(h³ q⃛) term of the local displacement error. Element states (first order):
+    /// e = h (ż_{n+1} − ż_n)/12, the trapezoidal rule's leading term. Rotations are
+    /// compared in rad with |q| = 1.
+    fn local_error(&self, h: f64, tol: &crate::model::AdaptiveSettings) -> f64 {
+        let c2 = (self.ga.beta - 1.0 / 6.0).abs() * h * h;
+        let c1 = h / 12.0;
+        let (atol, rtol) = (tol.tolerance_abs, tol.tolerance_rel);
+        let mut worst: f64 = 0.0;
+        for (n, p) in self.trial.nodes.iter().zip(&self.state.nodes) {
+            for k in 0..3 {
+                let scale = atol + rtol * n.x[k].abs().max(p.x[k].abs());
+                worst = worst.max(c2 * (n.a[k] - p.a[k]).abs() / scale);
+                worst = worst.max(c2 * (n.wd[k] - p.wd[k]).abs() / (atol + rtol));
+            }
+        }
+        for (c, p) in self
+            .trial
+            .coords
+            .iter()
+            .zip(&self.state.coords)
+            .take(self.sys.n_coordinates)
+        {
+            let scale = atol + rtol * c.q.abs().max(p.q.abs());
+            worst = worst.max(c2 * (c.a - p.a).abs() / scale);
+        }
+        for (z, p) in self.trial.states.iter().zip(&self.state.states) {
+            let scale = atol + rtol * z.z.abs().max(p.z.abs());
+            worst = worst.max(c1 * (z.zd - p.zd).abs() / scale);
+        }
+        if worst.is_nan() { f64::INFINITY } else { worst }
+    }
+
     fn accept(&mut self) {
         let ga = self.ga;
         let h = self.trial.time - self.state.time;
@@ -608,6 +646,8 @@ pub fn run_dynamic(
         condition: f64::NAN,
         condition_kind: crate::solve::condition::ConditionKind::Exact2Norm,
         step_size: 0.0,
+        error_estimate: f64::NAN,
+        rejected: 0,
     });
     if let Some(what) = super::first_non_finite(sys, &it.state, &energy) {
         summary.failure = Some(super::non_finite_failure(name, t0, what));
@@ -624,8 +664,18 @@ pub fn run_dynamic(
     let mut step_index: usize = 0;
     // Steps on the nominal grid are placed at t0 + k·step, so long runs do not drift.
     let mut grid_k: u64 = 0;
-    let mut on_grid = true;
+    let adaptive = settings.adaptive;
+    let mut on_grid = adaptive.is_none();
     let mut hold_next = false;
+    // Adaptive steps: breakpoints of the time functions to land on, the previous error
+    // (PI controller) and the rejections since the last accepted step.
+    let breakpoints = if adaptive.is_some() {
+        sys.breakpoints()
+    } else {
+        Vec::new()
+    };
+    let mut previous_error: f64 = 1.0;
+    let mut rejected_here: usize = 0;
     while it.state.time < settings.t_end {
         let t = it.state.time;
         let mut target = if on_grid && h == settings.step {
@@ -633,6 +683,12 @@ pub fn run_dynamic(
         } else {
             t + h
         };
+        if adaptive.is_some()
+            && let Some(&b) = breakpoints.iter().find(|&&b| b > t + 1e-9 * h)
+            && b < target + 1e-9 * h
+        {
+            target = b;
+        }
         if target > settings.t_end || settings.t_end - target < 1e-9 * h {
             target = settings.t_end;
         }
@@ -645,6 +701,30 @@ pub fn run_dynamic(
         match it.step(h_try, predictor) {
             Ok(report) => {
                 hold_next = false;
+                let error = match &adaptive {
+                    Some(a) => it.local_error(h_try, a),
+                    None => f64::NAN,
+                };
+                if error > 1.0 {
+                    summary.rejected_steps += 1;
+                    rejected_here += 1;
+                    if h_try <= settings.min_step * (1.0 + 1e-9) {
+                        fail(
+                            &mut summary,
+                            t,
+                            format!(
+                                "the local error estimate is {error:.3} times the tolerance at the smallest step {h_try:.3e} s"
+                            ),
+                            Some(
+                                "raise `tolerance_abs`/`tolerance_rel`, or lower `min_step`".into(),
+                            ),
+                        );
+                        break;
+                    }
+                    // Retry with the step the error asks for (local error O(h³)).
+                    h = (h_try * (0.9 * error.powf(-1.0 / 3.0)).max(0.2)).max(settings.min_step);
+                    continue;
+                }
                 it.accept();
                 // The step was aimed at `target`; t + (target − t) may miss it by an ulp.
                 it.state.time = target;
@@ -689,6 +769,8 @@ pub fn run_dynamic(
                             condition: c,
                             condition_kind: kind,
                             step_size: h_try,
+                            error_estimate: error,
+                            rejected: rejected_here,
                         })
                     } else {
                         None
@@ -696,7 +778,22 @@ pub fn run_dynamic(
                     record(&it, energy, viol, diag, recorder)?;
                 }
                 progress(((it.state.time - t0) / span).clamp(0.0, 1.0));
-                if h < settings.step {
+                rejected_here = 0;
+                if let Some(a) = &adaptive {
+                    // PI controller (Gustafsson 1991; Hairer & Wanner, IV.2), local error
+                    // order 3: h_new = 0.9 h e_n^(−0.7/3) e_(n−1)^(0.4/3), growth in [0.2, 5].
+                    let e = error.max(1e-10);
+                    let factor =
+                        (0.9 * e.powf(-0.7 / 3.0) * previous_error.powf(0.4 / 3.0)).clamp(0.2, 5.0);
+                    let mut next = h_try * factor;
+                    // A step shortened to land on a breakpoint or t_end does not shrink
+                    // the next one.
+                    if h_try < h * (1.0 - 1e-9) {
+                        next = next.max(h);
+                    }
+                    h = next.clamp(settings.min_step, a.step_max);
+                    previous_error = e.max(1e-4);
+                } else if h < settings.step {
                     good_since_cut = good_since_cut.saturating_add(1);
                     if good_since_cut >= REGROW_AFTER {
                         h = (2.0 * h).min(settings.step);

@@ -47,6 +47,11 @@ pub struct StepDiagnostics {
     pub condition: f64,
     pub condition_kind: ConditionKind,
     pub step_size: f64,
+    /// Adaptive steps: the local error estimate relative to the tolerance (≤ 1); NaN for
+    /// fixed steps.
+    pub error_estimate: f64,
+    /// Adaptive steps: attempts rejected by the error control before this step.
+    pub rejected: usize,
 }
 
 /// Everything written at one output time.

@@ -291,6 +291,8 @@ pub fn run_static(
                         condition: c,
                         condition_kind: kind,
                         step_size: target - (target - inc).max(0.0),
+                        error_estimate: f64::NAN,
+                        rejected: 0,
                     }
                 });
                 let energy = Energy {

@@ -95,6 +95,8 @@ pub trait Constraint: Send + Sync {
     fn dissipated_power(&self, _coords: &[Coordinate]) -> f64 {
         0.0
     }
+    /// Times where the constraint's drives jump or kink (their breakpoints).
+    fn breakpoints(&self, _out: &mut Vec<f64>) {}
     /// Power of the input ports.
     fn external_power(&self, _ctx: &EvalContext, _coords: &[Coordinate], _signals: &[f64]) -> f64 {
         0.0

@@ -224,4 +224,6 @@ pub trait Element: Send + Sync {
     }
     /// Values of the outputs, in the order of [`Element::output_names`].
     fn outputs(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut [f64]) {}
+    /// Times where the element's loads jump or kink (its time functions' breakpoints).
+    fn breakpoints(&self, _out: &mut Vec<f64>) {}
 }

@@ -73,6 +73,10 @@ impl AppliedLoad {
 }
 
 impl Element for AppliedLoad {
+    fn breakpoints(&self, out: &mut Vec<f64>) {
+        out.extend(self.function.breakpoints());
+    }
+
     fn name(&self) -> &str {
         &self.name
     }

@@ -20,6 +20,10 @@ impl TimeSignal {
 }
 
 impl Element for TimeSignal {
+    fn breakpoints(&self, out: &mut Vec<f64>) {
+        out.extend(self.function.breakpoints());
+    }
+
     fn name(&self) -> &str {
         &self.name[0]
     }

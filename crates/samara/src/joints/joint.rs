@@ -332,6 +332,14 @@ impl Joint {
 }
 
 impl Constraint for Joint {
+    fn breakpoints(&self, out: &mut Vec<f64>) {
+        for r in self.rows.iter().chain(&self.passive_rows) {
+            if let Row::Drive { function, .. } = r {
+                out.extend(function.breakpoints());
+            }
+        }
+    }
+
     fn name(&self) -> &str {
         &self.name
     }

@@ -40,6 +40,20 @@ impl Default for TimeFunction {
 }
 
 impl TimeFunction {
+    /// Times where f or one of its first two derivatives jumps (ramp ends, steps, table
+    /// knots, the start of a sine or polynomial): adaptive steps land on them.
+    pub fn breakpoints(&self) -> Vec<f64> {
+        match self {
+            TimeFunction::Constant(_) => Vec::new(),
+            TimeFunction::Ramp { start, end, .. } => vec![*start, *end],
+            TimeFunction::Step { time, .. } => vec![*time],
+            TimeFunction::Sine { start, .. } | TimeFunction::Polynomial { start, .. } => {
+                vec![*start]
+            }
+            TimeFunction::Table { times, .. } => times.clone(),
+        }
+    }
+
     /// f(t).
     pub fn eval(&self, t: f64) -> f64 {
         match self {

@@ -175,6 +175,17 @@ pub enum FormulationType {
     StabilizedIndex2,
 }
 
+/// How a dynamic analysis chooses its steps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum StepControlType {
+    /// The given `step` (halved only after a Newton failure).
+    #[default]
+    Fixed,
+    /// Steps chosen from a local error estimate to meet `tolerance_abs`/`tolerance_rel`.
+    Adaptive,
+}
+
 /// An analysis. Keys not used by the chosen `type` are rejected.
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -200,10 +211,23 @@ pub struct AnalysisInput {
     /// dynamic: spectral radius at infinite frequency ρ∞ ∈ [0, 1] (default 0.9).
     #[serde(default)]
     pub rho_inf: Option<f64>,
-    /// dynamic: smallest step allowed when steps are cut after Newton failures
-    /// (default step/1024).
-    #[serde(default)]
+    /// dynamic: smallest step allowed when steps are cut after Newton failures or by the
+    /// error control (default step/1024); also spelled `step_min`.
+    #[serde(default, alias = "step_min")]
     pub min_step: Option<f64>,
+    /// dynamic: `fixed` (default) or `adaptive` step sizes.
+    #[serde(default)]
+    pub step_control: Option<StepControlType>,
+    /// dynamic, adaptive: absolute tolerance on the local error estimate [m, rad]
+    /// (default 1e-6).
+    #[serde(default)]
+    pub tolerance_abs: Option<f64>,
+    /// dynamic, adaptive: relative tolerance on the local error estimate (default 1e-4).
+    #[serde(default)]
+    pub tolerance_rel: Option<f64>,
+    /// dynamic, adaptive: largest step [s] (default t_end − t_start).
+    #[serde(default)]
+    pub step_max: Option<f64>,
     /// dynamic: write every n-th step (default 1).
     #[serde(default)]
     pub output_every: Option<usize>,

@@ -23,7 +23,9 @@ pub use components::force::LoadDef;
 pub use components::signal::SignalDef;
 pub use components::spring::SpringDef;
 pub use components::{Model, ModelInput};
-pub use input::{FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame};
+pub use input::{
+    FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame, StepControlType,
+};
 pub use section_files::LoadOptions;
 pub use validate::{Checker, Entry, validate};
 
@@ -96,6 +98,17 @@ pub struct DynamicSettings {
     pub jacobian: JacobianUpdate,
     pub formulation: FormulationType,
     pub solver: SolverSettings,
+    /// Adaptive steps (`None`: fixed steps).
+    pub adaptive: Option<AdaptiveSettings>,
+}
+
+/// Error control of adaptive steps: the local error estimate e of every unknown is kept
+/// below `tolerance_abs + tolerance_rel·|q|`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdaptiveSettings {
+    pub tolerance_abs: f64,
+    pub tolerance_rel: f64,
+    pub step_max: f64,
 }
 
 impl DynamicSettings {
@@ -114,6 +127,7 @@ impl DynamicSettings {
                 FormulationType::Index3
             },
             solver: SolverSettings::default(),
+            adaptive: None,
         }
     }
 }

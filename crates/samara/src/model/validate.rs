@@ -648,7 +648,11 @@ impl<'a> Checker<'a> {
             return None;
         }
         // `scaling` multiplies rows and multipliers by βh²: there is no step in statics.
-        let dynamic_keys: [(&str, bool); 9] = [
+        let dynamic_keys: [(&str, bool); 13] = [
+            ("step_control", ai.step_control.is_some()),
+            ("tolerance_abs", ai.tolerance_abs.is_some()),
+            ("tolerance_rel", ai.tolerance_rel.is_some()),
+            ("step_max", ai.step_max.is_some()),
             ("scaling", ai.scaling.is_some()),
             ("formulation", ai.formulation.is_some()),
             ("t_start", ai.t_start.is_some()),
@@ -871,6 +875,67 @@ impl<'a> Checker<'a> {
                     );
                     ok = false;
                 }
+                let adaptive = match ai.step_control.unwrap_or_default() {
+                    StepControlType::Fixed => {
+                        for (k, given) in [
+                            ("tolerance_abs", ai.tolerance_abs.is_some()),
+                            ("tolerance_rel", ai.tolerance_rel.is_some()),
+                            ("step_max", ai.step_max.is_some()),
+                        ] {
+                            if given {
+                                self.error(
+                                    format!("{what}: `{k}` is used only with adaptive steps"),
+                                    self.key(&e, k),
+                                    Some(
+                                        "add `step_control = \"adaptive\"`, or remove the key"
+                                            .into(),
+                                    ),
+                                );
+                                ok = false;
+                            }
+                        }
+                        None
+                    }
+                    StepControlType::Adaptive => {
+                        let tolerance_abs = ai.tolerance_abs.unwrap_or(1e-6);
+                        let tolerance_rel = ai.tolerance_rel.unwrap_or(1e-4);
+                        for (k, v) in [
+                            ("tolerance_abs", tolerance_abs),
+                            ("tolerance_rel", tolerance_rel),
+                        ] {
+                            if !(v.is_finite() && v >= 0.0) {
+                                self.error(
+                                    format!("{what}: `{k}` must be ≥ 0 (got {v})"),
+                                    self.key(&e, k),
+                                    None,
+                                );
+                                ok = false;
+                            }
+                        }
+                        if ok && tolerance_abs == 0.0 && tolerance_rel == 0.0 {
+                            self.error(
+                                format!("{what}: `tolerance_abs` and `tolerance_rel` are both 0"),
+                                self.key(&e, "tolerance_abs"),
+                                Some("the error control needs a positive tolerance, e.g. tolerance_abs = 1e-6".into()),
+                            );
+                            ok = false;
+                        }
+                        let step_max = ai.step_max.unwrap_or(t_end - t_start);
+                        if !(step_max.is_finite() && step_max >= step) {
+                            self.error(
+                                format!("{what}: `step_max` must be at least `step` ({step}) (got {step_max})"),
+                                self.key(&e, "step_max"),
+                                Some("`step` is the first step; the error control chooses the others in [min_step, step_max]".into()),
+                            );
+                            ok = false;
+                        }
+                        Some(AdaptiveSettings {
+                            tolerance_abs,
+                            tolerance_rel,
+                            step_max,
+                        })
+                    }
+                };
                 AnalysisKind::Dynamic(DynamicSettings {
                     t_start,
                     t_end,
@@ -881,6 +946,7 @@ impl<'a> Checker<'a> {
                     jacobian: ai.jacobian.unwrap_or_default(),
                     formulation,
                     solver,
+                    adaptive,
                 })
             }
             AnalysisType::Static => {

@@ -52,6 +52,8 @@ struct DiagnosticVars {
     residual: VarId,
     condition: VarId,
     step: VarId,
+    error: VarId,
+    rejected: VarId,
 }
 
 /// Writes one analysis's results as they are computed (a [`Recorder`]).
@@ -441,6 +443,22 @@ impl ResultsFile {
                 "condition number of the iteration matrix (exact 2-norm up to 400 unknowns, 1-norm estimate above)",
             ),
             step: var(&mut d, "step_size", NcType::Double, &[time], "s", "size of the accepted step"),
+            error: var(
+                &mut d,
+                "error_estimate",
+                NcType::Double,
+                &[time],
+                "1",
+                "adaptive steps: local error estimate of the step relative to the tolerance (NaN for fixed steps)",
+            ),
+            rejected: var(
+                &mut d,
+                "rejected_attempts",
+                NcType::Int,
+                &[time],
+                "1",
+                "adaptive steps: attempts rejected by the error control before the accepted step",
+            ),
         });
 
         let beams = super::beam_vars::BeamVars::define(&mut d, sys, time, vec3, quat);
@@ -746,6 +764,10 @@ impl Recorder for ResultsFile {
                 .map_err(e)?;
             w.set_record_f64(dv.condition, &[dg.condition]).map_err(e)?;
             w.set_record_f64(dv.step, &[dg.step_size]).map_err(e)?;
+            w.set_record_f64(dv.error, &[dg.error_estimate])
+                .map_err(e)?;
+            w.set_record_i32(dv.rejected, &[dg.rejected.min(i32::MAX as usize) as i32])
+                .map_err(e)?;
         }
         w.commit_record().map_err(e)
     }

@@ -581,6 +581,22 @@ impl System {
         self.element_sum(s, &signals, |e, x| e.external_power(ctx, x)) + coordinate_inputs
     }
 
+    /// The sorted, distinct breakpoints of every time function in the model (loads,
+    /// signals, drives): adaptive steps land on them.
+    pub fn breakpoints(&self) -> Vec<f64> {
+        let mut out = Vec::new();
+        for e in &self.elements {
+            e.breakpoints(&mut out);
+        }
+        for c in &self.constraints {
+            c.breakpoints(&mut out);
+        }
+        out.retain(|t| t.is_finite());
+        out.sort_by(f64::total_cmp);
+        out.dedup();
+        out
+    }
+
     /// Values of every element's outputs at `s` (`out.len()` = number of outputs).
     pub fn element_outputs(&self, ctx: &EvalContext, s: &State, out: &mut [f64]) {
         if self.output_names.is_empty() {

@@ -725,6 +725,12 @@ fn with_work<R>(nn: usize, f: impl FnOnce(&mut Work) -> R) -> R {
 }
 
 impl Element for BeamElement {
+    fn breakpoints(&self, out: &mut Vec<f64>) {
+        for l in self.loads.iter() {
+            out.extend(l.function.breakpoints());
+        }
+    }
+
     fn name(&self) -> &str {
         &self.name
     }
@@ -856,5 +862,8 @@ impl Element for Arc<BeamElement> {
     }
     fn dissipated_power(&self, x: &ElementInput) -> f64 {
         self.as_ref().dissipated_power(x)
+    }
+    fn breakpoints(&self, out: &mut Vec<f64>) {
+        self.as_ref().breakpoints(out)
     }
 }

@@ -1,0 +1,261 @@
+//! Adaptive steps (issue #17): the achieved global error follows the tolerance as the
+//! theory says, a fast transient followed by a slow phase takes far fewer steps than the
+//! fixed step of the same accuracy, breakpoints of time functions are landed on, and the
+//! options (`tolerance_abs`, `tolerance_rel`, `step_max`, `min_step`) act and are checked.
+//!
+//! Theory: with the local error (O(h³) for the second-order generalized-α) held at the
+//! tolerance ε per step, h ∝ ε^(1/3) and the global error ∝ h² ∝ ε^(2/3).
+
+mod common;
+use common::{model, run};
+use samara::model::Model;
+use std::f64::consts::PI;
+
+const PENDULUM: &str = r#"[model]
+name = "pendulum"
+gravity = [0.0, 0.0, -9.81]
+[[nodes]]
+name = "bob"
+position = [1.0, 0.0, 0.0]
+[[bodies]]
+name = "bob"
+node = "bob"
+mass = 1.0
+inertia = [[1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]
+[[joints]]
+name = "pivot"
+type = "revolute"
+node_a = "ground"
+node_b = "bob"
+position = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+"#;
+
+/// The pendulum released from the horizontal: φ̈ = m g L cos φ / I_O (φ below the
+/// horizontal, I_O = m L² + I_yy), by RK4 with 200,000 steps (error < 1e-12).
+fn pendulum_reference(t_end: f64) -> (f64, f64) {
+    let (g, i_o) = (9.81, 1.0 + 1e-3);
+    let f = |y: [f64; 2]| [y[1], g * y[0].cos() / i_o];
+    let n = 200_000;
+    let h = t_end / n as f64;
+    let mut y = [0.0, 0.0];
+    let add = |y: [f64; 2], k: [f64; 2], s: f64| [y[0] + s * k[0], y[1] + s * k[1]];
+    for _ in 0..n {
+        let k1 = f(y);
+        let k2 = f(add(y, k1, h / 2.0));
+        let k3 = f(add(y, k2, h / 2.0));
+        let k4 = f(add(y, k3, h));
+        for i in 0..2 {
+            y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        }
+    }
+    (y[0].cos(), -y[0].sin())
+}
+
+fn with_analysis(base: &str, analysis: &str) -> Model {
+    model(&format!(
+        "{base}\n[[analyses]]\nname = \"run\"\ntype = \"dynamic\"\n{analysis}"
+    ))
+}
+
+/// Pendulum over 2 s (a large swing): the global error at t_end falls as ε^(2/3) over
+/// four decades of the tolerance (observed exponent 0.69; accepted 0.55 … 0.8).
+#[test]
+fn global_error_follows_the_tolerance() {
+    let t_end = 2.0;
+    let (xr, zr) = pendulum_reference(t_end);
+    let tols: [f64; 4] = [1e-4, 1e-5, 1e-6, 1e-7];
+    let mut errors = Vec::new();
+    for tol in tols {
+        let m = with_analysis(
+            PENDULUM,
+            &format!(
+                "t_end = {t_end}\nstep = 1e-3\nrho_inf = 0.9\nstep_control = \"adaptive\"\ntolerance_abs = {tol}\ntolerance_rel = 0.0"
+            ),
+        );
+        let (s, h) = run(&m);
+        assert!(s.failure.is_none());
+        let last = h.frames.last().unwrap();
+        assert!((last.time - t_end).abs() < 1e-12);
+        let x = last.state.nodes[0].x;
+        let err = ((x.x - xr).powi(2) + (x.z - zr).powi(2)).sqrt();
+        println!("tolerance {tol:e}: {} steps, error {err:.3e}", s.steps);
+        errors.push(err);
+    }
+    let slope = (errors[0] / errors[3]).log10() / (tols[0] / tols[3]).log10();
+    println!("error ∝ tolerance^{slope:.3}");
+    assert!(
+        (0.55..=0.8).contains(&slope),
+        "exponent {slope} ({errors:?})"
+    );
+    for w in errors.windows(2) {
+        assert!(w[1] < w[0], "{errors:?}");
+    }
+}
+
+/// A mass on a stiff spring-damper (20 Hz, ζ = 0.05) hit by a step force at t = 0.5 s,
+/// then at rest for 4 s. Closed form x = F/k [1 − e^{−ζωs}(cos ω_d s + ζ/√(1−ζ²) sin ω_d s)],
+/// s = t − 0.5. The adaptive run lands on the step (a record at exactly 0.5 s) and uses
+/// at least 5× fewer steps than the fixed step that reaches its accuracy (measured: 607
+/// against 20,000 steps at 4.6e-5 m, 1.5 % of the static deflection).
+#[test]
+fn a_fast_transient_then_rest_pays_for_adaptive_steps() {
+    let (m, f0, zeta, force, t0) = (2.0, 20.0, 0.05, 100.0, 0.5);
+    let w = 2.0 * PI * f0;
+    let k = m * w * w;
+    let c = 2.0 * zeta * (k * m).sqrt();
+    let wd = w * (1.0 - zeta * zeta).sqrt();
+    let exact = |t: f64| {
+        if t < t0 {
+            return 0.0;
+        }
+        let s = t - t0;
+        force / k
+            * (1.0
+                - (-zeta * w * s).exp()
+                    * ((wd * s).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * s).sin()))
+    };
+    let base = format!(
+        r#"[model]
+name = "kick"
+[[nodes]]
+name = "mass"
+position = [0.0, 0.0, 0.0]
+[[bodies]]
+name = "mass"
+node = "mass"
+mass = {m}
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[joints]]
+name = "rail"
+type = "prismatic"
+node_a = "ground"
+node_b = "mass"
+position = [0.0, 0.0, 0.0]
+axis = [1.0, 0.0, 0.0]
+[joints.d3]
+stiffness = {k}
+damping = {c}
+[[forces]]
+name = "kick"
+node = "mass"
+force = [{force}, 0.0, 0.0]
+function = {{ type = "step", time = {t0}, after = 1.0 }}
+"#
+    );
+    let error_and_steps = |analysis: &str| {
+        let mm = with_analysis(&base, &format!("t_end = 5.0\nrho_inf = 0.9\n{analysis}"));
+        let (s, h) = run(&mm);
+        assert!(s.failure.is_none(), "{:?}", s.failure);
+        let err = h
+            .frames
+            .iter()
+            .map(|f| (f.state.nodes[0].x.x - exact(f.time)).abs())
+            .fold(0.0, f64::max);
+        (err, s.steps, h)
+    };
+    let (err, steps, h) = error_and_steps(
+        "step = 1e-3\nstep_control = \"adaptive\"\ntolerance_abs = 1e-6\ntolerance_rel = 0.0\ndiagnostics = true",
+    );
+    assert!(
+        h.frames.iter().any(|f| f.time == t0),
+        "no step ends on the breakpoint"
+    );
+    // Every accepted step met the tolerance and the records say so.
+    for f in &h.frames[1..] {
+        let d = f.diagnostics.unwrap();
+        assert!(d.error_estimate <= 1.0 && d.step_size > 0.0, "{d:?}");
+    }
+    assert!(err < 0.02 * force / k, "adaptive error {err:e}");
+    let mut fixed = 1e-3;
+    let fixed_steps = loop {
+        let (e, n, _) = error_and_steps(&format!("step = {fixed}"));
+        println!("fixed step {fixed:e}: {n} steps, error {e:.3e}");
+        if e <= err {
+            break n;
+        }
+        fixed /= 2.0;
+        assert!(fixed > 1e-5, "fixed steps never reach {err:e}");
+    };
+    println!("adaptive: {steps} steps, error {err:.3e}; fixed: {fixed_steps} steps");
+    assert!(fixed_steps >= 5 * steps, "{fixed_steps} vs {steps}");
+}
+
+/// `step_max` bounds the steps, `tolerance_rel` acts (a looser relative tolerance takes
+/// fewer steps), and an error the smallest step cannot meet stops the run with a clear
+/// failure.
+#[test]
+fn options_act() {
+    let steps = |analysis: &str| {
+        let m = with_analysis(
+            PENDULUM,
+            &format!(
+                "t_end = 1.0\nstep = 1e-3\nstep_control = \"adaptive\"\ndiagnostics = true\n{analysis}"
+            ),
+        );
+        run(&m)
+    };
+    let (s, h) = steps("tolerance_abs = 1e-3\nstep_max = 0.01");
+    assert!(s.failure.is_none());
+    let largest = h.frames[1..]
+        .iter()
+        .map(|f| f.diagnostics.unwrap().step_size)
+        .fold(0.0, f64::max);
+    assert!(largest <= 0.01 + 1e-15, "{largest}");
+    let (free, _) = steps("tolerance_abs = 1e-3");
+    assert!(free.steps < s.steps, "{} vs {}", free.steps, s.steps);
+    let (tight, _) = steps("tolerance_abs = 0.0\ntolerance_rel = 1e-6");
+    let (loose, _) = steps("tolerance_abs = 0.0\ntolerance_rel = 1e-4");
+    assert!(
+        loose.steps < tight.steps,
+        "{} vs {}",
+        loose.steps,
+        tight.steps
+    );
+    let m = with_analysis(
+        PENDULUM,
+        "t_end = 1.0\nstep = 1e-3\nstep_control = \"adaptive\"\ntolerance_abs = 1e-12\ntolerance_rel = 0.0\nstep_min = 1e-4",
+    );
+    let sys = samara::system::System::new(&m);
+    let mut history = samara::analysis::History::default();
+    let failed = samara::analysis::run_analysis(
+        &sys,
+        &m.analyses[0],
+        sys.initial_state(),
+        &mut history,
+        &mut |_| {},
+    )
+    .unwrap();
+    let f = failed.failure.expect("the run must stop");
+    assert!(f.reason.contains("local error estimate"), "{}", f.reason);
+    assert!(f.hint.unwrap().contains("tolerance_abs"));
+}
+
+/// Bad settings get located errors.
+#[test]
+fn bad_settings_are_located_errors() {
+    let bad = |analysis: &str, message: &str| {
+        let text = format!(
+            "{PENDULUM}\n[[analyses]]\nname = \"run\"\ntype = \"dynamic\"\nt_end = 1.0\nstep = 1e-3\n{analysis}"
+        );
+        let e = Model::from_toml_str(&text, "bad.toml").expect_err(analysis);
+        let shown = e.to_string();
+        assert!(shown.contains(message), "{shown}");
+        assert!(shown.contains("bad.toml:"), "{shown}");
+    };
+    bad("tolerance_abs = 1e-6", "used only with adaptive steps");
+    bad("step_max = 0.1", "used only with adaptive steps");
+    bad(
+        "step_control = \"adaptive\"\ntolerance_abs = 0.0\ntolerance_rel = 0.0",
+        "both 0",
+    );
+    bad(
+        "step_control = \"adaptive\"\ntolerance_rel = -1.0",
+        "`tolerance_rel` must be ≥ 0",
+    );
+    bad(
+        "step_control = \"adaptive\"\nstep_max = 1e-4",
+        "`step_max` must be at least `step`",
+    );
+    bad("step_control = \"adaptve\"", "unknown value `adaptve`");
+}
