@@ -26,6 +26,7 @@ pub mod core;
 pub mod elements;
 pub mod input_files;
 pub mod joints;
+pub mod linear;
 pub mod math;
 pub mod model;
 pub mod output;
