@@ -350,6 +350,7 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
         let end_time = match &def.kind {
             AnalysisKind::Dynamic(d) => d.t_end,
             AnalysisKind::Static(s) => s.time,
+            AnalysisKind::Modal(_) => summary.final_state.time,
         };
         rows.push(report::Row {
             summary: summary.clone(),

@@ -5,3 +5,5 @@ pub mod linearize;
 pub mod matrix_market;
 
 pub use linearize::{LinearSystem, SteadyRotation, linearize, unknown_names};
+pub mod eigen;
+pub use eigen::{EigenMethod, EigenOptions, Mode, Spectrum, modes};

@@ -23,7 +23,7 @@ pub use components::signal::SignalDef;
 pub use components::spring::SpringDef;
 pub use components::{Model, ModelInput};
 pub use error::{Diagnostic, ModelError, Severity, SourceFile};
-pub use input::{FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame};
+pub use input::{EigensolverType, FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame};
 pub use located::Located;
 pub use section_files::LoadOptions;
 pub(crate) use validate::parse_error_diagnostic as parse_error;
@@ -143,10 +143,32 @@ impl Default for StaticSettings {
     }
 }
 
+/// Modal analysis settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModalSettings {
+    pub n_modes: usize,
+    /// Target frequency [Hz].
+    pub shift: Option<f64>,
+    pub write_matrices: bool,
+    pub eigensolver: EigensolverType,
+}
+
+impl Default for ModalSettings {
+    fn default() -> Self {
+        Self {
+            n_modes: 10,
+            shift: None,
+            write_matrices: false,
+            eigensolver: EigensolverType::Auto,
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub enum AnalysisKind {
     Dynamic(DynamicSettings),
     Static(StaticSettings),
+    Modal(ModalSettings),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -162,6 +184,7 @@ impl AnalysisDef {
         match self.kind {
             AnalysisKind::Dynamic(_) => "dynamic",
             AnalysisKind::Static(_) => "static",
+            AnalysisKind::Modal(_) => "modal",
         }
     }
 }
