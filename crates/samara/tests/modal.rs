@@ -233,3 +233,183 @@ fn axial_mode_with_shift() {
         assert!((w - axial).abs() / axial < 1e-10);
     }
 }
+
+const DOUBLE_PENDULUM: &str = r#"
+[model]
+name = "hanging_double_pendulum"
+gravity = [0.0, 0.0, -9.81]
+
+[[nodes]]
+name = "bob1"
+position = [0.0, 0.0, -1.0]
+
+[[nodes]]
+name = "bob2"
+position = [0.0, 0.0, -2.0]
+
+[[bodies]]
+name = "bob1"
+node = "bob1"
+mass = 1.0
+inertia = [[1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]
+
+[[bodies]]
+name = "bob2"
+node = "bob2"
+mass = 0.5
+inertia = [[2e-3, 0.0, 0.0], [0.0, 2e-3, 0.0], [0.0, 0.0, 2e-3]]
+
+[[joints]]
+name = "shoulder"
+type = "revolute"
+node_a = "ground"
+node_b = "bob1"
+position = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+
+[[joints]]
+name = "elbow"
+type = "revolute"
+node_a = "bob1"
+node_b = "bob2"
+position = [0.0, 0.0, -1.0]
+axis = [0.0, 1.0, 0.0]
+
+[[analyses]]
+name = "hang"
+type = "static"
+
+[[analyses]]
+name = "modes"
+type = "modal"
+start_from = "hang"
+n_modes = 2
+"#;
+
+/// Runs every analysis of `m` to memory; the last summary and history.
+fn run_all(m: &Model) -> Vec<(samara::analysis::AnalysisSummary, History)> {
+    let sys = System::new(m);
+    samara::analysis::run_all(m, &sys, |_| Ok(History::default()), |_, _| {}).unwrap()
+}
+
+#[test]
+fn constrained_double_pendulum_against_minimal_coordinates() {
+    // Minimal coordinates: absolute arm angles θ1, θ2 (l = 1), each bob turning with its
+    // arm: M = [[m1l² + J1 + m2l², m2l²], [m2l², m2l² + J2]], K = diag((m1 + m2)gl, m2gl).
+    // The constrained model gets its gravity stiffness only through the joint reactions
+    // (∂(Bᵀλ)/∂q at the multipliers of the static solution), so this checks those too.
+    let (m1, m2, j1, j2, g, l) = (1.0f64, 0.5f64, 1e-3, 2e-3, 9.81, 1.0);
+    let mm = nalgebra::Matrix2::new(m1 * l * l + j1 + m2 * l * l, m2 * l * l, m2 * l * l, m2 * l * l + j2);
+    let kk = nalgebra::Matrix2::new((m1 + m2) * g * l, 0.0, 0.0, m2 * g * l);
+    // det(K − ω²M) = 0: a quadratic in ω².
+    let a = mm.determinant();
+    let b = -(kk[(0, 0)] * mm[(1, 1)] + kk[(1, 1)] * mm[(0, 0)] - 2.0 * kk[(0, 1)] * mm[(0, 1)]);
+    let c = kk.determinant();
+    let disc = (b * b - 4.0 * a * c).sqrt();
+    let exact = [((-b - disc) / (2.0 * a)).sqrt(), ((-b + disc) / (2.0 * a)).sqrt()];
+    let m = model(DOUBLE_PENDULUM);
+    let out = run_all(&m);
+    let sys = System::new(&m);
+    let state = out[0].0.final_state.clone();
+    let lin = linearize(&sys, &state, None);
+    for method in [EigenMethod::Dense, EigenMethod::Sparse] {
+        let s = modes(&lin, &EigenOptions { n_modes: 2, shift: None, method }).unwrap();
+        for (mode, w) in s.modes.iter().zip(exact) {
+            let err = (2.0 * PI * mode.frequency() - w).abs() / w;
+            eprintln!("double pendulum {method:?}: {} vs {w}: {err:.2e}", 2.0 * PI * mode.frequency());
+            // The static solution is converged to 1e-8 m: the multipliers, hence the
+            // gravity stiffness, to about that relative accuracy.
+            assert!(err < 1e-7, "{method:?}: {err:e}");
+            assert!(mode.damping_ratio().abs() < 1e-9);
+        }
+    }
+    // Through the stage: the arrays of the modal analysis.
+    let h = &out[1].1;
+    let f = &h.arrays.iter().find(|a| a.0.name == "frequency").expect("frequency array").1;
+    assert!((2.0 * PI * f[0] - exact[0]).abs() / exact[0] < 1e-7);
+    // Only two degrees of freedom: a third mode is refused, not invented.
+    let err = modes(&lin, &EigenOptions { n_modes: 3, shift: None, method: EigenMethod::Dense });
+    assert!(matches!(err, Err(EigenError::TooManyModes { requested: 3, dof: 2 })), "{err:?}");
+}
+
+const FREE_BODY: &str = r#"
+[model]
+name = "free_body"
+
+[[nodes]]
+name = "c"
+position = [0.3, -0.2, 0.5]
+orientation = { rotation_vector = [1.2, 1.2, 1.2] }
+
+[[bodies]]
+name = "b"
+node = "c"
+mass = 3.0
+inertia = [[1.0, 0.1, 0.0], [0.1, 2.0, 0.2], [0.0, 0.2, 3.0]]
+
+[[analyses]]
+name = "modes"
+type = "modal"
+n_modes = 6
+"#;
+
+#[test]
+fn free_body_has_six_zero_modes_and_nothing_else() {
+    let m = model(FREE_BODY);
+    let sys = System::new(&m);
+    let lin = linearize(&sys, &sys.initial_state(), None);
+    for method in [EigenMethod::Dense, EigenMethod::Sparse] {
+        let s = modes(&lin, &EigenOptions { n_modes: 6, shift: None, method }).unwrap();
+        assert_eq!(s.modes.len(), 6);
+        assert!(s.modes.iter().all(|m| m.rigid && m.frequency() == 0.0), "{method:?}");
+        // The six shapes span all six rigid-body motions.
+        let mut a = nalgebra::DMatrix::<f64>::zeros(6, 6);
+        for (j, md) in s.modes.iter().enumerate() {
+            for i in 0..6 {
+                a[(i, j)] = md.shape[i].re;
+            }
+        }
+        let sv = a.singular_values();
+        assert!(sv.min() > 1e-6 * sv.max(), "{method:?}: rigid shapes dependent {sv}");
+    }
+    let e = modes(&lin, &EigenOptions { n_modes: 7, shift: None, method: EigenMethod::Dense });
+    assert!(matches!(e, Err(EigenError::TooManyModes { requested: 7, dof: 6 })));
+}
+
+#[test]
+fn free_free_beam_six_rigid_modes_then_bending() {
+    // Free-free slender beam: 6 zero modes, then the first flap and lag bending modes at
+    // (4.7300407)² √(EI/mL⁴) (Euler–Bernoulli; slender, so within 1e-5), nothing between.
+    let (len, ei2, ei3, ga, ea, gj) = (1.0f64, 1.0, 4.0, 1e7, 1e7, 0.8);
+    let (m, rho_j, rho_i) = (1.0f64, 2e-7, 1e-7);
+    let text = cantilever(len, 9, 1, [ea, ga, ga, gj, ei2, ei3], [m, m, m, rho_j, rho_i, rho_i]);
+    let cut = text.find("[[joints]]").unwrap();
+    let end = text.find("[[analyses]]").unwrap();
+    let text = format!("{}{}", &text[..cut], &text[end..]);
+    let mdl = model(&text);
+    let b = 4.730_040_744_862_704f64;
+    let flap = b * b * (ei2 / (m * len.powi(4))).sqrt();
+    let lag = b * b * (ei3 / (m * len.powi(4))).sqrt();
+    let dense = omegas(&mdl, 8, EigenMethod::Dense);
+    let sparse = omegas(&mdl, 8, EigenMethod::Sparse);
+    eprintln!("free-free dense {dense:?}\nsparse {sparse:?}");
+    for w in [&dense, &sparse] {
+        assert!(w[..6].iter().all(|x| *x == 0.0));
+        assert!((w[6] - flap).abs() / flap < 1e-5, "{w:?}");
+        assert!((w[7] - lag).abs() / lag < 1e-5, "{w:?}");
+    }
+}
+
+#[test]
+fn dense_and_sparse_paths_agree() {
+    // Roll-up beam, 4 elements of order 6 (repeated bending frequencies), 12 modes.
+    let (len, ei, kga, ea, gj, m, ri, rj): (f64, f64, f64, f64, f64, f64, f64, f64) =
+        (10.0, 100.0, 1e4, 1e4, 200.0, 1.0, 1.0, 2.0);
+    let mdl = model(&cantilever(len, 6, 4, [ea, kga, kga, gj, ei, ei], [m, m, m, rj, ri, ri]));
+    let d = omegas(&mdl, 12, EigenMethod::Dense);
+    let s = omegas(&mdl, 12, EigenMethod::Sparse);
+    let err = d.iter().zip(&s).map(|(a, b)| (a - b).abs() / a).fold(0.0, f64::max);
+    eprintln!("dense vs sparse, 12 modes of a 4-element beam: {err:.2e}");
+    // Both solve to round-off of the eigenproblem (Krylov–Schur residual 1e-11).
+    assert!(err < 1e-9, "{d:?}\n{s:?}");
+}

@@ -197,11 +197,14 @@ pub fn modes(lin: &LinearSystem, opts: &EigenOptions) -> Result<Spectrum, EigenE
         EigenMethod::Auto => EigenMethod::Sparse,
         m => m,
     };
-    let (values, vectors) = match method {
+    let (values, vectors, rigid) = match method {
         EigenMethod::Dense => dense_eigenpairs(lin)?,
-        _ => sparse_eigenpairs(lin, sigma, opts.n_modes)?,
+        _ => {
+            let (v, w) = sparse_eigenpairs(lin, sigma, opts.n_modes)?;
+            (v, w, None)
+        }
     };
-    let modes = select(values, vectors, sigma, opts.n_modes, n);
+    let modes = select(values, vectors, sigma, opts.n_modes, n, rigid);
     if modes.len() < opts.n_modes {
         return Err(EigenError::NotConverged {
             found: modes.len(),
@@ -215,8 +218,13 @@ pub fn modes(lin: &LinearSystem, opts: &EigenOptions) -> Result<Spectrum, EigenE
     })
 }
 
-/// All finite eigenpairs (λ, y) by null-space projection and QZ.
-fn dense_eigenpairs(lin: &LinearSystem) -> Result<(Vec<c64>, Vec<Vec<c64>>), EigenError> {
+/// Eigenvalues, eigenvectors and candidate rigid-body shapes.
+type Eigenpairs = (Vec<c64>, Vec<Vec<c64>>, Option<Vec<Vec<f64>>>);
+
+/// All finite eigenpairs (λ, y) by null-space projection and QZ, and the right singular
+/// vectors of the projected K from the smallest singular value up (QZ eigenvectors of the
+/// defective zero eigenvalues of rigid-body modes are not usable; these are).
+fn dense_eigenpairs(lin: &LinearSystem) -> Result<Eigenpairs, EigenError> {
     let n = lin.n;
     let basis: Mat<f64> = if lin.m == 0 {
         Mat::identity(n, n)
@@ -275,7 +283,15 @@ fn dense_eigenpairs(lin: &LinearSystem) -> Result<(Vec<c64>, Vec<Vec<c64>>), Eig
         values.push(lam);
         vectors.push(y);
     }
-    Ok((values, vectors))
+    let ksvd = k.svd().map_err(|e| EigenError::Dense(format!("{e:?}")))?;
+    let (sv, v) = (ksvd.S().column_vector(), ksvd.V());
+    let mut order: Vec<usize> = (0..r).collect();
+    order.sort_by(|&i, &j| sv[i].total_cmp(&sv[j]));
+    let rigid = order
+        .iter()
+        .map(|&j| (0..n).map(|p| (0..r).map(|q| basis[(p, q)] * v[(q, j)]).sum()).collect())
+        .collect();
+    Ok((values, vectors, Some(rigid)))
 }
 
 /// Column-compressed matrix-vector product `out += alpha A x`.
@@ -477,6 +493,11 @@ fn sparse_eigenpairs(
     for z in &mut v0 {
         *z /= norm;
     }
+    if len <= 2 * k + 20 {
+        // The Krylov space would be the whole space (and Arnoldi breaks down early on the
+        // tiny invariant subspaces of rigid-body Jordan blocks): form the operator.
+        return Ok(explicit_eigenpairs(&op, sigma));
+    }
     let v0 = faer::ColRef::from_slice(&v0);
     let params = faer::matrix_free::eigen::PartialEigenParams {
         max_dim: (2 * k + 20).min(len),
@@ -512,6 +533,38 @@ fn sparse_eigenpairs(
     Ok((values, vectors))
 }
 
+/// All eigenpairs of the operator formed column by column (small problems).
+fn explicit_eigenpairs(op: &ShiftInvert, sigma: c64) -> (Vec<c64>, Vec<Vec<c64>>) {
+    let (n, len) = (op.n, 2 * op.n);
+    let mut s = Mat::<c64>::zeros(len, len);
+    let mut e = vec![c64::new(0.0, 0.0); len];
+    let mut col = vec![c64::new(0.0, 0.0); len];
+    for j in 0..len {
+        e.fill(c64::new(0.0, 0.0));
+        e[j] = c64::new(1.0, 0.0);
+        op.apply_one(&e, &mut col);
+        for i in 0..len {
+            s[(i, j)] = col[i];
+        }
+    }
+    let Ok(evd) = s.eigen() else {
+        return (Vec::new(), Vec::new());
+    };
+    let (vals, vecs) = (evd.S().column_vector(), evd.U());
+    let mut values = Vec::new();
+    let mut vectors = Vec::new();
+    for j in 0..len {
+        let th = vals[j];
+        // θ = 0: infinite λ, or directions outside the constrained space.
+        if th.norm() <= 1e-12 * (1.0 / sigma.norm()) {
+            continue;
+        }
+        values.push(sigma + c64::new(1.0, 0.0) / th);
+        vectors.push((0..n).map(|i| vecs[(i, j)]).collect());
+    }
+    (values, vectors)
+}
+
 /// Scales `y` so that its component of largest modulus is 1.
 fn normalize(y: &mut [c64]) {
     let (mut best, mut big) = (c64::new(1.0, 0.0), 0.0);
@@ -536,6 +589,7 @@ fn select(
     sigma: c64,
     n_modes: usize,
     n: usize,
+    rigid_shapes: Option<Vec<Vec<f64>>>,
 ) -> Vec<Mode> {
     let zero = 1e-2 * sigma.re.abs();
     let mut rigid_vecs = Vec::new();
@@ -556,7 +610,18 @@ fn select(
             });
         }
     }
-    let mut out = rigid_modes(rigid_vecs, n);
+    let mut out = match rigid_shapes {
+        Some(shapes) => shapes
+            .into_iter()
+            .take(rigid_vecs.len().div_ceil(2))
+            .map(|y| Mode {
+                eigenvalue: c64::new(0.0, 0.0),
+                shape: y.into_iter().map(|x| c64::new(x, 0.0)).collect(),
+                rigid: true,
+            })
+            .collect(),
+        None => rigid_modes(rigid_vecs, n),
+    };
     out.extend(modes);
     out.sort_by(|a, b| (a.eigenvalue - sigma).norm().total_cmp(&(b.eigenvalue - sigma).norm()));
     out.truncate(n_modes);
@@ -574,18 +639,26 @@ fn rigid_modes(vecs: Vec<Vec<c64>>, n: usize) -> Vec<Mode> {
     }
     let r = k.div_ceil(2);
     // Real and imaginary parts as real columns, then the leading left singular vectors.
-    let mut a = Mat::<f64>::zeros(n, 2 * k);
+    let mut a = nalgebra::DMatrix::<f64>::zeros(n, 2 * k);
     for (j, y) in vecs.iter().enumerate() {
         for i in 0..n {
             a[(i, 2 * j)] = y[i].re;
             a[(i, 2 * j + 1)] = y[i].im;
         }
     }
-    let Ok(svd) = a.thin_svd() else {
+    if !a.iter().all(|x| x.is_finite()) {
+        return Vec::new();
+    }
+    let svd = a.svd(true, false);
+    let Some(u) = svd.u else {
         return Vec::new();
     };
-    let u = svd.U();
-    (0..r.min(u.ncols()))
+    // Singular values in decreasing order.
+    let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
+    order.sort_by(|&i, &j| svd.singular_values[j].total_cmp(&svd.singular_values[i]));
+    order
+        .into_iter()
+        .take(r)
         .map(|j| Mode {
             eigenvalue: c64::new(0.0, 0.0),
             shape: (0..n).map(|i| c64::new(u[(i, j)], 0.0)).collect(),
