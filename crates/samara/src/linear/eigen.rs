@@ -41,7 +41,7 @@ use std::f64::consts::PI;
 
 /// Models with at most this many unconstrained unknowns (n − m) use the dense path by
 /// default.
-pub const DENSE_LIMIT: usize = 300;
+pub const DENSE_LIMIT: usize = 120;
 
 /// Which algorithm solves the eigenproblem.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -156,7 +156,7 @@ pub enum AnalysisType {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum EigensolverType {
-    /// Dense QZ up to 300 unconstrained unknowns, sparse shift-invert above.
+    /// Dense QZ up to 120 unconstrained unknowns, sparse shift-invert above.
     #[default]
     Auto,
     /// Null-space projection and dense QZ.
