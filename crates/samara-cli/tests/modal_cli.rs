@@ -11,7 +11,12 @@ fn run_text(text: &str) -> (std::process::Output, tempfile::TempDir) {
     let model = dir.path().join("m.toml");
     std::fs::write(&model, text).unwrap();
     let out = dir.path().join("out");
-    let o = samara(&["run", model.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = samara(&[
+        "run",
+        model.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     (o, dir)
 }
 
@@ -19,7 +24,12 @@ fn run_text(text: &str) -> (std::process::Output, tempfile::TempDir) {
 fn cantilever_modal_example_frequencies_and_matrices() {
     let dir = tempfile::tempdir().unwrap();
     let model = root().join("examples/verification/cantilever_modal.toml");
-    let o = samara(&["run", model.to_str().unwrap(), "--out", dir.path().to_str().unwrap()]);
+    let o = samara(&[
+        "run",
+        model.to_str().unwrap(),
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let mut r = samara::output::ResultsReader::open(dir.path().join("modes.nc")).unwrap();
     let f = r.read("frequency").unwrap();
@@ -42,7 +52,10 @@ fn cantilever_modal_example_frequencies_and_matrices() {
     assert!(zeta.iter().all(|z| z.abs() < 1e-9));
     let ev = r.read("eigenvalue").unwrap();
     assert_eq!(ev.len(), 16);
-    assert!((ev[5] - 2.0 * std::f64::consts::PI * 0.25).abs() < 1e-8, "{ev:?}");
+    assert!(
+        (ev[5] - 2.0 * std::f64::consts::PI * 0.25).abs() < 1e-8,
+        "{ev:?}"
+    );
     // Mode shapes: largest component 1 + 0i; the torsion mode turns the tip about z.
     let shape = r.read("mode_shape").unwrap();
     let nodes = shape.len() / (8 * 12);
@@ -67,7 +80,12 @@ fn cantilever_modal_example_frequencies_and_matrices() {
         assert!(text.contains("tip.uz"), "unknown names in the header");
     }
     // Running again keeps the earlier matrices.
-    let o = samara(&["run", model.to_str().unwrap(), "--out", dir.path().to_str().unwrap()]);
+    let o = samara(&[
+        "run",
+        model.to_str().unwrap(),
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
     assert!(o.status.success());
     assert!(Path::new(&dir.path().join("axial.K.~1~.mtx")).exists());
 }
@@ -105,7 +123,10 @@ fn too_many_modes_is_a_clear_failure() {
     let (o, _d) = run_text(&SPRING_MASS.replace("n_modes = 6", "n_modes = 7"));
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{e}");
-    assert!(e.contains("7 modes requested") && e.contains("only 6 degrees of freedom"), "{e}");
+    assert!(
+        e.contains("7 modes requested") && e.contains("only 6 degrees of freedom"),
+        "{e}"
+    );
     assert!(e.contains("lower `n_modes`"), "{e}");
 }
 
@@ -149,14 +170,41 @@ fn modal_keys_are_checked_and_located() {
     let (o, path, _d) = check_text("m.toml", &SPRING_MASS.replace("n_modes = 6", "n_modes = 0"));
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
-    assert!(e.contains(&format!("{}:", path.display())) && e.contains("`n_modes` must be at least 1"), "{e}");
-    let (o, _, _d) = check_text("m.toml", &SPRING_MASS.replace("n_modes = 6", "shift = -1.0"));
-    assert!(stderr(&o).contains("`shift` must be a frequency"), "{}", stderr(&o));
-    let (o, _, _d) = check_text("m.toml", &SPRING_MASS.replace("n_modes = 6", "tolerance = 1e-6"));
-    assert!(stderr(&o).contains("`tolerance` is not used by a modal analysis"), "{}", stderr(&o));
-    let (o, _, _d) = check_text("m.toml", &PENDULUM.replace("[[analyses]]", "[[analyses]]\nn_modes = 3"));
-    assert!(stderr(&o).contains("`n_modes` is not used by a dynamic analysis"), "{}", stderr(&o));
-    let (o, _, _d) = check_text("m.toml", &SPRING_MASS.replace("n_modes = 6", "eigensolver = \"lanczos\""));
+    assert!(
+        e.contains(&format!("{}:", path.display())) && e.contains("`n_modes` must be at least 1"),
+        "{e}"
+    );
+    let (o, _, _d) = check_text(
+        "m.toml",
+        &SPRING_MASS.replace("n_modes = 6", "shift = -1.0"),
+    );
+    assert!(
+        stderr(&o).contains("`shift` must be a frequency"),
+        "{}",
+        stderr(&o)
+    );
+    let (o, _, _d) = check_text(
+        "m.toml",
+        &SPRING_MASS.replace("n_modes = 6", "tolerance = 1e-6"),
+    );
+    assert!(
+        stderr(&o).contains("`tolerance` is not used by a modal analysis"),
+        "{}",
+        stderr(&o)
+    );
+    let (o, _, _d) = check_text(
+        "m.toml",
+        &PENDULUM.replace("[[analyses]]", "[[analyses]]\nn_modes = 3"),
+    );
+    assert!(
+        stderr(&o).contains("`n_modes` is not used by a dynamic analysis"),
+        "{}",
+        stderr(&o)
+    );
+    let (o, _, _d) = check_text(
+        "m.toml",
+        &SPRING_MASS.replace("n_modes = 6", "eigensolver = \"lanczos\""),
+    );
     assert_eq!(o.status.code(), Some(1));
 }
 
@@ -166,7 +214,10 @@ fn spring_mass_frequency_damping_and_eigensolver_choice() {
     // so no transverse stiffness): five rigid-body modes, then f = √(k/m)/2π with
     // ζ = c/(2√(km)) = 0.1 and f_d = f√(1 − ζ²).
     for solver in ["dense", "sparse"] {
-        let (o, d) = run_text(&SPRING_MASS.replace("n_modes = 6", &format!("n_modes = 6\neigensolver = \"{solver}\"")));
+        let (o, d) = run_text(&SPRING_MASS.replace(
+            "n_modes = 6",
+            &format!("n_modes = 6\neigensolver = \"{solver}\""),
+        ));
         assert!(o.status.success(), "{}", stderr(&o));
         let mut r = samara::output::ResultsReader::open(d.path().join("out/modes.nc")).unwrap();
         let f = r.read("frequency").unwrap();
@@ -176,6 +227,9 @@ fn spring_mass_frequency_damping_and_eigensolver_choice() {
         assert_eq!(&f[..5], &[0.0; 5], "{solver}: {f:?}");
         assert!((f[5] - exact).abs() / exact < 1e-10, "{solver}: {f:?}");
         assert!((z[5] - 0.1).abs() < 1e-10, "{solver}: {z:?}");
-        assert!((fd[5] - exact * 0.99f64.sqrt()).abs() / exact < 1e-10, "{solver}: {fd:?}");
+        assert!(
+            (fd[5] - exact * 0.99f64.sqrt()).abs() / exact < 1e-10,
+            "{solver}: {fd:?}"
+        );
     }
 }

@@ -29,7 +29,8 @@ fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     // EB first bending frequency of the bench beam: L = 1, E = 210 GPa, I = 8.333e-10,
     // ρA = 7850 × 1e-4.
-    let f1 = 1.875_104_068_711_961f64.powi(2) * (210e9 * 8.333_333_333_333_334e-10 / 0.785f64).sqrt()
+    let f1 = 1.875_104_068_711_961f64.powi(2)
+        * (210e9 * 8.333_333_333_333_334e-10 / 0.785f64).sqrt()
         / (2.0 * PI);
     println!(
         "{:<8} {:>7} {:>6} {:<7} {:>12} {:>10} {:>10} {:>12}",

@@ -140,7 +140,11 @@ fn check(path: &str, rot: SteadyRotation) {
         (Channel::Rate, dense(&lin.damping)),
         (Channel::Acceleration, dense(&lin.mass)),
     ] {
-        let eps = if ch == Channel::Configuration { 1e-6 } else { 1e-2 };
+        let eps = if ch == Channel::Configuration {
+            1e-6
+        } else {
+            1e-2
+        };
         let mut fd = DMatrix::zeros(n, n);
         let mut bfd = DMatrix::zeros(lin.m, n);
         for j in 0..n {

@@ -86,13 +86,32 @@ fn omegas(m: &Model, n: usize, method: EigenMethod) -> Vec<f64> {
 /// matrix of `z = (w, ψ, M, V)`, `w' = ψ + V/κGA`, `ψ' = M/EI`, `M' = −V − ρIω²ψ`,
 /// `V' = −ρAω²w` (Timoshenko 1921; the equations themselves, integrated exactly by the
 /// matrix exponential, so no transcription of a frequency equation is involved).
-fn timoshenko_cantilever(len: f64, ei: f64, kga: f64, rho_a: f64, rho_i: f64, n: usize) -> Vec<f64> {
+fn timoshenko_cantilever(
+    len: f64,
+    ei: f64,
+    kga: f64,
+    rho_a: f64,
+    rho_i: f64,
+    n: usize,
+) -> Vec<f64> {
     let det = |w: f64| {
         let a = Matrix4::new(
-            0.0, 1.0, 0.0, 1.0 / kga, //
-            0.0, 0.0, 1.0 / ei, 0.0, //
-            0.0, -rho_i * w * w, 0.0, -1.0, //
-            -rho_a * w * w, 0.0, 0.0, 0.0,
+            0.0,
+            1.0,
+            0.0,
+            1.0 / kga, //
+            0.0,
+            0.0,
+            1.0 / ei,
+            0.0, //
+            0.0,
+            -rho_i * w * w,
+            0.0,
+            -1.0, //
+            -rho_a * w * w,
+            0.0,
+            0.0,
+            0.0,
         );
         let t = (a * len).exp();
         // Clamped: z(0) = (0, 0, M0, V0); free: M(L) = V(L) = 0.
@@ -127,7 +146,11 @@ fn timoshenko_cantilever(len: f64, ei: f64, kga: f64, rho_a: f64, rho_i: f64, n:
 }
 
 /// Euler–Bernoulli clamped-free roots βL of 1 + cos βL cosh βL = 0.
-const EB_BETA_L: [f64; 3] = [1.875_104_068_711_961, 4.694_091_132_974_175, 7.854_757_438_237_613];
+const EB_BETA_L: [f64; 3] = [
+    1.875_104_068_711_961,
+    4.694_091_132_974_175,
+    7.854_757_438_237_613,
+];
 
 /// The reference of each computed frequency: the nearest value in `reference`.
 fn nearest_error(computed: f64, reference: &[f64]) -> f64 {
@@ -142,39 +165,78 @@ fn slender_cantilever_converges_exponentially_in_p_to_timoshenko_and_euler_berno
     // Slender beam (L/r ≈ 3000; shear flexibility EI/(κGA L²) ≤ 4e-7): Timoshenko theory
     // (the reference for the converged beam) and Euler–Bernoulli then differ by < 1e-5.
     // Distinct bending stiffnesses so that flap and lag modes differ.
-    let (len, ei2, ei3, ga, ea, gj): (f64, f64, f64, f64, f64, f64) = (1.0, 1.0, 4.0, 1e7, 1e7, 0.8);
+    let (len, ei2, ei3, ga, ea, gj): (f64, f64, f64, f64, f64, f64) =
+        (1.0, 1.0, 4.0, 1e7, 1e7, 0.8);
     let (m, rho_j, rho_i): (f64, f64, f64) = (1.0, 2e-7, 1e-7);
     let flap = timoshenko_cantilever(len, ei2, ga, m, rho_i, 2);
     let lag = timoshenko_cantilever(len, ei3, ga, m, rho_i, 2);
-    let eb2: Vec<f64> = EB_BETA_L.iter().map(|b| b * b * (ei2 / (m * len.powi(4))).sqrt()).collect();
-    let eb3: Vec<f64> = EB_BETA_L.iter().map(|b| b * b * (ei3 / (m * len.powi(4))).sqrt()).collect();
+    let eb2: Vec<f64> = EB_BETA_L
+        .iter()
+        .map(|b| b * b * (ei2 / (m * len.powi(4))).sqrt())
+        .collect();
+    let eb3: Vec<f64> = EB_BETA_L
+        .iter()
+        .map(|b| b * b * (ei3 / (m * len.powi(4))).sqrt())
+        .collect();
     let reference = [flap[0], lag[0], flap[1], lag[1]];
     let eb = [eb2[0], eb3[0], eb2[1], eb3[1]];
     for (t, e) in reference.iter().zip(&eb) {
-        assert!((t - e).abs() / e < 1e-5, "slender: Timoshenko {t} vs EB {e}");
+        assert!(
+            (t - e).abs() / e < 1e-5,
+            "slender: Timoshenko {t} vs EB {e}"
+        );
     }
     let mut errs = Vec::new();
     for p in [3, 4, 5, 6, 7, 8, 9] {
-        let mdl = model(&cantilever(len, p, 1, [ea, ga, ga, gj, ei2, ei3], [m, m, m, rho_j, rho_i, rho_i]));
+        let mdl = model(&cantilever(
+            len,
+            p,
+            1,
+            [ea, ga, ga, gj, ei2, ei3],
+            [m, m, m, rho_j, rho_i, rho_i],
+        ));
         let w = omegas(&mdl, 4, EigenMethod::Dense);
-        let e = (0..4).map(|i| (w[i] - reference[i]).abs() / reference[i]).fold(0.0, f64::max);
-        let e_eb = (0..4).map(|i| (w[i] - eb[i]).abs() / eb[i]).fold(0.0, f64::max);
-        eprintln!("slender p = {p}: worst of the first 4 bending modes vs Timoshenko {e:.2e}, vs EB {e_eb:.2e}");
+        let e = (0..4)
+            .map(|i| (w[i] - reference[i]).abs() / reference[i])
+            .fold(0.0, f64::max);
+        let e_eb = (0..4)
+            .map(|i| (w[i] - eb[i]).abs() / eb[i])
+            .fold(0.0, f64::max);
+        eprintln!(
+            "slender p = {p}: worst of the first 4 bending modes vs Timoshenko {e:.2e}, vs EB {e_eb:.2e}"
+        );
         errs.push(e);
     }
     // Exponential convergence: each step in p gains at least a factor 5 until the
     // round-off floor of this stiff problem, ε·(ω_max/ω_1)² ≈ 1e-16 · 1e8 (axial and
     // shear stiffness 1e7 against EI = 1): 2e-8.
     for w in errs.windows(2) {
-        assert!(w[1] < 0.2 * w[0] || w[1] < 2e-8, "not exponential: {errs:?}");
+        assert!(
+            w[1] < 0.2 * w[0] || w[1] < 2e-8,
+            "not exponential: {errs:?}"
+        );
     }
     assert!(errs[6] < 2e-8, "p = 9: {errs:?}");
     // Torsion (St-Venant, exact in the beam model): first torsion mode.
     let torsion = PI / (2.0 * len) * (gj / rho_j).sqrt();
-    let mdl = model(&cantilever(len, 12, 1, [ea, ga, ga, gj, ei2, ei3], [m, m, m, rho_j, rho_i, rho_i]));
+    let mdl = model(&cantilever(
+        len,
+        12,
+        1,
+        [ea, ga, ga, gj, ei2, ei3],
+        [m, m, m, rho_j, rho_i, rho_i],
+    ));
     let sys = System::new(&mdl);
     let lin = linearize(&sys, &sys.initial_state(), None);
-    let s = modes(&lin, &EigenOptions { n_modes: 1, shift: Some(torsion / (2.0 * PI)), method: EigenMethod::Dense }).unwrap();
+    let s = modes(
+        &lin,
+        &EigenOptions {
+            n_modes: 1,
+            shift: Some(torsion / (2.0 * PI)),
+            method: EigenMethod::Dense,
+        },
+    )
+    .unwrap();
     let et = (2.0 * PI * s.modes[0].frequency() - torsion).abs() / torsion;
     eprintln!("slender torsion 1 error {et:.2e}");
     assert!(et < 1e-9);
@@ -188,23 +250,43 @@ fn stocky_rollup_beam_against_timoshenko_and_torsion() {
     let (len, ei, kga, ea, gj, m, ri, rj): (f64, f64, f64, f64, f64, f64, f64, f64) =
         (10.0, 100.0, 1e4, 1e4, 200.0, 1.0, 1.0, 2.0);
     let bend = timoshenko_cantilever(len, ei, kga, m, ri, 5);
-    let eb: Vec<f64> = EB_BETA_L.iter().map(|b| b * b * (ei / (m * len.powi(4))).sqrt()).collect();
+    let eb: Vec<f64> = EB_BETA_L
+        .iter()
+        .map(|b| b * b * (ei / (m * len.powi(4))).sqrt())
+        .collect();
     eprintln!("Timoshenko {bend:?}, EB {eb:?}");
-    assert!((bend[1] - eb[1]).abs() / eb[1] > 0.1, "the stocky case must differ from EB");
-    let torsion: Vec<f64> = (1..5).map(|k| (2 * k - 1) as f64 * PI / (2.0 * len) * (gj / rj).sqrt()).collect();
+    assert!(
+        (bend[1] - eb[1]).abs() / eb[1] > 0.1,
+        "the stocky case must differ from EB"
+    );
+    let torsion: Vec<f64> = (1..5)
+        .map(|k| (2 * k - 1) as f64 * PI / (2.0 * len) * (gj / rj).sqrt())
+        .collect();
     let refs: Vec<f64> = [bend.clone(), torsion.clone()].concat();
     let mut errs = Vec::new();
     for p in [5, 8, 11, 14] {
-        let mdl = model(&cantilever(len, p, 1, [ea, kga, kga, gj, ei, ei], [m, m, m, rj, ri, ri]));
+        let mdl = model(&cantilever(
+            len,
+            p,
+            1,
+            [ea, kga, kga, gj, ei, ei],
+            [m, m, m, rj, ri, ri],
+        ));
         let w = omegas(&mdl, 12, EigenMethod::Dense);
         // Pairs of equal bending frequencies (EI2 = EI3) and the torsion modes: the first
         // 12 are B1 B1 T1 B2 B2 T2 B3 B3 T3 B4 B4 T4.
-        let err = w.iter().map(|x| nearest_error(*x, &refs)).fold(0.0, f64::max);
+        let err = w
+            .iter()
+            .map(|x| nearest_error(*x, &refs))
+            .fold(0.0, f64::max);
         eprintln!("rollup p = {p}: first 12 modes worst error {err:.2e}");
         errs.push(err);
     }
     for w in errs.windows(2) {
-        assert!(w[1] < 0.05 * w[0] || w[1] < 1e-9, "not exponential: {errs:?}");
+        assert!(
+            w[1] < 0.05 * w[0] || w[1] < 1e-9,
+            "not exponential: {errs:?}"
+        );
     }
     assert!(errs[3] < 1e-9, "p = 14: {errs:?}");
 }
@@ -215,7 +297,13 @@ fn axial_mode_with_shift() {
     let (len, ei, kga, ea, gj, m, ri, rj): (f64, f64, f64, f64, f64, f64, f64, f64) =
         (10.0, 100.0, 1e4, 1e4, 200.0, 1.0, 1.0, 2.0);
     let axial = PI / (2.0 * len) * (ea / m).sqrt();
-    let mdl = model(&cantilever(len, 15, 1, [ea, kga, kga, gj, ei, ei], [m, m, m, rj, ri, ri]));
+    let mdl = model(&cantilever(
+        len,
+        15,
+        1,
+        [ea, kga, kga, gj, ei, ei],
+        [m, m, m, rj, ri, ri],
+    ));
     let sys = System::new(&mdl);
     let lin = linearize(&sys, &sys.initial_state(), None);
     for method in [EigenMethod::Dense, EigenMethod::Sparse] {
@@ -299,24 +387,43 @@ fn constrained_double_pendulum_against_minimal_coordinates() {
     // The constrained model gets its gravity stiffness only through the joint reactions
     // (∂(Bᵀλ)/∂q at the multipliers of the static solution), so this checks those too.
     let (m1, m2, j1, j2, g, l) = (1.0f64, 0.5f64, 1e-3, 2e-3, 9.81, 1.0);
-    let mm = nalgebra::Matrix2::new(m1 * l * l + j1 + m2 * l * l, m2 * l * l, m2 * l * l, m2 * l * l + j2);
+    let mm = nalgebra::Matrix2::new(
+        m1 * l * l + j1 + m2 * l * l,
+        m2 * l * l,
+        m2 * l * l,
+        m2 * l * l + j2,
+    );
     let kk = nalgebra::Matrix2::new((m1 + m2) * g * l, 0.0, 0.0, m2 * g * l);
     // det(K − ω²M) = 0: a quadratic in ω².
     let a = mm.determinant();
     let b = -(kk[(0, 0)] * mm[(1, 1)] + kk[(1, 1)] * mm[(0, 0)] - 2.0 * kk[(0, 1)] * mm[(0, 1)]);
     let c = kk.determinant();
     let disc = (b * b - 4.0 * a * c).sqrt();
-    let exact = [((-b - disc) / (2.0 * a)).sqrt(), ((-b + disc) / (2.0 * a)).sqrt()];
+    let exact = [
+        ((-b - disc) / (2.0 * a)).sqrt(),
+        ((-b + disc) / (2.0 * a)).sqrt(),
+    ];
     let m = model(DOUBLE_PENDULUM);
     let out = run_all(&m);
     let sys = System::new(&m);
     let state = out[0].0.final_state.clone();
     let lin = linearize(&sys, &state, None);
     for method in [EigenMethod::Dense, EigenMethod::Sparse] {
-        let s = modes(&lin, &EigenOptions { n_modes: 2, shift: None, method }).unwrap();
+        let s = modes(
+            &lin,
+            &EigenOptions {
+                n_modes: 2,
+                shift: None,
+                method,
+            },
+        )
+        .unwrap();
         for (mode, w) in s.modes.iter().zip(exact) {
             let err = (2.0 * PI * mode.frequency() - w).abs() / w;
-            eprintln!("double pendulum {method:?}: {} vs {w}: {err:.2e}", 2.0 * PI * mode.frequency());
+            eprintln!(
+                "double pendulum {method:?}: {} vs {w}: {err:.2e}",
+                2.0 * PI * mode.frequency()
+            );
             // The static solution is converged to 1e-8 m: the multipliers, hence the
             // gravity stiffness, to about that relative accuracy.
             assert!(err < 1e-7, "{method:?}: {err:e}");
@@ -325,11 +432,32 @@ fn constrained_double_pendulum_against_minimal_coordinates() {
     }
     // Through the stage: the arrays of the modal analysis.
     let h = &out[1].1;
-    let f = &h.arrays.iter().find(|a| a.0.name == "frequency").expect("frequency array").1;
+    let f = &h
+        .arrays
+        .iter()
+        .find(|a| a.0.name == "frequency")
+        .expect("frequency array")
+        .1;
     assert!((2.0 * PI * f[0] - exact[0]).abs() / exact[0] < 1e-7);
     // Only two degrees of freedom: a third mode is refused, not invented.
-    let err = modes(&lin, &EigenOptions { n_modes: 3, shift: None, method: EigenMethod::Dense });
-    assert!(matches!(err, Err(EigenError::TooManyModes { requested: 3, dof: 2 })), "{err:?}");
+    let err = modes(
+        &lin,
+        &EigenOptions {
+            n_modes: 3,
+            shift: None,
+            method: EigenMethod::Dense,
+        },
+    );
+    assert!(
+        matches!(
+            err,
+            Err(EigenError::TooManyModes {
+                requested: 3,
+                dof: 2
+            })
+        ),
+        "{err:?}"
+    );
 }
 
 const FREE_BODY: &str = r#"
@@ -359,9 +487,20 @@ fn free_body_has_six_zero_modes_and_nothing_else() {
     let sys = System::new(&m);
     let lin = linearize(&sys, &sys.initial_state(), None);
     for method in [EigenMethod::Dense, EigenMethod::Sparse] {
-        let s = modes(&lin, &EigenOptions { n_modes: 6, shift: None, method }).unwrap();
+        let s = modes(
+            &lin,
+            &EigenOptions {
+                n_modes: 6,
+                shift: None,
+                method,
+            },
+        )
+        .unwrap();
         assert_eq!(s.modes.len(), 6);
-        assert!(s.modes.iter().all(|m| m.rigid && m.frequency() == 0.0), "{method:?}");
+        assert!(
+            s.modes.iter().all(|m| m.rigid && m.frequency() == 0.0),
+            "{method:?}"
+        );
         // The six shapes span all six rigid-body motions.
         let mut a = nalgebra::DMatrix::<f64>::zeros(6, 6);
         for (j, md) in s.modes.iter().enumerate() {
@@ -370,10 +509,26 @@ fn free_body_has_six_zero_modes_and_nothing_else() {
             }
         }
         let sv = a.singular_values();
-        assert!(sv.min() > 1e-6 * sv.max(), "{method:?}: rigid shapes dependent {sv}");
+        assert!(
+            sv.min() > 1e-6 * sv.max(),
+            "{method:?}: rigid shapes dependent {sv}"
+        );
     }
-    let e = modes(&lin, &EigenOptions { n_modes: 7, shift: None, method: EigenMethod::Dense });
-    assert!(matches!(e, Err(EigenError::TooManyModes { requested: 7, dof: 6 })));
+    let e = modes(
+        &lin,
+        &EigenOptions {
+            n_modes: 7,
+            shift: None,
+            method: EigenMethod::Dense,
+        },
+    );
+    assert!(matches!(
+        e,
+        Err(EigenError::TooManyModes {
+            requested: 7,
+            dof: 6
+        })
+    ));
 }
 
 #[test]
@@ -382,7 +537,13 @@ fn free_free_beam_six_rigid_modes_then_bending() {
     // (4.7300407)² √(EI/mL⁴) (Euler–Bernoulli; slender, so within 1e-5), nothing between.
     let (len, ei2, ei3, ga, ea, gj) = (1.0f64, 1.0, 4.0, 1e7, 1e7, 0.8);
     let (m, rho_j, rho_i) = (1.0f64, 2e-7, 1e-7);
-    let text = cantilever(len, 9, 1, [ea, ga, ga, gj, ei2, ei3], [m, m, m, rho_j, rho_i, rho_i]);
+    let text = cantilever(
+        len,
+        9,
+        1,
+        [ea, ga, ga, gj, ei2, ei3],
+        [m, m, m, rho_j, rho_i, rho_i],
+    );
     let cut = text.find("[[joints]]").unwrap();
     let end = text.find("[[analyses]]").unwrap();
     let text = format!("{}{}", &text[..cut], &text[end..]);
@@ -405,10 +566,20 @@ fn dense_and_sparse_paths_agree() {
     // Roll-up beam, 4 elements of order 6 (repeated bending frequencies), 12 modes.
     let (len, ei, kga, ea, gj, m, ri, rj): (f64, f64, f64, f64, f64, f64, f64, f64) =
         (10.0, 100.0, 1e4, 1e4, 200.0, 1.0, 1.0, 2.0);
-    let mdl = model(&cantilever(len, 6, 4, [ea, kga, kga, gj, ei, ei], [m, m, m, rj, ri, ri]));
+    let mdl = model(&cantilever(
+        len,
+        6,
+        4,
+        [ea, kga, kga, gj, ei, ei],
+        [m, m, m, rj, ri, ri],
+    ));
     let d = omegas(&mdl, 12, EigenMethod::Dense);
     let s = omegas(&mdl, 12, EigenMethod::Sparse);
-    let err = d.iter().zip(&s).map(|(a, b)| (a - b).abs() / a).fold(0.0, f64::max);
+    let err = d
+        .iter()
+        .zip(&s)
+        .map(|(a, b)| (a - b).abs() / a)
+        .fold(0.0, f64::max);
     eprintln!("dense vs sparse, 12 modes of a 4-element beam: {err:.2e}");
     // Both solve to round-off of the eigenproblem (Krylov–Schur residual 1e-11).
     assert!(err < 1e-9, "{d:?}\n{s:?}");

@@ -9,9 +9,7 @@
 //! `mode_shape(mode, node, 6, 2)` (see docs/results.md). With `write_matrices`, the
 //! matrices M, G, K, B are written as Matrix Market files beside the results file.
 
-use super::{
-    AnalysisSummary, ArraySpec, Energy, OutputFrame, Progress, Recorder, SolverFailure,
-};
+use super::{AnalysisSummary, ArraySpec, Energy, OutputFrame, Progress, Recorder, SolverFailure};
 use crate::core::State;
 use crate::linear::eigen::{EigenMethod, EigenOptions, Mode};
 use crate::linear::{LinearSystem, linearize, matrix_market};
@@ -139,8 +137,16 @@ pub fn write_matrices(dir: &Path, name: &str, lin: &LinearSystem) -> Result<(), 
     for (tag, what, a) in [
         ("M", "mass matrix M", &lin.mass),
         ("G", "damping and gyroscopic matrix G", &lin.damping),
-        ("K", "stiffness matrix K (elastic, geometric, centrifugal)", &lin.stiffness),
-        ("B", "constraint Jacobian B (rows: constraint equations)", &lin.constraint_jacobian),
+        (
+            "K",
+            "stiffness matrix K (elastic, geometric, centrifugal)",
+            &lin.stiffness,
+        ),
+        (
+            "B",
+            "constraint Jacobian B (rows: constraint equations)",
+            &lin.constraint_jacobian,
+        ),
     ] {
         let path = dir.join(format!("{name}.{tag}.mtx"));
         if path.exists() {
@@ -186,7 +192,8 @@ pub fn run_modal(
         match recorder.output_dir() {
             Some(dir) => write_matrices(&dir, name, &lin)?,
             None => summary.warnings.push(
-                "write_matrices: this recorder has no output folder; the matrices were not written".into(),
+                "write_matrices: this recorder has no output folder; the matrices were not written"
+                    .into(),
             ),
         }
     }

@@ -259,7 +259,11 @@ fn dense_eigenpairs(lin: &LinearSystem) -> Result<Eigenpairs, EigenError> {
     let gev = a
         .generalized_eigen(&e)
         .map_err(|e| EigenError::Dense(format!("{e:?}")))?;
-    let (sa, sb, u) = (gev.S_a().column_vector(), gev.S_b().column_vector(), gev.U());
+    let (sa, sb, u) = (
+        gev.S_a().column_vector(),
+        gev.S_b().column_vector(),
+        gev.U(),
+    );
     let scale = a.norm_max().max(e.norm_max());
     let mut values = Vec::new();
     let mut vectors = Vec::new();
@@ -289,7 +293,11 @@ fn dense_eigenpairs(lin: &LinearSystem) -> Result<Eigenpairs, EigenError> {
     order.sort_by(|&i, &j| sv[i].total_cmp(&sv[j]));
     let rigid = order
         .iter()
-        .map(|&j| (0..n).map(|p| (0..r).map(|q| basis[(p, q)] * v[(q, j)]).sum()).collect())
+        .map(|&j| {
+            (0..n)
+                .map(|p| (0..r).map(|q| basis[(p, q)] * v[(q, j)]).sum())
+                .collect()
+        })
         .collect();
     Ok((values, vectors, Some(rigid)))
 }
@@ -623,7 +631,11 @@ fn select(
         None => rigid_modes(rigid_vecs, n),
     };
     out.extend(modes);
-    out.sort_by(|a, b| (a.eigenvalue - sigma).norm().total_cmp(&(b.eigenvalue - sigma).norm()));
+    out.sort_by(|a, b| {
+        (a.eigenvalue - sigma)
+            .norm()
+            .total_cmp(&(b.eigenvalue - sigma).norm())
+    });
     out.truncate(n_modes);
     for m in &mut out {
         normalize(&mut m.shape);

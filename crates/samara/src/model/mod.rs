@@ -23,7 +23,9 @@ pub use components::signal::SignalDef;
 pub use components::spring::SpringDef;
 pub use components::{Model, ModelInput};
 pub use error::{Diagnostic, ModelError, Severity, SourceFile};
-pub use input::{EigensolverType, FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame};
+pub use input::{
+    EigensolverType, FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame,
+};
 pub use located::Located;
 pub use section_files::LoadOptions;
 pub(crate) use validate::parse_error_diagnostic as parse_error;
