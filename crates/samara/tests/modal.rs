@@ -6,10 +6,10 @@
 mod common;
 use common::model;
 use nalgebra::{Matrix2, Matrix4};
-use samara::analysis::{History, run_analysis};
+use samara::analysis::History;
 use samara::linear::eigen::{EigenError, EigenMethod, EigenOptions};
 use samara::linear::{linearize, modes};
-use samara::model::{AnalysisKind, Model};
+use samara::model::Model;
 use samara::system::System;
 use std::f64::consts::PI;
 
