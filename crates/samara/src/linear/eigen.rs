@@ -302,78 +302,129 @@ fn dense_eigenpairs(lin: &LinearSystem) -> Result<Eigenpairs, EigenError> {
     Ok((values, vectors, Some(rigid)))
 }
 
+/// The scalars of the shift-invert operator: real for a real target (half the work of
+/// complex arithmetic), complex for a shift.
+trait Scalar:
+    faer::traits::ComplexField<Real = f64>
+    + Copy
+    + std::fmt::Display
+    + std::ops::Add<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+    + std::ops::AddAssign
+    + std::ops::Neg<Output = Self>
+    + 'static
+{
+    /// The real part only for `f64`.
+    fn from_c64(z: c64) -> Self;
+    fn modulus(self) -> f64;
+    fn conjugated(self) -> Self;
+}
+
+impl Scalar for f64 {
+    fn from_c64(z: c64) -> Self {
+        z.re
+    }
+    fn modulus(self) -> f64 {
+        self.abs()
+    }
+    fn conjugated(self) -> Self {
+        self
+    }
+}
+
+impl Scalar for c64 {
+    fn from_c64(z: c64) -> Self {
+        z
+    }
+    fn modulus(self) -> f64 {
+        self.norm()
+    }
+    fn conjugated(self) -> Self {
+        self.conj()
+    }
+}
+
+fn zero<T: Scalar>() -> T {
+    T::from_c64(c64::new(0.0, 0.0))
+}
+
+fn real<T: Scalar>(x: f64) -> T {
+    T::from_c64(c64::new(x, 0.0))
+}
+
 /// Column-compressed matrix-vector product `out += alpha A x`.
-fn spmv(a: &SparseColMat<usize, c64>, x: &[c64], alpha: c64, out: &mut [c64]) {
+fn spmv<T: Scalar>(a: &SparseColMat<usize, T>, x: &[T], alpha: T, out: &mut [T]) {
     let r = a.as_ref();
     for (j, xj) in x.iter().enumerate() {
-        let s = alpha * xj;
+        let s = alpha * *xj;
         for (&i, v) in r.row_idx_of_col_raw(j).iter().zip(r.val_of_col(j)) {
             out[i] += *v * s;
         }
     }
 }
 
-fn to_complex(a: &SparseColMat<usize, f64>) -> SparseColMat<usize, c64> {
-    let r = a.as_ref();
-    let mut t = Vec::with_capacity(r.compute_nnz());
-    for j in 0..a.ncols() {
-        for (&i, &v) in r.row_idx_of_col_raw(j).iter().zip(r.val_of_col(j)) {
-            t.push(Triplet::new(i, j, c64::new(v, 0.0)));
+/// `Σ fₖ Aₖ` of real sparse matrices with scalar factors, as triplets.
+fn combine<T: Scalar>(
+    parts: &[(&SparseColMat<usize, f64>, T)],
+    t: &mut Vec<Triplet<usize, usize, T>>,
+) {
+    for (a, f) in parts {
+        let r = a.as_ref();
+        for j in 0..a.ncols() {
+            for (&i, &v) in r.row_idx_of_col_raw(j).iter().zip(r.val_of_col(j)) {
+                t.push(Triplet::new(i, j, *f * real::<T>(v)));
+            }
         }
     }
-    SparseColMat::try_new_from_triplets(a.nrows(), a.ncols(), &t).expect("same pattern")
 }
 
 /// The shift-invert operator `(A − σE)⁻¹E` on `x = (y, v)` (length 2n).
-struct ShiftInvert {
+struct ShiftInvert<T: Scalar> {
     n: usize,
     m: usize,
-    sigma: c64,
-    mass: SparseColMat<usize, c64>,
+    sigma: T,
+    mass: SparseColMat<usize, T>,
     /// G + σM.
-    g_sigma: SparseColMat<usize, c64>,
-    lu: Lu<usize, c64>,
+    g_sigma: SparseColMat<usize, T>,
+    lu: Lu<usize, T>,
 }
 
-impl std::fmt::Debug for ShiftInvert {
+impl<T: Scalar> std::fmt::Debug for ShiftInvert<T> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "ShiftInvert(n = {}, σ = {})", self.n, self.sigma)
     }
 }
 
-impl ShiftInvert {
-    fn new(lin: &LinearSystem, sigma: c64) -> Result<Self, EigenError> {
+impl<T: Scalar> ShiftInvert<T> {
+    fn new(lin: &LinearSystem, sigma: T) -> Result<Self, EigenError> {
         let (n, m) = (lin.n, lin.m);
-        let mut t: Vec<Triplet<usize, usize, c64>> = Vec::new();
-        let mut kmax = 0.0f64;
-        for (a, f) in [
-            (&lin.stiffness, c64::new(1.0, 0.0)),
-            (&lin.damping, sigma),
-            (&lin.mass, sigma * sigma),
-        ] {
-            let r = a.as_ref();
-            for j in 0..n {
-                for (&i, &v) in r.row_idx_of_col_raw(j).iter().zip(r.val_of_col(j)) {
-                    let x = f * v;
-                    if i == j {
-                        kmax = kmax.max(x.norm());
-                    }
-                    t.push(Triplet::new(i, j, x));
-                }
-            }
-        }
+        let mut t: Vec<Triplet<usize, usize, T>> = Vec::new();
+        combine(
+            &[
+                (&lin.stiffness, real(1.0)),
+                (&lin.damping, sigma),
+                (&lin.mass, sigma * sigma),
+            ],
+            &mut t,
+        );
+        let kmax = t
+            .iter()
+            .filter(|x| x.row == x.col)
+            .map(|x| x.val.modulus())
+            .fold(0.0, f64::max);
         // Constraint rows scaled to the size of the diagonal (same solution y).
         let s = if kmax > 0.0 { kmax } else { 1.0 };
         let b = lin.constraint_jacobian.as_ref();
         for j in 0..n {
             for (&i, &v) in b.row_idx_of_col_raw(j).iter().zip(b.val_of_col(j)) {
-                t.push(Triplet::new(n + i, j, c64::new(s * v, 0.0)));
-                t.push(Triplet::new(j, n + i, c64::new(s * v, 0.0)));
+                t.push(Triplet::new(n + i, j, real(s * v)));
+                t.push(Triplet::new(j, n + i, real(s * v)));
             }
         }
         // A structural zero on every diagonal keeps the pattern square-factorable.
         for i in 0..n + m {
-            t.push(Triplet::new(i, i, c64::new(0.0, 0.0)));
+            t.push(Triplet::new(i, i, zero()));
         }
         let a = SparseColMat::try_new_from_triplets(n + m, n + m, &t)
             .map_err(|e| EigenError::Singular(format!("{e:?}")))?;
@@ -381,16 +432,11 @@ impl ShiftInvert {
             .map_err(|e| EigenError::Singular(format!("{e:?}")))?;
         let lu = Lu::try_new_with_symbolic(sym, a.as_ref())
             .map_err(|e| EigenError::Singular(format!("{e:?}")))?;
-        let mass = to_complex(&lin.mass);
+        let mut mt = Vec::new();
+        combine(&[(&lin.mass, real(1.0))], &mut mt);
+        let mass = SparseColMat::try_new_from_triplets(n, n, &mt).expect("inside");
         let mut gs = Vec::new();
-        for (a, f) in [(&lin.damping, c64::new(1.0, 0.0)), (&lin.mass, sigma)] {
-            let r = a.as_ref();
-            for j in 0..n {
-                for (&i, &v) in r.row_idx_of_col_raw(j).iter().zip(r.val_of_col(j)) {
-                    gs.push(Triplet::new(i, j, f * v));
-                }
-            }
-        }
+        combine(&[(&lin.damping, real(1.0)), (&lin.mass, sigma)], &mut gs);
         let g_sigma = SparseColMat::try_new_from_triplets(n, n, &gs).expect("inside");
         Ok(Self {
             n,
@@ -402,18 +448,17 @@ impl ShiftInvert {
         })
     }
 
-    fn apply_one(&self, x: &[c64], out: &mut [c64]) {
+    fn apply_one(&self, x: &[T], out: &mut [T], rhs: &mut Vec<T>) {
         let n = self.n;
         let (by, bv) = x.split_at(n);
-        let mut rhs = vec![c64::new(0.0, 0.0); n + self.m];
-        let minus = c64::new(-1.0, 0.0);
+        rhs.clear();
+        rhs.resize(n + self.m, zero());
+        let minus = real(-1.0);
         spmv(&self.mass, bv, minus, &mut rhs[..n]);
         spmv(&self.g_sigma, by, minus, &mut rhs[..n]);
         let len = rhs.len();
-        self.lu.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut rhs, len, 1),
-        );
+        self.lu
+            .solve_in_place_with_conj(Conj::No, MatMut::from_column_major_slice_mut(rhs, len, 1));
         for i in 0..n {
             out[i] = rhs[i];
             out[n + i] = by[i] + self.sigma * rhs[i];
@@ -421,7 +466,7 @@ impl ShiftInvert {
     }
 }
 
-impl faer::matrix_free::LinOp<c64> for ShiftInvert {
+impl<T: Scalar> faer::matrix_free::LinOp<T> for ShiftInvert<T> {
     fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> faer::dyn_stack::StackReq {
         faer::dyn_stack::StackReq::EMPTY
     }
@@ -433,18 +478,19 @@ impl faer::matrix_free::LinOp<c64> for ShiftInvert {
     }
     fn apply(
         &self,
-        mut out: MatMut<'_, c64>,
-        rhs: MatRef<'_, c64>,
+        mut out: MatMut<'_, T>,
+        rhs: MatRef<'_, T>,
         _par: Par,
         _stack: &mut faer::dyn_stack::MemStack,
     ) {
         let len = 2 * self.n;
-        let (mut x, mut y) = (vec![c64::new(0.0, 0.0); len], vec![c64::new(0.0, 0.0); len]);
+        let (mut x, mut y) = (vec![zero::<T>(); len], vec![zero::<T>(); len]);
+        let mut work = Vec::with_capacity(self.n + self.m);
         for c in 0..rhs.ncols() {
             for i in 0..len {
                 x[i] = rhs[(i, c)];
             }
-            self.apply_one(&x, &mut y);
+            self.apply_one(&x, &mut y, &mut work);
             for i in 0..len {
                 out[(i, c)] = y[i];
             }
@@ -452,35 +498,57 @@ impl faer::matrix_free::LinOp<c64> for ShiftInvert {
     }
     fn conj_apply(
         &self,
-        mut out: MatMut<'_, c64>,
-        rhs: MatRef<'_, c64>,
+        mut out: MatMut<'_, T>,
+        rhs: MatRef<'_, T>,
         par: Par,
         stack: &mut faer::dyn_stack::MemStack,
     ) {
-        let conj_rhs = rhs.conjugate().to_owned();
+        let mut conj_rhs = Mat::<T>::zeros(rhs.nrows(), rhs.ncols());
+        for c in 0..rhs.ncols() {
+            for i in 0..rhs.nrows() {
+                conj_rhs[(i, c)] = rhs[(i, c)].conjugated();
+            }
+        }
         self.apply(out.as_mut(), conj_rhs.as_ref(), par, stack);
         for c in 0..out.ncols() {
             for i in 0..out.nrows() {
-                out[(i, c)] = out[(i, c)].conj();
+                out[(i, c)] = out[(i, c)].conjugated();
             }
         }
     }
 }
 
-/// The eigenpairs nearest σ by shift-invert Krylov–Schur.
+/// The eigenpairs nearest σ by shift-invert Krylov–Schur, in real arithmetic for a real
+/// target and complex arithmetic otherwise.
 fn sparse_eigenpairs(
     lin: &LinearSystem,
     sigma: c64,
     n_modes: usize,
 ) -> Result<(Vec<c64>, Vec<Vec<c64>>), EigenError> {
-    let op = ShiftInvert::new(lin, sigma)?;
+    if sigma.im == 0.0 {
+        krylov_schur::<f64>(lin, sigma, n_modes)
+    } else {
+        krylov_schur::<c64>(lin, sigma, n_modes)
+    }
+}
+
+fn krylov_schur<T: Scalar>(
+    lin: &LinearSystem,
+    sigma: c64,
+    n_modes: usize,
+) -> Result<(Vec<c64>, Vec<Vec<c64>>), EigenError> {
+    let op = ShiftInvert::<T>::new(lin, T::from_c64(sigma))?;
     let n = lin.n;
     let len = 2 * n;
     // Conjugate pairs and the double zero eigenvalues of rigid-body modes: twice the
     // modes, and a few more to see the pairs complete.
     let k = (2 * n_modes + 6).min(len);
+    if len <= 2 * k + 20 {
+        // The Krylov space would be the whole space (and Arnoldi breaks down early on the
+        // tiny invariant subspaces of rigid-body Jordan blocks): form the operator.
+        return Ok(explicit_eigenpairs(&op, sigma));
+    }
     // Start in the range of the operator (so that B y = 0 and B v = 0 hold).
-    let mut v0 = vec![c64::new(0.0, 0.0); len];
     let mut seed = 0x9e37_79b9_7f4a_7c15u64;
     let mut rnd = || {
         seed = seed
@@ -488,23 +556,20 @@ fn sparse_eigenpairs(
             .wrapping_add(1442695040888963407);
         ((seed >> 11) as f64) / ((1u64 << 53) as f64) - 0.5
     };
-    let x: Vec<c64> = (0..len).map(|_| c64::new(rnd(), 0.0)).collect();
-    let mut tmp = vec![c64::new(0.0, 0.0); len];
-    op.apply_one(&x, &mut tmp);
-    op.apply_one(&tmp, &mut v0);
-    let norm = v0.iter().map(|z| z.norm_sqr()).sum::<f64>().sqrt();
+    let x: Vec<T> = (0..len).map(|_| real(rnd())).collect();
+    let mut work = Vec::with_capacity(n + lin.m);
+    let mut tmp = vec![zero::<T>(); len];
+    let mut v0 = vec![zero::<T>(); len];
+    op.apply_one(&x, &mut tmp, &mut work);
+    op.apply_one(&tmp, &mut v0, &mut work);
+    let norm = v0.iter().map(|z| z.modulus().powi(2)).sum::<f64>().sqrt();
     if !(norm.is_finite() && norm > 0.0) {
         return Err(EigenError::Singular(
             "the shifted solve produced no finite vector".into(),
         ));
     }
     for z in &mut v0 {
-        *z /= norm;
-    }
-    if len <= 2 * k + 20 {
-        // The Krylov space would be the whole space (and Arnoldi breaks down early on the
-        // tiny invariant subspaces of rigid-body Jordan blocks): form the operator.
-        return Ok(explicit_eigenpairs(&op, sigma));
+        *z = *z * real::<T>(1.0 / norm);
     }
     let v0 = faer::ColRef::from_slice(&v0);
     let params = faer::matrix_free::eigen::PartialEigenParams {
@@ -542,15 +607,16 @@ fn sparse_eigenpairs(
 }
 
 /// All eigenpairs of the operator formed column by column (small problems).
-fn explicit_eigenpairs(op: &ShiftInvert, sigma: c64) -> (Vec<c64>, Vec<Vec<c64>>) {
+fn explicit_eigenpairs<T: Scalar>(op: &ShiftInvert<T>, sigma: c64) -> (Vec<c64>, Vec<Vec<c64>>) {
     let (n, len) = (op.n, 2 * op.n);
-    let mut s = Mat::<c64>::zeros(len, len);
-    let mut e = vec![c64::new(0.0, 0.0); len];
-    let mut col = vec![c64::new(0.0, 0.0); len];
+    let mut s = Mat::<T>::zeros(len, len);
+    let mut e = vec![zero::<T>(); len];
+    let mut col = vec![zero::<T>(); len];
+    let mut work = Vec::new();
     for j in 0..len {
-        e.fill(c64::new(0.0, 0.0));
-        e[j] = c64::new(1.0, 0.0);
-        op.apply_one(&e, &mut col);
+        e.fill(zero());
+        e[j] = real(1.0);
+        op.apply_one(&e, &mut col, &mut work);
         for i in 0..len {
             s[(i, j)] = col[i];
         }
@@ -562,7 +628,7 @@ fn explicit_eigenpairs(op: &ShiftInvert, sigma: c64) -> (Vec<c64>, Vec<Vec<c64>>
     let mut values = Vec::new();
     let mut vectors = Vec::new();
     for j in 0..len {
-        let th = vals[j];
+        let th: c64 = vals[j];
         // θ = 0: infinite λ, or directions outside the constrained space.
         if th.norm() <= 1e-12 * (1.0 / sigma.norm()) {
             continue;
