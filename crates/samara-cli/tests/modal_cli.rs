@@ -233,3 +233,99 @@ fn spring_mass_frequency_damping_and_eigensolver_choice() {
         );
     }
 }
+
+const ROTOR: &str = r#"
+[model]
+name = "stodola_green"
+
+[[beams]]
+name = "shaft"
+order = 4
+elements = 1
+points = [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+root = "root"
+tip = "disk"
+
+[[beams.sections]]
+station = 0.0
+stiffness = [
+  [1e9, 0.0, 0.0, 0.0, 0.0, 0.0],
+  [0.0, 1e9, 0.0, 0.0, 0.0, 0.0],
+  [0.0, 0.0, 1e9, 0.0, 0.0, 0.0],
+  [0.0, 0.0, 0.0, 1e6, 0.0, 0.0],
+  [0.0, 0.0, 0.0, 0.0, 2e3, 0.0],
+  [0.0, 0.0, 0.0, 0.0, 0.0, 2e3],
+]
+
+[[bodies]]
+name = "disk"
+node = "disk"
+mass = 5.0
+inertia = [[0.4, 0.0, 0.0], [0.0, 0.25, 0.0], [0.0, 0.0, 0.25]]
+
+[[joints]]
+name = "clamp"
+type = "fixed"
+node_a = "ground"
+node_b = "root"
+
+[[analyses]]
+name = "modes"
+type = "modal"
+n_modes = 4
+rotation = { axis = [0.0, 0.0, 2.0], omega = 20.0, centre = [0.0, 0.0, 0.0] }
+"#;
+
+#[test]
+fn spinning_rotor_modal_with_rotation() {
+    // Disk on a massless shaft spinning at 20 rad/s (tests/modal.rs has the closed form):
+    // rotating-frame whirl frequencies |ω − Ω| = 14.50028, 51.06759, 184.1000, 195.5327 rad/s
+    // (Euler–Bernoulli shaft; the model's shear stiffness shifts them by 1e-5).
+    let (o, d) = run_text(ROTOR);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut r = samara::output::ResultsReader::open(d.path().join("out/modes.nc")).unwrap();
+    let f = r.read("frequency").unwrap();
+    let expected = [
+        14.500282178966444,
+        51.06758981037455,
+        184.0999990817167,
+        195.53269145030862,
+    ];
+    for (a, b) in f.iter().zip(expected) {
+        let w = a * 2.0 * std::f64::consts::PI;
+        assert!((w - b).abs() / b < 2e-5, "{f:?}");
+    }
+    // Without the rotation the spin is absent: the two planes give equal frequencies.
+    let (o, d) = run_text(&ROTOR.replace(
+        "rotation = { axis = [0.0, 0.0, 2.0], omega = 20.0, centre = [0.0, 0.0, 0.0] }\n",
+        "",
+    ));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut r = samara::output::ResultsReader::open(d.path().join("out/modes.nc")).unwrap();
+    let g = r.read("frequency").unwrap();
+    assert!((g[0] - g[1]).abs() < 1e-6 * g[0], "{g:?}");
+    // A zero axis is a located error.
+    let (o, path, _d) = check_text(
+        "r.toml",
+        &ROTOR.replace("axis = [0.0, 0.0, 2.0]", "axis = [0.0, 0.0, 0.0]"),
+    );
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains(&format!("{}:", path.display())) && e.contains("non-zero vector"),
+        "{e}"
+    );
+    // `rotation` belongs to modal analyses here.
+    let (o, _, _d) = check_text(
+        "r.toml",
+        &PENDULUM.replace(
+            "[[analyses]]",
+            "[[analyses]]\nrotation = { axis = [0.0, 0.0, 1.0], omega = 1.0 }",
+        ),
+    );
+    assert!(
+        stderr(&o).contains("`rotation` is not used by a dynamic analysis"),
+        "{}",
+        stderr(&o)
+    );
+}

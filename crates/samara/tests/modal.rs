@@ -584,3 +584,124 @@ fn dense_and_sparse_paths_agree() {
     // Both solve to round-off of the eigenproblem (Krylov–Schur residual 1e-11).
     assert!(err < 1e-9, "{d:?}\n{s:?}");
 }
+
+/// Issue #14 test 3, in the frame turning with the rotor: a rigid disk (m, polar Ip, diametral Id) spinning at
+/// Ω at the tip of a massless, shear-rigid cantilever shaft (Stodola–Green rotor). With the
+/// shaft's tip stiffness `K = EI/L³ [12 −6L; −6L 4L²]` acting on the tip deflection r and
+/// slope θ (complex whirl coordinates), the whirl frequencies ω solve
+/// `(k₁₁ − mω²)(k₂₂ − I_d ω² + I_p Ω ω) − k₁₂² = 0`: two forward (ω > 0) and two
+/// backward (ω < 0) roots, which split as Ω grows (gyroscopic stiffening/softening).
+/// The spinning nodes' material rotations turn with the rotor, so the linearized equations
+/// are time-invariant only in the rotating frame (`SteadyRotation`), where a whirl is seen
+/// at ω − Ω. Tolerance 2e-5: the model's shear stiffness (1e9 against 12EI/L² = 2.4e4)
+/// shifts the frequencies by ~1e-5 from the Euler–Bernoulli closed form.
+#[test]
+fn spinning_disk_on_a_shaft_forward_and_backward_whirl() {
+    let (len, ei, m, ip, id) = (1.0f64, 2.0e3, 5.0, 0.4, 0.25);
+    let text = format!(
+        r#"
+[model]
+name = "stodola_green"
+
+[[beams]]
+name = "shaft"
+order = 4
+elements = 1
+points = [[0.0, 0.0, 0.0], [0.0, 0.0, {len}]]
+root = "root"
+tip = "disk"
+
+[[beams.sections]]
+station = 0.0
+stiffness = [
+  [1e9, 0.0, 0.0, 0.0, 0.0, 0.0],
+  [0.0, 1e9, 0.0, 0.0, 0.0, 0.0],
+  [0.0, 0.0, 1e9, 0.0, 0.0, 0.0],
+  [0.0, 0.0, 0.0, 1e6, 0.0, 0.0],
+  [0.0, 0.0, 0.0, 0.0, {ei}, 0.0],
+  [0.0, 0.0, 0.0, 0.0, 0.0, {ei}],
+]
+
+[[bodies]]
+name = "disk"
+node = "disk"
+mass = {m}
+inertia = [[{ip}, 0.0, 0.0], [0.0, {id}, 0.0], [0.0, 0.0, {id}]]
+
+[[joints]]
+name = "clamp"
+type = "fixed"
+node_a = "ground"
+node_b = "root"
+
+[[analyses]]
+name = "modes"
+type = "modal"
+n_modes = 4
+"#
+    );
+    let mdl = model(&text);
+    let sys = System::new(&mdl);
+    let (k11, k12, k22) = (
+        12.0 * ei / len.powi(3),
+        -6.0 * ei / len.powi(2),
+        4.0 * ei / len,
+    );
+    for omega in [0.0, 20.0, 60.0] {
+        // Closed form: roots of the quartic, by bisection on a fine grid of ω.
+        let f = |w: f64| (k11 - m * w * w) * (k22 - id * w * w + ip * omega * w) - k12 * k12;
+        let mut roots = Vec::new();
+        let (mut w0, dw) = (-400.0f64, 1e-3);
+        while w0 < 400.0 {
+            let w1 = w0 + dw;
+            if f(w0).signum() != f(w1).signum() {
+                let (mut a, mut b) = (w0, w1);
+                for _ in 0..100 {
+                    let c = 0.5 * (a + b);
+                    if f(c).signum() == f(a).signum() {
+                        a = c
+                    } else {
+                        b = c
+                    }
+                }
+                // In the frame turning with the rotor (where the linearized equations of
+                // the spinning, material-frame rotations are time-invariant), a whirl
+                // e^{iωt} is seen at ω − Ω.
+                roots.push((0.5 * (a + b) - omega).abs());
+            }
+            w0 = w1;
+        }
+        roots.sort_by(f64::total_cmp);
+        assert_eq!(roots.len(), 4, "{roots:?}");
+        let mut state = sys.initial_state();
+        let rot = samara::linear::SteadyRotation {
+            axis: nalgebra::Vector3::z(),
+            omega,
+            centre: nalgebra::Vector3::zeros(),
+        };
+        rot.impose(&sys, &mut state);
+        let lin = linearize(&sys, &state, Some(&rot));
+        for method in [EigenMethod::Dense, EigenMethod::Sparse] {
+            let s = modes(
+                &lin,
+                &EigenOptions {
+                    n_modes: 4,
+                    shift: None,
+                    method,
+                },
+            )
+            .unwrap();
+            let mut w: Vec<f64> = s.modes.iter().map(|m| 2.0 * PI * m.frequency()).collect();
+            w.sort_by(f64::total_cmp);
+            let err = w
+                .iter()
+                .zip(&roots)
+                .map(|(a, b)| (a - b).abs() / b)
+                .fold(0.0, f64::max);
+            eprintln!("Ω = {omega}: {method:?} {w:?} vs {roots:?}: {err:.2e}");
+            // Shear and axial stiffness 1e9 against EI/L² = 2e3: the shaft is Euler–Bernoulli
+            // to ~1e-6; p = 4 represents the cubic static deflection exactly.
+            assert!(err < 2e-5, "Ω = {omega} {method:?}: {err:e}");
+        }
+    }
+}

@@ -4,6 +4,13 @@
 //! final state of an earlier analysis (`start_from`): a static equilibrium, or the last
 //! instant of a dynamic run.
 //!
+//! With `rotation`, the starting state is set spinning rigidly about the axis
+//! ([`crate::linear::SteadyRotation::impose`]) and the equations are written in the frame
+//! turning with it, where those of a steadily spinning axisymmetric rotor are
+//! time-invariant (frequencies are rotating-frame frequencies). The state is not
+//! re-equilibrated: a rotor with centrifugal stresses should start from a state that
+//! has them (a dynamic run spun up to steady speed).
+//!
 //! Results: one time record (the reference state) and the arrays `frequency(mode)`,
 //! `damped_frequency(mode)`, `damping_ratio(mode)`, `eigenvalue(mode, 2)` and
 //! `mode_shape(mode, node, 6, 2)` (see docs/results.md). With `write_matrices`, the
@@ -184,9 +191,12 @@ pub fn run_modal(
 ) -> Result<AnalysisSummary, crate::Error> {
     let clock = Instant::now();
     let mut summary = AnalysisSummary::new(name, "modal");
-    let state = initial;
+    let mut state = initial;
+    if let Some(rot) = &settings.rotation {
+        rot.impose(sys, &mut state);
+    }
     let ctx = sys.context(state.time, 1.0);
-    let lin = linearize(sys, &state, None);
+    let lin = linearize(sys, &state, settings.rotation.as_ref());
     progress(0.2);
     if settings.write_matrices {
         match recorder.output_dir() {

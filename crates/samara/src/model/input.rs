@@ -274,4 +274,21 @@ pub struct AnalysisInput {
     /// modal: `auto` (default), `dense` or `sparse`.
     #[serde(default)]
     pub eigensolver: Option<EigensolverType>,
+    /// modal: linearize in the frame turning at `omega` [rad/s] about `axis` through
+    /// `centre` (default the origin); the starting state is set spinning rigidly.
+    #[serde(default)]
+    pub rotation: Option<RotationInput>,
+}
+
+/// A steady rotation: `{ axis = [x, y, z], omega = Ω, centre = [x, y, z] }`.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RotationInput {
+    /// Direction of the rotation axis (normalized; right-hand rule).
+    pub axis: [f64; 3],
+    /// Angular speed [rad/s].
+    pub omega: f64,
+    /// A point of the axis [m] (default the origin).
+    #[serde(default)]
+    pub centre: Option<[f64; 3]>,
 }

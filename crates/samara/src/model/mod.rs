@@ -153,6 +153,8 @@ pub struct ModalSettings {
     pub shift: Option<f64>,
     pub write_matrices: bool,
     pub eigensolver: EigensolverType,
+    /// Linearize in the frame turning with this rotation.
+    pub rotation: Option<crate::linear::SteadyRotation>,
 }
 
 impl Default for ModalSettings {
@@ -162,6 +164,7 @@ impl Default for ModalSettings {
             shift: None,
             write_matrices: false,
             eigensolver: EigensolverType::Auto,
+            rotation: None,
         }
     }
 }

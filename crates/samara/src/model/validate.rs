@@ -766,7 +766,8 @@ impl<'a> Checker<'a> {
             ("load_steps", ai.load_steps.is_some()),
             ("time", ai.time.is_some()),
         ];
-        let modal_keys: [(&str, bool); 4] = [
+        let modal_keys: [(&str, bool); 5] = [
+            ("rotation", ai.rotation.is_some()),
             ("n_modes", ai.n_modes.is_some()),
             ("shift", ai.shift.is_some()),
             ("write_matrices", ai.write_matrices.is_some()),
@@ -1056,6 +1057,28 @@ impl<'a> Checker<'a> {
                 }
                 m.write_matrices = ai.write_matrices.unwrap_or(false);
                 m.eigensolver = ai.eigensolver.unwrap_or_default();
+                if let Some(r) = &ai.rotation {
+                    let axis = self.unit_axis(r.axis, &e, "axis", &format!("{what}: `rotation`"));
+                    let centre = Vector3::from(r.centre.unwrap_or([0.0; 3]));
+                    if !r.omega.is_finite() || !centre.iter().all(|x| x.is_finite()) {
+                        self.error(
+                            format!("{what}: `rotation` needs a finite `omega` and `centre`"),
+                            self.key(&e, "rotation"),
+                            None,
+                        );
+                        ok = false;
+                    }
+                    match axis {
+                        Some(axis) => {
+                            m.rotation = Some(crate::linear::SteadyRotation {
+                                axis,
+                                omega: r.omega,
+                                centre,
+                            })
+                        }
+                        None => ok = false,
+                    }
+                }
                 AnalysisKind::Modal(m)
             }
         };
