@@ -312,6 +312,7 @@ trait Scalar:
     + std::ops::Mul<Output = Self>
     + std::ops::Div<Output = Self>
     + std::ops::AddAssign
+    + std::ops::MulAssign
     + std::ops::Neg<Output = Self>
     + 'static
 {
@@ -569,7 +570,7 @@ fn krylov_schur<T: Scalar>(
         ));
     }
     for z in &mut v0 {
-        *z = *z * real::<T>(1.0 / norm);
+        *z *= real::<T>(1.0 / norm);
     }
     let v0 = faer::ColRef::from_slice(&v0);
     let params = faer::matrix_free::eigen::PartialEigenParams {
