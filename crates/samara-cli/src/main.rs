@@ -347,7 +347,7 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
             report::solver_failure(f, &written, records);
             failed = true;
         }
-        let end_time = def.end_time();
+        let end_time = def.end_time().unwrap_or(summary.final_state.time);
         rows.push(report::Row {
             summary: summary.clone(),
             path: written,

@@ -40,6 +40,7 @@ pub mod diagnostics;
 pub mod elements;
 pub mod input_files;
 pub mod joints;
+pub mod linear;
 pub mod math;
 pub mod model;
 pub mod output;

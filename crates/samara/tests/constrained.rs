@@ -9,7 +9,7 @@ use samara::model::AnalysisKind;
 fn set_dynamic(m: &mut samara::model::Model, f: impl FnOnce(&mut samara::model::DynamicSettings)) {
     match &mut m.analyses[0].kind {
         AnalysisKind::Dynamic(d) => f(d),
-        AnalysisKind::Static(_) => panic!("expected a dynamic analysis"),
+        _ => panic!("expected a dynamic analysis"),
     }
 }
 

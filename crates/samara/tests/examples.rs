@@ -83,6 +83,11 @@ fn every_example_runs() {
                 AnalysisKind::Static(_) => {
                     assert!((last.load_factor - 1.0).abs() < 1e-12, "{rel}");
                 }
+                AnalysisKind::Modal(ms) => {
+                    let f = &h.arrays.iter().find(|a| a.0.name == "frequency");
+                    let f = &f.unwrap_or_else(|| panic!("{rel}: no frequencies")).1;
+                    assert_eq!(f.len(), ms.n_modes, "{rel}");
+                }
             }
             let finite = last.state.nodes.iter().all(|n| {
                 n.x.iter()

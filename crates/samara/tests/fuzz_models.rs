@@ -202,6 +202,7 @@ fn shorten(m: &mut Model) {
                 d.t_end = d.t_end.min(d.t_start + 4.0 * d.step);
             }
             AnalysisKind::Static(s) => s.load_steps = s.load_steps.min(3),
+            AnalysisKind::Modal(_) => {}
         }
     }
 }

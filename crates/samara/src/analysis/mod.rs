@@ -7,6 +7,7 @@ mod dynamic;
 pub mod generalized_alpha;
 mod history;
 mod initial;
+pub mod modal;
 mod stage;
 mod statics;
 
@@ -16,7 +17,8 @@ pub use history::{Frame, History};
 pub use initial::{
     AssemblyError, AssemblyReport, assemble_initial_state, consistent_accelerations,
 };
-pub use stage::{Analysis, ArraySpec, DynamicAnalysis, StaticAnalysis};
+pub use modal::run_modal;
+pub use stage::{Analysis, ArraySpec, DynamicAnalysis, ModalAnalysis, StaticAnalysis};
 pub use statics::run_static;
 
 use crate::model::{AnalysisDef, Model};
@@ -79,6 +81,11 @@ pub trait Recorder {
         spec: &ArraySpec,
         values: &[f64],
     ) -> Result<(), crate::Error>;
+    /// The folder of the results, where an analysis may write files of its own (a modal
+    /// analysis's matrices); `None` for recorders that keep results in memory.
+    fn output_dir(&self) -> Option<std::path::PathBuf> {
+        None
+    }
 }
 
 /// Why an analysis stopped early.

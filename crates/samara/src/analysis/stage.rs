@@ -6,8 +6,8 @@
 //! Adding an analysis type: a module with a type implementing [`Analysis`], its settings
 //! in the model (validated like the others) and one arm in [`AnalysisDef::stage`].
 
-use super::{AnalysisSummary, Progress, Recorder, run_dynamic, run_static};
-use crate::model::{AnalysisDef, AnalysisKind, DynamicSettings, StaticSettings};
+use super::{AnalysisSummary, Progress, Recorder, run_dynamic, run_modal, run_static};
+use crate::model::{AnalysisDef, AnalysisKind, DynamicSettings, ModalSettings, StaticSettings};
 use crate::system::{State, System};
 
 /// A result array that is not a time history, declared before the run so that a results
@@ -116,6 +116,33 @@ impl Analysis for StaticAnalysis<'_> {
     }
 }
 
+/// Eigenanalysis about the starting state ([`run_modal`]).
+pub struct ModalAnalysis<'a> {
+    pub name: &'a str,
+    pub settings: &'a ModalSettings,
+}
+
+impl Analysis for ModalAnalysis<'_> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn kind(&self) -> &'static str {
+        "modal"
+    }
+    fn arrays(&self, sys: &System) -> Vec<ArraySpec> {
+        super::modal::modal_arrays(sys, self.settings.n_modes, "")
+    }
+    fn run(
+        &self,
+        sys: &System,
+        initial: State,
+        recorder: &mut dyn Recorder,
+        progress: Progress,
+    ) -> Result<AnalysisSummary, crate::Error> {
+        run_modal(sys, self.name, self.settings, initial, recorder, progress)
+    }
+}
+
 impl AnalysisDef {
     /// The stage that runs this analysis.
     pub fn stage(&self) -> Box<dyn Analysis + '_> {
@@ -125,6 +152,10 @@ impl AnalysisDef {
                 settings: s,
             }),
             AnalysisKind::Static(s) => Box::new(StaticAnalysis {
+                name: &self.name,
+                settings: s,
+            }),
+            AnalysisKind::Modal(s) => Box::new(ModalAnalysis {
                 name: &self.name,
                 settings: s,
             }),

@@ -148,6 +148,21 @@ pub enum AnalysisType {
     Dynamic,
     /// Static equilibrium with load increments.
     Static,
+    /// Eigenanalysis of the equations linearized about the starting state.
+    Modal,
+}
+
+/// Eigensolver of a modal analysis.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum EigensolverType {
+    /// Dense QZ up to 120 unconstrained unknowns, sparse shift-invert above.
+    #[default]
+    Auto,
+    /// Null-space projection and dense QZ.
+    Dense,
+    /// Shift-invert Krylov–Schur with a sparse LU.
+    Sparse,
 }
 
 /// When the iteration matrix is refactorized.
@@ -192,7 +207,7 @@ pub enum StepControlType {
 pub struct AnalysisInput {
     /// Unique analysis name; also the results file name (`<name>.nc`).
     pub name: Located<String>,
-    /// `dynamic` or `static`.
+    /// `dynamic`, `static` or `modal`.
     #[serde(rename = "type")]
     pub kind: Located<AnalysisType>,
     /// Start from the final state of an earlier analysis of this model instead of the
@@ -271,4 +286,33 @@ pub struct AnalysisInput {
     /// `auto` (default), `block` or `sparse_lu`.
     #[serde(default)]
     pub linear_solver: Option<LinearSolverType>,
+    /// modal: number of modes (default 10).
+    #[serde(default)]
+    pub n_modes: Option<Located<usize>>,
+    /// modal: frequency [Hz] near which the modes are wanted (default: the lowest).
+    #[serde(default)]
+    pub shift: Option<f64>,
+    /// modal: also write M, G, K and B (Matrix Market) next to the results (default false).
+    #[serde(default)]
+    pub write_matrices: Option<bool>,
+    /// modal: `auto` (default), `dense` or `sparse`.
+    #[serde(default)]
+    pub eigensolver: Option<EigensolverType>,
+    /// modal: linearize in the frame turning at `omega` [rad/s] about `axis` through
+    /// `centre` (default the origin); the starting state is set spinning rigidly.
+    #[serde(default)]
+    pub rotation: Option<RotationInput>,
+}
+
+/// A steady rotation: `{ axis = [x, y, z], omega = Ω, centre = [x, y, z] }`.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RotationInput {
+    /// Direction of the rotation axis (normalized; right-hand rule).
+    pub axis: [f64; 3],
+    /// Angular speed [rad/s].
+    pub omega: f64,
+    /// A point of the axis [m] (default the origin).
+    #[serde(default)]
+    pub centre: Option<[f64; 3]>,
 }

@@ -24,7 +24,8 @@ pub use components::signal::SignalDef;
 pub use components::spring::SpringDef;
 pub use components::{Model, ModelInput};
 pub use input::{
-    FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame, StepControlType,
+    EigensolverType, FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame,
+    StepControlType,
 };
 pub use section_files::LoadOptions;
 pub use validate::{Checker, Entry, validate};
@@ -150,10 +151,35 @@ impl Default for StaticSettings {
     }
 }
 
+/// Modal analysis settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModalSettings {
+    pub n_modes: usize,
+    /// Target frequency [Hz].
+    pub shift: Option<f64>,
+    pub write_matrices: bool,
+    pub eigensolver: EigensolverType,
+    /// Linearize in the frame turning with this rotation.
+    pub rotation: Option<crate::linear::SteadyRotation>,
+}
+
+impl Default for ModalSettings {
+    fn default() -> Self {
+        Self {
+            n_modes: 10,
+            shift: None,
+            write_matrices: false,
+            eigensolver: EigensolverType::Auto,
+            rotation: None,
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub enum AnalysisKind {
     Dynamic(DynamicSettings),
     Static(StaticSettings),
+    Modal(ModalSettings),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -169,14 +195,17 @@ impl AnalysisDef {
         match self.kind {
             AnalysisKind::Dynamic(_) => "dynamic",
             AnalysisKind::Static(_) => "static",
+            AnalysisKind::Modal(_) => "modal",
         }
     }
 
-    /// The time the analysis ends at (a static analysis: the time its loads are taken at).
-    pub fn end_time(&self) -> f64 {
+    /// The time the analysis ends at (a static analysis: the time its loads are taken
+    /// at); `None` when the state it starts from decides (a modal analysis).
+    pub fn end_time(&self) -> Option<f64> {
         match &self.kind {
-            AnalysisKind::Dynamic(d) => d.t_end,
-            AnalysisKind::Static(s) => s.time,
+            AnalysisKind::Dynamic(d) => Some(d.t_end),
+            AnalysisKind::Static(s) => Some(s.time),
+            AnalysisKind::Modal(_) => None,
         }
     }
 }

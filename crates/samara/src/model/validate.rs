@@ -667,12 +667,32 @@ impl<'a> Checker<'a> {
             ("load_steps", ai.load_steps.is_some()),
             ("time", ai.time.is_some()),
         ];
-        let (wrong, tname): (&[(&str, bool)], &str) = match kind {
-            AnalysisType::Dynamic => (&static_keys, "dynamic"),
-            AnalysisType::Static => (&dynamic_keys, "static"),
+        let modal_keys: [(&str, bool); 5] = [
+            ("rotation", ai.rotation.is_some()),
+            ("n_modes", ai.n_modes.is_some()),
+            ("shift", ai.shift.is_some()),
+            ("write_matrices", ai.write_matrices.is_some()),
+            ("eigensolver", ai.eigensolver.is_some()),
+        ];
+        // A modal analysis solves no nonlinear equations.
+        let newton_keys: [(&str, bool); 6] = [
+            ("penalty", ai.penalty.is_some()),
+            ("tolerance", ai.tolerance.is_some()),
+            ("relative_tolerance", ai.relative_tolerance.is_some()),
+            ("max_iterations", ai.max_iterations.is_some()),
+            ("diagnostics", ai.diagnostics.is_some()),
+            ("linear_solver", ai.linear_solver.is_some()),
+        ];
+        let (wrong, tname): (Vec<(&str, bool)>, &str) = match kind {
+            AnalysisType::Dynamic => ([&static_keys[..], &modal_keys].concat(), "dynamic"),
+            AnalysisType::Static => ([&dynamic_keys[..], &modal_keys].concat(), "static"),
+            AnalysisType::Modal => (
+                [&dynamic_keys[..], &static_keys, &newton_keys].concat(),
+                "modal",
+            ),
         };
         let mut ok = true;
-        for (k, g) in wrong {
+        for (k, g) in &wrong {
             if *g {
                 self.error(
                     format!("{what}: `{k}` is not used by a {tname} analysis"),
@@ -973,6 +993,56 @@ impl<'a> Checker<'a> {
                     time,
                     solver,
                 })
+            }
+            AnalysisType::Modal => {
+                let mut m = ModalSettings::default();
+                if let Some(n) = &ai.n_modes {
+                    if n.value == 0 {
+                        self.error(
+                            format!("{what}: `n_modes` must be at least 1"),
+                            n.span.clone(),
+                            None,
+                        );
+                        ok = false;
+                    }
+                    m.n_modes = n.value;
+                }
+                if let Some(f) = ai.shift {
+                    if !(f.is_finite() && f >= 0.0) {
+                        self.error(
+                            format!("{what}: `shift` must be a frequency ≥ 0 Hz (got {f})"),
+                            self.key(&e, "shift"),
+                            Some("the modes nearest this frequency are computed; leave it out for the lowest modes".into()),
+                        );
+                        ok = false;
+                    }
+                    m.shift = Some(f);
+                }
+                m.write_matrices = ai.write_matrices.unwrap_or(false);
+                m.eigensolver = ai.eigensolver.unwrap_or_default();
+                if let Some(r) = &ai.rotation {
+                    let axis = self.unit_axis(r.axis, &e, "axis", &format!("{what}: `rotation`"));
+                    let centre = Vector3::from(r.centre.unwrap_or([0.0; 3]));
+                    if !r.omega.is_finite() || !centre.iter().all(|x| x.is_finite()) {
+                        self.error(
+                            format!("{what}: `rotation` needs a finite `omega` and `centre`"),
+                            self.key(&e, "rotation"),
+                            None,
+                        );
+                        ok = false;
+                    }
+                    match axis {
+                        Some(axis) => {
+                            m.rotation = Some(crate::linear::SteadyRotation {
+                                axis,
+                                omega: r.omega,
+                                centre,
+                            })
+                        }
+                        None => ok = false,
+                    }
+                }
+                AnalysisKind::Modal(m)
             }
         };
         ok.then(|| AnalysisDef {

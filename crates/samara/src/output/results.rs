@@ -655,6 +655,10 @@ impl ResultsFile {
 }
 
 impl Recorder for ResultsFile {
+    fn output_dir(&self) -> Option<PathBuf> {
+        Some(self.path.parent().unwrap_or(Path::new(".")).to_path_buf())
+    }
+
     fn write_array(
         &mut self,
         _sys: &System,

@@ -1,0 +1,9 @@
+//! Linearized analyses: the small-motion equations about a state ([`linearize`]), their
+//! eigenvalue problem ([`eigen`]) and the matrices written for users ([`matrix_market`]).
+
+pub mod linearize;
+pub mod matrix_market;
+
+pub use linearize::{LinearSystem, SteadyRotation, linearize, unknown_names};
+pub mod eigen;
+pub use eigen::{EigenMethod, EigenOptions, Mode, Spectrum, modes};
