@@ -5,6 +5,7 @@
 //! only the validated [`Model`].
 
 pub mod components;
+pub mod document;
 pub mod error;
 pub mod input;
 pub mod located;
