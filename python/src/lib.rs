@@ -20,13 +20,13 @@ use std::time::{Duration, Instant};
 use toml::Value;
 
 create_exception!(
-    _samara,
+    samara,
     SamaraError,
     pyo3::exceptions::PyException,
     "Base class of samara's errors."
 );
 create_exception!(
-    _samara,
+    samara,
     ModelError,
     SamaraError,
     "The model is invalid. `diagnostics` lists every finding (message, hint, path of the \
