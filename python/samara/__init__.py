@@ -187,7 +187,7 @@ def displacement(ds, node: Optional[str] = None):
 
 
 def sweep(*args, **kwargs):
-    """Runs a parameter sweep on Dask; see :func:`samara.sweep.sweep`."""
-    from .sweep import sweep as _sweep
+    """Runs a parameter sweep on Dask; see :func:`samara.sweeps.sweep`."""
+    from .sweeps import sweep as _sweep
 
     return _sweep(*args, **kwargs)

@@ -17,7 +17,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 
 from . import ModelLike, load, open_results
-from ._samara import Model
+from ._samara import Model, ModelError
 
 __all__ = ["sweep", "run_case", "expand"]
 
@@ -62,6 +62,10 @@ def run_case(model: Model, values: Mapping[str, Any], analysis: str) -> Dict[str
         raw = m.run_raw(analysis, None, None)
     except KeyboardInterrupt:
         raise
+    except ModelError as e:
+        found = [d for d in getattr(e, "diagnostics", []) if d["severity"] == "error"]
+        text = "; ".join(f"{d['path']}: {d['message']}" if d["path"] else d["message"] for d in found)
+        return {"status": "error", "error": f"ModelError: {text or e}", "results": None}
     except Exception as e:  # recorded per case; the sweep goes on
         return {"status": "error", "error": f"{type(e).__name__}: {e}", "results": None}
     name, data, summary = raw[-1]
