@@ -392,7 +392,7 @@ impl Model {
         analysis: Option<String>,
         out: Option<PathBuf>,
         progress: Option<Py<PyAny>>,
-    ) -> PyResult<Vec<(String, Py<PyAny>, Py<PyDict>)>> {
+    ) -> PyResult<Vec<RunOutput>> {
         let options = match &out {
             Some(dir) => LoadOptions {
                 section_cache: Some(samara::section::results::Cache {
@@ -520,6 +520,9 @@ impl Model {
         Ok(list)
     }
 }
+
+/// One analysis run from Python: name, results (bytes or path), summary.
+type RunOutput = (String, Py<PyAny>, Py<PyDict>);
 
 enum Results {
     Bytes(Vec<u8>),

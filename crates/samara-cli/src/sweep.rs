@@ -76,11 +76,9 @@ fn written_order(text: &str, params: &mut [(String, Value)]) {
         _ => {
             if let Some(toml::de::DeValue::Array(a)) =
                 doc.get_ref().get("cases").map(|c| c.get_ref())
+                && let Some(toml::de::DeValue::Table(first)) = a.iter().next().map(|c| c.get_ref())
             {
-                if let Some(toml::de::DeValue::Table(first)) = a.iter().next().map(|c| c.get_ref())
-                {
-                    positions("", first, &mut pos);
-                }
+                positions("", first, &mut pos);
             }
         }
     }

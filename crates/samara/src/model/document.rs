@@ -44,7 +44,7 @@ pub fn parse_path(path: &str) -> Result<Vec<Step>, PathError> {
         let end = rest.find(['.', '[']).unwrap_or(rest.len());
         let key = &rest[..end];
         if key.is_empty() {
-            if !(rest.starts_with('[') && !steps.is_empty()) {
+            if !rest.starts_with('[') || steps.is_empty() {
                 return Err(err("expected a key (an empty key or a leading index)"));
             }
         } else {
