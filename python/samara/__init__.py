@@ -182,7 +182,10 @@ def displacement(ds, node: Optional[str] = None):
     u.attrs = {"units": ds["position"].attrs.get("units", "m"), "long_name": "displacement of the node"}
     u.name = "displacement"
     if node is not None:
-        u = u.sel(node=node)
+        names = [n.decode() if isinstance(n, bytes) else str(n) for n in ds["node_name"].values]
+        if node not in names:
+            raise KeyError(f"no node named '{node}' (nodes: {', '.join(names)})")
+        u = u.isel(node=names.index(node))
     return u
 
 

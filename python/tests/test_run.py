@@ -161,3 +161,36 @@ def test_the_gil_is_released_during_a_run(root):
     # (5 ms each) at most; released, it spins freely (millions of times per second).
     assert elapsed > 0.1, "the run should take long enough to measure"
     assert spins > 10_000, spins
+
+
+def test_displacements_from_the_reference_configuration(root, cli, tmp_path):
+    # Static: position minus the model's reference (the node positions of the file).
+    f = shortened(root, "loaded_cantilever.toml", tmp_path, **{"analyses.released.t_end": 0.01})
+    results = samara.run(str(f))
+    loaded = results["loaded"]
+    ref = loaded.reference_position.values
+    names = [n.decode() for n in loaded.node_name.values]
+    model = samara.load(str(f))
+    for i, n in enumerate(names):
+        try:
+            given = model.get(f"nodes.{n}.position")
+        except KeyError:
+            continue  # a node a beam created
+        assert list(ref[i]) == given
+    u = samara.displacement(loaded)
+    assert (u.values == (loaded.position - loaded.reference_position).values).all()
+    tip = samara.displacement(loaded, "tip")
+    assert float(tip.isel(time=-1, vec3=2)) < 0.0  # sags under its load
+    # Dynamic from the model's initial state: position minus the initial position.
+    swing = samara.run(str(root / "examples" / "pendulum.toml"), "swing")
+    d = samara.displacement(swing, "bob")
+    assert float(abs(d.isel(time=0)).max()) == 0.0
+    assert (d.values == (swing.position.isel(node=0) - swing.position.isel(node=0, time=0)).values).all()
+    # The CLI's channel of the same name.
+    out = tmp_path / "cli"
+    subprocess.run([cli, "run", str(f), "--out", str(out), "--quiet"], check=True)
+    svg = tmp_path / "tip.svg"
+    subprocess.run([cli, "plot", str(out / "loaded.nc"), "displacement:tip:z", "--out", str(svg)], check=True)
+    assert svg.stat().st_size > 1000
+    with pytest.raises(KeyError, match="no node named"):
+        samara.displacement(loaded, "nope")

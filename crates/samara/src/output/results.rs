@@ -238,6 +238,22 @@ impl ResultsFile {
             "",
             "node name",
         );
+        let reference_position = var(
+            &mut d,
+            "reference_position",
+            NcType::Double,
+            &[node, vec3],
+            "m",
+            "position of the node in the model's reference configuration (displacement = position - reference_position)",
+        );
+        let reference_orientation = var(
+            &mut d,
+            "reference_orientation",
+            NcType::Double,
+            &[node, quat],
+            "1",
+            "orientation of the node in the model's reference configuration (unit quaternion w, x, y, z; global frame)",
+        );
         let body_vars = body.map(|b| {
             (
                 var(
@@ -523,6 +539,21 @@ impl ResultsFile {
         writer
             .put_fixed_text(node_name, &names)
             .map_err(|e| nc_err(&path, e))?;
+        {
+            let e = |err| nc_err(&path, err);
+            let x: Vec<f64> = model
+                .nodes
+                .iter()
+                .flat_map(|n| n.position.iter().copied())
+                .collect();
+            writer.put_fixed_f64(reference_position, &x).map_err(e)?;
+            let q: Vec<f64> = model
+                .nodes
+                .iter()
+                .flat_map(|n| n.orientation.wxyz())
+                .collect();
+            writer.put_fixed_f64(reference_orientation, &q).map_err(e)?;
+        }
         if let Some((bn, bnode, boff, bmass)) = body_vars {
             let e = |err| nc_err(&path, err);
             let names: Vec<&str> = model.bodies.iter().map(|b| b.name.as_str()).collect();
