@@ -181,6 +181,10 @@ def test_displacements_from_the_reference_configuration(root, cli, tmp_path):
     assert (u.values == (loaded.position - loaded.reference_position).values).all()
     tip = samara.displacement(loaded, "tip")
     assert float(tip.isel(time=-1, vec3=2)) < 0.0  # sags under its load
+    # The first static record is the unloaded state: load factor 0, no displacement.
+    assert float(loaded.load_factor[0]) == 0.0
+    assert float(abs(u.isel(time=0)).max()) == 0.0
+    assert loaded.sizes["time"] == 1 + int(model.get("analyses.loaded.load_steps"))
     # Dynamic from the model's initial state: position minus the initial position.
     swing = samara.run(str(root / "examples" / "pendulum.toml"), "swing")
     d = samara.displacement(swing, "bob")

@@ -434,7 +434,10 @@ impl ResultsReader {
     fn displacement(&mut self, spec: &str, rest: &str) -> Result<Channel, ReadError> {
         let position = self.channel(&format!("position:{rest}"))?;
         let parts: Vec<&str> = rest.split(':').collect();
-        let has_reference = self.variables().iter().any(|v| v.name == "reference_position");
+        let has_reference = self
+            .variables()
+            .iter()
+            .any(|v| v.name == "reference_position");
         let reference = if has_reference {
             let i = self
                 .node_names
