@@ -10,7 +10,7 @@ mod sweep;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use samara::analysis::run_analysis;
-use samara::model::{AnalysisKind, LoadOptions, LoadedModel, Model, ModelInput};
+use samara::model::{LoadOptions, LoadedModel, Model, ModelInput};
 use samara::output::ResultsFile;
 use samara::system::{State, System};
 use std::io::IsTerminal;
@@ -362,10 +362,7 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
             report::solver_failure(f, &written, records);
             failed = true;
         }
-        let end_time = match &def.kind {
-            AnalysisKind::Dynamic(d) => d.t_end,
-            AnalysisKind::Static(s) => s.time,
-        };
+        let end_time = def.end_time();
         rows.push(report::Row {
             summary: summary.clone(),
             path: written,

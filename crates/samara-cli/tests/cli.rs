@@ -615,3 +615,43 @@ step = 1e-3
     );
     assert!(!stderr(&o).contains("no mass"), "{}", stderr(&o));
 }
+
+/// Element states, signals and element outputs, end to end through `samara run` and the
+/// results file (examples/active_suspension.toml): the Maxwell mount's tension output
+/// equals k (l − l₀ − z) from its length output and its state; its length equals the
+/// body's height (the mount hangs from the origin); the skyhook signal equals the sensor's
+/// state; and the channels carry their units.
+#[test]
+fn element_states_signals_and_outputs_reach_the_results_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = root().join("examples/active_suspension.toml");
+    let o = samara(&[
+        "run",
+        model.to_str().unwrap(),
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut r = samara::output::ResultsReader::open(dir.path().join("settle.nc")).unwrap();
+    let tension = r.channel("element_output:mount.tension").unwrap();
+    let length = r.channel("element_output:mount.length").unwrap();
+    let stretch = r.channel("element_state:mount.damper_stretch").unwrap();
+    let height = r.channel("position:body:z").unwrap();
+    let filtered = r.channel("element_state:skyhook.output").unwrap();
+    let signal = r.channel("signal:skyhook").unwrap();
+    assert_eq!((tension.units.as_str(), length.units.as_str()), ("N", "m"));
+    let (k, l0) = (8000.0, 0.5);
+    for i in 0..tension.values.len() {
+        let expected = k * (length.values[i] - l0 - stretch.values[i]);
+        assert!(
+            (tension.values[i] - expected).abs() < 1e-9 * k,
+            "record {i}"
+        );
+        assert!((length.values[i] - height.values[i]).abs() < 1e-12);
+        assert!((signal.values[i] - filtered.values[i]).abs() < 1e-12);
+    }
+    // Settled on the coil spring (the mount relaxed): tension → 0, sag m g / k_coil.
+    let last = tension.values.len() - 1;
+    assert!(tension.values[last].abs() < 5.0, "{}", tension.values[last]);
+    assert!((height.values[last] - (0.5 - 250.0 * 9.81 / 16000.0)).abs() < 1e-3);
+}

@@ -1,10 +1,23 @@
 //! samara — flexible multibody dynamics.
 //!
 //! The flow of data reads top to bottom:
-//! [`model`] (file → validated model) → [`system`] (elements, joints, DOF layout, assembly)
-//! → [`analysis`] (static, dynamic; Newton and the integrator, using [`solve`]) →
-//! [`output`] (results files). [`math`] holds the rotation kernel; [`elements`] and
-//! [`joints`] the element library.
+//! [`model`] (file → validated model) → [`system`] (elements, joints, unknown layout,
+//! assembly) → [`analysis`] (statics, dynamics as stages; Newton and the integrators, using
+//! [`solve`]) → [`output`] (results files).
+//!
+//! Layers, each importing only from the ones before it (no circular imports):
+//!
+//! 1. [`math`] (rotations, time functions), [`diagnostics`] (located errors of input
+//!    files), [`input_files`], [`solve`] (sparse and block linear solvers);
+//! 2. [`core`]: node state, element states, the [`core::Element`] and
+//!    [`core::Constraint`] traits every kernel implements;
+//! 3. the kernels: [`elements`] (bodies, beams, springs, sensors, …) and [`joints`];
+//!    [`section`] (cross-sectional analysis); [`tangent_check`] (the generic check of
+//!    every kernel's tangents);
+//! 4. [`model`]: the input file and its validation, one module per component kind in
+//!    [`model::components`] (the registry);
+//! 5. [`system`]: the system's unknowns and their assembly;
+//! 6. [`analysis`]; 7. [`output`].
 //!
 //! ```no_run
 //! use samara::model::Model;
@@ -23,6 +36,7 @@
 
 pub mod analysis;
 pub mod core;
+pub mod diagnostics;
 pub mod elements;
 pub mod input_files;
 pub mod joints;

@@ -616,23 +616,49 @@ impl TangentCase {
         }
     }
 
-    /// The largest relative mismatch of every tangent of the case.
-    pub fn check(&self, ctx: &EvalContext) -> f64 {
+    /// The largest relative mismatches of the case's tangents (per entry, differences at
+    /// ε = 1e-6) and of its rate terms (constraints' convective and velocity terms,
+    /// differences along the motion at ε = 1e-4, floor ≈ 1e-8).
+    pub fn check(&self, ctx: &EvalContext) -> CaseReport {
         match self {
             Self::Element {
                 element,
                 nodes,
                 states,
                 signals,
-            } => check_element_with(element.as_ref(), ctx, nodes, states, signals).worst(),
+            } => CaseReport {
+                tangents: check_element_with(element.as_ref(), ctx, nodes, states, signals).worst(),
+                rates: 0.0,
+            },
             Self::Constraint {
                 constraint,
                 nodes,
                 coords,
                 mu,
-            } => check_constraint(constraint.as_ref(), ctx, nodes, coords, mu).worst(),
+            } => {
+                let r = check_constraint(constraint.as_ref(), ctx, nodes, coords, mu);
+                CaseReport {
+                    tangents: largest(&[
+                        r.b.relative,
+                        r.k.relative,
+                        r.coordinate_stiffness.relative,
+                        r.coordinate_damping.relative,
+                        r.coordinate_signals.relative,
+                    ]),
+                    rates: largest(&[r.convective, r.velocity]),
+                }
+            }
         }
     }
+}
+
+/// Result of [`TangentCase::check`].
+#[derive(Clone, Copy, Debug)]
+pub struct CaseReport {
+    /// Largest relative mismatch of the tangent matrices.
+    pub tangents: f64,
+    /// Largest relative mismatch of the rate terms (constraints only).
+    pub rates: f64,
 }
 
 /// A node in a reproducible, generic state (position, orientation, velocities and

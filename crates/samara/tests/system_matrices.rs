@@ -202,3 +202,8 @@ fn landing_gear_with_coordinate_elements() {
 fn curved_beam_with_a_body() {
     check("examples/blade_spinup.toml");
 }
+
+#[test]
+fn active_suspension_with_states_and_signals() {
+    check("examples/active_suspension.toml");
+}

@@ -288,3 +288,35 @@ fn checker_detects_a_wrong_tangent() {
     let rep = check_element(&Wrong(mk(100.0), mk(100.5)), &ctx(), &nodes);
     assert!(rep.k.relative > 1e-4, "{rep:?}");
 }
+
+/// The generic loop over the registry of component kinds: every kind of the model file
+/// supplies tangent cases (its elements and constraints at generic states, with element
+/// states and input signals where it has them), and every case passes. A new kind that
+/// registers no case fails here.
+#[test]
+fn every_registered_kind_passes_the_tangent_check() {
+    use samara::model::components::{TABLES, tangent_cases};
+    let cases = tangent_cases();
+    for table in TABLES {
+        assert!(
+            cases.iter().any(|(t, _)| t == table),
+            "the kind `[[{table}]]` registers no tangent case"
+        );
+    }
+    let (mut tangents, mut rates): (f64, f64) = (0.0, 0.0);
+    for (table, case) in &cases {
+        let rep = case.check(&ctx());
+        tangents = tangents.max(rep.tangents);
+        rates = rates.max(rep.rates);
+        assert!(
+            rep.tangents < TOL && rep.rates < 1e-5,
+            "[[{table}]] {}: {rep:?}",
+            case.name()
+        );
+    }
+    println!(
+        "{} cases over {} kinds; largest mismatch: tangents {tangents:.2e}, rate terms {rates:.2e}",
+        cases.len(),
+        TABLES.len()
+    );
+}

@@ -216,4 +216,12 @@ pub trait Element: Send + Sync {
     fn dissipated_power(&self, _x: &ElementInput) -> f64 {
         0.0
     }
+    /// Names and units of the element's output quantities (`("tension", "N")`; written
+    /// as `element_output` named `<element>.tension`). Outputs are for the results only:
+    /// no equation depends on them.
+    fn output_names(&self) -> Vec<(String, &'static str)> {
+        Vec::new()
+    }
+    /// Values of the outputs, in the order of [`Element::output_names`].
+    fn outputs(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut [f64]) {}
 }

@@ -101,4 +101,14 @@ impl Element for Maxwell {
         let zd = x.states[0].zd;
         self.damping * zd * zd
     }
+
+    fn output_names(&self) -> Vec<(String, &'static str)> {
+        vec![("tension".into(), "N"), ("length".into(), "m")]
+    }
+
+    fn outputs(&self, _ctx: &EvalContext, x: &ElementInput, out: &mut [f64]) {
+        let st = self.line.state(x.nodes);
+        out[0] = self.tension(st.length, x.states[0].z);
+        out[1] = st.length;
+    }
 }

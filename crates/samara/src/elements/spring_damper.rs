@@ -63,4 +63,14 @@ impl Element for SpringDamper {
         let st = self.line.state(x.nodes);
         self.damping * st.rate * st.rate
     }
+
+    fn output_names(&self) -> Vec<(String, &'static str)> {
+        vec![("tension".into(), "N"), ("length".into(), "m")]
+    }
+
+    fn outputs(&self, _ctx: &EvalContext, x: &ElementInput, out: &mut [f64]) {
+        let st = self.line.state(x.nodes);
+        out[0] = self.stiffness * (st.length - self.rest_length) + self.damping * st.rate;
+        out[1] = st.length;
+    }
 }

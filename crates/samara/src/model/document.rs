@@ -121,7 +121,7 @@ impl Document {
             }),
             Err(e) => Err(ModelError {
                 source: super::SourceFile::new(&path, text),
-                diagnostics: vec![super::parse_error(&e, text)],
+                diagnostics: vec![crate::diagnostics::parse_error_diagnostic(&e, text)],
             }),
         }
     }

@@ -6,13 +6,14 @@
 
 pub mod components;
 pub mod document;
-pub mod error;
 pub mod input;
-pub mod located;
 pub mod section_files;
 mod validate;
 
 pub use crate::core::NodeRef;
+pub use crate::diagnostics::Located;
+pub use crate::diagnostics::{Diagnostic, MAX_MAGNITUDE, ModelError, Severity, SourceFile};
+pub use crate::diagnostics::{error, located};
 pub use crate::elements::beam::BeamDef;
 pub use crate::joints::COMPONENT_NAMES;
 pub use crate::joints::{BacklashDef, ComponentDef, ForceLaw, JointDef};
@@ -23,21 +24,13 @@ pub use components::force::LoadDef;
 pub use components::signal::SignalDef;
 pub use components::spring::SpringDef;
 pub use components::{Model, ModelInput};
-pub use error::{Diagnostic, ModelError, Severity, SourceFile};
 pub use input::{FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame};
-pub use located::Located;
 pub use section_files::LoadOptions;
-pub(crate) use validate::parse_error_diagnostic as parse_error;
 pub use validate::{Checker, Entry, validate};
 
 use crate::math::Rotation;
 use nalgebra::Vector3;
 use std::path::Path;
-
-/// The largest magnitude a number in a model may have. Products of a few such numbers
-/// (energies, stiffness times strain) stay finite in f64; no SI quantity of a mechanical
-/// model comes near it.
-pub const MAX_MAGNITUDE: f64 = 1e100;
 
 /// The largest number of nodes a model may have (given and created by beams together):
 /// about 1 GB of iteration matrix, well inside what one machine holds.
@@ -165,6 +158,14 @@ impl AnalysisDef {
             AnalysisKind::Static(_) => "static",
         }
     }
+
+    /// The time the analysis ends at (a static analysis: the time its loads are taken at).
+    pub fn end_time(&self) -> f64 {
+        match &self.kind {
+            AnalysisKind::Dynamic(d) => d.t_end,
+            AnalysisKind::Static(s) => s.time,
+        }
+    }
 }
 
 /// A validated model and the warnings found while checking it.
@@ -199,7 +200,7 @@ impl Model {
             Err(e) => {
                 return Err(ModelError {
                     source,
-                    diagnostics: vec![validate::parse_error_diagnostic(&e, text)],
+                    diagnostics: vec![crate::diagnostics::parse_error_diagnostic(&e, text)],
                 });
             }
         };

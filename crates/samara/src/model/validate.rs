@@ -5,6 +5,7 @@ use super::error::{Diagnostic, ModelError, Severity, SourceFile, did_you_mean};
 use super::input::*;
 use super::located::Located;
 use super::*;
+use crate::diagnostics::number_range_diagnostics;
 use crate::math::Rotation;
 use nalgebra::{Matrix3, Vector3};
 use std::collections::HashMap;
@@ -43,110 +44,6 @@ pub fn validate(input: &ModelInput, source: SourceFile) -> Result<LoadedModel, M
         warnings: v.diags,
         source,
     })
-}
-
-/// Every number written in the file must be finite and at most [`MAX_MAGNITUDE`] in
-/// magnitude, whatever key it belongs to: one located error per offending number.
-pub(crate) fn number_range_diagnostics(text: &str) -> Vec<Diagnostic> {
-    use toml::de::{DeTable, DeValue};
-    let mut out = Vec::new();
-    let Ok(doc) = DeTable::parse(text) else {
-        return out; // syntax errors are reported by the parser itself
-    };
-    let mut stack: Vec<&toml::Spanned<DeValue>> = doc.get_ref().values().collect();
-    while let Some(v) = stack.pop() {
-        match v.get_ref() {
-            DeValue::Float(f) => {
-                let raw = f.as_str();
-                let x: f64 = raw.replace('_', "").parse().unwrap_or(f64::NAN);
-                if !(x.is_finite() && x.abs() <= MAX_MAGNITUDE) {
-                    out.push(
-                        Diagnostic::error(
-                            format!("the number `{raw}` is outside the range samara computes with (finite, |x| ≤ {MAX_MAGNITUDE:e})"),
-                            Some(v.span()),
-                        )
-                        .with_hint("inf and nan are not allowed in a model; use SI units, where no input comes near this bound"),
-                    );
-                }
-            }
-            DeValue::Array(a) => stack.extend(a.iter()),
-            DeValue::Table(t) => stack.extend(t.values()),
-            _ => {}
-        }
-    }
-    out.sort_by_key(|d| d.span.as_ref().map_or(0, |s| s.start));
-    out
-}
-
-/// Where a parse error without a location most likely is: the most deeply nested line
-/// (dotted keys and headers, brackets), for the parser's recursion limit.
-fn deepest_line(text: &str) -> Option<std::ops::Range<usize>> {
-    let mut best: Option<(usize, std::ops::Range<usize>)> = None;
-    let mut start = 0;
-    for line in text.split_inclusive('\n') {
-        let depth = line
-            .bytes()
-            .filter(|b| matches!(b, b'.' | b'[' | b'{'))
-            .count();
-        if best.as_ref().is_none_or(|(d, _)| depth > *d) {
-            best = Some((depth, start..start + line.trim_end().len().max(1)));
-        }
-        start += line.len();
-    }
-    best.map(|(_, r)| r)
-}
-
-/// Turns a TOML/serde error into a diagnostic with a hint where one can be guessed.
-pub(crate) fn parse_error_diagnostic(e: &toml::de::Error, text: &str) -> Diagnostic {
-    let msg = e.message().trim().to_string();
-    if e.span().is_none() && msg.contains("recursion") {
-        return Diagnostic::error(
-            format!("{msg}: the file nests tables or arrays too deeply"),
-            deepest_line(text),
-        )
-        .with_hint("a model needs only a few levels of nesting; check this line's dotted keys and brackets");
-    }
-    let mut d = Diagnostic::error(msg.clone(), e.span());
-    if let Some(rest) = msg.strip_prefix("unknown field `") {
-        if let Some((field, expected)) = rest.split_once('`') {
-            let candidates = backticked(expected);
-            d.message = format!("unknown key `{field}`");
-            d = match did_you_mean(field, candidates.iter().map(|s| s.as_str())) {
-                Some(best) => d.with_hint(format!("did you mean `{best}`?")),
-                None => d.with_hint(format!(
-                    "the keys allowed here are: {}",
-                    candidates.join(", ")
-                )),
-            };
-        }
-    } else if let Some(rest) = msg.strip_prefix("unknown variant `") {
-        if let Some((word, expected)) = rest.split_once('`') {
-            let candidates = backticked(expected);
-            d.message = format!("unknown value `{word}`");
-            d = match did_you_mean(word, candidates.iter().map(|s| s.as_str())) {
-                Some(best) => d.with_hint(format!("did you mean `{best}`?")),
-                None => d.with_hint(format!("expected one of: {}", candidates.join(", "))),
-            };
-        }
-    } else if let Some(rest) = msg.strip_prefix("missing field `") {
-        if let Some((field, _)) = rest.split_once('`') {
-            d.message = format!("missing required key `{field}`");
-            d = d.with_hint(format!(
-                "add `{field} = …` to this table (see docs/model-reference.md)"
-            ));
-        }
-    } else if msg.contains("invalid type") || msg.contains("expected") {
-        d = d.with_hint("check the value's type: numbers are written like 1.0 or 2e-3, vectors like [0.0, 1.0, 0.0], names in quotes");
-    }
-    d
-}
-
-fn backticked(s: &str) -> Vec<String> {
-    s.split('`')
-        .enumerate()
-        .filter(|(i, _)| i % 2 == 1)
-        .map(|(_, w)| w.to_string())
-        .collect()
 }
 
 /// The validation context shared by every component kind: diagnostics with their

@@ -82,6 +82,9 @@ pub struct ResultsReader {
     /// Element states (`<element>.<state>`) and signals, if the model has them.
     pub state_names: Vec<String>,
     pub signal_names: Vec<String>,
+    /// Element outputs (`<element>.<output>`) and their units, if the model has them.
+    pub output_names: Vec<String>,
+    pub output_units: Vec<String>,
     /// Complete output times in the file.
     pub records: usize,
 }
@@ -171,6 +174,8 @@ impl ResultsReader {
         let section_names = names(&mut reader, "section_name");
         let state_names = names(&mut reader, "state_name");
         let signal_names = names(&mut reader, "signal_name");
+        let output_names = names(&mut reader, "output_name");
+        let output_units = names(&mut reader, "output_units");
         Ok(Self {
             reader,
             path,
@@ -183,6 +188,8 @@ impl ResultsReader {
             section_names,
             state_names,
             signal_names,
+            output_names,
+            output_units,
             records: complete,
         })
     }
@@ -305,6 +312,7 @@ impl ResultsReader {
             "coordinate" => &self.coordinate_names,
             "state" => &self.state_names,
             "signal" => &self.signal_names,
+            "output" => &self.output_names,
             _ => &[],
         }
     }
@@ -312,7 +320,8 @@ impl ResultsReader {
     /// Reads a channel: `variable` for scalar histories, `variable:item:component` for
     /// node and joint vectors (component x, y, z; w, x, y, z for `orientation`), and
     /// `variable:name` for joint coordinates (e.g. `joint_coordinate:pivot.theta3`),
-    /// element states (`element_state:strut.pressure`) and signals (`signal:sensor.out`).
+    /// element states (`element_state:strut.pressure`), signals (`signal:sensor.out`) and
+    /// element outputs (`element_output:strut.tension`).
     pub fn channel(&mut self, spec: &str) -> Result<Channel, ReadError> {
         if let Some(rest) = spec.strip_prefix("displacement:") {
             return self.displacement(spec, rest);
@@ -360,6 +369,7 @@ impl ResultsReader {
                     ("joint_coordinate_rate", false) => "rad s-1".into(),
                     ("joint_coordinate_force", true) => "N".into(),
                     ("joint_coordinate_force", false) => "N m".into(),
+                    ("element_output", _) => self.output_units.get(i).cloned().unwrap_or(units),
                     _ => units,
                 };
                 (0..self.records).map(|r| data[r * n + i]).collect()

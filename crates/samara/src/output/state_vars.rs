@@ -1,7 +1,8 @@
 //! Results of element states and signals: `element_state(time, state)`,
 //! `element_state_rate(time, state)` with names `<element>.<state>` in `state_name`, and
-//! `signal(time, signal)` with names in `signal_name` (defined only when the model has
-//! them).
+//! `signal(time, signal)` with names in `signal_name`, and the elements' output quantities
+//! `element_output(time, output)` with `output_name` and `output_units` (each defined
+//! only when the model has them).
 
 use super::netcdf::{Definition, DimId, NcError, NcType, VarId, Writer};
 use crate::core::State;
@@ -13,7 +14,11 @@ pub struct StateVars {
     rate: Option<VarId>,
     signal_name: Option<VarId>,
     signal: Option<VarId>,
+    output_name: Option<VarId>,
+    output_units: Option<VarId>,
+    output: Option<VarId>,
     z: Vec<f64>,
+    values: Vec<f64>,
     zd: Vec<f64>,
 }
 
@@ -22,9 +27,9 @@ fn longest(names: &[String]) -> usize {
 }
 
 impl StateVars {
-    /// Defines the variables; `None` when the model has neither states nor signals.
+    /// Defines the variables; `None` when the model has no states, signals or outputs.
     pub fn define(d: &mut Definition, sys: &System, time: DimId) -> Option<Self> {
-        if sys.n_states == 0 && sys.signals.names.is_empty() {
+        if sys.n_states == 0 && sys.signals.names.is_empty() && sys.output_names.is_empty() {
             return None;
         }
         let var = super::beam_vars::add;
@@ -78,12 +83,46 @@ impl StateVars {
                 "signal value",
             ));
         }
+        let (mut output_name, mut output_units, mut output) = (None, None, None);
+        if !sys.output_names.is_empty() {
+            let o = d.add_dim("output", sys.output_names.len());
+            let len = d.add_dim("output_strlen", longest(&sys.output_names));
+            let ulen = d.add_dim("output_units_strlen", longest(&sys.output_units));
+            output_name = Some(var(
+                d,
+                "output_name",
+                NcType::Char,
+                &[o, len],
+                "",
+                "element output name, <element>.<output>",
+            ));
+            output_units = Some(var(
+                d,
+                "output_units",
+                NcType::Char,
+                &[o, ulen],
+                "",
+                "units of each element output",
+            ));
+            output = Some(var(
+                d,
+                "element_output",
+                NcType::Double,
+                &[time, o],
+                "output-specific",
+                "element output quantity (units in output_units)",
+            ));
+        }
         Some(Self {
             name,
             value,
             rate,
             signal_name,
             signal,
+            output_name,
+            output_units,
+            output,
+            values: vec![0.0; sys.output_names.len()],
             z: vec![0.0; sys.n_states],
             zd: vec![0.0; sys.n_states],
         })
@@ -98,6 +137,12 @@ impl StateVars {
         if let Some(v) = self.signal_name {
             let names: Vec<&str> = sys.signals.names.iter().map(|s| s.as_str()).collect();
             w.put_fixed_text(v, &names)?;
+        }
+        if let (Some(n), Some(u)) = (self.output_name, self.output_units) {
+            let names: Vec<&str> = sys.output_names.iter().map(|s| s.as_str()).collect();
+            w.put_fixed_text(n, &names)?;
+            let units: Vec<&str> = sys.output_units.iter().map(|s| s.as_str()).collect();
+            w.put_fixed_text(u, &units)?;
         }
         Ok(())
     }
@@ -118,9 +163,13 @@ impl StateVars {
             w.set_record_f64(v, &self.z)?;
             w.set_record_f64(r, &self.zd)?;
         }
+        let ctx = sys.context(state.time, load_factor);
         if let Some(v) = self.signal {
-            let ctx = sys.context(state.time, load_factor);
             w.set_record_f64(v, &sys.signal_values(&ctx, state))?;
+        }
+        if let Some(v) = self.output {
+            sys.element_outputs(&ctx, state, &mut self.values);
+            w.set_record_f64(v, &self.values)?;
         }
         Ok(())
     }

@@ -6,7 +6,7 @@ mod check;
 
 use super::SectionModel;
 use super::mesh_io::MeshFileError;
-use crate::model::{Diagnostic, Located, ModelError, Severity, SourceFile};
+use crate::diagnostics::{Diagnostic, Located, ModelError, Severity, SourceFile};
 use check::Checker;
 use schemars::JsonSchema;
 use serde::Deserialize;
@@ -363,7 +363,7 @@ pub fn from_str(text: &str, path: &Path) -> Result<LoadedSection, SectionError> 
             return Err(SectionError {
                 errors: vec![ModelError {
                     source,
-                    diagnostics: vec![crate::model::parse_error(&e, text)],
+                    diagnostics: vec![crate::diagnostics::parse_error_diagnostic(&e, text)],
                 }],
             });
         }

@@ -13,7 +13,7 @@
 
 use super::input::SectionFile;
 use super::{Properties, SectionResult};
-use crate::model::{Diagnostic, Located, ModelError, SourceFile};
+use crate::diagnostics::{Diagnostic, Located, ModelError, SourceFile};
 use nalgebra::Matrix6;
 use serde::Deserialize;
 use sha2::{Digest, Sha256};

@@ -66,6 +66,11 @@ pub struct System {
     pub state_names: Vec<String>,
     /// Who produces and who reads each signal.
     pub signals: SignalGraph,
+    /// First output of each element in the list of outputs (results only).
+    pub output_offsets: Vec<usize>,
+    /// `<element>.<output>`, with units.
+    pub output_names: Vec<String>,
+    pub output_units: Vec<String>,
 }
 
 impl System {
@@ -265,6 +270,16 @@ impl System {
             nz += e.n_states();
             state_names.extend(e.state_names().iter().map(|s| format!("{}.{s}", e.name())));
         }
+        // Output quantities, element by element (results only).
+        let mut output_offsets = Vec::with_capacity(elements.len());
+        let (mut output_names, mut output_units) = (Vec::new(), Vec::new());
+        for e in &elements {
+            output_offsets.push(output_names.len());
+            for (o, u) in e.output_names() {
+                output_names.push(format!("{}.{o}", e.name()));
+                output_units.push(u.to_string());
+            }
+        }
         let local_config: Vec<Vec<usize>> = elements
             .iter()
             .zip(&state_offsets)
@@ -318,6 +333,9 @@ impl System {
             n_states: nz,
             state_names,
             signals,
+            output_offsets,
+            output_names,
+            output_units,
         }
     }
 
@@ -534,7 +552,10 @@ impl System {
     }
 
     pub fn kinetic_energy(&self, s: &State) -> f64 {
-        self.element_sum(s, &[], |e, x| e.kinetic_energy(x))
+        // Elements see their input signals in every evaluation (kinetic energy
+        // included), so the signals are evaluated at the state's time.
+        let signals = self.signal_values(&self.context(s.time, 1.0), s);
+        self.element_sum(s, &signals, |e, x| e.kinetic_energy(x))
     }
 
     pub fn potential_energy(&self, ctx: &EvalContext, s: &State) -> f64 {
@@ -558,6 +579,23 @@ impl System {
             })
             .sum();
         self.element_sum(s, &signals, |e, x| e.external_power(ctx, x)) + coordinate_inputs
+    }
+
+    /// Values of every element's outputs at `s` (`out.len()` = number of outputs).
+    pub fn element_outputs(&self, ctx: &EvalContext, s: &State, out: &mut [f64]) {
+        if self.output_names.is_empty() {
+            return;
+        }
+        let signals = self.signal_values(ctx, s);
+        let mut scratch = Vec::new();
+        for (k, e) in self.elements.iter().enumerate() {
+            let off = self.output_offsets[k];
+            let n = self.output_offsets.get(k + 1).copied().unwrap_or(out.len()) - off;
+            if n > 0 {
+                let x = self.element_input(k, s, &signals, &mut scratch);
+                e.outputs(ctx, &x, &mut out[off..off + n]);
+            }
+        }
     }
 
     pub fn dissipated_power(&self, s: &State) -> f64 {

@@ -2,7 +2,7 @@
 //! (a mesh file or one generator), each finding located in its file with a hint.
 
 use super::*;
-use crate::model::{Diagnostic, Located, ModelError, Severity, SourceFile};
+use crate::diagnostics::{Diagnostic, Located, ModelError, Severity, SourceFile};
 use crate::section::element::ElementKind;
 use crate::section::generators::{self as generate, Meshing, Ply};
 use crate::section::material::{Material, Orthotropic};
@@ -409,7 +409,7 @@ impl Checker {
         if let Some(i) = names.iter().position(|n| *n == m.value) {
             return Some(i);
         }
-        let hint = crate::model::error::did_you_mean(&m.value, names.iter().map(|s| s.as_str()))
+        let hint = crate::diagnostics::did_you_mean(&m.value, names.iter().map(|s| s.as_str()))
             .map(|b| format!("did you mean '{b}'?"))
             .unwrap_or_else(|| format!("the materials are: {}", names.join(", ")));
         self.error(
