@@ -5,6 +5,7 @@ mod plot;
 mod report;
 mod section;
 mod section_plot;
+mod sweep;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -41,6 +42,19 @@ enum Command {
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
+    },
+    /// Run a model once per case of a parameter grid or list: `<out>/case_NNNN/` per case
+    /// and `<out>/index.csv` (values, status, error of every case).
+    Sweep {
+        /// Model file (TOML).
+        model: PathBuf,
+        /// Parameters file (TOML): `[grid]` with `"path" = [values]`, or `[[cases]]`
+        /// with `"path" = value`; paths such as `bodies.bob.mass`, `model.gravity[2]`.
+        #[arg(long, value_name = "PARAMS.toml")]
+        grid: PathBuf,
+        /// Results directory [default: out/sweep/ beside the model].
+        #[arg(long, short)]
+        out: Option<PathBuf>,
     },
     /// Validate a model without running it.
     Check {
@@ -108,6 +122,7 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Run { model, out, quiet } => run(&model, out, quiet),
         Command::Check { model } => check(&model),
+        Command::Sweep { model, grid, out } => sweep::sweep(&model, &grid, out),
         Command::Section {
             section,
             out,

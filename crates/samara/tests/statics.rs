@@ -68,11 +68,16 @@ tolerance = 1e-12
     // Newton converges to the tolerance 1e-12; nothing is discretized.
     assert!((x - tip).norm() < 1e-9, "{:e}", (x - tip).norm());
     assert!((last.load_factor - 1.0).abs() < 1e-15);
-    // Load factors of the increments are k/10.
-    assert_eq!(hist.frames.len(), 10);
+    // The first record is the unloaded state (load factor 0): the bar where the model put
+    // it, the spring at its free length and no weight, hence no reaction (exactly: the
+    // least-squares multipliers of a zero residual). Then the increments' k/10.
+    assert_eq!(hist.frames.len(), 11);
     for (i, f) in hist.frames.iter().enumerate() {
-        assert!((f.load_factor - (i + 1) as f64 / 10.0).abs() < 1e-12);
+        assert!((f.load_factor - i as f64 / 10.0).abs() < 1e-12);
     }
+    let first = &hist.frames[0];
+    assert_eq!(first.state.nodes[0].x, md.nodes[0].position);
+    assert!(first.reactions[0].0.norm() < 1e-12 && first.reactions[0].1.norm() < 1e-12);
     // Pivot reaction on the bar (side B) by the ground: −(weight + spring force on the
     // bar), written in the components of the joint's frame A (docs/model-reference.md,
     // "Reactions"; A is fixed to the ground here). The moment about the pivot is zero: the

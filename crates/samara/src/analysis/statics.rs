@@ -233,6 +233,56 @@ pub fn run_static(
         constraint_tolerance: settings.solver.tolerance,
         reuse_jacobian: false,
     };
+    // The first record is the unloaded state (load factor 0): the assembled reference
+    // configuration, reactions as the least-squares multipliers there.
+    {
+        let ctx0 = sys.context(settings.time, 0.0);
+        least_squares_multipliers(
+            sys,
+            &mut asm,
+            &mut state,
+            &ctx0,
+            &mut lin,
+            &mut matrix,
+            &mut work,
+        );
+        sys.update_passive_coordinates(&mut state, true);
+        let energy = Energy {
+            kinetic: 0.0,
+            potential: sys.potential_energy(&ctx0, &state),
+            external_work: 0.0,
+            dissipated: 0.0,
+        };
+        let violation = summary.assembly.as_ref().map_or(0.0, |r| r.violation_after);
+        summary.max_constraint_violation = violation;
+        if let Some(what) = super::first_non_finite(sys, &state, &energy) {
+            summary.failure = Some(super::non_finite_failure(name, 0.0, what));
+            summary.final_state = state;
+            summary.wall_time = clock.elapsed();
+            return Ok(summary);
+        }
+        mu.copy_from_slice(&state.lambda);
+        let diag = settings.solver.diagnostics.then_some(StepDiagnostics {
+            newton_iterations: 0,
+            residual_norm: 0.0,
+            correction_norm: 0.0,
+            condition: f64::NAN,
+            condition_kind: crate::solve::condition::ConditionKind::Exact2Norm,
+            step_size: 0.0,
+        });
+        recorder.record(
+            sys,
+            &OutputFrame {
+                time: 0.0,
+                state: &state,
+                mu: &mu,
+                energy,
+                constraint_violation: violation,
+                load_factor: 0.0,
+                diagnostics: diag,
+            },
+        )?;
+    }
     let nominal = 1.0 / settings.load_steps as f64;
     let mut lf = 0.0;
     let mut inc = nominal;

@@ -5,6 +5,7 @@
 //! only the validated [`Model`].
 
 pub mod components;
+pub mod document;
 pub mod input;
 pub mod section_files;
 mod validate;

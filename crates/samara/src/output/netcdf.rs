@@ -592,6 +592,33 @@ impl Definition {
         if !self.errors.is_empty() {
             return Err(NcError::Definition(self.errors.join("; ")));
         }
+        let file = OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(path)
+            .map_err(|e| {
+                if e.kind() == io::ErrorKind::AlreadyExists {
+                    NcError::Exists(path.to_owned())
+                } else {
+                    NcError::Io {
+                        path: path.to_owned(),
+                        source: e,
+                    }
+                }
+            })?;
+        self.start(Target::File(file), path)
+    }
+
+    /// [`Self::create`] into memory: the same bytes, kept in the [`Writer`] and handed
+    /// back by [`Writer::into_bytes`]; `name` only labels errors.
+    pub fn create_in_memory(self, name: &Path) -> Result<Writer, NcError> {
+        if !self.errors.is_empty() {
+            return Err(NcError::Definition(self.errors.join("; ")));
+        }
+        self.start(Target::Memory(Vec::new()), name)
+    }
+
+    fn start(self, mut target: Target, path: &Path) -> Result<Writer, NcError> {
         let io_err = |source: io::Error| NcError::Io {
             path: path.to_owned(),
             source,
@@ -601,21 +628,9 @@ impl Definition {
         let (layout, data_start, rec_begin, recsize) = self.compute_layout(header.len())?;
         self.schema.encode_header(0, &layout, &mut header);
 
-        let file = OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(path)
-            .map_err(|e| {
-                if e.kind() == io::ErrorKind::AlreadyExists {
-                    NcError::Exists(path.to_owned())
-                } else {
-                    io_err(e)
-                }
-            })?;
-
         // Header, reserved zeros, then fixed variables pre-filled.
         {
-            let mut w = BufWriter::with_capacity(1 << 16, &file);
+            let mut w = BufWriter::with_capacity(1 << 16, target.sink());
             w.write_all(&header).map_err(io_err)?;
             let zeros = [0u8; 4096];
             let mut left = data_start as usize - header.len();
@@ -648,7 +663,7 @@ impl Definition {
             }
         }
         Ok(Writer {
-            file,
+            file: target,
             path: path.to_owned(),
             has_record_dim: self.schema.record_dim().is_some(),
             schema: self.schema,
@@ -795,13 +810,65 @@ fn encode_i32(out: &mut [u8], ty: NcType, data: &[i32], var: &str) -> Result<(),
 // Data mode
 // ---------------------------------------------------------------------------
 
+/// Where a [`Writer`]'s bytes go: a file (positioned writes straight to the OS) or a
+/// buffer in memory holding the same bytes.
+#[derive(Debug)]
+enum Target {
+    File(File),
+    Memory(Vec<u8>),
+}
+
+impl Target {
+    fn write_all_at(&mut self, buf: &[u8], offset: u64) -> io::Result<()> {
+        match self {
+            Target::File(f) => f.write_all_at(buf, offset),
+            Target::Memory(m) => {
+                let start = usize::try_from(offset)
+                    .map_err(|_| io::Error::other("offset beyond the address space"))?;
+                let end = start
+                    .checked_add(buf.len())
+                    .ok_or_else(|| io::Error::other("offset beyond the address space"))?;
+                if m.len() < end {
+                    m.resize(end, 0);
+                }
+                m[start..end].copy_from_slice(buf);
+                Ok(())
+            }
+        }
+    }
+
+    /// A sequential writer from the start (used once, to lay the file out).
+    fn sink(&mut self) -> Sink<'_> {
+        Sink {
+            target: self,
+            pos: 0,
+        }
+    }
+}
+
+struct Sink<'a> {
+    target: &'a mut Target,
+    pos: u64,
+}
+
+impl Write for Sink<'_> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        self.target.write_all_at(buf, self.pos)?;
+        self.pos += buf.len() as u64;
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}
+
 /// Data mode: write fixed variables, append records, rewrite global attributes.
 ///
 /// Dropping a `Writer` without [`finish`](Self::finish) leaves a valid file
 /// with all committed records (staged, uncommitted values are discarded).
 #[derive(Debug)]
 pub struct Writer {
-    file: File,
+    file: Target,
     path: PathBuf,
     schema: Schema,
     layout: Vec<VarLayout>,
@@ -1052,9 +1119,22 @@ impl Writer {
         Ok(())
     }
 
-    /// fsync data and metadata (durability against power loss).
+    /// fsync data and metadata (durability against power loss); nothing for a writer in
+    /// memory.
     pub fn sync(&self) -> Result<(), NcError> {
-        self.file.sync_all().map_err(|e| self.io_err(e))
+        match &self.file {
+            Target::File(f) => f.sync_all().map_err(|e| self.io_err(e)),
+            Target::Memory(_) => Ok(()),
+        }
+    }
+
+    /// The bytes of a file written in memory ([`Definition::create_in_memory`]); `None`
+    /// for a file on disk.
+    pub fn into_bytes(self) -> Option<Vec<u8>> {
+        match self.file {
+            Target::File(_) => None,
+            Target::Memory(b) => Some(b),
+        }
     }
 
     /// Finish writing: fsync and close. Uncommitted staged values are discarded.

@@ -292,6 +292,13 @@ impl ResultsReader {
                             out.push(format!("{}:{it}:{c}", v.name));
                         }
                     }
+                    if v.name == "position" {
+                        for it in items {
+                            for c in comps {
+                                out.push(format!("displacement:{it}:{c}"));
+                            }
+                        }
+                    }
                 }
                 _ => {}
             }
@@ -316,6 +323,9 @@ impl ResultsReader {
     /// element states (`element_state:strut.pressure`), signals (`signal:sensor.out`) and
     /// element outputs (`element_output:strut.tension`).
     pub fn channel(&mut self, spec: &str) -> Result<Channel, ReadError> {
+        if let Some(rest) = spec.strip_prefix("displacement:") {
+            return self.displacement(spec, rest);
+        }
         let parts: Vec<&str> = spec.split(':').collect();
         let all = self.channel_names();
         let unknown = |reason: String, candidates: &[String]| ReadError::UnknownChannel {
@@ -423,6 +433,40 @@ impl ResultsReader {
             units,
             long_name: info.long_name.clone().unwrap_or_default(),
             values,
+        })
+    }
+}
+
+impl ResultsReader {
+    /// `displacement:node:component`: `position` minus `reference_position` (the model's
+    /// reference configuration); files written before that variable existed use the first
+    /// record's position.
+    fn displacement(&mut self, spec: &str, rest: &str) -> Result<Channel, ReadError> {
+        let position = self.channel(&format!("position:{rest}"))?;
+        let parts: Vec<&str> = rest.split(':').collect();
+        let has_reference = self
+            .variables()
+            .iter()
+            .any(|v| v.name == "reference_position");
+        let reference = if has_reference {
+            let i = self
+                .node_names
+                .iter()
+                .position(|n| n == parts[0])
+                .expect("position found the node");
+            let c = ["x", "y", "z"]
+                .iter()
+                .position(|c| *c == parts[1])
+                .expect("position found the component");
+            self.read("reference_position")?[3 * i + c]
+        } else {
+            position.values.first().copied().unwrap_or(0.0)
+        };
+        Ok(Channel {
+            label: spec.to_string(),
+            units: position.units,
+            long_name: "displacement of the node from its reference position".into(),
+            values: position.values.iter().map(|x| x - reference).collect(),
         })
     }
 }

@@ -123,6 +123,29 @@ impl ResultsFile {
         sys: &System,
         analysis: &dyn Analysis,
     ) -> Result<Self, crate::Error> {
+        Self::open(Some(dir), model, model_file, sys, analysis)
+    }
+
+    /// The results of an analysis written in memory instead of a file: the same bytes
+    /// [`Self::create`] would write, returned by [`Self::finish_in_memory`].
+    pub fn in_memory(
+        model: &Model,
+        model_file: Option<&Path>,
+        sys: &System,
+        analysis: &dyn Analysis,
+    ) -> Result<Self, crate::Error> {
+        Self::open(None, model, model_file, sys, analysis)
+    }
+
+    fn open(
+        dir: Option<&Path>,
+        model: &Model,
+        model_file: Option<&Path>,
+        sys: &System,
+        analysis: &dyn Analysis,
+    ) -> Result<Self, crate::Error> {
+        let in_memory = dir.is_none();
+        let dir = dir.unwrap_or(Path::new("<memory>"));
         // Validation checks this for model files; a model built in code gets it here, so
         // that no name can place a file outside `dir`.
         if !crate::model::is_plain_file_name(analysis.name()) {
@@ -134,14 +157,16 @@ impl ResultsFile {
                 ),
             });
         }
-        std::fs::create_dir_all(dir).map_err(|e| crate::Error::Io {
-            path: dir.to_path_buf(),
-            action: "create the results directory",
-            source: e,
-        })?;
         let path = dir.join(format!("{}.nc", analysis.name()));
         let mut backup = None;
-        if path.exists() {
+        if !in_memory {
+            std::fs::create_dir_all(dir).map_err(|e| crate::Error::Io {
+                path: dir.to_path_buf(),
+                action: "create the results directory",
+                source: e,
+            })?;
+        }
+        if !in_memory && path.exists() {
             let b = backup_name(&path);
             std::fs::rename(&path, &b).map_err(|e| crate::Error::Io {
                 path: path.clone(),
@@ -214,6 +239,22 @@ impl ResultsFile {
             &[node, strlen],
             "",
             "node name",
+        );
+        let reference_position = var(
+            &mut d,
+            "reference_position",
+            NcType::Double,
+            &[node, vec3],
+            "m",
+            "position of the node in the model's reference configuration (displacement = position - reference_position)",
+        );
+        let reference_orientation = var(
+            &mut d,
+            "reference_orientation",
+            NcType::Double,
+            &[node, quat],
+            "1",
+            "orientation of the node in the model's reference configuration (unit quaternion w, x, y, z; global frame)",
         );
         let body_vars = body.map(|b| {
             (
@@ -506,11 +547,31 @@ impl ResultsFile {
         d.add_global_attr("status", text("running"));
         d.reserve_header(HEADER_RESERVE);
 
-        let mut writer = d.create(&path).map_err(|e| nc_err(&path, e))?;
+        let created = if in_memory {
+            d.create_in_memory(&path)
+        } else {
+            d.create(&path)
+        };
+        let mut writer = created.map_err(|e| nc_err(&path, e))?;
         let names: Vec<&str> = model.nodes.iter().map(|n| n.name.as_str()).collect();
         writer
             .put_fixed_text(node_name, &names)
             .map_err(|e| nc_err(&path, e))?;
+        {
+            let e = |err| nc_err(&path, err);
+            let x: Vec<f64> = model
+                .nodes
+                .iter()
+                .flat_map(|n| n.position.iter().copied())
+                .collect();
+            writer.put_fixed_f64(reference_position, &x).map_err(e)?;
+            let q: Vec<f64> = model
+                .nodes
+                .iter()
+                .flat_map(|n| n.orientation.wxyz())
+                .collect();
+            writer.put_fixed_f64(reference_orientation, &q).map_err(e)?;
+        }
         if let Some((bn, bnode, boff, bmass)) = body_vars {
             let e = |err| nc_err(&path, err);
             let names: Vec<&str> = model.bodies.iter().map(|b| b.name.as_str()).collect();
@@ -608,6 +669,25 @@ impl ResultsFile {
 
     /// Writes the closing attributes (status, counts, failure) and closes the file.
     pub fn finish(mut self, summary: &AnalysisSummary) -> Result<PathBuf, crate::Error> {
+        self.close(summary)?;
+        let path = self.writer.path().to_path_buf();
+        self.writer.finish().map_err(|e| nc_err(&path, e))?;
+        Ok(path)
+    }
+
+    /// [`Self::finish`] for results written [`Self::in_memory`]: the file's bytes.
+    pub fn finish_in_memory(mut self, summary: &AnalysisSummary) -> Result<Vec<u8>, crate::Error> {
+        self.close(summary)?;
+        let path = self.path.clone();
+        self.writer
+            .into_bytes()
+            .ok_or_else(|| crate::Error::Output {
+                path,
+                message: "the results were written to a file, not in memory".into(),
+            })
+    }
+
+    fn close(&mut self, summary: &AnalysisSummary) -> Result<(), crate::Error> {
         let path = self.writer.path().to_path_buf();
         let e = |err| nc_err(&path, err);
         let status = if summary.failure.is_some() {
@@ -649,8 +729,7 @@ impl ResultsFile {
                 .set_global_attr("failure", AttrValue::Text(reason))
                 .map_err(e)?;
         }
-        self.writer.finish().map_err(e)?;
-        Ok(path)
+        Ok(())
     }
 }
 

@@ -1,0 +1,121 @@
+"""Invalid models raise ModelError with the path of the offending value (and line and
+column for files); bad paths and values raise KeyError/TypeError; solver failures."""
+
+import pytest
+import samara
+
+
+PENDULUM = """
+[model]
+name = "pendulum"
+gravity = [0.0, 0.0, -9.81]
+
+[[nodes]]
+name = "bob"
+position = [1.0, 0.0, 0.0]
+
+[[bodies]]
+name = "bob"
+node = "bob"
+mass = 1.0
+inertia = [[1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]
+
+[[joints]]
+name = "pivot"
+type = "revolute"
+node_a = "ground"
+node_b = "bob"
+position = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+
+[[analyses]]
+name = "swing"
+type = "dynamic"
+t_end = 0.1
+step = 1e-3
+rho_inf = 0.9
+"""
+
+
+def errors(exc):
+    return [d for d in exc.diagnostics if d["severity"] == "error"]
+
+
+def test_a_file_error_has_file_line_column_and_path(tmp_path):
+    f = tmp_path / "bad.toml"
+    f.write_text(PENDULUM.replace("mass = 1.0", "mass = -1.0"))
+    with pytest.raises(samara.ModelError) as e:
+        samara.load(str(f))
+    [d] = errors(e.value)
+    assert d["file"] == str(f)
+    assert d["line"] == PENDULUM.splitlines().index("mass = 1.0") + 1
+    assert d["column"] == 8
+    assert d["path"] == "bodies.bob.mass"
+    assert "mass" in d["message"]
+    assert f"{f}:{d['line']}:8" in str(e.value)
+    assert isinstance(e.value, samara.SamaraError)
+
+
+def test_an_unknown_reference_is_located_and_hinted(tmp_path):
+    with pytest.raises(samara.ModelError) as e:
+        samara.load(PENDULUM.replace('node_b = "bob"', 'node_b = "bobb"'))
+    [d] = errors(e.value)
+    assert d["path"] == "joints.pivot.node_b"
+    assert "bobb" in d["message"]
+    assert d["hint"] and "bob" in d["hint"]
+
+
+def test_a_dict_error_names_the_offending_value():
+    m = samara.load(PENDULUM).to_dict()
+    m["bodies"][0]["inertia"][1][1] = -5.0
+    with pytest.raises(samara.ModelError) as e:
+        samara.load(m)
+    paths = [d["path"] for d in errors(e.value)]
+    assert any(p and p.startswith("bodies.bob.inertia") for p in paths), paths
+
+
+def test_a_syntax_error_is_located():
+    with pytest.raises(samara.ModelError) as e:
+        samara.load("[model]\nname = \n")
+    [d] = errors(e.value)
+    assert d["line"] == 2
+
+
+def test_set_validates_and_leaves_the_model_unchanged_on_error():
+    m = samara.load(PENDULUM)
+    with pytest.raises(samara.ModelError) as e:
+        m.set("analyses.swing.step", -1.0)
+    assert errors(e.value)[0]["path"] == "analyses.swing.step"
+    assert m.get("analyses.swing.step") == 1e-3
+
+
+def test_bad_paths_and_values():
+    m = samara.load(PENDULUM)
+    with pytest.raises(KeyError, match="no element named 'bobb'"):
+        m.set("bodies.bobb.mass", 1.0)
+    with pytest.raises(KeyError, match="out of range"):
+        m.set("model.gravity[3]", 1.0)
+    with pytest.raises(KeyError, match="must be a non-negative integer"):
+        m.get("model.gravity[x]")
+    with pytest.raises(TypeError, match="bodies.bob.mass: None"):
+        m.set("bodies.bob.mass", None)
+    with pytest.raises(TypeError):
+        samara.load(42)
+
+
+def test_a_solver_failure_keeps_the_partial_results():
+    # A node with no mass, held only by a spring, cannot be accelerated consistently
+    # (the case of the CLI's exit status 2).
+    text = PENDULUM.replace(
+        "[[analyses]]",
+        '[[nodes]]\nname = "loose"\nposition = [3.0, 0.0, 0.0]\n\n[[springs]]\nname = "s"\n'
+        'node_a = "bob"\nnode_b = "loose"\nstiffness = 10.0\n\n[[analyses]]',
+    )
+    m = samara.load(text)
+    with pytest.raises(samara.SolverError) as e:
+        samara.run(m)
+    partial = e.value.results["swing"]
+    assert partial.attrs["status"] == "failed"
+    assert "failure" in partial.attrs
+    again = samara.run(m, raise_on_failure=False)
+    assert again["swing"].attrs["status"] == "failed"
