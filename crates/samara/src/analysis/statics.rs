@@ -269,6 +269,8 @@ pub fn run_static(
             condition: f64::NAN,
             condition_kind: crate::solve::condition::ConditionKind::Exact2Norm,
             step_size: 0.0,
+            error_estimate: f64::NAN,
+            rejected: 0,
         });
         recorder.record(
             sys,
