@@ -69,7 +69,7 @@ fn run_writes_a_complete_results_file_and_keeps_earlier_ones() {
         ds.get_global_attr_as_string("analysis").as_deref(),
         Some("swing")
     );
-    assert_eq!(ds.get_global_attr_i32("format_version"), Some(&[1][..]));
+    assert_eq!(ds.get_global_attr_i32("format_version"), Some(&[2][..]));
     assert_eq!(ds.get_global_attr_i32("steps"), Some(&[500][..]));
     for v in [
         "time",

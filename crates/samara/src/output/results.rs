@@ -9,7 +9,8 @@ use crate::system::System;
 use std::path::{Path, PathBuf};
 
 /// Version of the results layout (global attribute `format_version`).
-pub const FORMAT_VERSION: i32 = 1;
+/// 2: a static analysis writes the unloaded state (load factor 0) as its first record.
+pub const FORMAT_VERSION: i32 = 2;
 
 /// Header bytes kept free so the closing attributes (status, counts, failure reason) can
 /// be written when the analysis ends.
