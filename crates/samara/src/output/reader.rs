@@ -460,7 +460,16 @@ impl ResultsReader {
                 .expect("position found the component");
             self.read("reference_position")?[3 * i + c]
         } else {
-            position.values.first().copied().unwrap_or(0.0)
+            // Older files: from the first record; a file without records has no values.
+            match position.values.first() {
+                Some(&x0) => x0,
+                None => {
+                    return Ok(Channel {
+                        label: spec.to_string(),
+                        ..position
+                    });
+                }
+            }
         };
         Ok(Channel {
             label: spec.to_string(),
