@@ -300,3 +300,176 @@ fn nrel5mw_rigid_rotor_matches_the_reference_power_and_thrust() {
         assert!((-0.03..0.16).contains(&et), "thrust at {ws} m/s: {et}");
     }
 }
+
+/// A thin-plate polar (cl = π sin 2α ≈ 2πα, no drag, no moment) every degree, as CSV.
+fn plate_csv() -> String {
+    let mut s = String::from("# thin plate\nalpha,cl,cd,cm\n");
+    for d in -180..=180 {
+        let a = (d as f64).to_radians();
+        s += &format!("{d},{:.17},0,0\n", std::f64::consts::PI * (2.0 * a).sin());
+    }
+    s
+}
+
+/// A straight cantilever wing (beam along y, clamped at y = 0) in a uniform wind along x,
+/// with `stations` lifting-line stations at the midpoints of equal cells.
+fn wing_model(dir: &Path, stations: usize, extra: &str) -> String {
+    std::fs::write(dir.join("plate.csv"), plate_csv()).unwrap();
+    let mut st = String::new();
+    for k in 0..stations {
+        let s = 10.0 * (k as f64 + 0.5) / stations as f64;
+        st += &format!(
+            "[[aero_lines.stations]]\nspan = {s}\nchord = 1.0\ntwist = -0.05235987755982988\nairfoil = \"plate.csv\"\n"
+        );
+    }
+    format!(
+        r#"[model]
+name = "wing"
+[[beams]]
+name = "wing"
+order = 4
+elements = 2
+points = [[0.0, 0.0, 0.0], [0.0, 10.0, 0.0]]
+[[beams.sections]]
+station = 0.0
+isotropic = {{ E = 7e10, G = 2.7e10, A = 0.01, I2 = 1.4285714285714287e-4, I3 = 1.4285714285714287e-4, J = 2e-4, shear_factors = [0.83, 0.83] }}
+[[joints]]
+name = "root"
+type = "fixed"
+node_a = "ground"
+node_b = "wing.0"
+[[aero_lines]]
+name = "lift"
+beam = "wing"
+chord_direction = [1.0, 0.0, 0.0]
+normal_direction = [0.0, 0.0, 1.0]
+wind = {{ speed = 20.0 }}
+{extra}
+{st}
+[[analyses]]
+name = "trim"
+type = "static"
+load_steps = 2
+tolerance = 1e-12
+"#
+    )
+}
+
+#[test]
+fn lifting_line_on_a_beam_loads_a_cantilever_wing_as_the_closed_form() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = wing_model(dir.path(), 80, "");
+    let loaded = Model::from_toml_str(&text, dir.path().join("wing.toml"))
+        .unwrap_or_else(|e| panic!("{}", e.render_plain()));
+    let m = loaded.model;
+    let sys = samara::system::System::new(&m);
+    let mut h = samara::analysis::History::default();
+    let s = samara::analysis::run_analysis(
+        &sys,
+        &m.analyses[0],
+        sys.initial_state(),
+        &mut h,
+        &mut |_| {},
+    )
+    .unwrap();
+    assert!(s.failure.is_none());
+    let last = &h.last().unwrap().state;
+    let tip = m.nodes.iter().position(|n| n.name == "wing.8").unwrap();
+    // Lift per unit span w = ½ρV²c cl(3°) (twist −3°: α = 3°), uniform.
+    let cl = std::f64::consts::PI * (6f64.to_radians()).sin();
+    let w = 0.5 * 1.225 * 400.0 * 1.0 * cl;
+    // Total lift on the deformed wing (stations' loads at the final state).
+    let initial = initial_nodes(&m);
+    let mut parts = Build::new(&initial);
+    build_all(&m, &mut parts);
+    let aero: Vec<Box<dyn Element>> = parts
+        .elements
+        .into_iter()
+        .filter(|e| e.name().starts_with("lift."))
+        .collect();
+    assert_eq!(aero.len(), 80);
+    let mut lift = 0.0;
+    for n in 0..m.nodes.len() {
+        lift += loads_on(&aero, &last.nodes, n).0.z;
+    }
+    // The cells' widths add up to the span; bending about the chord keeps α (tip slope
+    // wL³/6EI ≈ 1.3e-3 tilts the lift by cos − 1 ≈ 1e-6): 1e-5.
+    assert!(
+        (lift / (w * 10.0) - 1.0).abs() < 1e-5,
+        "lift {lift} vs {}",
+        w * 10.0
+    );
+    // Tip deflection of a uniformly loaded Timoshenko cantilever, wL⁴/(8EI) + wL²/(2kGA).
+    // The order-4 elements are exact for it; the 80 point loads stand for the uniform
+    // load with a midpoint-rule error O((L/80)²) in each nodal load: 1e-3.
+    let ei = 7e10 * 1.4285714285714287e-4;
+    let kga = 0.83 * 2.7e10 * 0.01;
+    let exact = w * 1e4 / (8.0 * ei) + w * 100.0 / (2.0 * kga);
+    let dz = last.nodes[tip].x.z;
+    println!("tip deflection {dz:.6e} vs {exact:.6e}");
+    assert!((dz / exact - 1.0).abs() < 1e-3, "{dz} vs {exact}");
+}
+
+/// The model's error text (rendered with file, line and column).
+fn model_error(dir: &Path, text: &str) -> String {
+    match Model::from_toml_str(text, dir.join("bad.toml")) {
+        Ok(_) => panic!("accepted"),
+        Err(e) => e.render_plain(),
+    }
+}
+
+#[test]
+fn bad_aerodynamic_inputs_are_located_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = wing_model(dir.path(), 4, "");
+    assert!(Model::from_toml_str(&good, dir.path().join("ok.toml")).is_ok());
+    // A station outside its beam: located at that station's entry.
+    let bad = good.replacen("span = 8.75", "span = 10.5", 1);
+    let e = model_error(dir.path(), &bad);
+    assert!(
+        e.contains("lies outside the line") && e.contains("bad.toml:"),
+        "{e}"
+    );
+    let line = bad.lines().position(|l| l.contains("span = 10.5")).unwrap();
+    assert!(e.contains(&format!("bad.toml:{}:", line)), "{e}");
+    // A chord ≤ 0.
+    let bad = good.replacen("chord = 1.0", "chord = 0.0", 1);
+    let e = model_error(dir.path(), &bad);
+    assert!(e.contains("the chord must be > 0"), "{e}");
+    // An airfoil table that does not cover ±180°: the airfoil file's line in the message.
+    std::fs::write(
+        dir.path().join("short.csv"),
+        "alpha,cl,cd,cm\n-20,-1,0.1,0\n0,0,0.01,0\n20,1,0.1,0\n",
+    )
+    .unwrap();
+    let bad = good.replacen("airfoil = \"plate.csv\"", "airfoil = \"short.csv\"", 1);
+    let e = model_error(dir.path(), &bad);
+    assert!(
+        e.contains("short.csv") && e.contains("line 2") && e.contains("−180°"),
+        "{e}"
+    );
+    // A missing airfoil file, an unknown beam, neither beam nor node.
+    let bad = good.replacen("airfoil = \"plate.csv\"", "airfoil = \"none.csv\"", 1);
+    assert!(model_error(dir.path(), &bad).contains("cannot read airfoil file"));
+    let bad = good.replacen("beam = \"wing\"", "beam = \"wingg\"", 1);
+    assert!(model_error(dir.path(), &bad).contains("unknown beam 'wingg'"));
+    let bad = good.replacen("beam = \"wing\"", "", 1);
+    assert!(model_error(dir.path(), &bad).contains("give either `beam` or `node`"));
+    // Shear without a reference height; a BEM rotor with tip inside the hub.
+    let bad = good.replacen(
+        "wind = { speed = 20.0 }",
+        "wind = { speed = 20.0, shear_exponent = 0.2 }",
+        1,
+    );
+    assert!(model_error(dir.path(), &bad).contains("needs `reference_height`"));
+    let bad = wing_model(
+        dir.path(),
+        4,
+        "inflow = { type = \"bem\", centre = [0.0, 0.0, 0.0], axis = [1.0, 0.0, 0.0], blades = 3, hub_radius = 2.0, tip_radius = 1.0 }",
+    );
+    assert!(model_error(dir.path(), &bad).contains("hub_radius < tip_radius"));
+    // An AeroDyn file that is not one.
+    std::fs::write(dir.path().join("ad.dat"), "nothing\n").unwrap();
+    let bad = wing_model(dir.path(), 0, "aerodyn = \"ad.dat\"");
+    assert!(model_error(dir.path(), &bad).contains("not an AeroDyn v15 primary file"));
+}

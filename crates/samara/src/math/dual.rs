@@ -22,6 +22,8 @@ pub trait Scalar:
     + SubAssign
     + std::fmt::Debug
 {
+    /// Number of derivative directions (0 for `f64`).
+    const DIRECTIONS: usize;
     fn cst(v: f64) -> Self;
     /// The value (the f64 part).
     fn re(&self) -> f64;
@@ -44,6 +46,7 @@ pub trait Scalar:
 }
 
 impl Scalar for f64 {
+    const DIRECTIONS: usize = 0;
     fn cst(v: f64) -> Self {
         v
     }
@@ -106,6 +109,7 @@ impl<const N: usize> Dual<N> {
 }
 
 impl<const N: usize> Scalar for Dual<N> {
+    const DIRECTIONS: usize = N;
     fn cst(v: f64) -> Self {
         Self { v, d: [0.0; N] }
     }

@@ -8,5 +8,5 @@ pub mod wind;
 
 pub use airfoil::{Airfoil, AirfoilError, Coefficients};
 pub use bem::{BemRotor, Induction, StationFlow};
-pub use station::{AeroStation, Attachment, Inflow, Section};
+pub use station::{AeroStation, Attachment, Inflow, MAX_NODES, Section};
 pub use wind::Wind;

@@ -78,9 +78,8 @@ pub struct AeroStation {
     inflow: Arc<Inflow>,
 }
 
-/// Derivative directions: (δx, δθ) of node i at 6i…6i+5, (v, Ω) at 12 + 6i…
-const N: usize = 24;
-type D = Dual<N>;
+/// The most nodes a station hangs on (a beam element of order ≤ 7).
+pub const MAX_NODES: usize = 8;
 
 /// What a station computes besides its loads.
 #[derive(Clone, Copy, Debug)]
@@ -165,8 +164,11 @@ impl AeroStation {
         &self,
         t: f64,
         nodes: &[NodeState],
-        rows: &mut [V3<S>; 4],
+        rows: &mut [V3<S>; 2 * MAX_NODES],
     ) -> StationResult<S> {
+        // Derivative directions: (δx, δθ) of node i at 6i…6i+5, (v, Ω) at vo + 6i…,
+        // vo half the directions of S (unused for f64).
+        let vo = S::DIRECTIONS / 2;
         let zero = S::cst(0.0);
         let mut p = [zero; 3];
         let mut pd = [zero; 3];
@@ -180,7 +182,7 @@ impl AeroStation {
             let mut v = cst3::<S>(&ns.v);
             for k in 0..3 {
                 x[k].add_deriv(6 * i + k, 1.0);
-                v[k].add_deriv(12 + 6 * i + k, 1.0);
+                v[k].add_deriv(vo + 6 * i + k, 1.0);
             }
             let rd = Self::rot::<S>(i, r, &at.offset);
             // R (Ω × d): Ω enters linearly (direction 12 + 6i + 3 + j: R (e_j × d)).
@@ -188,7 +190,7 @@ impl AeroStation {
             for j in 0..3 {
                 let col = r * Vector3::ith(j, 1.0).cross(&at.offset);
                 for (k, o) in wd.iter_mut().enumerate() {
-                    o.add_deriv(12 + 6 * i + 3 + j, col[k]);
+                    o.add_deriv(vo + 6 * i + 3 + j, col[k]);
                 }
             }
             p = add(&p, &scale(&add(&x, &rd), S::cst(w)));
@@ -300,6 +302,27 @@ impl AeroStation {
     }
 }
 
+impl AeroStation {
+    /// Residual and tangents with M dual directions (M/2 ≥ 6 × nodes).
+    fn tangents<const M: usize>(&self, ctx: &EvalContext, x: &ElementInput, out: &mut LocalTerms) {
+        let lf = ctx.load_factor;
+        let nn = self.nodes.len();
+        let mut rows = [[Dual::<M>::cst(0.0); 3]; 2 * MAX_NODES];
+        self.compute::<Dual<M>>(ctx.time, x.nodes, &mut rows);
+        let (n, vo) = (6 * nn, M / 2);
+        for (b, row) in rows.iter().take(2 * nn).enumerate() {
+            for k in 0..3 {
+                let ri = 3 * b + k;
+                out.r[ri] -= lf * row[k].v;
+                for j in 0..n {
+                    out.k[(ri, j)] -= lf * row[k].d[j];
+                    out.c[(ri, j)] -= lf * row[k].d[vo + j];
+                }
+            }
+        }
+    }
+}
+
 impl Element for AeroStation {
     fn name(&self) -> &str {
         &self.name
@@ -313,7 +336,7 @@ impl Element for AeroStation {
         // Loads are applied loads: scaled by the load factor in statics.
         let lf = ctx.load_factor;
         if need == Need::Residual {
-            let mut rows = [[0.0f64; 3]; 4];
+            let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
             self.compute::<f64>(ctx.time, x.nodes, &mut rows);
             for (b, row) in rows.iter().take(2 * nn).enumerate() {
                 for k in 0..3 {
@@ -322,23 +345,15 @@ impl Element for AeroStation {
             }
             return;
         }
-        let mut rows = [[D::cst(0.0); 3]; 4];
-        self.compute::<D>(ctx.time, x.nodes, &mut rows);
-        let n = 6 * nn;
-        for (b, row) in rows.iter().take(2 * nn).enumerate() {
-            for k in 0..3 {
-                let ri = 3 * b + k;
-                out.r[ri] -= lf * row[k].v;
-                for j in 0..n {
-                    out.k[(ri, j)] -= lf * row[k].d[j];
-                    out.c[(ri, j)] -= lf * row[k].d[12 + j];
-                }
-            }
+        match nn {
+            0..=2 => self.tangents::<24>(ctx, x, out),
+            3..=4 => self.tangents::<48>(ctx, x, out),
+            _ => self.tangents::<96>(ctx, x, out),
         }
     }
 
     fn external_power(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
-        let mut rows = [[0.0f64; 3]; 4];
+        let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
         self.compute::<f64>(ctx.time, x.nodes, &mut rows);
         // Power of the loads on the nodes' velocities.
         let mut p = 0.0;
@@ -356,7 +371,7 @@ impl Element for AeroStation {
     }
 
     fn outputs(&self, ctx: &EvalContext, x: &ElementInput, out: &mut [f64]) {
-        let mut rows = [[0.0f64; 3]; 4];
+        let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
         let r = self.compute::<f64>(ctx.time, x.nodes, &mut rows);
         let vals = [
             r.alpha,

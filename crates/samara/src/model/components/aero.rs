@@ -6,7 +6,9 @@
 
 use super::{Build, ComponentKind};
 use crate::core::NodeRef;
-use crate::elements::aero::{AeroStation, Airfoil, Attachment, BemRotor, Inflow, Section, Wind};
+use crate::elements::aero::{
+    AeroStation, Airfoil, Attachment, BemRotor, Inflow, MAX_NODES, Section, Wind,
+};
 use crate::math::TimeFunction;
 use crate::model::input::TimeFunctionInput;
 use crate::model::validate::{Checker, Entry};
@@ -151,8 +153,14 @@ pub struct StationDef {
 /// What carries a line.
 #[derive(Clone, Debug)]
 pub enum Carrier {
-    /// Beam nodes root → tip with their initial positions and arc lengths s [m].
-    Beam { nodes: Vec<usize>, arc: Vec<f64> },
+    /// A beam: its nodes root → tip, their normalized arc length η, the polyline length
+    /// s [m] through them (s ↔ η piecewise linear), and the nodes of each element.
+    Beam {
+        nodes: Vec<usize>,
+        etas: Vec<f64>,
+        arc: Vec<f64>,
+        order: usize,
+    },
     /// A node, with the line from `root` to `tip`.
     Node {
         node: usize,
@@ -355,6 +363,14 @@ impl ComponentKind for AeroLine {
                     );
                     return None;
                 };
+                if def.order + 1 > MAX_NODES {
+                    cx.error(
+                        format!("{what}: beam '{}' has order {}; lifting lines ride on beams of order ≤ {}", b.value, def.order, MAX_NODES - 1),
+                        b.span.clone(),
+                        Some("use more elements of a lower order".into()),
+                    );
+                    return None;
+                }
                 let mut arc = vec![0.0];
                 for w in def.nodes.windows(2) {
                     let d = (model.nodes[w[1]].position - model.nodes[w[0]].position).norm();
@@ -362,7 +378,9 @@ impl ComponentKind for AeroLine {
                 }
                 Carrier::Beam {
                     nodes: def.nodes.clone(),
+                    etas: def.etas.clone(),
                     arc,
+                    order: def.order,
                 }
             }
             (None, Some(n)) => {
@@ -762,6 +780,7 @@ impl ComponentKind for AeroLine {
                 wind.clone(),
                 inflow.clone(),
             );
+            let e1_inflow = inflow.clone();
             let e1 = AeroStation::new(
                 "aero1",
                 vec![0],
@@ -790,6 +809,24 @@ impl ComponentKind for AeroLine {
                 Box::new(e1),
                 vec![node(720 + k as u64)],
             ));
+            // Five nodes of an order-4 beam element (Lagrange weights, summing to 1).
+            let w5 = [-0.1, 0.4, 0.5, 0.3, -0.1];
+            let e5 = AeroStation::new(
+                "aero5",
+                (0..5).collect(),
+                w5.iter()
+                    .enumerate()
+                    .map(|(i, &w)| attach(i as f64 - 2.0, w))
+                    .collect(),
+                section.clone(),
+                1.2,
+                wind.clone(),
+                e1_inflow.clone(),
+            );
+            cases.push(TangentCase::element(
+                Box::new(e5),
+                (0..5).map(|i| node(730 + 10 * k as u64 + i)).collect(),
+            ));
         }
         cases
     }
@@ -806,7 +843,15 @@ fn station_place(
             let t = (tip - root).normalize();
             (vec![*node], vec![1.0], root + t * span, t)
         }
-        Carrier::Beam { nodes, arc } => {
+        Carrier::Beam {
+            nodes,
+            etas,
+            arc,
+            order,
+        } => {
+            // η of the station (s ↔ η linear between nodes), its element, and the
+            // element's Lagrange shape functions Nₐ(η) and derivatives: the station moves
+            // and deforms with the beam's own interpolation.
             let n = nodes.len();
             let j = arc.partition_point(|&s| s <= span).clamp(1, n - 1) - 1;
             let len = arc[j + 1] - arc[j];
@@ -815,10 +860,33 @@ fn station_place(
             } else {
                 0.0
             };
-            let (a, b) = (&parts.initial[nodes[j]], &parts.initial[nodes[j + 1]]);
-            let p = a.x * (1.0 - xi) + b.x * xi;
-            let t = (b.x - a.x).normalize();
-            (vec![nodes[j], nodes[j + 1]], vec![1.0 - xi, xi], p, t)
+            let eta = etas[j] * (1.0 - xi) + etas[j + 1] * xi;
+            let e = (j / order).min((n - 1) / order - 1);
+            let idx: Vec<usize> = (e * order..=(e + 1) * order).collect();
+            let mut w = vec![0.0; idx.len()];
+            let mut dw = vec![0.0; idx.len()];
+            for (a, &ia) in idx.iter().enumerate() {
+                let mut v = 1.0;
+                let mut d = 0.0;
+                for (b, &ib) in idx.iter().enumerate() {
+                    if a == b {
+                        continue;
+                    }
+                    let den = etas[ia] - etas[ib];
+                    // d(∏)/dη by the product rule.
+                    d = d * (eta - etas[ib]) / den + v / den;
+                    v *= (eta - etas[ib]) / den;
+                }
+                w[a] = v;
+                dw[a] = d;
+            }
+            let mut p = Vector3::zeros();
+            let mut t = Vector3::zeros();
+            for (a, &ia) in idx.iter().enumerate() {
+                p += parts.initial[nodes[ia]].x * w[a];
+                t += parts.initial[nodes[ia]].x * dw[a];
+            }
+            (idx.iter().map(|&i| nodes[i]).collect(), w, p, t.normalize())
         }
     }
 }
