@@ -359,7 +359,7 @@ fn parse_aerodyn(text: &str) -> Result<Vec<(usize, [f64; 4])>, AirfoilError> {
         ));
     };
     let n = number(v, line0, 1, "NumAlf")?;
-    if !(n >= 3.0 && n <= 1e6 && n.fract() == 0.0) {
+    if !((3.0..=1e6).contains(&n) && n.fract() == 0.0) {
         return Err(AirfoilError::at(
             line0,
             1,

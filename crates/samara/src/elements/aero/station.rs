@@ -311,12 +311,12 @@ impl AeroStation {
         self.compute::<Dual<M>>(ctx.time, x.nodes, &mut rows);
         let (n, vo) = (6 * nn, M / 2);
         for (b, row) in rows.iter().take(2 * nn).enumerate() {
-            for k in 0..3 {
+            for (k, rk) in row.iter().enumerate() {
                 let ri = 3 * b + k;
-                out.r[ri] -= lf * row[k].v;
+                out.r[ri] -= lf * rk.v;
                 for j in 0..n {
-                    out.k[(ri, j)] -= lf * row[k].d[j];
-                    out.c[(ri, j)] -= lf * row[k].d[vo + j];
+                    out.k[(ri, j)] -= lf * rk.d[j];
+                    out.c[(ri, j)] -= lf * rk.d[vo + j];
                 }
             }
         }
@@ -339,8 +339,8 @@ impl Element for AeroStation {
             let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
             self.compute::<f64>(ctx.time, x.nodes, &mut rows);
             for (b, row) in rows.iter().take(2 * nn).enumerate() {
-                for k in 0..3 {
-                    out.r[3 * b + k] -= lf * row[k];
+                for (k, rk) in row.iter().enumerate() {
+                    out.r[3 * b + k] -= lf * rk;
                 }
             }
             return;

@@ -232,10 +232,12 @@ fn unquote(s: &str) -> &str {
     s.trim().trim_matches('"')
 }
 
+/// Rows (span, chord, twist [rad], airfoil index) and the airfoil files of an AeroDyn
+/// blade.
+type AeroDynBlade = (Vec<(f64, f64, f64, usize)>, Vec<PathBuf>);
+
 /// Stations from an AeroDyn v15 primary file; errors are `(message, hint)`.
-fn read_aerodyn(
-    primary: &Path,
-) -> Result<(Vec<(f64, f64, f64, usize)>, Vec<PathBuf>), (String, String)> {
+fn read_aerodyn(primary: &Path) -> Result<AeroDynBlade, (String, String)> {
     let err = |p: &Path, m: String| (format!("'{}': {m}", p.display()), String::new());
     let text = crate::input_files::read_text(primary).map_err(|e| err(primary, e.to_string()))?;
     let lines: Vec<&str> = text.lines().collect();
