@@ -42,6 +42,7 @@ fn every_example_runs() {
         "verification/heavy_top.toml",
         "bench/chain_revolute_1000.toml",
         "bench/cantilever_10000.toml",
+        "rotor/nrel5mw_rotor.toml",
     ] {
         assert!(files.contains(&root.join(name)), "{name} not found");
     }

@@ -314,3 +314,167 @@ fn penalty_with_the_stabilized_formulation_is_rejected_where_it_is_written() {
         .is_ok()
     );
 }
+
+/// Issue #15: every key of `[[aero_lines]]` changes the aerodynamic loads. A two-station
+/// rotor blade on a spinning node (BEM inflow) and a wing on a beam; each variant replaces
+/// one piece of text and must change the loads on the nodes.
+#[test]
+fn every_aero_line_option_changes_the_loads() {
+    use samara::core::{ElementInput, EvalContext, LocalTerms, Need};
+    use samara::model::components::{Build, build_all, initial_nodes};
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv = String::from("alpha,cl,cd,cm\n");
+    let mut csv2 = csv.clone();
+    for d in -180..=180 {
+        let a = (d as f64).to_radians();
+        csv += &format!(
+            "{d},{},{},{}\n",
+            std::f64::consts::PI * (2.0 * a).sin(),
+            0.01 + a.sin().powi(2),
+            -0.1 * a.sin()
+        );
+        csv2 += &format!(
+            "{d},{},{},{}\n",
+            0.9 * std::f64::consts::PI * (2.0 * a).sin(),
+            0.02 + a.sin().powi(2),
+            -0.1 * a.sin()
+        );
+    }
+    std::fs::write(dir.path().join("a.csv"), csv).unwrap();
+    std::fs::write(dir.path().join("b.csv"), csv2).unwrap();
+    let base = r#"[model]
+name = "aero_options"
+[[nodes]]
+name = "hub"
+position = [0.0, 0.0, 0.0]
+angular_velocity = [2.0, 0.0, 0.0]
+[[bodies]]
+name = "hub"
+node = "hub"
+mass = 1.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[aero_lines]]
+name = "blade"
+node = "hub"
+root = [0.0, 0.0, 0.5]
+tip = [0.0, 0.0, 5.0]
+chord_direction = [0.0, 1.0, 0.0]
+normal_direction = [1.0, 0.0, 0.0]
+pitch = 0.02
+air_density = 1.2
+wind = { speed = 8.0, direction = [1.0, 0.0, 0.0], shear_exponent = 0.2, reference_height = 3.0, vertical = [0.0, 0.0, 1.0], function = { type = "ramp", start = 0.0, end = 1.0, from = 0.8, to = 1.0 } }
+inflow = { type = "bem", centre = [0.0, 0.0, 0.0], axis = [1.0, 0.0, 0.0], blades = 3, hub_radius = 0.5, tip_radius = 5.0, tip_loss = true, hub_loss = true, tangential_induction = true }
+[[aero_lines.stations]]
+span = 1.0
+chord = 0.6
+twist = 0.2
+airfoil = "a.csv"
+ac_offset = 0.05
+[[aero_lines.stations]]
+span = 4.2
+chord = 0.3
+twist = 0.05
+airfoil = "a.csv"
+ac_offset = 0.0
+[[analyses]]
+name = "spin"
+type = "dynamic"
+t_end = 0.01
+step = 0.01
+"#;
+    let loads = |text: &str| -> Vec<f64> {
+        let m = Model::from_toml_str(text, dir.path().join("m.toml"))
+            .unwrap_or_else(|e| panic!("{}", e.render_plain()))
+            .model;
+        let initial = initial_nodes(&m);
+        let mut parts = Build::new(&initial);
+        build_all(&m, &mut parts);
+        let ctx = EvalContext {
+            time: 0.0,
+            gravity: Vector3::zeros(),
+            load_factor: 1.0,
+        };
+        let mut total = vec![0.0; 6];
+        for e in parts
+            .elements
+            .iter()
+            .filter(|e| e.name().starts_with("blade."))
+        {
+            let mut out = LocalTerms::for_element(e.as_ref());
+            e.evaluate(
+                &ctx,
+                &ElementInput::nodes(&initial),
+                Need::Residual,
+                &mut out,
+            );
+            for (k, t) in total.iter_mut().enumerate() {
+                *t += out.r[k];
+            }
+        }
+        total
+    };
+    let reference = loads(base);
+    assert!(reference.iter().any(|x| x.abs() > 1.0), "{reference:?}");
+    let variants = [
+        ("root = [0.0, 0.0, 0.5]", "root = [0.0, 0.0, 0.3]"),
+        ("tip = [0.0, 0.0, 5.0]", "tip = [0.0, 0.0, 5.5]"),
+        (
+            "chord_direction = [0.0, 1.0, 0.0]",
+            "chord_direction = [0.2, 1.0, 0.0]",
+        ),
+        (
+            "normal_direction = [1.0, 0.0, 0.0]",
+            "normal_direction = [-1.0, 0.0, 0.0]",
+        ),
+        ("pitch = 0.02", "pitch = 0.1"),
+        ("air_density = 1.2", "air_density = 1.0"),
+        ("speed = 8.0", "speed = 9.0"),
+        (
+            "direction = [1.0, 0.0, 0.0], shear",
+            "direction = [1.0, 0.3, 0.0], shear",
+        ),
+        ("shear_exponent = 0.2", "shear_exponent = 0.1"),
+        ("reference_height = 3.0", "reference_height = 4.0"),
+        ("vertical = [0.0, 0.0, 1.0]", "vertical = [0.0, 0.2, 1.0]"),
+        ("from = 0.8", "from = 0.7"),
+        (
+            "type = \"bem\", centre = [0.0, 0.0, 0.0]",
+            "type = \"bem\", centre = [0.0, 0.0, 0.2]",
+        ),
+        (
+            "axis = [1.0, 0.0, 0.0], blades",
+            "axis = [1.0, 0.1, 0.0], blades",
+        ),
+        ("blades = 3", "blades = 2"),
+        ("hub_radius = 0.5", "hub_radius = 0.4"),
+        ("tip_radius = 5.0", "tip_radius = 5.2"),
+        ("tip_loss = true", "tip_loss = false"),
+        ("hub_loss = true", "hub_loss = false"),
+        (
+            "tangential_induction = true",
+            "tangential_induction = false",
+        ),
+        ("span = 4.2", "span = 4.0"),
+        ("chord = 0.6", "chord = 0.7"),
+        ("twist = 0.2", "twist = 0.25"),
+        ("airfoil = \"a.csv\"", "airfoil = \"b.csv\""),
+        ("ac_offset = 0.05", "ac_offset = 0.1"),
+    ];
+    for (from, to) in variants {
+        assert!(base.contains(from), "{from}");
+        let v = loads(&base.replacen(from, to, 1));
+        let diff: f64 = v.iter().zip(&reference).map(|(a, b)| (a - b).abs()).sum();
+        assert!(diff > 1e-6, "`{to}` changed nothing");
+    }
+    // Inflow models: none and uniform differ from BEM and from each other.
+    let inflow_line = base.lines().find(|l| l.starts_with("inflow")).unwrap();
+    let none = loads(&base.replacen(inflow_line, "inflow = { type = \"none\" }", 1));
+    let uniform = loads(&base.replacen(
+        inflow_line,
+        "inflow = { type = \"uniform\", velocity = [-2.0, 0.0, 0.0] }",
+        1,
+    ));
+    assert!(none != reference && uniform != reference && none != uniform);
+    // `beam` (instead of `node`) and `aerodyn` (instead of `stations`): tests/aerodynamics.rs
+    // (the cantilever wing, the NREL 5-MW rotor).
+}

@@ -1,5 +1,6 @@
 //! The element library: force elements on nodes (the contract is [`crate::core::Element`]).
 
+pub mod aero;
 mod applied_load;
 pub mod beam;
 pub mod line_of_action;

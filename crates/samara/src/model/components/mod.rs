@@ -11,6 +11,7 @@
 //! Kernels (residuals and tangents) of the larger kinds live in [`crate::elements`] and
 //! [`crate::joints`]; a small kind may keep its kernel in its own module.
 
+pub mod aero;
 pub mod beam;
 pub mod body;
 pub mod force;
@@ -234,4 +235,7 @@ registry! {
     forces: force::Force,
     /// Point-to-point viscoelastic elements (Maxwell: a spring in series with a damper).
     viscoelastic: viscoelastic::Viscoelastic,
+    /// Lifting lines on beams or nodes: aerodynamic stations with airfoil tables, wind
+    /// and induced velocity (docs/aerodynamics.md).
+    aero_lines: aero::AeroLine,
 }

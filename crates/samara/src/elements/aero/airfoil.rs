@@ -1,0 +1,436 @@
+//! Airfoil tables: lift, drag and pitching-moment coefficients cl, cd, cm(α) over the
+//! whole circle −180° … 180°, read from a CSV table or an OpenFAST/AeroDyn airfoil file,
+//! interpolated by a C¹ piecewise-cubic Hermite curve (docs/aerodynamics.md).
+//!
+//! Interpolation: on each interval [αᵢ, αᵢ₊₁] the cubic Hermite polynomial through the
+//! values with the slopes of the three-point parabola at each knot,
+//! mᵢ = (hᵢ₋₁ δᵢ + hᵢ δᵢ₋₁)/(hᵢ₋₁ + hᵢ) (δ the secant slopes, h the spacings),
+//! taken across ±180° as the circle closes: the coefficients and their first derivative
+//! are continuous, as Newton needs. The curve passes through every table point.
+
+use std::f64::consts::PI;
+
+/// A parse or check error of an airfoil file, at a 1-based line and column of that file
+/// (0: the file as a whole).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AirfoilError {
+    pub line: usize,
+    pub column: usize,
+    pub message: String,
+    pub hint: Option<String>,
+}
+
+impl AirfoilError {
+    fn at(line: usize, column: usize, message: impl Into<String>, hint: &str) -> Self {
+        Self {
+            line,
+            column,
+            message: message.into(),
+            hint: (!hint.is_empty()).then(|| hint.to_string()),
+        }
+    }
+}
+
+impl std::fmt::Display for AirfoilError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.line > 0 {
+            write!(
+                f,
+                "line {}, column {}: {}",
+                self.line, self.column, self.message
+            )
+        } else {
+            write!(f, "{}", self.message)
+        }
+    }
+}
+
+/// Coefficients and their derivatives with respect to α [1/rad].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Coefficients {
+    pub cl: f64,
+    pub cd: f64,
+    pub cm: f64,
+    pub dcl: f64,
+    pub dcd: f64,
+    pub dcm: f64,
+}
+
+/// An airfoil table covering −π … π.
+#[derive(Clone, Debug)]
+pub struct Airfoil {
+    /// Angles of attack [rad], strictly increasing, first −π, last π.
+    alpha: Vec<f64>,
+    /// cl, cd, cm at the knots.
+    values: [Vec<f64>; 3],
+    /// Their knot slopes.
+    slopes: [Vec<f64>; 3],
+}
+
+/// How far from ±180° a table end may be [deg] (printed tables round).
+const COVER_TOL_DEG: f64 = 1e-6;
+
+impl Airfoil {
+    /// A table from rows (α [deg], cl, cd, cm) with the 1-based file line of each row
+    /// (for messages; 0 if built in code). Checks: finite values, α strictly increasing,
+    /// first −180°, last 180°.
+    pub fn from_rows(rows: &[(usize, [f64; 4])]) -> Result<Self, AirfoilError> {
+        if rows.len() < 3 {
+            return Err(AirfoilError::at(
+                rows.last().map_or(0, |r| r.0),
+                1,
+                format!("the table has {} rows; at least 3 are needed", rows.len()),
+                "give cl, cd, cm from −180° to 180°",
+            ));
+        }
+        for (line, r) in rows {
+            if let Some(k) = r.iter().position(|x| !x.is_finite()) {
+                return Err(AirfoilError::at(
+                    *line,
+                    1,
+                    format!("{} is not a finite number", ["alpha", "cl", "cd", "cm"][k]),
+                    "",
+                ));
+            }
+        }
+        for w in rows.windows(2) {
+            if w[1].1[0] <= w[0].1[0] {
+                return Err(AirfoilError::at(
+                    w[1].0,
+                    1,
+                    format!(
+                        "angles of attack must increase strictly: {}° follows {}°",
+                        w[1].1[0], w[0].1[0]
+                    ),
+                    "sort the rows by α and remove repeated angles",
+                ));
+            }
+        }
+        let (first, last) = (&rows[0], &rows[rows.len() - 1]);
+        if (first.1[0] + 180.0).abs() > COVER_TOL_DEG || (last.1[0] - 180.0).abs() > COVER_TOL_DEG {
+            let (line, what) = if (first.1[0] + 180.0).abs() > COVER_TOL_DEG {
+                (first.0, format!("the table starts at {}°", first.1[0]))
+            } else {
+                (last.0, format!("the table ends at {}°", last.1[0]))
+            };
+            return Err(AirfoilError::at(
+                line,
+                1,
+                format!("{what}: airfoil tables must cover −180° … 180°"),
+                "extend the polar to the full circle (e.g. Viterna extrapolation, as AirfoilPrep does); a blade section meets every angle in parked or starting rotors",
+            ));
+        }
+        let alpha: Vec<f64> = rows.iter().map(|r| r.1[0].to_radians()).collect();
+        let values: [Vec<f64>; 3] =
+            std::array::from_fn(|c| rows.iter().map(|r| r.1[c + 1]).collect());
+        let slopes = std::array::from_fn(|c| knot_slopes(&alpha, &values[c]));
+        Ok(Self {
+            alpha,
+            values,
+            slopes,
+        })
+    }
+
+    /// The flat plate of thin-airfoil theory near zero incidence, cl = 2π sin α cos α
+    /// (2πα for small α), cd = 0, cm = 0, tabulated every degree.
+    pub fn thin_plate() -> Self {
+        let rows: Vec<(usize, [f64; 4])> = (-180..=180)
+            .map(|d| {
+                let a = (d as f64).to_radians();
+                (0, [d as f64, PI * (2.0 * a).sin(), 0.0, 0.0])
+            })
+            .collect();
+        // The rows are valid by construction.
+        Self::from_rows(&rows).unwrap_or_else(|_| unreachable!())
+    }
+
+    /// A smooth table with lift, drag and moment everywhere (for tangent checks):
+    /// cl = π sin 2α, cd = 0.01 + 1.5 sin²α, cm = −0.1 sin α.
+    pub fn thin_plate_with_drag() -> Self {
+        let rows: Vec<(usize, [f64; 4])> = (-180..=180)
+            .map(|d| {
+                let a = (d as f64).to_radians();
+                (
+                    0,
+                    [
+                        d as f64,
+                        PI * (2.0 * a).sin(),
+                        0.01 + 1.5 * a.sin().powi(2),
+                        -0.1 * a.sin(),
+                    ],
+                )
+            })
+            .collect();
+        Self::from_rows(&rows).unwrap_or_else(|_| unreachable!())
+    }
+
+    /// Coefficients at α [rad] (any angle: wrapped to −π … π).
+    pub fn eval(&self, alpha: f64) -> Coefficients {
+        let a = wrap(alpha);
+        let n = self.alpha.len();
+        // Interval by bisection.
+        let i = match self.alpha.partition_point(|&x| x <= a) {
+            0 => 0,
+            k if k >= n => n - 2,
+            k => k - 1,
+        };
+        let h = self.alpha[i + 1] - self.alpha[i];
+        let t = (a - self.alpha[i]) / h;
+        let (h00, h10, h01, h11) = (
+            (1.0 + 2.0 * t) * (1.0 - t) * (1.0 - t),
+            t * (1.0 - t) * (1.0 - t),
+            t * t * (3.0 - 2.0 * t),
+            t * t * (t - 1.0),
+        );
+        let (d00, d10, d01, d11) = (
+            6.0 * t * (t - 1.0) / h,
+            (1.0 - t) * (1.0 - 3.0 * t) / h,
+            6.0 * t * (1.0 - t) / h,
+            t * (3.0 * t - 2.0) / h,
+        );
+        let f = |c: usize| {
+            let (y0, y1) = (self.values[c][i], self.values[c][i + 1]);
+            let (m0, m1) = (self.slopes[c][i], self.slopes[c][i + 1]);
+            (
+                h00 * y0 + h10 * h * m0 + h01 * y1 + h11 * h * m1,
+                d00 * y0 + d10 * h * m0 + d01 * y1 + d11 * h * m1,
+            )
+        };
+        let (cl, dcl) = f(0);
+        let (cd, dcd) = f(1);
+        let (cm, dcm) = f(2);
+        Coefficients {
+            cl,
+            cd,
+            cm,
+            dcl,
+            dcd,
+            dcm,
+        }
+    }
+
+    /// Number of table rows.
+    pub fn len(&self) -> usize {
+        self.alpha.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.alpha.is_empty()
+    }
+
+    /// Reads a table from text: CSV if `csv` (header `alpha,cl,cd[,cm]`, α in degrees,
+    /// `#` comments), otherwise the OpenFAST/AeroDyn airfoil file format (AirfoilInfo
+    /// v1.01: the `NumAlf` rows of α [deg], cl, cd[, cm] after the `NumAlf` line; `!`
+    /// comments; one table).
+    pub fn parse(text: &str, csv: bool) -> Result<Self, AirfoilError> {
+        let rows = if csv {
+            parse_csv(text)?
+        } else {
+            parse_aerodyn(text)?
+        };
+        Self::from_rows(&rows)
+    }
+}
+
+/// α wrapped to [−π, π].
+pub fn wrap(a: f64) -> f64 {
+    if (-PI..=PI).contains(&a) {
+        a
+    } else {
+        let w = (a + PI).rem_euclid(2.0 * PI) - PI;
+        w.clamp(-PI, PI)
+    }
+}
+
+/// Three-point slopes, periodic across the ends (the first and last knots are the same
+/// angle, −π ≡ π).
+fn knot_slopes(x: &[f64], y: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    let three = |hl: f64, dl: f64, hr: f64, dr: f64| (hl * dr + hr * dl) / (hl + hr);
+    let mut m = vec![0.0; n];
+    for i in 1..n - 1 {
+        let (hl, hr) = (x[i] - x[i - 1], x[i + 1] - x[i]);
+        m[i] = three(hl, (y[i] - y[i - 1]) / hl, hr, (y[i + 1] - y[i]) / hr);
+    }
+    let (hl, hr) = (x[n - 1] - x[n - 2], x[1] - x[0]);
+    let ends = three(hl, (y[n - 1] - y[n - 2]) / hl, hr, (y[1] - y[0]) / hr);
+    m[0] = ends;
+    m[n - 1] = ends;
+    m
+}
+
+fn number(tok: &str, line: usize, column: usize, what: &str) -> Result<f64, AirfoilError> {
+    tok.trim().parse::<f64>().map_err(|_| {
+        AirfoilError::at(
+            line,
+            column,
+            format!("expected a number ({what}), found '{}'", tok.trim()),
+            "",
+        )
+    })
+}
+
+fn parse_csv(text: &str) -> Result<Vec<(usize, [f64; 4])>, AirfoilError> {
+    let mut rows = Vec::new();
+    let mut columns: Option<usize> = None;
+    for (k, raw) in text.lines().enumerate() {
+        let line = k + 1;
+        let content = raw.split('#').next().unwrap_or("").trim();
+        if content.is_empty() {
+            continue;
+        }
+        let cells: Vec<&str> = content.split(',').collect();
+        match columns {
+            None => {
+                let names: Vec<String> = cells.iter().map(|c| c.trim().to_lowercase()).collect();
+                let ok = names.len() >= 3
+                    && names.len() <= 4
+                    && (names[0] == "alpha" || names[0] == "alpha_deg")
+                    && names[1] == "cl"
+                    && names[2] == "cd"
+                    && (names.len() == 3 || names[3] == "cm");
+                if !ok {
+                    return Err(AirfoilError::at(
+                        line,
+                        1,
+                        format!("expected the header `alpha,cl,cd,cm`, found '{content}'"),
+                        "the first line that is not a comment names the columns: alpha (degrees), cl, cd and optionally cm",
+                    ));
+                }
+                columns = Some(names.len());
+            }
+            Some(nc) => {
+                if cells.len() != nc {
+                    return Err(AirfoilError::at(
+                        line,
+                        1,
+                        format!("expected {nc} values, found {}", cells.len()),
+                        "one row per angle: alpha, cl, cd[, cm]",
+                    ));
+                }
+                let mut r = [0.0; 4];
+                let mut col = 1;
+                for (j, c) in cells.iter().enumerate() {
+                    r[j] = number(c, line, col, ["alpha", "cl", "cd", "cm"][j])?;
+                    col += c.len() + 1;
+                }
+                rows.push((line, r));
+            }
+        }
+    }
+    if columns.is_none() {
+        return Err(AirfoilError::at(
+            0,
+            0,
+            "the file is empty",
+            "give the header `alpha,cl,cd,cm` and one row per angle",
+        ));
+    }
+    Ok(rows)
+}
+
+/// Value of a `value  Name  ! comment` line of an OpenFAST file whose second token is `key`.
+fn keyed<'a>(text: &'a str, key: &str) -> Option<(usize, &'a str)> {
+    text.lines().enumerate().find_map(|(k, l)| {
+        let mut t = l.split_whitespace();
+        let v = t.next()?;
+        (t.next()? == key).then_some((k + 1, v))
+    })
+}
+
+fn parse_aerodyn(text: &str) -> Result<Vec<(usize, [f64; 4])>, AirfoilError> {
+    if let Some((line, v)) = keyed(text, "NumTabs") {
+        let n = number(v, line, 1, "NumTabs")?;
+        if n != 1.0 {
+            return Err(AirfoilError::at(
+                line,
+                1,
+                format!("NumTabs = {v}: several Reynolds-number tables are not read yet"),
+                "keep the table of the Reynolds number of the operating point (NumTabs = 1)",
+            ));
+        }
+    }
+    let Some((line0, v)) = keyed(text, "NumAlf") else {
+        return Err(AirfoilError::at(
+            0,
+            0,
+            "no `NumAlf` line: this is not an AeroDyn airfoil file",
+            "give an AeroDyn (AirfoilInfo v1.01) file, or a `.csv` table with the header alpha,cl,cd,cm",
+        ));
+    };
+    let n = number(v, line0, 1, "NumAlf")?;
+    if !((3.0..=1e6).contains(&n) && n.fract() == 0.0) {
+        return Err(AirfoilError::at(
+            line0,
+            1,
+            format!("NumAlf = {v}: expected a whole number of rows ≥ 3"),
+            "",
+        ));
+    }
+    let n = n as usize;
+    let mut rows = Vec::with_capacity(n);
+    for (k, l) in text.lines().enumerate().skip(line0) {
+        if rows.len() == n {
+            break;
+        }
+        let t = l.trim();
+        if t.is_empty() || t.starts_with('!') {
+            continue;
+        }
+        let line = k + 1;
+        let toks: Vec<&str> = t.split_whitespace().collect();
+        if toks.len() < 3 {
+            return Err(AirfoilError::at(
+                line,
+                1,
+                format!("expected alpha, cl, cd[, cm], found '{t}'"),
+                "the NumAlf rows follow the NumAlf line",
+            ));
+        }
+        let mut r = [0.0; 4];
+        for j in 0..toks.len().min(4) {
+            let col = l.find(toks[j]).map_or(1, |c| c + 1);
+            r[j] = number(toks[j], line, col, ["alpha", "cl", "cd", "cm"][j])?;
+        }
+        rows.push((line, r));
+    }
+    if rows.len() < n {
+        return Err(AirfoilError::at(
+            line0,
+            1,
+            format!("NumAlf = {n} but the file has {} rows after it", rows.len()),
+            "make NumAlf the number of table rows",
+        ));
+    }
+    Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cubic_reproduces_a_quadratic_inside_and_is_c1() {
+        // On a uniform grid the three-point slopes are exact for a parabola: the Hermite
+        // cubic reproduces it between interior knots.
+        let rows: Vec<(usize, [f64; 4])> = (-36..=36)
+            .map(|k| {
+                let d = 5.0 * k as f64;
+                let a = d.to_radians();
+                (0, [d, 1.0 + a - 0.3 * a * a, 0.01, 0.0])
+            })
+            .collect();
+        let af = Airfoil::from_rows(&rows).unwrap();
+        for a in [-1.0, -0.1234, 0.0, 0.4, 2.0] {
+            let c = af.eval(a);
+            assert!((c.cl - (1.0 + a - 0.3 * a * a)).abs() < 1e-12);
+            assert!((c.dcl - (1.0 - 0.6 * a)).abs() < 1e-12);
+        }
+        // Continuity of value and slope across every knot (and across ±180°).
+        for row in &rows[1..rows.len() - 1] {
+            let a = row.1[0].to_radians();
+            let (l, r) = (af.eval(a - 1e-9), af.eval(a + 1e-9));
+            assert!((l.cl - r.cl).abs() < 1e-7 && (l.dcl - r.dcl).abs() < 1e-6);
+        }
+    }
+}

@@ -1,0 +1,227 @@
+//! Quasi-steady blade-element momentum theory at one station, in the one-unknown form of
+//! Ning (2014, "A simple solution method for the blade element momentum equations with
+//! guaranteed convergence", Wind Energy 17): the inflow angle φ solves
+//!
+//! `R(φ) = sin φ/(1 − a(φ)) − cos φ (1 − κ'(φ))/λᵣ = 0`   (φ > 0, windmill state),
+//! `R(φ) = sin φ (1 − κ) − cos φ (1 − κ')/λᵣ = 0`          (φ < 0, propeller brake),
+//!
+//! with λᵣ = V_y/V_x, σ' = B c/(2π r), α = φ − θ, c_n = c_l cos φ + c_d sin φ,
+//! c_t = c_l sin φ − c_d cos φ, κ = σ' c_n/(4F sin²φ), κ' = σ' c_t/(4F sin φ cos φ),
+//! a = κ/(1 + κ) for κ ≤ 2/3 and Buhl's (2005) high-thrust correction above,
+//! a' = κ'/(1 − κ'), and Prandtl's tip and hub losses F = F_tip F_hub,
+//! F_tip = (2/π) acos exp(−B(R − r)/(2 r |sin φ|)), F_hub = (2/π) acos exp(−B(r − R_hub)/(2 R_hub |sin φ|)).
+//! φ is bracketed and found by bisection–secant (always converges); its derivatives with
+//! respect to the inputs follow from the implicit-function theorem, one Newton step in
+//! dual numbers at the root: φ = φ* − R(φ*, p)/∂R/∂φ.
+
+use super::airfoil::Airfoil;
+use crate::math::dual::{Dual, Scalar};
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// The rotor a station belongs to, for BEM.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BemRotor {
+    /// Number of blades B.
+    pub blades: usize,
+    /// Hub and tip radius [m].
+    pub hub_radius: f64,
+    pub tip_radius: f64,
+    pub tip_loss: bool,
+    pub hub_loss: bool,
+    /// Include the tangential induction a'.
+    pub tangential_induction: bool,
+}
+
+/// The BEM solution at a station.
+#[derive(Clone, Copy, Debug)]
+pub struct Induction<S> {
+    pub phi: S,
+    /// Axial and tangential induction factors a, a'.
+    pub a: S,
+    pub ap: S,
+    /// Prandtl loss factor F.
+    pub loss: S,
+}
+
+/// The station's inputs: axial and tangential inflow V_x (> 0 along the axis, through
+/// the rotor), V_y (> 0 against the blade motion), radius r, chord c, and θ, the chord's
+/// angle to the rotor plane (twist + pitch, positive toward feather).
+#[derive(Clone, Copy, Debug)]
+pub struct StationFlow<S> {
+    pub vx: S,
+    pub vy: S,
+    pub r: S,
+    pub chord: f64,
+    pub theta: S,
+}
+
+impl BemRotor {
+    fn loss<S: Scalar>(&self, phi: S, r: S) -> S {
+        let b = self.blades as f64;
+        let s = phi.sin().abs();
+        let mut f = S::cst(1.0);
+        if self.tip_loss && r.re() < self.tip_radius {
+            let x = (S::cst(self.tip_radius) - r) * (b / 2.0) / (r * s);
+            f = f * (-x).exp().acos() * (2.0 / PI);
+        }
+        if self.hub_loss && r.re() > self.hub_radius && self.hub_radius > 0.0 {
+            let x = (r - self.hub_radius) * (b / 2.0) / (s * self.hub_radius);
+            f = f * (-x).exp().acos() * (2.0 / PI);
+        }
+        f
+    }
+
+    /// R(φ) and the induction factors at φ.
+    fn residual<S: Scalar>(
+        &self,
+        phi: S,
+        p: &StationFlow<S>,
+        airfoil: &Airfoil,
+    ) -> (S, Induction<S>) {
+        let (sp, cp) = (phi.sin(), phi.cos());
+        let alpha = phi - p.theta;
+        let c = airfoil.eval(alpha.re());
+        let cl = alpha.chain(c.cl, c.dcl);
+        let cd = alpha.chain(c.cd, c.dcd);
+        let cn = cl * cp + cd * sp;
+        let ct = cl * sp - cd * cp;
+        let sigma = S::cst(self.blades as f64 * p.chord / (2.0 * PI)) / p.r;
+        let loss = self.loss(phi, p.r);
+        let k = sigma * cn / (loss * sp * sp * 4.0);
+        let mut kp = sigma * ct / (loss * sp * cp * 4.0);
+        if !self.tangential_induction {
+            kp = S::cst(0.0);
+        }
+        let lambda_r = p.vy / p.vx;
+        let (a, r) = if phi.re() > 0.0 {
+            let a = if k.re() <= 2.0 / 3.0 {
+                k / (k + 1.0)
+            } else {
+                // Buhl's correction, continuous with the momentum branch at κ = 2/3.
+                let f = loss;
+                let g1 = f * k * 2.0 - (S::cst(10.0 / 9.0) - f);
+                let g2 = f * k * 2.0 - f * (S::cst(4.0 / 3.0) - f);
+                let g3 = f * k * 2.0 - (S::cst(25.0 / 9.0) - f * 2.0);
+                if g3.re().abs() < 1e-6 {
+                    S::cst(1.0) - S::cst(0.5) / g2.sqrt()
+                } else {
+                    (g1 - g2.sqrt()) / g3
+                }
+            };
+            (
+                a,
+                sp / (S::cst(1.0) - a) - cp * (S::cst(1.0) - kp) / lambda_r,
+            )
+        } else {
+            let a = if k.re() > 1.0 {
+                k / (k - 1.0)
+            } else {
+                S::cst(0.0)
+            };
+            (
+                a,
+                sp * (S::cst(1.0) - k) - cp * (S::cst(1.0) - kp) / lambda_r,
+            )
+        };
+        let ap = kp / (S::cst(1.0) - kp);
+        (r, Induction { phi, a, ap, loss })
+    }
+
+    fn residual_value(&self, phi: f64, p: &StationFlow<f64>, airfoil: &Airfoil) -> f64 {
+        self.residual(phi, p, airfoil).0
+    }
+
+    /// Solves for φ (in f64) and returns the induction with exact derivatives for a
+    /// dual `p` (values only for f64). `None` where BEM does not apply (V_x ≤ 0 or
+    /// V_y ≤ 0, a station outside hub…tip, or no root in the brackets).
+    pub fn solve<S: Scalar>(&self, p: &StationFlow<S>, airfoil: &Airfoil) -> Option<Induction<S>> {
+        let pv = StationFlow {
+            vx: p.vx.re(),
+            vy: p.vy.re(),
+            r: p.r.re(),
+            chord: p.chord,
+            theta: p.theta.re(),
+        };
+        if !(pv.vx > 1e-9 && pv.vy > 1e-9 && pv.r > 0.0) {
+            return None;
+        }
+        let eps = 1e-6;
+        let f = |x: f64| self.residual_value(x, &pv, airfoil);
+        let brackets = [
+            (eps, FRAC_PI_2),
+            (-FRAC_PI_2 / 2.0, -eps),
+            (FRAC_PI_2, PI - eps),
+        ];
+        let phi = brackets.iter().find_map(|&(lo, hi)| {
+            let (flo, fhi) = (f(lo), f(hi));
+            (flo.is_finite() && fhi.is_finite() && flo * fhi <= 0.0)
+                .then(|| bracketed_root(&f, lo, hi, flo, fhi))
+        })?;
+        // ∂R/∂φ at the root (one dual direction), then the implicit-function step.
+        let pd = StationFlow {
+            vx: Dual::<1>::cst(pv.vx),
+            vy: Dual::<1>::cst(pv.vy),
+            r: Dual::<1>::cst(pv.r),
+            chord: pv.chord,
+            theta: Dual::<1>::cst(pv.theta),
+        };
+        let dr = self.residual(Dual::<1>::var(phi, 0), &pd, airfoil).0.d[0];
+        let (r, _) = self.residual(S::cst(phi), p, airfoil);
+        let phi_s = if dr.abs() > 1e-300 {
+            S::cst(phi) - r / dr
+        } else {
+            S::cst(phi)
+        };
+        Some(self.residual(phi_s, p, airfoil).1)
+    }
+}
+
+/// A root of f in [lo, hi] with f(lo) f(hi) ≤ 0: Illinois false position with bisection
+/// safeguard, to 1e-14 rad.
+fn bracketed_root(
+    f: &dyn Fn(f64) -> f64,
+    mut lo: f64,
+    mut hi: f64,
+    mut flo: f64,
+    mut fhi: f64,
+) -> f64 {
+    if flo == 0.0 {
+        return lo;
+    }
+    if fhi == 0.0 {
+        return hi;
+    }
+    let mut side = 0;
+    for it in 0..200 {
+        let x = if it % 4 == 3 {
+            0.5 * (lo + hi)
+        } else {
+            let x = (lo * fhi - hi * flo) / (fhi - flo);
+            if x.is_finite() && x > lo && x < hi {
+                x
+            } else {
+                0.5 * (lo + hi)
+            }
+        };
+        let fx = f(x);
+        if fx == 0.0 || (hi - lo) < 1e-14 {
+            return x;
+        }
+        if fx * flo < 0.0 {
+            hi = x;
+            fhi = fx;
+            if side == -1 {
+                flo *= 0.5;
+            }
+            side = -1;
+        } else {
+            lo = x;
+            flo = fx;
+            if side == 1 {
+                fhi *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    0.5 * (lo + hi)
+}

@@ -1,0 +1,12 @@
+//! Aerodynamics (docs/aerodynamics.md): airfoil tables, the wind field, quasi-steady BEM
+//! induction, and the lifting-line station element.
+
+pub mod airfoil;
+pub mod bem;
+pub mod station;
+pub mod wind;
+
+pub use airfoil::{Airfoil, AirfoilError, Coefficients};
+pub use bem::{BemRotor, Induction, StationFlow};
+pub use station::{AeroStation, Attachment, Inflow, MAX_NODES, Section};
+pub use wind::Wind;

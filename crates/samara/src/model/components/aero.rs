@@ -1,0 +1,915 @@
+//! `[[aero_lines]]`: a lifting line on a beam or a node (a rigid body), one
+//! [`AeroStation`] element per station (kernel: [`crate::elements::aero`];
+//! docs/aerodynamics.md). Stations, chords, twists and airfoils are given in the model or
+//! read from an OpenFAST AeroDyn v15 primary file (its `ADBlFile(1)` blade table and
+//! `AFNames` airfoil files, paths relative to that file).
+
+use super::{Build, ComponentKind};
+use crate::core::NodeRef;
+use crate::elements::aero::{
+    AeroStation, Airfoil, Attachment, BemRotor, Inflow, MAX_NODES, Section, Wind,
+};
+use crate::math::TimeFunction;
+use crate::model::input::TimeFunctionInput;
+use crate::model::validate::{Checker, Entry};
+use crate::model::{Located, Model};
+use crate::tangent_check::{TangentCase, random_node};
+use nalgebra::{Matrix3, Vector3};
+use schemars::JsonSchema;
+use serde::Deserialize;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// One station of a lifting line.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct StationInput {
+    /// Distance from the line's root along it [m] (along the beam's reference line, or
+    /// root → tip for a node).
+    pub span: f64,
+    /// Chord c [m], > 0.
+    pub chord: f64,
+    /// Aerodynamic twist [rad], positive toward feather (turns the chord toward the
+    /// suction-side normal, lowering α).
+    #[serde(default)]
+    pub twist: f64,
+    /// Airfoil table: a `.csv` file (alpha,cl,cd,cm) or an AeroDyn airfoil file, relative
+    /// to the model file.
+    pub airfoil: String,
+    /// Distance of the aerodynamic centre from the line, along the chord toward the
+    /// trailing edge [m].
+    #[serde(default)]
+    pub ac_offset: f64,
+}
+
+/// The wind of a line.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct WindInput {
+    /// Speed at the reference height [m/s].
+    pub speed: f64,
+    /// Direction the air moves to, global (normalized); default +x.
+    #[serde(default)]
+    pub direction: Option<[f64; 3]>,
+    /// Power-law shear exponent; default 0 (uniform).
+    #[serde(default)]
+    pub shear_exponent: Option<f64>,
+    /// Reference height of the shear law [m]; required with a shear exponent.
+    #[serde(default)]
+    pub reference_height: Option<f64>,
+    /// Vertical direction, global; default +z (heights from z = 0).
+    #[serde(default)]
+    pub vertical: Option<[f64; 3]>,
+    /// Time function multiplying the speed (a gust); default 1.
+    #[serde(default)]
+    pub function: Option<Located<TimeFunctionInput>>,
+}
+
+/// The induced-velocity model of a line.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum InflowInput {
+    /// No induced velocity.
+    None,
+    /// A given induced velocity, global [m/s].
+    Uniform { velocity: [f64; 3] },
+    /// Quasi-steady blade-element momentum theory of a rotor.
+    Bem {
+        /// Rotor centre, global [m] (fixed).
+        centre: [f64; 3],
+        /// Rotor axis, global, pointing downstream (the wind's way through the rotor).
+        axis: [f64; 3],
+        /// Number of blades.
+        blades: usize,
+        /// Hub and tip radius [m].
+        hub_radius: f64,
+        tip_radius: f64,
+        /// Prandtl tip loss; default true.
+        #[serde(default)]
+        tip_loss: Option<bool>,
+        /// Prandtl hub loss; default true.
+        #[serde(default)]
+        hub_loss: Option<bool>,
+        /// Tangential induction a'; default true.
+        #[serde(default)]
+        tangential_induction: Option<bool>,
+    },
+}
+
+/// A lifting line on a beam or a node.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AeroLineInput {
+    /// Unique line name; its stations are elements `<name>.<k>`.
+    pub name: Located<String>,
+    /// The beam carrying the line (stations along its reference line, from its root).
+    #[serde(default)]
+    pub beam: Option<Located<String>>,
+    /// Or the node carrying the line (a rigid body), with `root` and `tip`.
+    #[serde(default)]
+    pub node: Option<Located<String>>,
+    /// Root and tip of a line on a node, global in the initial configuration [m].
+    #[serde(default)]
+    pub root: Option<[f64; 3]>,
+    #[serde(default)]
+    pub tip: Option<[f64; 3]>,
+    /// Chord direction (leading → trailing edge) at zero twist, global, initial
+    /// configuration (made normal to the line).
+    pub chord_direction: [f64; 3],
+    /// Normal toward the suction side (where lift points at positive α) at zero twist.
+    pub normal_direction: [f64; 3],
+    /// Pitch added to every station's twist [rad]; default 0.
+    #[serde(default)]
+    pub pitch: Option<f64>,
+    /// Air density ρ [kg/m³]; default 1.225.
+    #[serde(default)]
+    pub air_density: Option<f64>,
+    /// Stations (or `aerodyn`).
+    #[serde(default)]
+    pub stations: Vec<Located<StationInput>>,
+    /// An AeroDyn v15 primary file (relative to the model): stations from its blade
+    /// file `ADBlFile(1)` (BlSpn, BlTwist [deg], BlChord, BlAFID) and airfoils `AFNames`.
+    #[serde(default)]
+    pub aerodyn: Option<Located<String>>,
+    /// The wind; default still air.
+    #[serde(default)]
+    pub wind: Option<Located<WindInput>>,
+    /// Induced velocity; default none.
+    #[serde(default)]
+    pub inflow: Option<Located<InflowInput>>,
+}
+
+/// A validated station.
+#[derive(Clone, Debug)]
+pub struct StationDef {
+    pub span: f64,
+    pub chord: f64,
+    pub twist: f64,
+    pub ac_offset: f64,
+    pub airfoil: Arc<Airfoil>,
+}
+
+/// What carries a line.
+#[derive(Clone, Debug)]
+pub enum Carrier {
+    /// A beam: its nodes root → tip, their normalized arc length η, the polyline length
+    /// s [m] through them (s ↔ η piecewise linear), and the nodes of each element.
+    Beam {
+        nodes: Vec<usize>,
+        etas: Vec<f64>,
+        arc: Vec<f64>,
+        order: usize,
+    },
+    /// A node, with the line from `root` to `tip`.
+    Node {
+        node: usize,
+        root: Vector3<f64>,
+        tip: Vector3<f64>,
+    },
+}
+
+/// A validated lifting line.
+#[derive(Clone, Debug)]
+pub struct AeroLineDef {
+    pub name: String,
+    pub carrier: Carrier,
+    pub chord_direction: Vector3<f64>,
+    pub normal_direction: Vector3<f64>,
+    pub pitch: f64,
+    pub density: f64,
+    pub stations: Vec<StationDef>,
+    pub wind: Wind,
+    pub inflow: Inflow,
+}
+
+pub struct AeroLine;
+
+/// Reads an airfoil file (cached per path), located at `span` on failure.
+fn load_airfoil(
+    cx: &mut Checker,
+    cache: &mut HashMap<PathBuf, Arc<Airfoil>>,
+    path: &Path,
+    span: Option<std::ops::Range<usize>>,
+    what: &str,
+) -> Option<Arc<Airfoil>> {
+    if let Some(a) = cache.get(path) {
+        return Some(a.clone());
+    }
+    let text = match crate::input_files::read_text(path) {
+        Ok(t) => t,
+        Err(e) => {
+            cx.error(
+                format!("{what}: cannot read airfoil file '{}': {e}", path.display()),
+                span,
+                Some("paths are relative to the model file".into()),
+            );
+            return None;
+        }
+    };
+    let csv = path
+        .extension()
+        .is_some_and(|x| x.eq_ignore_ascii_case("csv"));
+    match Airfoil::parse(&text, csv) {
+        Ok(a) => {
+            let a = Arc::new(a);
+            cache.insert(path.to_path_buf(), a.clone());
+            Some(a)
+        }
+        Err(e) => {
+            cx.error(
+                format!("{what}: airfoil file '{}', {e}", path.display()),
+                span,
+                e.hint.clone(),
+            );
+            None
+        }
+    }
+}
+
+/// First token of a line, unquoted.
+fn unquote(s: &str) -> &str {
+    s.trim().trim_matches('"')
+}
+
+/// Rows (span, chord, twist [rad], airfoil index) and the airfoil files of an AeroDyn
+/// blade.
+type AeroDynBlade = (Vec<(f64, f64, f64, usize)>, Vec<PathBuf>);
+
+/// Stations from an AeroDyn v15 primary file; errors are `(message, hint)`.
+fn read_aerodyn(primary: &Path) -> Result<AeroDynBlade, (String, String)> {
+    let err = |p: &Path, m: String| (format!("'{}': {m}", p.display()), String::new());
+    let text = crate::input_files::read_text(primary).map_err(|e| err(primary, e.to_string()))?;
+    let lines: Vec<&str> = text.lines().collect();
+    let key = |k: &str| {
+        lines.iter().position(|l| {
+            let mut t = l.split_whitespace();
+            t.next().is_some() && t.next() == Some(k)
+        })
+    };
+    let base = primary.parent().unwrap_or(Path::new("."));
+    let nline = key("NumAFfiles").ok_or_else(|| {
+        err(
+            primary,
+            "no `NumAFfiles` line: not an AeroDyn v15 primary file".into(),
+        )
+    })?;
+    let n: usize = lines[nline]
+        .split_whitespace()
+        .next()
+        .and_then(|v| v.parse().ok())
+        .filter(|&n| (1..=1000).contains(&n))
+        .ok_or_else(|| {
+            err(
+                primary,
+                format!("line {}: NumAFfiles must be 1…1000", nline + 1),
+            )
+        })?;
+    let first = key("AFNames").ok_or_else(|| err(primary, "no `AFNames` line".into()))?;
+    let mut airfoils = Vec::with_capacity(n);
+    for k in 0..n {
+        let l = lines.get(first + k).ok_or_else(|| {
+            err(
+                primary,
+                format!("AFNames lists fewer than NumAFfiles = {n} files"),
+            )
+        })?;
+        let name = unquote(l.split_whitespace().next().unwrap_or(""));
+        airfoils.push(base.join(name));
+    }
+    let bl = key("ADBlFile(1)").ok_or_else(|| err(primary, "no `ADBlFile(1)` line".into()))?;
+    let blade = base.join(unquote(lines[bl].split_whitespace().next().unwrap_or("")));
+    let btext = crate::input_files::read_text(&blade).map_err(|e| err(&blade, e.to_string()))?;
+    let blines: Vec<&str> = btext.lines().collect();
+    let nl = blines
+        .iter()
+        .position(|l| l.split_whitespace().nth(1) == Some("NumBlNds"))
+        .ok_or_else(|| {
+            err(
+                &blade,
+                "no `NumBlNds` line: not an AeroDyn v15 blade file".into(),
+            )
+        })?;
+    let nodes: usize = blines[nl]
+        .split_whitespace()
+        .next()
+        .and_then(|v| v.parse().ok())
+        .filter(|&n| (2..=10000).contains(&n))
+        .ok_or_else(|| err(&blade, format!("line {}: NumBlNds must be 2…10000", nl + 1)))?;
+    let mut rows = Vec::with_capacity(nodes);
+    // Two header lines (names, units), then the rows.
+    for (k, l) in blines.iter().enumerate().skip(nl + 3) {
+        if rows.len() == nodes {
+            break;
+        }
+        let v: Vec<f64> = l
+            .split_whitespace()
+            .map(|t| t.parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| err(&blade, format!("line {}: expected 7 numbers", k + 1)))?;
+        if v.len() < 7 || v.iter().any(|x| !x.is_finite()) {
+            return Err(err(&blade, format!("line {}: expected 7 numbers", k + 1)));
+        }
+        let id = v[6];
+        if !(id >= 1.0 && id <= n as f64 && id.fract() == 0.0) {
+            return Err(err(
+                &blade,
+                format!("line {}: BlAFID {id} is not an airfoil 1…{n}", k + 1),
+            ));
+        }
+        rows.push((v[0], v[5], v[4].to_radians(), id as usize - 1));
+    }
+    if rows.len() < nodes {
+        return Err(err(
+            &blade,
+            format!("NumBlNds = {nodes} but {} rows follow", rows.len()),
+        ));
+    }
+    Ok((rows, airfoils))
+}
+
+impl ComponentKind for AeroLine {
+    const NOUN: &'static str = "aerodynamic line";
+    type Input = AeroLineInput;
+    type Def = AeroLineDef;
+
+    fn name(input: &AeroLineInput) -> &Located<String> {
+        &input.name
+    }
+
+    fn validate(
+        l: &Located<AeroLineInput>,
+        cx: &mut Checker,
+        model: &mut Model,
+    ) -> Option<AeroLineDef> {
+        let e = Entry {
+            span: l.span.clone(),
+        };
+        let li = &l.value;
+        let what = format!("aerodynamic line '{}'", li.name.value);
+        let base = cx
+            .source
+            .path
+            .parent()
+            .unwrap_or(Path::new("."))
+            .to_path_buf();
+        let mut ok = true;
+        // Carrier.
+        let carrier = match (&li.beam, &li.node) {
+            (Some(b), None) => {
+                let Some(def) = model.beams.iter().find(|d| d.name == b.value) else {
+                    cx.error(
+                        format!("{what}: unknown beam '{}'", b.value),
+                        b.span.clone(),
+                        Some("name a `[[beams]]` entry".into()),
+                    );
+                    return None;
+                };
+                if def.order + 1 > MAX_NODES {
+                    cx.error(
+                        format!("{what}: beam '{}' has order {}; lifting lines ride on beams of order ≤ {}", b.value, def.order, MAX_NODES - 1),
+                        b.span.clone(),
+                        Some("use more elements of a lower order".into()),
+                    );
+                    return None;
+                }
+                let mut arc = vec![0.0];
+                for w in def.nodes.windows(2) {
+                    let d = (model.nodes[w[1]].position - model.nodes[w[0]].position).norm();
+                    arc.push(arc[arc.len() - 1] + d);
+                }
+                Carrier::Beam {
+                    nodes: def.nodes.clone(),
+                    etas: def.etas.clone(),
+                    arc,
+                    order: def.order,
+                }
+            }
+            (None, Some(n)) => {
+                let node = match cx.node_ref(n, &what) {
+                    Some(NodeRef::Node(i)) => i,
+                    Some(NodeRef::Ground) => {
+                        cx.error(
+                            format!("{what}: a line on the ground does not move; put it on a node"),
+                            n.span.clone(),
+                            None,
+                        );
+                        return None;
+                    }
+                    None => return None,
+                };
+                let (Some(root), Some(tip)) = (li.root, li.tip) else {
+                    cx.error(
+                        format!("{what}: a line on a node needs `root` and `tip`"),
+                        e.span.clone(),
+                        Some("give the line's ends, global, initial configuration".into()),
+                    );
+                    return None;
+                };
+                ok &= cx.finite(&e, "root", &root, &what) & cx.finite(&e, "tip", &tip, &what);
+                let (root, tip) = (Vector3::from(root), Vector3::from(tip));
+                if (tip - root).norm() <= 0.0 {
+                    cx.error(
+                        format!("{what}: `root` and `tip` coincide"),
+                        cx.key(&e, "tip"),
+                        None,
+                    );
+                    return None;
+                }
+                Carrier::Node { node, root, tip }
+            }
+            _ => {
+                cx.error(
+                    format!("{what}: give either `beam` or `node`"),
+                    e.span.clone(),
+                    Some("a line rides on one beam or one node (a rigid body)".into()),
+                );
+                return None;
+            }
+        };
+        let length = match &carrier {
+            Carrier::Beam { arc, .. } => arc[arc.len() - 1],
+            Carrier::Node { root, tip, .. } => (tip - root).norm(),
+        };
+        ok &= cx.finite(&e, "chord_direction", &li.chord_direction, &what);
+        ok &= cx.finite(&e, "normal_direction", &li.normal_direction, &what);
+        let chord_direction = Vector3::from(li.chord_direction);
+        let normal_direction = Vector3::from(li.normal_direction);
+        if chord_direction.cross(&normal_direction).norm()
+            < 1e-9 * chord_direction.norm() * normal_direction.norm()
+            || chord_direction.norm() == 0.0
+        {
+            cx.error(
+                format!("{what}: `chord_direction` and `normal_direction` must be non-zero and not parallel"),
+                cx.key(&e, "normal_direction"),
+                Some("the chord runs leading → trailing edge; the normal points to the suction side".into()),
+            );
+            ok = false;
+        }
+        let density = li.air_density.unwrap_or(1.225);
+        if !(density.is_finite() && density > 0.0) {
+            cx.error(
+                format!("{what}: `air_density` must be > 0"),
+                cx.key(&e, "air_density"),
+                None,
+            );
+            ok = false;
+        }
+        let pitch = li.pitch.unwrap_or(0.0);
+        ok &= cx.finite(&e, "pitch", &[pitch], &what);
+        // Stations.
+        let mut cache = HashMap::new();
+        let mut stations = Vec::new();
+        match (&li.aerodyn, li.stations.is_empty()) {
+            (Some(f), true) => match read_aerodyn(&base.join(&f.value)) {
+                Ok((rows, files)) => {
+                    let mut foils = Vec::new();
+                    for p in &files {
+                        foils.push(load_airfoil(cx, &mut cache, p, f.span.clone(), &what));
+                    }
+                    for (span, chord, twist, id) in rows {
+                        let Some(af) = foils[id].clone() else {
+                            ok = false;
+                            continue;
+                        };
+                        stations.push((span, chord, twist, 0.0, af, f.span.clone()));
+                    }
+                }
+                Err((m, _)) => {
+                    cx.error(
+                        format!("{what}: AeroDyn file {m}"),
+                        f.span.clone(),
+                        Some("give an AeroDyn v15 primary file (NumAFfiles, AFNames, ADBlFile(1)); paths relative to the model file".into()),
+                    );
+                    return None;
+                }
+            },
+            (None, false) => {
+                for s in &li.stations {
+                    let si = &s.value;
+                    let Some(af) = load_airfoil(
+                        cx,
+                        &mut cache,
+                        &base.join(&si.airfoil),
+                        s.span.clone(),
+                        &what,
+                    ) else {
+                        ok = false;
+                        continue;
+                    };
+                    stations.push((
+                        si.span,
+                        si.chord,
+                        si.twist,
+                        si.ac_offset,
+                        af,
+                        s.span.clone(),
+                    ));
+                }
+            }
+            _ => {
+                cx.error(
+                    format!("{what}: give either `stations` or `aerodyn`"),
+                    e.span.clone(),
+                    None,
+                );
+                return None;
+            }
+        }
+        let tol = 1e-9 * length.max(1.0);
+        let mut defs: Vec<StationDef> = Vec::new();
+        for (span, chord, twist, ac, airfoil, sspan) in stations {
+            if ![span, chord, twist, ac].iter().all(|x| x.is_finite()) {
+                cx.error(
+                    format!("{what}: station values must be finite"),
+                    sspan,
+                    None,
+                );
+                ok = false;
+                continue;
+            }
+            if chord <= 0.0 {
+                cx.error(
+                    format!("{what}: station at span {span} m has chord {chord} m; the chord must be > 0"),
+                    sspan,
+                    None,
+                );
+                ok = false;
+                continue;
+            }
+            if span < -tol || span > length + tol {
+                cx.error(
+                    format!("{what}: station at span {span} m lies outside the line (0 … {length:.6} m)"),
+                    sspan,
+                    Some("span is measured from the root along the beam's reference line (or root → tip)".into()),
+                );
+                ok = false;
+                continue;
+            }
+            if let Some(prev) = defs.last()
+                && span <= prev.span
+            {
+                cx.error(
+                    format!(
+                        "{what}: station spans must increase strictly ({span} m follows {} m)",
+                        prev.span
+                    ),
+                    sspan,
+                    None,
+                );
+                ok = false;
+                continue;
+            }
+            defs.push(StationDef {
+                span: span.clamp(0.0, length),
+                chord,
+                twist,
+                ac_offset: ac,
+                airfoil,
+            });
+        }
+        // Wind.
+        let wind = match &li.wind {
+            None => Wind::default(),
+            Some(w) => {
+                let we = Entry {
+                    span: w.span.clone(),
+                };
+                let wi = &w.value;
+                let dir = Vector3::from(wi.direction.unwrap_or([1.0, 0.0, 0.0]));
+                let up = Vector3::from(wi.vertical.unwrap_or([0.0, 0.0, 1.0]));
+                ok &= cx.finite(&we, "speed", &[wi.speed], &what);
+                ok &= cx.finite(&we, "direction", dir.as_slice(), &what);
+                ok &= cx.finite(&we, "vertical", up.as_slice(), &what);
+                if dir.norm() == 0.0 || up.norm() == 0.0 {
+                    cx.error(
+                        format!("{what}: wind `direction` and `vertical` must be non-zero"),
+                        w.span.clone(),
+                        None,
+                    );
+                    ok = false;
+                }
+                let alpha = wi.shear_exponent.unwrap_or(0.0);
+                let href = wi.reference_height.unwrap_or(0.0);
+                if alpha != 0.0 && !(href.is_finite() && href > 0.0) {
+                    cx.error(
+                        format!("{what}: a wind shear exponent needs `reference_height` > 0"),
+                        cx.key(&we, "shear_exponent"),
+                        Some("the hub height, typically".into()),
+                    );
+                    ok = false;
+                }
+                ok &= cx.finite(&we, "shear_exponent", &[alpha], &what);
+                let function = match &wi.function {
+                    Some(f) => cx.time_function(f, &what).unwrap_or_default(),
+                    None => TimeFunction::Constant(1.0),
+                };
+                Wind {
+                    speed: wi.speed,
+                    direction: dir.normalize(),
+                    shear_exponent: alpha,
+                    reference_height: if href > 0.0 { href } else { 1.0 },
+                    vertical: up.normalize(),
+                    ground: 0.0,
+                    function,
+                }
+            }
+        };
+        let inflow = match li.inflow.as_ref().map(|i| &i.value) {
+            None | Some(InflowInput::None) => Inflow::None,
+            Some(InflowInput::Uniform { velocity }) => {
+                ok &= cx.finite(&e, "velocity", velocity, &what);
+                Inflow::Uniform(Vector3::from(*velocity))
+            }
+            Some(InflowInput::Bem {
+                centre,
+                axis,
+                blades,
+                hub_radius,
+                tip_radius,
+                tip_loss,
+                hub_loss,
+                tangential_induction,
+            }) => {
+                let span = li.inflow.as_ref().and_then(|i| i.span.clone());
+                let axis = Vector3::from(*axis);
+                if !(*blades >= 1
+                    && hub_radius.is_finite()
+                    && tip_radius.is_finite()
+                    && *hub_radius >= 0.0
+                    && tip_radius > hub_radius
+                    && axis.norm() > 0.0
+                    && axis.iter().all(|x| x.is_finite())
+                    && centre.iter().all(|x| x.is_finite()))
+                {
+                    cx.error(
+                        format!("{what}: BEM needs blades ≥ 1, 0 ≤ hub_radius < tip_radius and a non-zero axis"),
+                        span,
+                        None,
+                    );
+                    ok = false;
+                }
+                Inflow::Bem {
+                    rotor: BemRotor {
+                        blades: *blades,
+                        hub_radius: *hub_radius,
+                        tip_radius: *tip_radius,
+                        tip_loss: tip_loss.unwrap_or(true),
+                        hub_loss: hub_loss.unwrap_or(true),
+                        tangential_induction: tangential_induction.unwrap_or(true),
+                    },
+                    centre: Vector3::from(*centre),
+                    axis: if axis.norm() > 0.0 {
+                        axis.normalize()
+                    } else {
+                        Vector3::x()
+                    },
+                }
+            }
+        };
+        (ok && !defs.is_empty()).then(|| AeroLineDef {
+            name: li.name.value.clone(),
+            carrier,
+            chord_direction,
+            normal_direction,
+            pitch,
+            density,
+            stations: defs,
+            wind,
+            inflow,
+        })
+    }
+
+    fn nodes(_def: &AeroLineDef) -> Vec<usize> {
+        // Loads give a node no equation of its own.
+        Vec::new()
+    }
+
+    fn build(def: &AeroLineDef, parts: &mut Build) {
+        let wind = Arc::new(def.wind.clone());
+        let inflow = Arc::new(def.inflow.clone());
+        for (k, s) in def.stations.iter().enumerate() {
+            let (nodes, weights, point, tangent) = station_place(def, s.span, parts);
+            // Chord and normal at this station: made normal to the line, turned by the
+            // twist (+ pitch) about the span toward the normal.
+            let c0 =
+                (def.chord_direction - tangent * tangent.dot(&def.chord_direction)).normalize();
+            let n0 = {
+                let n = def.normal_direction - tangent * tangent.dot(&def.normal_direction);
+                (n - c0 * c0.dot(&n)).normalize()
+            };
+            let th = s.twist + def.pitch;
+            let c = c0 * th.cos() + n0 * th.sin();
+            let n = -c0 * th.sin() + n0 * th.cos();
+            let ac = point + c * s.ac_offset;
+            let attach = nodes
+                .iter()
+                .zip(&weights)
+                .map(|(&i, &w)| {
+                    let ns = &parts.initial[i];
+                    let rt: Matrix3<f64> = ns.r().transpose();
+                    Attachment {
+                        weight: w,
+                        offset: rt * (ac - ns.x),
+                        chord_dir: rt * c,
+                        normal_dir: rt * n,
+                    }
+                })
+                .collect();
+            let width = station_width(def, k);
+            parts.elements.push(Box::new(AeroStation::new(
+                format!("{}.{k}", def.name),
+                nodes,
+                attach,
+                Section {
+                    chord: s.chord,
+                    width,
+                    airfoil: s.airfoil.clone(),
+                },
+                def.density,
+                wind.clone(),
+                inflow.clone(),
+            )));
+        }
+    }
+
+    fn tangent_cases() -> Vec<TangentCase> {
+        let airfoil = Arc::new(Airfoil::thin_plate_with_drag());
+        let wind = Arc::new(Wind {
+            speed: 9.0,
+            direction: Vector3::new(1.0, 0.2, -0.1).normalize(),
+            shear_exponent: 0.2,
+            reference_height: 2.0,
+            ..Default::default()
+        });
+        let attach = |seed: f64, w: f64| Attachment {
+            weight: w,
+            offset: Vector3::new(0.1 * seed, -0.2, 0.3),
+            chord_dir: Vector3::new(0.0, 1.0, 0.1 * seed).normalize(),
+            normal_dir: Vector3::new(1.0, 0.0, 0.05).normalize(),
+        };
+        let section = Section {
+            chord: 0.4,
+            width: 0.3,
+            airfoil,
+        };
+        let mut cases = Vec::new();
+        let inflows = [
+            Inflow::None,
+            Inflow::Uniform(Vector3::new(-0.5, 0.3, 0.1)),
+            Inflow::Bem {
+                rotor: BemRotor {
+                    blades: 3,
+                    hub_radius: 0.2,
+                    tip_radius: 4.0,
+                    tip_loss: true,
+                    hub_loss: true,
+                    tangential_induction: true,
+                },
+                centre: Vector3::new(0.0, 0.0, 0.0),
+                axis: Vector3::x(),
+            },
+        ];
+        for (k, inflow) in inflows.into_iter().enumerate() {
+            let inflow = Arc::new(inflow);
+            // Two nodes of a beam (weights 0.3/0.7) and one node of a body.
+            let e2 = AeroStation::new(
+                "aero2",
+                vec![0, 1],
+                vec![attach(1.0, 0.3), attach(-1.0, 0.7)],
+                section.clone(),
+                1.2,
+                wind.clone(),
+                inflow.clone(),
+            );
+            let e1_inflow = inflow.clone();
+            let e1 = AeroStation::new(
+                "aero1",
+                vec![0],
+                vec![attach(0.5, 1.0)],
+                section.clone(),
+                1.2,
+                wind.clone(),
+                inflow,
+            );
+            // Nodes near a spinning blade station: at r ≈ 2 on the rotor, moving in the
+            // plane (so BEM finds its windmill root).
+            let node = |seed: u64| {
+                let mut n = random_node(seed);
+                n.x = Vector3::new(0.05, 0.1, 2.0) + 0.02 * n.x;
+                n.v = Vector3::new(0.3, -12.0, 0.2) + 0.1 * n.v;
+                n.w *= 0.3;
+                n.rot = crate::math::Rotation::identity()
+                    .compose_exp(&(0.1 * crate::math::Rotation::identity().relative_log(&n.rot)));
+                n
+            };
+            cases.push(TangentCase::element(
+                Box::new(e2),
+                vec![node(700 + k as u64), node(710 + k as u64)],
+            ));
+            cases.push(TangentCase::element(
+                Box::new(e1),
+                vec![node(720 + k as u64)],
+            ));
+            // Five nodes of an order-4 beam element (Lagrange weights, summing to 1).
+            let w5 = [-0.1, 0.4, 0.5, 0.3, -0.1];
+            let e5 = AeroStation::new(
+                "aero5",
+                (0..5).collect(),
+                w5.iter()
+                    .enumerate()
+                    .map(|(i, &w)| attach(i as f64 - 2.0, w))
+                    .collect(),
+                section.clone(),
+                1.2,
+                wind.clone(),
+                e1_inflow.clone(),
+            );
+            cases.push(TangentCase::element(
+                Box::new(e5),
+                (0..5).map(|i| node(730 + 10 * k as u64 + i)).collect(),
+            ));
+        }
+        cases
+    }
+}
+
+/// Nodes, weights, initial point and unit tangent of the line at `span`.
+fn station_place(
+    def: &AeroLineDef,
+    span: f64,
+    parts: &Build,
+) -> (Vec<usize>, Vec<f64>, Vector3<f64>, Vector3<f64>) {
+    match &def.carrier {
+        Carrier::Node { node, root, tip } => {
+            let t = (tip - root).normalize();
+            (vec![*node], vec![1.0], root + t * span, t)
+        }
+        Carrier::Beam {
+            nodes,
+            etas,
+            arc,
+            order,
+        } => {
+            // η of the station (s ↔ η linear between nodes), its element, and the
+            // element's Lagrange shape functions Nₐ(η) and derivatives: the station moves
+            // and deforms with the beam's own interpolation.
+            let n = nodes.len();
+            let j = arc.partition_point(|&s| s <= span).clamp(1, n - 1) - 1;
+            let len = arc[j + 1] - arc[j];
+            let xi = if len > 0.0 {
+                (span - arc[j]) / len
+            } else {
+                0.0
+            };
+            let eta = etas[j] * (1.0 - xi) + etas[j + 1] * xi;
+            let e = (j / order).min((n - 1) / order - 1);
+            let idx: Vec<usize> = (e * order..=(e + 1) * order).collect();
+            let mut w = vec![0.0; idx.len()];
+            let mut dw = vec![0.0; idx.len()];
+            for (a, &ia) in idx.iter().enumerate() {
+                let mut v = 1.0;
+                let mut d = 0.0;
+                for (b, &ib) in idx.iter().enumerate() {
+                    if a == b {
+                        continue;
+                    }
+                    let den = etas[ia] - etas[ib];
+                    // d(∏)/dη by the product rule.
+                    d = d * (eta - etas[ib]) / den + v / den;
+                    v *= (eta - etas[ib]) / den;
+                }
+                w[a] = v;
+                dw[a] = d;
+            }
+            let mut p = Vector3::zeros();
+            let mut t = Vector3::zeros();
+            for (a, &ia) in idx.iter().enumerate() {
+                p += parts.initial[nodes[ia]].x * w[a];
+                t += parts.initial[nodes[ia]].x * dw[a];
+            }
+            (idx.iter().map(|&i| nodes[i]).collect(), w, p, t.normalize())
+        }
+    }
+}
+
+/// Width of station k: its cell between midpoints to the neighbours, clipped to the line
+/// (the trapezoid rule for stations at both ends, the midpoint rule for cell centres).
+fn station_width(def: &AeroLineDef, k: usize) -> f64 {
+    let s = &def.stations;
+    let length = match &def.carrier {
+        Carrier::Beam { arc, .. } => arc[arc.len() - 1],
+        Carrier::Node { root, tip, .. } => (tip - root).norm(),
+    };
+    let lo = if k == 0 {
+        0.0
+    } else {
+        0.5 * (s[k - 1].span + s[k].span)
+    };
+    let hi = if k + 1 == s.len() {
+        length
+    } else {
+        0.5 * (s[k].span + s[k + 1].span)
+    };
+    (hi - lo).max(0.0)
+}
