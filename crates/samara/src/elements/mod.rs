@@ -2,6 +2,7 @@
 
 mod applied_load;
 pub mod beam;
+mod contact;
 pub mod line_of_action;
 mod low_pass;
 mod maxwell;
@@ -10,6 +11,9 @@ mod spring_damper;
 mod time_signal;
 
 pub use applied_load::{AppliedLoad, LoadFrame};
+pub use contact::{
+    Contact, ContactShape, Friction, GroundPlane, NormalLaw, hunt_crossley_damping, normal_force,
+};
 pub use low_pass::{LowPassSensor, NodeQuantity, SensorInput};
 pub use maxwell::Maxwell;
 pub use rigid_body::RigidBody;

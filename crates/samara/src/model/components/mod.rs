@@ -13,6 +13,7 @@
 
 pub mod beam;
 pub mod body;
+pub mod contact;
 pub mod force;
 pub mod joint;
 pub mod sensor;
@@ -234,4 +235,7 @@ registry! {
     forces: force::Force,
     /// Point-to-point viscoelastic elements (Maxwell: a spring in series with a damper).
     viscoelastic: viscoelastic::Viscoelastic,
+    /// Contacts of bodies with a ground plane (Hunt–Crossley or linear normal force,
+    /// LuGre friction with bristle states).
+    contacts: contact::ContactKind,
 }
