@@ -15,6 +15,7 @@ pub mod beam;
 pub mod body;
 pub mod contact;
 pub mod force;
+pub mod hydraulic;
 pub mod joint;
 pub mod sensor;
 pub mod signal;
@@ -238,4 +239,7 @@ registry! {
     /// Contacts of bodies with a ground plane (Hunt–Crossley or linear normal force,
     /// LuGre friction with bristle states).
     contacts: contact::ContactKind,
+    /// Hydraulic circuits: volumes with pressure states, reservoirs, orifices, check
+    /// valves and a double-acting actuator.
+    hydraulics: hydraulic::Hydraulic,
 }
