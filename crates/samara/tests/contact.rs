@@ -572,6 +572,22 @@ fn every_contact_option_changes_the_answer() {
         .x[2];
     assert!((za - zb).abs() < 1e-9, "{za} {zb}");
 
+    // ground_point: the same drop 0.5 m higher on a ground 0.5 m higher.
+    let raised = drop
+        .replace(
+            "ground_point = [0.0, 0.0, 0.0]",
+            "ground_point = [3.0, -2.0, 0.5]",
+        )
+        .replace("position = [0.0, 0.0, 1.0] ", "position = [0.0, 0.0, 1.5] ");
+    let zr = run(&set_step(model(&raised), 1e-4, 0.6))
+        .1
+        .last()
+        .unwrap()
+        .state
+        .nodes[0]
+        .x[2];
+    assert!((zr - 0.5 - za).abs() < 1e-9, "{zr} {za}");
+
     // exponent = 1, α = 0: contact time π √(m/k) (gravity-free, from 0.1 m at 1 m/s).
     let k: f64 = 1e5;
     let lin = drop

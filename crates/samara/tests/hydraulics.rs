@@ -159,6 +159,24 @@ fn two_chamber_actuator_matches_an_independent_integration() {
         println!(
             "h = {step:e}: stroke {stroke:.5} m, position error {wx:.2e}, pressure error {wp:.2e}"
         );
+        // The outputs: actuator force p₁A₁ − p₂A₂, stroke x, orifice flows Q(Δp).
+        let sys = System::new(&m);
+        let last = h.last().unwrap();
+        let mut out = vec![0.0; sys.output_names.len()];
+        let ctx = samara::elements::EvalContext {
+            time: last.time,
+            gravity: m.gravity,
+            load_factor: 1.0,
+        };
+        sys.element_outputs(&ctx, &last.state, &mut out);
+        let get = |n: &str| out[sys.output_names.iter().position(|x| x == n).unwrap()];
+        let (p1, p2) = (last.state.states[k1].z, last.state.states[k2].z);
+        let x = last.state.nodes[0].x[0];
+        let force = p1 * lumped.a1 - p2 * lumped.a2;
+        assert!((get("lift.actuator.force") - force).abs() < 1e-9 * p1 * lumped.a1);
+        assert!((get("lift.actuator.stroke") - x).abs() < 1e-12);
+        assert!((get("lift.inlet.flow") - lumped.q(lumped.ps - p1)).abs() < 1e-15);
+        assert!((get("lift.outlet.flow") - lumped.q(p2 - lumped.pt)).abs() < 1e-15);
         ex.push(wx);
         ep.push(wp);
     }
