@@ -3,6 +3,7 @@
 mod applied_load;
 pub mod beam;
 mod contact;
+mod dc_motor;
 mod hydraulic;
 pub mod line_of_action;
 mod low_pass;
@@ -15,6 +16,7 @@ pub use applied_load::{AppliedLoad, LoadFrame};
 pub use contact::{
     Contact, ContactShape, Friction, GroundPlane, NormalLaw, hunt_crossley_damping, normal_force,
 };
+pub use dc_motor::DcMotor;
 pub use hydraulic::{
     HydraulicCircuit, Orifice as HydraulicOrifice, OrificeLaw, Port, Volume as HydraulicVolume,
     actuator as hydraulic_actuator,

@@ -17,6 +17,7 @@ pub mod contact;
 pub mod force;
 pub mod hydraulic;
 pub mod joint;
+pub mod motor;
 pub mod sensor;
 pub mod signal;
 pub mod spring;
@@ -242,4 +243,7 @@ registry! {
     /// Hydraulic circuits: volumes with pressure states, reservoirs, orifices, check
     /// valves and a double-acting actuator.
     hydraulics: hydraulic::Hydraulic,
+    /// DC motors between two nodes about an axis, driven by a voltage signal (armature
+    /// current as the state).
+    motors: motor::Motor,
 }
