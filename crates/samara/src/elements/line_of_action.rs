@@ -139,6 +139,32 @@ impl LineOfAction {
         }
     }
 
+    /// Adds `scale · ∂l̇/∂q` (over the local node unknowns, at fixed velocities) into
+    /// `out` through `set`: with P = I − n nᵀ, `∂l̇/∂x_X = σ_X P ḋ / l` and
+    /// `∂l̇/∂θ_X = σ_X (s̃ Rᵀ P ḋ / l + hₓᵀ n)`. (`∂l̇/∂v` is the length gradient.)
+    pub fn add_rate_gradient(&self, st: &LineState, scale: f64, mut set: impl FnMut(usize, f64)) {
+        let l = st.length;
+        if l == 0.0 {
+            return;
+        }
+        let n = st.direction;
+        let ddot = st.ends[1].pdot - st.ends[0].pdot;
+        let pd = (ddot - n * n.dot(&ddot)) / l;
+        for (x, e) in self.ends.iter().enumerate() {
+            if e.node.is_none() {
+                continue;
+            }
+            let row = 6 * e.local;
+            let f = pd * (SIGMA[x] * scale);
+            let m = (skew(&e.s) * (st.ends[x].r.transpose() * pd) + st.ends[x].h.transpose() * n)
+                * (SIGMA[x] * scale);
+            for i in 0..3 {
+                set(row + i, f[i]);
+                set(row + 3 + i, m[i]);
+            }
+        }
+    }
+
     /// Adds the residual of the tension `t` and, with `tangents`, its K and C for the
     /// tension's partial derivatives `(∂T/∂l, ∂T/∂l̇)`.
     pub fn add_tension(

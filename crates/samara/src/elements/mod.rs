@@ -3,6 +3,9 @@
 pub mod aero;
 mod applied_load;
 pub mod beam;
+mod contact;
+mod dc_motor;
+mod hydraulic;
 pub mod line_of_action;
 mod low_pass;
 mod maxwell;
@@ -11,6 +14,14 @@ mod spring_damper;
 mod time_signal;
 
 pub use applied_load::{AppliedLoad, LoadFrame};
+pub use contact::{
+    Contact, ContactShape, Friction, GroundPlane, NormalLaw, hunt_crossley_damping, normal_force,
+};
+pub use dc_motor::DcMotor;
+pub use hydraulic::{
+    HydraulicCircuit, Orifice as HydraulicOrifice, OrificeLaw, Port, Volume as HydraulicVolume,
+    actuator as hydraulic_actuator,
+};
 pub use low_pass::{LowPassSensor, NodeQuantity, SensorInput};
 pub use maxwell::Maxwell;
 pub use rigid_body::RigidBody;

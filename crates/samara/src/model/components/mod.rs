@@ -14,8 +14,11 @@
 pub mod aero;
 pub mod beam;
 pub mod body;
+pub mod contact;
 pub mod force;
+pub mod hydraulic;
 pub mod joint;
+pub mod motor;
 pub mod sensor;
 pub mod signal;
 pub mod spring;
@@ -238,4 +241,13 @@ registry! {
     /// Lifting lines on beams or nodes: aerodynamic stations with airfoil tables, wind
     /// and induced velocity (docs/aerodynamics.md).
     aero_lines: aero::AeroLine,
+    /// Contacts of bodies with a ground plane (Hunt–Crossley or linear normal force,
+    /// LuGre friction with bristle states).
+    contacts: contact::ContactKind,
+    /// Hydraulic circuits: volumes with pressure states, reservoirs, orifices, check
+    /// valves and a double-acting actuator.
+    hydraulics: hydraulic::Hydraulic,
+    /// DC motors between two nodes about an axis, driven by a voltage signal (armature
+    /// current as the state).
+    motors: motor::Motor,
 }

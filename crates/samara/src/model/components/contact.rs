@@ -1,0 +1,661 @@
+//! `[[contacts]]`: a body against a ground plane, with a Hunt–Crossley or linear
+//! spring-damper normal force and LuGre friction (kernel: [`crate::elements::Contact`]).
+//!
+//! ```toml
+//! [[contacts]]
+//! name = "ball"
+//! node = "ball"                  # the body's node
+//! shape = "sphere"               # sphere (centred at the node) | point (on the body)
+//! radius = 0.1                   # sphere radius [m]
+//! # point = [0.0, 0.0, -0.1]     # point: global, initial configuration; default the node
+//! ground_point = [0.0, 0.0, 0.0] # a point of the ground plane (default the origin)
+//! ground_normal = [0.0, 0.0, 1.0] # out of the ground (default +z)
+//! # ground_velocity = [0.1, 0.0, 0.0] # surface velocity in its plane (a belt)
+//! normal = "hunt_crossley"       # hunt_crossley | linear
+//! stiffness = 1e6                # k [N/m^e] (linear: N/m)
+//! exponent = 1.5                 # Hunt–Crossley e ≥ 1 (default 1.5)
+//! restitution = 0.7              # Hunt–Crossley: ε at `impact_velocity` … (α from it)
+//! impact_velocity = 2.0          # [m/s]
+//! # damping_factor = 0.3         # … or α [s/m] directly
+//! # damping = 100.0              # linear: c [N s/m]
+//! static_friction = 0.6          # μ_s: friction on (with the four below)
+//! dynamic_friction = 0.4         # μ_d ≤ μ_s
+//! stribeck_velocity = 1e-3       # v_s [m/s]
+//! bristle_stiffness = 1e5        # σ₀ [1/m]
+//! bristle_damping = 100.0        # σ₁ [s/m]
+//! # viscous_friction = 0.0       # σ₂ [s/m]
+//! ```
+
+use super::{Build, ComponentKind, ModelInput};
+use crate::core::NodeRef;
+use crate::elements::{Contact, ContactShape, Friction, GroundPlane, NormalLaw};
+use crate::model::input::AnalysisType;
+use crate::model::validate::{Checker, Entry};
+use crate::model::{Located, Model};
+use crate::tangent_check::{TangentCase, random_node};
+use nalgebra::Vector3;
+use schemars::JsonSchema;
+use serde::Deserialize;
+
+/// Contact geometry on the body.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ShapeInput {
+    /// A sphere of `radius` centred at the node.
+    Sphere,
+    /// A material point of the body (`point`).
+    Point,
+}
+
+/// Normal-force law.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum NormalInput {
+    /// N = k δᵉ (1 + α δ̇) (Hunt & Crossley 1975).
+    HuntCrossley,
+    /// N = k δ + c δ̇.
+    Linear,
+}
+
+/// A body–ground contact.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ContactInput {
+    /// Unique name; outputs `<name>.normal_force`, `.friction_force`, `.penetration`,
+    /// `.slip_velocity`, `.stick`; states `<name>.bristle_1`, `.bristle_2`.
+    pub name: Located<String>,
+    /// The body's node (not the ground).
+    pub node: Located<String>,
+    /// `sphere` or `point`.
+    pub shape: ShapeInput,
+    /// Sphere radius [m], positive (sphere only).
+    #[serde(default)]
+    pub radius: Option<f64>,
+    /// Contact point on the body, global, initial configuration [m]; default the node
+    /// (point only).
+    #[serde(default)]
+    pub point: Option<[f64; 3]>,
+    /// A point of the ground plane [m]; default the origin.
+    #[serde(default)]
+    pub ground_point: Option<[f64; 3]>,
+    /// Normal of the ground plane, out of the ground; default [0, 0, 1].
+    #[serde(default)]
+    pub ground_normal: Option<[f64; 3]>,
+    /// Velocity of the ground surface in its plane [m/s] (a belt); default zero.
+    #[serde(default)]
+    pub ground_velocity: Option<[f64; 3]>,
+    /// Normal-force law.
+    pub normal: NormalInput,
+    /// Contact stiffness k, positive [N/m^e].
+    pub stiffness: f64,
+    /// Hunt–Crossley exponent e ≥ 1 (default 1.5, Hertz).
+    #[serde(default)]
+    pub exponent: Option<f64>,
+    /// Hunt–Crossley damping factor α [s/m] ≥ 0 (or `restitution`).
+    #[serde(default)]
+    pub damping_factor: Option<f64>,
+    /// Hunt–Crossley: coefficient of restitution ε ∈ (0, 1] at `impact_velocity`.
+    #[serde(default)]
+    pub restitution: Option<f64>,
+    /// Hunt–Crossley: impact speed [m/s] at which `restitution` holds.
+    #[serde(default)]
+    pub impact_velocity: Option<f64>,
+    /// Linear law: damping c [N s/m] ≥ 0 (default 0).
+    #[serde(default)]
+    pub damping: Option<f64>,
+    /// Static friction coefficient μ_s; friction is on when given.
+    #[serde(default)]
+    pub static_friction: Option<f64>,
+    /// Dynamic (sliding) friction coefficient μ_d, 0 < μ_d ≤ μ_s.
+    #[serde(default)]
+    pub dynamic_friction: Option<f64>,
+    /// Stribeck speed v_s [m/s], positive.
+    #[serde(default)]
+    pub stribeck_velocity: Option<f64>,
+    /// LuGre bristle stiffness σ₀ per unit normal force [1/m], positive.
+    #[serde(default)]
+    pub bristle_stiffness: Option<f64>,
+    /// LuGre bristle damping σ₁ per unit normal force [s/m], ≥ 0.
+    #[serde(default)]
+    pub bristle_damping: Option<f64>,
+    /// Viscous friction σ₂ per unit normal force [s/m], ≥ 0 (default 0).
+    #[serde(default)]
+    pub viscous_friction: Option<f64>,
+}
+
+/// A validated contact.
+#[derive(Clone, Debug)]
+pub struct ContactDef {
+    pub name: String,
+    pub node: usize,
+    /// Sphere, or the point as a global point of the initial configuration (the offset is
+    /// taken in the node frame when built).
+    pub shape: ContactShape,
+    pub point: Vector3<f64>,
+    pub plane: GroundPlane,
+    pub law: NormalLaw,
+    pub friction: Option<Friction>,
+}
+
+pub struct ContactKind;
+
+/// A finite number satisfying `ok`, or an error at `key`.
+fn check(
+    cx: &mut Checker,
+    e: &Entry,
+    what: &str,
+    (key, value): (&str, f64),
+    ok: impl Fn(f64) -> bool,
+    expected: &str,
+    hint: &str,
+) -> bool {
+    if value.is_finite() && ok(value) {
+        return true;
+    }
+    cx.error(
+        format!("{what}: `{key}` must be {expected} (got {value})"),
+        cx.key(e, key),
+        Some(hint.into()),
+    );
+    false
+}
+
+/// A key that must be given.
+fn required(
+    cx: &mut Checker,
+    e: &Entry,
+    what: &str,
+    key: &str,
+    v: Option<f64>,
+    hint: &str,
+) -> Option<f64> {
+    if v.is_none() {
+        cx.error(
+            format!("{what}: `{key}` is required"),
+            e.span.clone(),
+            Some(hint.into()),
+        );
+    }
+    v
+}
+
+/// A key that does not belong to the chosen option.
+fn unused(cx: &mut Checker, e: &Entry, what: &str, key: &str, given: bool, hint: &str) -> bool {
+    if given {
+        cx.error(
+            format!("{what}: `{key}` does not apply here"),
+            cx.key(e, key),
+            Some(hint.into()),
+        );
+    }
+    !given
+}
+
+impl ComponentKind for ContactKind {
+    const NOUN: &'static str = "contact";
+    type Input = ContactInput;
+    type Def = ContactDef;
+
+    fn name(input: &ContactInput) -> &Located<String> {
+        &input.name
+    }
+
+    fn validate(
+        s: &Located<ContactInput>,
+        cx: &mut Checker,
+        model: &mut Model,
+    ) -> Option<ContactDef> {
+        let e = Entry {
+            span: s.span.clone(),
+        };
+        let ci = &s.value;
+        let what = format!("contact '{}'", ci.name.value);
+        let mut ok = true;
+        let node = match cx.node_ref(&ci.node, &what) {
+            Some(NodeRef::Node(i)) => Some(i),
+            Some(NodeRef::Ground) => {
+                cx.error(
+                    format!("{what}: the ground cannot touch itself"),
+                    ci.node.span.clone(),
+                    Some("a contact is between a body's node and the ground plane".into()),
+                );
+                None
+            }
+            None => None,
+        };
+        // Geometry.
+        let shape = match ci.shape {
+            ShapeInput::Sphere => {
+                ok &= unused(
+                    cx,
+                    &e,
+                    &what,
+                    "point",
+                    ci.point.is_some(),
+                    "`point` is for shape = \"point\"; a sphere is centred at its node",
+                );
+                match required(
+                    cx,
+                    &e,
+                    &what,
+                    "radius",
+                    ci.radius,
+                    "the sphere's radius [m], e.g. radius = 0.1",
+                ) {
+                    Some(r)
+                        if check(
+                            cx,
+                            &e,
+                            &what,
+                            ("radius", r),
+                            |v| v > 0.0,
+                            "positive",
+                            "a sphere has a positive radius [m]",
+                        ) =>
+                    {
+                        Some(ContactShape::Sphere { radius: r })
+                    }
+                    _ => None,
+                }
+            }
+            ShapeInput::Point => {
+                ok &= unused(
+                    cx,
+                    &e,
+                    &what,
+                    "radius",
+                    ci.radius.is_some(),
+                    "`radius` is for shape = \"sphere\"",
+                );
+                Some(ContactShape::Point {
+                    offset: Vector3::zeros(),
+                })
+            }
+        };
+        let normal = match ci.ground_normal {
+            Some(v) => cx.unit_axis(v, &e, "ground_normal", &what),
+            None => Some(Vector3::z()),
+        };
+        for (key, v) in [
+            ("point", ci.point),
+            ("ground_point", ci.ground_point),
+            ("ground_velocity", ci.ground_velocity),
+        ] {
+            if let Some(v) = v
+                && v.iter().any(|x| !x.is_finite())
+            {
+                cx.error(
+                    format!("{what}: `{key}` must be finite (got {v:?})"),
+                    cx.key(&e, key),
+                    Some("three finite numbers [x, y, z]".into()),
+                );
+                ok = false;
+            }
+        }
+        let velocity = Vector3::from(ci.ground_velocity.unwrap_or([0.0; 3]));
+        if let Some(n) = normal
+            && n.dot(&velocity).abs() > 1e-9 * velocity.norm().max(1.0)
+        {
+            cx.error(
+                format!("{what}: `ground_velocity` must lie in the ground plane"),
+                cx.key(&e, "ground_velocity"),
+                Some("the surface moves in its own plane (a belt); its normal component would move the plane".into()),
+            );
+            ok = false;
+        }
+        // Normal law.
+        ok &= check(
+            cx,
+            &e,
+            &what,
+            ("stiffness", ci.stiffness),
+            |v| v > 0.0,
+            "positive",
+            "the contact stiffness k [N/m^e]",
+        );
+        let law = match ci.normal {
+            NormalInput::HuntCrossley => {
+                ok &= unused(
+                    cx,
+                    &e,
+                    &what,
+                    "damping",
+                    ci.damping.is_some(),
+                    "Hunt–Crossley damping is `damping_factor` α [s/m] or `restitution` with `impact_velocity`",
+                );
+                let exponent = ci.exponent.unwrap_or(1.5);
+                ok &= check(
+                    cx,
+                    &e,
+                    &what,
+                    ("exponent", exponent),
+                    |v| v >= 1.0,
+                    "at least 1",
+                    "1.5 is Hertz's sphere; 1 a linear spring",
+                );
+                let alpha = match (ci.damping_factor, ci.restitution, ci.impact_velocity) {
+                    (Some(a), None, None) => check(
+                        cx,
+                        &e,
+                        &what,
+                        ("damping_factor", a),
+                        |v| v >= 0.0,
+                        "non-negative",
+                        "α [s/m]; 0 is an elastic contact",
+                    )
+                    .then_some(a),
+                    (None, Some(r), Some(v)) => {
+                        let r_ok = check(
+                            cx,
+                            &e,
+                            &what,
+                            ("restitution", r),
+                            |x| x > 0.0 && x <= 1.0,
+                            "in (0, 1]",
+                            "a restitution of 0 needs infinite Hunt–Crossley damping; use a small positive value",
+                        );
+                        let v_ok = check(
+                            cx,
+                            &e,
+                            &what,
+                            ("impact_velocity", v),
+                            |x| x > 0.0,
+                            "positive",
+                            "the impact speed [m/s] at which `restitution` holds",
+                        );
+                        (r_ok && v_ok).then(|| crate::elements::hunt_crossley_damping(r, v))
+                    }
+                    _ => {
+                        cx.error(
+                            format!("{what}: give either `damping_factor` or both `restitution` and `impact_velocity`"),
+                            e.span.clone(),
+                            Some("Hunt–Crossley damping: α [s/m], or the restitution ε at an impact speed".into()),
+                        );
+                        None
+                    }
+                };
+                alpha.map(|a| NormalLaw::HuntCrossley {
+                    stiffness: ci.stiffness,
+                    exponent,
+                    damping_factor: a,
+                })
+            }
+            NormalInput::Linear => {
+                for key in [
+                    "exponent",
+                    "damping_factor",
+                    "restitution",
+                    "impact_velocity",
+                ] {
+                    let given = match key {
+                        "exponent" => ci.exponent.is_some(),
+                        "damping_factor" => ci.damping_factor.is_some(),
+                        "restitution" => ci.restitution.is_some(),
+                        _ => ci.impact_velocity.is_some(),
+                    };
+                    ok &= unused(
+                        cx,
+                        &e,
+                        &what,
+                        key,
+                        given,
+                        "this key belongs to normal = \"hunt_crossley\"; the linear law takes `stiffness` and `damping`",
+                    );
+                }
+                let c = ci.damping.unwrap_or(0.0);
+                check(
+                    cx,
+                    &e,
+                    &what,
+                    ("damping", c),
+                    |v| v >= 0.0,
+                    "non-negative",
+                    "c [N s/m]",
+                )
+                .then_some(NormalLaw::Linear {
+                    stiffness: ci.stiffness,
+                    damping: c,
+                })
+            }
+        };
+        // Friction.
+        let friction = match ci.static_friction {
+            None => {
+                for (key, given) in [
+                    ("dynamic_friction", ci.dynamic_friction.is_some()),
+                    ("stribeck_velocity", ci.stribeck_velocity.is_some()),
+                    ("bristle_stiffness", ci.bristle_stiffness.is_some()),
+                    ("bristle_damping", ci.bristle_damping.is_some()),
+                    ("viscous_friction", ci.viscous_friction.is_some()),
+                ] {
+                    ok &= unused(
+                        cx,
+                        &e,
+                        &what,
+                        key,
+                        given,
+                        "friction is on only with `static_friction` (μ_s)",
+                    );
+                }
+                None
+            }
+            Some(ms) => {
+                let hint = "LuGre friction takes static_friction, dynamic_friction, stribeck_velocity, bristle_stiffness and bristle_damping";
+                let md = required(cx, &e, &what, "dynamic_friction", ci.dynamic_friction, hint);
+                let vs = required(
+                    cx,
+                    &e,
+                    &what,
+                    "stribeck_velocity",
+                    ci.stribeck_velocity,
+                    hint,
+                );
+                let s0 = required(
+                    cx,
+                    &e,
+                    &what,
+                    "bristle_stiffness",
+                    ci.bristle_stiffness,
+                    hint,
+                );
+                let s1 = required(cx, &e, &what, "bristle_damping", ci.bristle_damping, hint);
+                let s2 = ci.viscous_friction.unwrap_or(0.0);
+                let mut f_ok = check(
+                    cx,
+                    &e,
+                    &what,
+                    ("static_friction", ms),
+                    |v| v > 0.0,
+                    "positive",
+                    "μ_s; without friction leave out the friction keys",
+                );
+                if let Some(md) = md {
+                    f_ok &= check(
+                        cx,
+                        &e,
+                        &what,
+                        ("dynamic_friction", md),
+                        |v| v > 0.0 && v <= ms.max(0.0),
+                        "positive and at most `static_friction`",
+                        "μ_d ≤ μ_s: sliding friction does not exceed stiction",
+                    );
+                }
+                if let Some(vs) = vs {
+                    f_ok &= check(
+                        cx,
+                        &e,
+                        &what,
+                        ("stribeck_velocity", vs),
+                        |v| v > 0.0,
+                        "positive",
+                        "v_s [m/s], the speed over which friction falls from μ_s to μ_d",
+                    );
+                }
+                if let Some(s0) = s0 {
+                    f_ok &= check(
+                        cx,
+                        &e,
+                        &what,
+                        ("bristle_stiffness", s0),
+                        |v| v > 0.0,
+                        "positive",
+                        "σ₀ [1/m]: stiction holds the body within about μ_s/σ₀",
+                    );
+                }
+                if let Some(s1) = s1 {
+                    f_ok &= check(
+                        cx,
+                        &e,
+                        &what,
+                        ("bristle_damping", s1),
+                        |v| v >= 0.0,
+                        "non-negative",
+                        "σ₁ [s/m]; about 2√(σ₀/g) damps the stuck body critically",
+                    );
+                }
+                f_ok &= check(
+                    cx,
+                    &e,
+                    &what,
+                    ("viscous_friction", s2),
+                    |v| v >= 0.0,
+                    "non-negative",
+                    "σ₂ [s/m]",
+                );
+                match (md, vs, s0, s1) {
+                    (Some(md), Some(vs), Some(s0), Some(s1)) if f_ok => Some(Friction {
+                        static_coefficient: ms,
+                        dynamic_coefficient: md,
+                        stribeck_velocity: vs,
+                        bristle_stiffness: s0,
+                        bristle_damping: s1,
+                        viscous: s2,
+                    }),
+                    _ => {
+                        ok = false;
+                        None
+                    }
+                }
+            }
+        };
+        let (node, shape, normal, law) = (node?, shape?, normal?, law?);
+        let point = match ci.point {
+            Some(p) => Vector3::from(p),
+            None => model.nodes[node].position,
+        };
+        ok.then(|| ContactDef {
+            name: ci.name.value.clone(),
+            node,
+            shape,
+            point,
+            plane: GroundPlane {
+                point: Vector3::from(ci.ground_point.unwrap_or([0.0; 3])),
+                normal,
+                velocity,
+            },
+            law,
+            friction,
+        })
+    }
+
+    /// Friction contacts have no static equilibrium of their own (the bristle row is
+    /// 0 = 0 at rest): a static analysis of a model with one is rejected.
+    fn finish(input: &ModelInput, cx: &mut Checker, _model: &Model) {
+        let Some(c) = input
+            .contacts
+            .iter()
+            .find(|c| c.value.static_friction.is_some())
+        else {
+            return;
+        };
+        for a in &input.analyses {
+            if a.value.kind.value == AnalysisType::Static {
+                cx.error(
+                    format!(
+                        "analysis '{}': a static analysis cannot hold the friction of contact '{}'",
+                        a.value.name.value, c.value.name.value
+                    ),
+                    a.value.kind.span.clone(),
+                    Some("static friction is indeterminate at rest (the LuGre bristle row vanishes); run a dynamic analysis and let it settle, or leave out the friction keys".into()),
+                );
+            }
+        }
+    }
+
+    fn nodes(def: &ContactDef) -> Vec<usize> {
+        vec![def.node]
+    }
+
+    fn build(def: &ContactDef, parts: &mut Build) {
+        let shape = match def.shape {
+            ContactShape::Point { .. } => ContactShape::Point {
+                offset: parts
+                    .local_offset(NodeRef::Node(def.node), def.point)
+                    .map_or(Vector3::zeros(), |(_, s)| s),
+            },
+            s => s,
+        };
+        parts.elements.push(Box::new(Contact::new(
+            &def.name,
+            def.node,
+            shape,
+            def.plane,
+            def.law,
+            def.friction,
+        )));
+    }
+
+    fn tangent_cases() -> Vec<TangentCase> {
+        let friction = Friction {
+            static_coefficient: 0.7,
+            dynamic_coefficient: 0.4,
+            stribeck_velocity: 0.8,
+            bristle_stiffness: 50.0,
+            bristle_damping: 3.0,
+            viscous: 0.2,
+        };
+        let hc = NormalLaw::HuntCrossley {
+            stiffness: 2e3,
+            exponent: 1.5,
+            damping_factor: 0.3,
+        };
+        let lin = NormalLaw::Linear {
+            stiffness: 1e3,
+            damping: 20.0,
+        };
+        let mut out = Vec::new();
+        for k in 0..6u64 {
+            let node = random_node(900 + k);
+            let normal = Vector3::new(0.2, -0.3, 1.0).normalize();
+            let shape = if k % 2 == 0 {
+                ContactShape::Sphere { radius: 0.4 }
+            } else {
+                ContactShape::Point {
+                    offset: Vector3::new(0.1, -0.2, 0.15),
+                }
+            };
+            // The plane through a point 0.1 below the contact point: in contact (δ = 0.1)
+            // except case 5 (0.1 above: out of contact, only the bristle rows remain).
+            let a = match shape {
+                ContactShape::Sphere { radius } => -normal * radius,
+                ContactShape::Point { offset } => node.r() * offset,
+            };
+            let lift = if k == 5 { -0.1 } else { 0.1 };
+            let plane = GroundPlane {
+                point: node.x + a + normal * lift,
+                normal,
+                velocity: Vector3::new(0.3, 0.5, 0.0),
+            };
+            let law = if k < 3 { hc } else { lin };
+            let with_friction = k != 2;
+            let e = Contact::new("c", 0, shape, plane, law, with_friction.then_some(friction));
+            let case = TangentCase::element(Box::new(e), vec![node]);
+            out.push(if with_friction {
+                case.with_states(vec![(0.004, -0.3), (-0.002, 0.5)])
+            } else {
+                case
+            });
+        }
+        out
+    }
+}
