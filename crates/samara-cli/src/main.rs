@@ -1,5 +1,6 @@
 //! `samara`: run, check and describe multibody models.
 
+mod campbell_plot;
 mod info;
 mod plot;
 mod report;
@@ -63,7 +64,8 @@ enum Command {
     },
     /// Print the JSON Schema of the model file.
     Schema,
-    /// Plot time histories of channels, e.g. `position:bob:z`, `joint_force:pivot:x`, `kinetic_energy`.
+    /// Plot time histories of channels, e.g. `position:bob:z`, `joint_force:pivot:x`, `kinetic_energy`;
+    /// `campbell` draws the Campbell diagram of a Campbell analysis.
     Plot {
         /// Results file (NetCDF) written by `samara run`.
         results: PathBuf,
@@ -159,7 +161,13 @@ fn main() -> ExitCode {
             let out = out.unwrap_or_else(|| results.with_extension("png"));
             let done = samara::output::ResultsReader::open(&results)
                 .map_err(|e| e.to_string())
-                .and_then(|mut r| plot::plot(&mut r, &channels, &out));
+                .and_then(|mut r| {
+                    if channels == ["campbell"] {
+                        campbell_plot::plot(&mut r, &out)
+                    } else {
+                        plot::plot(&mut r, &channels, &out)
+                    }
+                });
             match done {
                 Ok(()) => {
                     println!("{}", out.display());

@@ -89,6 +89,13 @@ fn every_example_runs() {
                     let f = &f.unwrap_or_else(|| panic!("{rel}: no frequencies")).1;
                     assert_eq!(f.len(), ms.n_modes, "{rel}");
                 }
+                AnalysisKind::Campbell(cs) => {
+                    let f = &h.arrays.iter().find(|a| a.0.name == "campbell_frequency");
+                    let f = &f
+                        .unwrap_or_else(|| panic!("{rel}: no Campbell frequencies"))
+                        .1;
+                    assert_eq!(f.len(), cs.modal.n_modes * cs.speeds.len(), "{rel}");
+                }
             }
             let finite = last.state.nodes.iter().all(|n| {
                 n.x.iter()

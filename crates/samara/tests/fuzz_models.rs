@@ -203,6 +203,7 @@ fn shorten(m: &mut Model) {
             }
             AnalysisKind::Static(s) => s.load_steps = s.load_steps.min(3),
             AnalysisKind::Modal(_) => {}
+            AnalysisKind::Campbell(c) => c.speeds.truncate(2),
         }
     }
 }

@@ -3,6 +3,7 @@
 //! Analyses see the system only through the assembler (residual and iteration matrix) and
 //! the state; they never know element types. Results leave through a [`Recorder`].
 
+pub mod campbell;
 mod dynamic;
 pub mod generalized_alpha;
 mod history;
@@ -18,7 +19,9 @@ pub use initial::{
     AssemblyError, AssemblyReport, assemble_initial_state, consistent_accelerations,
 };
 pub use modal::run_modal;
-pub use stage::{Analysis, ArraySpec, DynamicAnalysis, ModalAnalysis, StaticAnalysis};
+pub use stage::{
+    Analysis, ArraySpec, CampbellAnalysis, DynamicAnalysis, ModalAnalysis, StaticAnalysis,
+};
 pub use statics::run_static;
 
 use crate::model::{AnalysisDef, Model};

@@ -7,7 +7,9 @@
 //! in the model (validated like the others) and one arm in [`AnalysisDef::stage`].
 
 use super::{AnalysisSummary, Progress, Recorder, run_dynamic, run_modal, run_static};
-use crate::model::{AnalysisDef, AnalysisKind, DynamicSettings, ModalSettings, StaticSettings};
+use crate::model::{
+    AnalysisDef, AnalysisKind, CampbellSettings, DynamicSettings, ModalSettings, StaticSettings,
+};
 use crate::system::{State, System};
 
 /// A result array that is not a time history, declared before the run so that a results
@@ -143,6 +145,34 @@ impl Analysis for ModalAnalysis<'_> {
     }
 }
 
+/// Campbell diagram: spinning statics and rotating-frame modes over a speed sweep
+/// ([`super::campbell::run_campbell`]).
+pub struct CampbellAnalysis<'a> {
+    pub name: &'a str,
+    pub settings: &'a CampbellSettings,
+}
+
+impl Analysis for CampbellAnalysis<'_> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn kind(&self) -> &'static str {
+        "campbell"
+    }
+    fn arrays(&self, _sys: &System) -> Vec<ArraySpec> {
+        super::campbell::campbell_arrays(self.settings.speeds.len(), self.settings.modal.n_modes)
+    }
+    fn run(
+        &self,
+        sys: &System,
+        initial: State,
+        recorder: &mut dyn Recorder,
+        progress: Progress,
+    ) -> Result<AnalysisSummary, crate::Error> {
+        super::campbell::run_campbell(sys, self.name, self.settings, initial, recorder, progress)
+    }
+}
+
 impl AnalysisDef {
     /// The stage that runs this analysis.
     pub fn stage(&self) -> Box<dyn Analysis + '_> {
@@ -156,6 +186,10 @@ impl AnalysisDef {
                 settings: s,
             }),
             AnalysisKind::Modal(s) => Box::new(ModalAnalysis {
+                name: &self.name,
+                settings: s,
+            }),
+            AnalysisKind::Campbell(s) => Box::new(CampbellAnalysis {
                 name: &self.name,
                 settings: s,
             }),

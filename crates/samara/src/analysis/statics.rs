@@ -1,17 +1,27 @@
 //! Static equilibrium `r(q) + Bᵀμ = 0`, `Φ(q) = 0` with load continuation: loads and
 //! gravity are scaled by the load factor λ_k = k/n, k = 1…n, each increment solved by
 //! Newton from the previous equilibrium; an increment that fails is bisected.
+//!
+//! **Spinning-rotor statics** (`rotation`, [`crate::linear::Spin`]): the spinning nodes
+//! carry the rates of the steady rotation at every iterate (`v = Ω × (x − c)`,
+//! `a = Ω × v`, `w = RᵀΩ`), so the residual holds their centrifugal and gyroscopic
+//! inertial loads, and the tangent holds `C A_v + M A₀` besides K (the same terms as the
+//! rotating-frame linearization, so Newton converges quadratically and a modal analysis
+//! started from the result finds it in equilibrium). The speed follows the load factor as
+//! `Ω√λ`, so the centrifugal loads grow in proportion to λ like the other loads; the
+//! final state keeps the rates of the rotation at full speed.
 
 use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
 };
 use crate::core::EvalContext;
+use crate::linear::Spin;
 use crate::model::StaticSettings;
 use crate::solve::condition::condition_number;
 use crate::solve::newton::{NewtonWork, newton};
 use crate::solve::{BlockMatrix, LinearSolver, NewtonFailure, NewtonSettings, NewtonSystem};
-use crate::system::{Assembler, Coefficients, Formulation, State, System};
+use crate::system::{Assembler, Coefficients, Formulation, RateMaps, State, System};
 use nalgebra::Vector3;
 use std::time::Instant;
 
@@ -32,10 +42,18 @@ struct StaticProblem<'a> {
     coef: Coefficients,
     atol: f64,
     rtol: f64,
+    /// The spinning nodes and the speed of this increment, with scratch for the maps.
+    spin: Option<(&'a Spin, f64)>,
+    maps: &'a mut Vec<RateMaps>,
 }
 
 impl NewtonSystem for StaticProblem<'_> {
     fn evaluate(&mut self, residual: &mut [f64], matrix: Option<&mut BlockMatrix>) {
+        if let Some((spin, omega)) = self.spin {
+            spin.impose(self.sys, self.state, omega);
+            spin.rate_maps(self.state, omega, self.maps);
+            self.asm.set_rate_maps(self.maps);
+        }
         self.asm.assemble(
             self.sys,
             self.state,
@@ -285,6 +303,9 @@ pub fn run_static(
             },
         )?;
     }
+    let spin = settings.rotation.as_ref();
+    let speed = |lf: f64| spin.map_or(0.0, |s| s.rotation.omega * lf.max(0.0).sqrt());
+    let mut maps = Vec::new();
     let nominal = 1.0 / settings.load_steps as f64;
     let mut lf = 0.0;
     let mut inc = nominal;
@@ -294,6 +315,9 @@ pub fn run_static(
         let ctx = sys.context(settings.time, target);
         saved.clone_from(&state);
         total.fill(0.0);
+        if let Some(s) = spin {
+            s.impose(sys, &mut state, speed(target));
+        }
         least_squares_multipliers(
             sys,
             &mut asm,
@@ -315,6 +339,8 @@ pub fn run_static(
             coef: Coefficients::statics(penalty),
             atol: settings.solver.tolerance,
             rtol: settings.solver.relative_tolerance,
+            spin: spin.map(|s| (s, speed(target))),
+            maps: &mut maps,
         };
         match newton(
             &mut problem,
@@ -325,6 +351,9 @@ pub fn run_static(
         ) {
             Ok(report) => {
                 sys.update_passive_coordinates(&mut state, true);
+                if let Some(s) = spin {
+                    s.impose(sys, &mut state, speed(target));
+                }
                 lf = target;
                 summary.steps += 1;
                 summary.newton_iterations += report.iterations;
@@ -348,7 +377,11 @@ pub fn run_static(
                     }
                 });
                 let energy = Energy {
-                    kinetic: 0.0,
+                    kinetic: if spin.is_some() {
+                        sys.kinetic_energy(&state)
+                    } else {
+                        0.0
+                    },
                     potential: sys.potential_energy(&ctx, &state),
                     external_work: 0.0,
                     dissipated: 0.0,

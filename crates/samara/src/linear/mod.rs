@@ -7,3 +7,5 @@ pub mod matrix_market;
 pub use linearize::{LinearSystem, SteadyRotation, linearize, unknown_names};
 pub mod eigen;
 pub use eigen::{EigenMethod, EigenOptions, Mode, Spectrum, modes};
+pub mod spin;
+pub use spin::Spin;

@@ -150,6 +150,8 @@ pub enum AnalysisType {
     Static,
     /// Eigenanalysis of the equations linearized about the starting state.
     Modal,
+    /// Campbell diagram: spinning statics and rotating-frame modes over a speed sweep.
+    Campbell,
 }
 
 /// Eigensolver of a modal analysis.
@@ -300,8 +302,21 @@ pub struct AnalysisInput {
     pub eigensolver: Option<EigensolverType>,
     /// modal: linearize in the frame turning at `omega` [rad/s] about `axis` through
     /// `centre` (default the origin); the starting state is set spinning rigidly.
+    /// static: spinning-rotor statics, the model (or the nodes, beams and bodies named in
+    /// `parts`) turning steadily at `omega`.
     #[serde(default)]
     pub rotation: Option<RotationInput>,
+    /// campbell: rotor speeds [rad/s], a list or `{ start, end, count }` (evenly spaced).
+    #[serde(default)]
+    pub speeds: Option<SpeedsInput>,
+}
+
+/// The speeds of a Campbell analysis.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum SpeedsInput {
+    List(Vec<f64>),
+    Range { start: f64, end: f64, count: usize },
 }
 
 /// A steady rotation: `{ axis = [x, y, z], omega = Ω, centre = [x, y, z] }`.
@@ -310,9 +325,14 @@ pub struct AnalysisInput {
 pub struct RotationInput {
     /// Direction of the rotation axis (normalized; right-hand rule).
     pub axis: [f64; 3],
-    /// Angular speed [rad/s].
-    pub omega: f64,
+    /// Angular speed [rad/s] (required, except in a Campbell analysis, which takes its
+    /// speeds from `speeds`).
+    #[serde(default)]
+    pub omega: Option<f64>,
     /// A point of the axis [m] (default the origin).
     #[serde(default)]
     pub centre: Option<[f64; 3]>,
+    /// static: names of the nodes, beams and bodies that turn (default: every node).
+    #[serde(default)]
+    pub parts: Option<Vec<Located<String>>>,
 }

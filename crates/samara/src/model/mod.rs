@@ -140,6 +140,9 @@ pub struct StaticSettings {
     pub load_steps: usize,
     pub time: f64,
     pub solver: SolverSettings,
+    /// Spinning-rotor statics: the nodes turning steadily (centrifugal and gyroscopic
+    /// loads; the speed follows the load factor as Ω√λ).
+    pub rotation: Option<crate::linear::Spin>,
 }
 
 impl Default for StaticSettings {
@@ -148,6 +151,7 @@ impl Default for StaticSettings {
             load_steps: 1,
             time: 0.0,
             solver: SolverSettings::default(),
+            rotation: None,
         }
     }
 }
@@ -176,11 +180,26 @@ impl Default for ModalSettings {
     }
 }
 
+/// Campbell diagram settings: each speed a spinning static analysis (`load_steps`,
+/// `time`, `solver`) and a rotating-frame modal analysis (`modal`, without rotation).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CampbellSettings {
+    /// Rotor speeds [rad/s], one point each.
+    pub speeds: Vec<f64>,
+    /// Axis and centre of the rotation (its `omega` is not used).
+    pub rotation: crate::linear::SteadyRotation,
+    pub modal: ModalSettings,
+    pub load_steps: usize,
+    pub time: f64,
+    pub solver: SolverSettings,
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub enum AnalysisKind {
     Dynamic(DynamicSettings),
     Static(StaticSettings),
     Modal(ModalSettings),
+    Campbell(CampbellSettings),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -197,6 +216,7 @@ impl AnalysisDef {
             AnalysisKind::Dynamic(_) => "dynamic",
             AnalysisKind::Static(_) => "static",
             AnalysisKind::Modal(_) => "modal",
+            AnalysisKind::Campbell(_) => "campbell",
         }
     }
 
@@ -206,7 +226,7 @@ impl AnalysisDef {
         match &self.kind {
             AnalysisKind::Dynamic(d) => Some(d.t_end),
             AnalysisKind::Static(s) => Some(s.time),
-            AnalysisKind::Modal(_) => None,
+            AnalysisKind::Modal(_) | AnalysisKind::Campbell(_) => None,
         }
     }
 }

@@ -582,7 +582,7 @@ impl<'a> Checker<'a> {
         // Analyses.
         self.unique_names(&input.analyses, |a| &a.name, "analysis");
         for (k, a) in input.analyses.iter().enumerate() {
-            if let Some(def) = self.analysis(a, &input.analyses[..k]) {
+            if let Some(def) = self.analysis(a, &input.analyses[..k], &model) {
                 model.analyses.push(def);
             }
         }
@@ -628,10 +628,107 @@ impl<'a> Checker<'a> {
         Some(ax / n)
     }
 
+    /// The steady rotation of a `rotation = { axis, omega, centre }` entry.
+    fn steady_rotation(
+        &mut self,
+        r: &super::input::RotationInput,
+        e: &Entry,
+        what: &str,
+        campbell: bool,
+    ) -> Option<crate::linear::SteadyRotation> {
+        let axis = self.unit_axis(r.axis, e, "axis", &format!("{what}: `rotation`"));
+        let centre = Vector3::from(r.centre.unwrap_or([0.0; 3]));
+        let omega = match (r.omega, campbell) {
+            (Some(w), false) => w,
+            (None, true) => 0.0,
+            (None, false) => {
+                self.error(
+                    format!("{what}: `rotation` needs `omega`, the angular speed [rad/s]"),
+                    self.key(e, "rotation"),
+                    Some("e.g. rotation = { axis = [0.0, 0.0, 1.0], omega = 40.0 }".into()),
+                );
+                return None;
+            }
+            (Some(_), true) => {
+                self.error(
+                    format!("{what}: a Campbell analysis takes its speeds from `speeds`, not `rotation.omega`"),
+                    self.key(e, "rotation"),
+                    Some("give `rotation = { axis, centre }` and `speeds = [...]`".into()),
+                );
+                return None;
+            }
+        };
+        if !(omega.is_finite()
+            && omega.abs() <= MAX_MAGNITUDE
+            && centre
+                .iter()
+                .all(|x| x.is_finite() && x.abs() <= MAX_MAGNITUDE))
+        {
+            self.error(
+                format!("{what}: `rotation` needs a finite `omega` and `centre`"),
+                self.key(e, "rotation"),
+                None,
+            );
+            return None;
+        }
+        Some(crate::linear::SteadyRotation {
+            axis: axis?,
+            omega,
+            centre,
+        })
+    }
+
+    /// Node indices (ascending, distinct) of the nodes, beams and bodies named in `parts`.
+    fn spinning_nodes(
+        &mut self,
+        parts: &[Located<String>],
+        model: &Model,
+        what: &str,
+    ) -> Option<Vec<usize>> {
+        let mut nodes = Vec::new();
+        let mut ok = true;
+        for p in parts {
+            let name = p.value.as_str();
+            let before = nodes.len();
+            if let Some(i) = model.node_index(name) {
+                nodes.push(i);
+            }
+            for b in model.beams.iter().filter(|b| b.name == name) {
+                nodes.extend_from_slice(&b.nodes);
+            }
+            for b in model.bodies.iter().filter(|b| b.name == name) {
+                nodes.push(b.node);
+            }
+            if nodes.len() == before {
+                let candidates: Vec<&str> = model
+                    .beams
+                    .iter()
+                    .map(|b| b.name.as_str())
+                    .chain(model.bodies.iter().map(|b| b.name.as_str()))
+                    .chain(model.nodes.iter().map(|n| n.name.as_str()))
+                    .collect();
+                let hint = match self.suggest(name, candidates) {
+                    Some(b) => format!("did you mean '{b}'?"),
+                    None => "`parts` lists names of [[nodes]], [[beams]] and [[bodies]]".into(),
+                };
+                self.error(
+                    format!("{what}: `rotation.parts`: no node, beam or body is named '{name}'"),
+                    p.span.clone(),
+                    Some(hint),
+                );
+                ok = false;
+            }
+        }
+        nodes.sort_unstable();
+        nodes.dedup();
+        ok.then_some(nodes)
+    }
+
     fn analysis(
         &mut self,
         a: &Located<AnalysisInput>,
         earlier: &[Located<AnalysisInput>],
+        model: &Model,
     ) -> Option<AnalysisDef> {
         let e = Entry {
             span: a.span.clone(),
@@ -667,13 +764,13 @@ impl<'a> Checker<'a> {
             ("load_steps", ai.load_steps.is_some()),
             ("time", ai.time.is_some()),
         ];
-        let modal_keys: [(&str, bool); 5] = [
-            ("rotation", ai.rotation.is_some()),
+        let modal_keys: [(&str, bool); 4] = [
             ("n_modes", ai.n_modes.is_some()),
             ("shift", ai.shift.is_some()),
             ("write_matrices", ai.write_matrices.is_some()),
             ("eigensolver", ai.eigensolver.is_some()),
         ];
+        let campbell_keys: [(&str, bool); 1] = [("speeds", ai.speeds.is_some())];
         // A modal analysis solves no nonlinear equations.
         let newton_keys: [(&str, bool); 6] = [
             ("penalty", ai.penalty.is_some()),
@@ -684,12 +781,42 @@ impl<'a> Checker<'a> {
             ("linear_solver", ai.linear_solver.is_some()),
         ];
         let (wrong, tname): (Vec<(&str, bool)>, &str) = match kind {
-            AnalysisType::Dynamic => ([&static_keys[..], &modal_keys].concat(), "dynamic"),
-            AnalysisType::Static => ([&dynamic_keys[..], &modal_keys].concat(), "static"),
+            AnalysisType::Dynamic => (
+                [
+                    &static_keys[..],
+                    &modal_keys,
+                    &[("rotation", ai.rotation.is_some())],
+                ]
+                .concat(),
+                "dynamic",
+            ),
+            AnalysisType::Static => (
+                [&dynamic_keys[..], &modal_keys, &campbell_keys].concat(),
+                "static",
+            ),
             AnalysisType::Modal => (
-                [&dynamic_keys[..], &static_keys, &newton_keys].concat(),
+                [
+                    &dynamic_keys[..],
+                    &static_keys,
+                    &newton_keys,
+                    &campbell_keys,
+                ]
+                .concat(),
                 "modal",
             ),
+            AnalysisType::Campbell => (
+                [
+                    &dynamic_keys[..],
+                    &[("write_matrices", ai.write_matrices.is_some())],
+                ]
+                .concat(),
+                "campbell",
+            ),
+        };
+        let wrong = if kind == AnalysisType::Dynamic {
+            [&wrong[..], &campbell_keys].concat()
+        } else {
+            wrong
         };
         let mut ok = true;
         for (k, g) in &wrong {
@@ -988,10 +1115,31 @@ impl<'a> Checker<'a> {
                     );
                     ok = false;
                 }
+                let rotation = match &ai.rotation {
+                    None => None,
+                    Some(r) => match self.steady_rotation(r, &e, &what, false) {
+                        Some(rotation) => {
+                            let nodes = match &r.parts {
+                                None => None,
+                                Some(parts) => {
+                                    let n = self.spinning_nodes(parts, model, &what);
+                                    ok &= n.is_some();
+                                    n
+                                }
+                            };
+                            Some(crate::linear::Spin { rotation, nodes })
+                        }
+                        None => {
+                            ok = false;
+                            None
+                        }
+                    },
+                };
                 AnalysisKind::Static(StaticSettings {
                     load_steps,
                     time,
                     solver,
+                    rotation,
                 })
             }
             AnalysisType::Modal => {
@@ -1021,28 +1169,146 @@ impl<'a> Checker<'a> {
                 m.write_matrices = ai.write_matrices.unwrap_or(false);
                 m.eigensolver = ai.eigensolver.unwrap_or_default();
                 if let Some(r) = &ai.rotation {
-                    let axis = self.unit_axis(r.axis, &e, "axis", &format!("{what}: `rotation`"));
-                    let centre = Vector3::from(r.centre.unwrap_or([0.0; 3]));
-                    if !r.omega.is_finite() || !centre.iter().all(|x| x.is_finite()) {
+                    if let Some(p) = r.parts.as_ref().and_then(|p| p.first()) {
                         self.error(
-                            format!("{what}: `rotation` needs a finite `omega` and `centre`"),
-                            self.key(&e, "rotation"),
+                            format!("{what}: `rotation.parts` is not used by a modal analysis"),
+                            p.span.clone(),
+                            Some("a modal analysis is written in the frame turning with the whole model; `parts` selects the spinning nodes of a static analysis".into()),
+                        );
+                        ok = false;
+                    }
+                    m.rotation = self.steady_rotation(r, &e, &what, false);
+                    ok &= m.rotation.is_some();
+                } else if let Some(i) = start_from {
+                    // A modal analysis of a spinning static state is written in its frame.
+                    if let Some(AnalysisKind::Static(StaticSettings {
+                        rotation: Some(spin),
+                        ..
+                    })) =
+                        (model.analyses.len() == earlier.len()).then(|| &model.analyses[i].kind)
+                        && spin.is_whole_model(model.nodes.len())
+                    {
+                        m.rotation = Some(spin.rotation);
+                    }
+                }
+                AnalysisKind::Modal(m)
+            }
+            AnalysisType::Campbell => {
+                let mut m = ModalSettings::default();
+                if let Some(n) = &ai.n_modes {
+                    if n.value == 0 {
+                        self.error(
+                            format!("{what}: `n_modes` must be at least 1"),
+                            n.span.clone(),
                             None,
                         );
                         ok = false;
                     }
-                    match axis {
-                        Some(axis) => {
-                            m.rotation = Some(crate::linear::SteadyRotation {
-                                axis,
-                                omega: r.omega,
-                                centre,
-                            })
-                        }
-                        None => ok = false,
-                    }
+                    m.n_modes = n.value;
                 }
-                AnalysisKind::Modal(m)
+                if let Some(f) = ai.shift {
+                    if !(f.is_finite() && f >= 0.0) {
+                        self.error(
+                            format!("{what}: `shift` must be a frequency ≥ 0 Hz (got {f})"),
+                            self.key(&e, "shift"),
+                            None,
+                        );
+                        ok = false;
+                    }
+                    m.shift = Some(f);
+                }
+                m.eigensolver = ai.eigensolver.unwrap_or_default();
+                let rotation = match &ai.rotation {
+                    Some(r) => {
+                        if let Some(p) = r.parts.as_ref().and_then(|p| p.first()) {
+                            self.error(
+                                format!(
+                                    "{what}: `rotation.parts` is not used by a Campbell analysis"
+                                ),
+                                p.span.clone(),
+                                Some("the whole model turns in a Campbell analysis".into()),
+                            );
+                            ok = false;
+                        }
+                        self.steady_rotation(r, &e, &what, true)
+                    }
+                    None => {
+                        self.error(
+                            format!("{what}: a Campbell analysis needs `rotation = {{ axis, centre }}`"),
+                            a.span.clone(),
+                            Some("e.g. rotation = { axis = [0.0, 0.0, 1.0] } and speeds = { start = 0.0, end = 40.0, count = 21 }".into()),
+                        );
+                        None
+                    }
+                };
+                let speeds = match &ai.speeds {
+                    Some(SpeedsInput::List(v)) => v.clone(),
+                    Some(SpeedsInput::Range { start, end, count }) => {
+                        if *count == 0 || *count > 100_000 {
+                            self.error(
+                                format!("{what}: `speeds.count` must be 1 … 100000 (got {count})"),
+                                self.key(&e, "speeds"),
+                                None,
+                            );
+                            ok = false;
+                        }
+                        let n = (*count).clamp(1, 100_000);
+                        (0..n)
+                            .map(|i| {
+                                if n == 1 {
+                                    *start
+                                } else {
+                                    start + (end - start) * i as f64 / (n - 1) as f64
+                                }
+                            })
+                            .collect()
+                    }
+                    None => {
+                        self.error(
+                            format!("{what}: a Campbell analysis needs `speeds`"),
+                            a.span.clone(),
+                            Some("`speeds = [0.0, 10.0, 20.0]` or `speeds = { start = 0.0, end = 40.0, count = 21 }` [rad/s]".into()),
+                        );
+                        ok = false;
+                        Vec::new()
+                    }
+                };
+                if ai.speeds.is_some()
+                    && (speeds.is_empty()
+                        || !speeds
+                            .iter()
+                            .all(|w| w.is_finite() && w.abs() <= MAX_MAGNITUDE))
+                {
+                    self.error(
+                        format!(
+                            "{what}: `speeds` must be finite rotor speeds [rad/s], at least one"
+                        ),
+                        self.key(&e, "speeds"),
+                        None,
+                    );
+                    ok = false;
+                }
+                let load_steps = ai.load_steps.unwrap_or(1);
+                if load_steps == 0 {
+                    self.error(
+                        format!("{what}: `load_steps` must be at least 1"),
+                        self.key(&e, "load_steps"),
+                        None,
+                    );
+                    ok = false;
+                }
+                let time = ai.time.unwrap_or(0.0);
+                match rotation {
+                    Some(rotation) => AnalysisKind::Campbell(CampbellSettings {
+                        speeds,
+                        rotation,
+                        modal: m,
+                        load_steps,
+                        time,
+                        solver,
+                    }),
+                    None => return None,
+                }
             }
         };
         ok.then(|| AnalysisDef {

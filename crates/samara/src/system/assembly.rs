@@ -214,6 +214,18 @@ pub struct Assembler {
     /// Stabilized only: (η_k, η_l) couplings of constraints k ≠ l sharing a node, as
     /// (k, l, value offset, local node index in k, local node index in l).
     nu_pairs: Vec<(usize, usize, usize, usize, usize)>,
+    /// Per node, how its rates follow its configuration (empty: they do not).
+    rate_maps: Vec<RateMaps>,
+}
+
+/// How a node's rates follow its configuration in a steadily spinning state:
+/// `δv = A_v δq` and `δv̇ = A₀ δq` on its translation (index 0) and material rotation
+/// (index 1) blocks. With them the iteration matrix gets `C A_v + M A₀` added to K (the
+/// centrifugal softening `MΩ̃Ω̃` and the gyroscopic stiffness of spinning statics).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RateMaps {
+    pub velocity: [Matrix3<f64>; 2],
+    pub acceleration: [Matrix3<f64>; 2],
 }
 
 impl Assembler {
@@ -531,6 +543,7 @@ impl Assembler {
             cf_ds: Vec::new(),
             constraints,
             nu_pairs,
+            rate_maps: Vec::new(),
         }
     }
 
@@ -663,6 +676,13 @@ impl Assembler {
         }
     }
 
+    /// Sets (or, with an empty slice, clears) the rate maps of the nodes: from then on
+    /// the stiffness columns of every node carry `C A_v + M A₀` as well.
+    pub fn set_rate_maps(&mut self, maps: &[RateMaps]) {
+        self.rate_maps.clear();
+        self.rate_maps.extend_from_slice(maps);
+    }
+
     /// Assembles the residual (always) and the iteration matrix (if given).
     ///
     /// `tangent_ops[i]` is the tangent operator of node i's rotation update; an empty slice
@@ -728,6 +748,9 @@ impl Assembler {
                 continue;
             };
             apply_tangent_ops(&mut t.k, en, tangent_ops);
+            if !self.rate_maps.is_empty() {
+                add_rate_terms(t, en, &self.rate_maps);
+            }
             let (cm, cc, ck) = (sr * coef.mass, sr * coef.damping, sr * coef.stiffness);
             let n6 = 6 * en.len();
             if nz == 0 {
@@ -1274,6 +1297,29 @@ fn add_sub_t(
         let d = &mut dst[(r0 + r) * stride + c0..(r0 + r) * stride + c0 + cols];
         for (x, v) in d.iter_mut().zip(col) {
             *x += scale * v;
+        }
+    }
+}
+
+/// `K += C A_v + M A₀` on the columns of each local node block (rows: all).
+fn add_rate_terms(t: &mut LocalTerms, nodes: &[usize], maps: &[RateMaps]) {
+    for (b, &nb) in nodes.iter().enumerate() {
+        let map = &maps[nb];
+        for blk in 0..2 {
+            let (av, a0) = (&map.velocity[blk], &map.acceleration[blk]);
+            if av.iter().all(|x| *x == 0.0) && a0.iter().all(|x| *x == 0.0) {
+                continue;
+            }
+            let c0 = 6 * b + 3 * blk;
+            for r in 0..t.k.nrows() {
+                let c = [t.c[(r, c0)], t.c[(r, c0 + 1)], t.c[(r, c0 + 2)]];
+                let m = [t.m[(r, c0)], t.m[(r, c0 + 1)], t.m[(r, c0 + 2)]];
+                for j in 0..3 {
+                    t.k[(r, c0 + j)] += (0..3)
+                        .map(|i| c[i] * av[(i, j)] + m[i] * a0[(i, j)])
+                        .sum::<f64>();
+                }
+            }
         }
     }
 }
