@@ -74,13 +74,22 @@ enum Command {
         #[arg(long, short)]
         out: Option<PathBuf>,
     },
-    /// Write a ParaView time series (.pvd + one .vtu per output time) from a results file.
+    /// Write a ParaView scene from a results file: a time series (.pvd + one binary .vtu
+    /// per output time), `<stem>_scene.py` (`paraview --script=...`), and for modal results
+    /// one animated series per mode.
     Vtk {
         /// Results file (NetCDF) written by `samara run`.
         results: PathBuf,
         /// Output directory [default: `<results stem>_vtk/` beside the results file].
         #[arg(long, short)]
         out: Option<PathBuf>,
+        /// Modal results: scale of the mode shapes [default: largest displacement a tenth
+        /// of the model's size, rotations at most 0.5 rad].
+        #[arg(long)]
+        mode_scale: Option<f64>,
+        /// Modal results: files per period of each mode's animation.
+        #[arg(long, default_value_t = 24)]
+        mode_frames: usize,
     },
     /// Describe a results file: analysis, time span, nodes, joints, solver statistics, variables.
     Info {
@@ -171,7 +180,12 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Vtk { results, out } => {
+        Command::Vtk {
+            results,
+            out,
+            mode_scale,
+            mode_frames,
+        } => {
             let dir = out.unwrap_or_else(|| {
                 let stem = results
                     .file_stem()
@@ -185,16 +199,25 @@ fn main() -> ExitCode {
             let written = samara::output::ResultsReader::open(&results)
                 .map_err(|e| e.to_string())
                 .and_then(|mut r| {
-                    samara::output::write_vtk(&mut r, &dir).map_err(|e| e.to_string())
+                    let options = samara::output::VtkOptions {
+                        mode_scale,
+                        mode_frames,
+                    };
+                    samara::output::write_vtk_with(&mut r, &dir, &options)
+                        .map_err(|e| e.to_string())
                 });
             match written {
                 Ok(s) => {
                     println!(
-                        "{}: {} time steps, {} points each — open it in ParaView",
+                        "{}: {} time steps, {} points each",
                         s.collection.display(),
                         s.files.len(),
                         s.points
                     );
+                    for m in &s.modes {
+                        println!("{}: mode animation", m.display());
+                    }
+                    println!("open the scene: paraview --script={}", s.script.display());
                     ExitCode::SUCCESS
                 }
                 Err(e) => {

@@ -467,8 +467,9 @@ fn vtk_series_reads_back_with_a_vtk_reader() {
     let IOBuffer::F64(points) = &piece.points else {
         panic!("points not f64")
     };
-    // The bob's node, the pivot, the bob's CG (no offset: on the node).
-    assert_eq!(points.len(), 9);
+    // The bob's node, the pivot, the bob's CG (no offset: on the node), then the 8
+    // corners of the bob's equivalent box.
+    assert_eq!(points.len(), 3 * 11);
     let mut rd = FileReader::open(&path).unwrap();
     let x = rd.read_var_f64("position").unwrap();
     for i in 0..3 {
