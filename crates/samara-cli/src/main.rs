@@ -36,7 +36,7 @@ enum Command {
     Run {
         /// Model file (TOML).
         model: PathBuf,
-        /// Results directory [default: out/ beside the model].
+        /// Results directory [default: out/<model file stem>/ beside the model].
         #[arg(long, short)]
         out: Option<PathBuf>,
         /// No progress bar.
@@ -52,7 +52,7 @@ enum Command {
         /// with `"path" = value`; paths such as `bodies.bob.mass`, `model.gravity[2]`.
         #[arg(long, value_name = "PARAMS.toml")]
         grid: PathBuf,
-        /// Results directory [default: out/sweep/ beside the model].
+        /// Results directory [default: out/<model file stem>/sweep/ beside the model].
         #[arg(long, short)]
         out: Option<PathBuf>,
     },
@@ -237,9 +237,21 @@ fn main() -> ExitCode {
     }
 }
 
-/// Results directory of a model: `--out`, or `out/` beside the model file.
-fn results_dir(path: &Path, out: Option<PathBuf>) -> PathBuf {
-    out.unwrap_or_else(|| path.parent().unwrap_or(Path::new(".")).join("out"))
+/// Results directory of a model: `--out`, or `out/<model file stem>/` beside the model
+/// file, so that two models of one folder never share a results folder (a folder cannot
+/// hold two files of the same name).
+pub(crate) fn results_dir(path: &Path, out: Option<PathBuf>) -> PathBuf {
+    out.unwrap_or_else(|| {
+        let stem = path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .filter(|s| samara::model::is_plain_file_name(s))
+            .unwrap_or("model");
+        path.parent()
+            .unwrap_or(Path::new("."))
+            .join("out")
+            .join(stem)
+    })
 }
 
 /// Section files named by the model are cached in `<results dir>/sections/`; `write`
