@@ -31,6 +31,8 @@ CASES = [
     ("landing_gear.toml", {}),
     # static only, beams
     ("curved_cantilever.toml", {}),
+    # modal (dense and sparse eigensolvers, arrays that are not time records)
+    ("verification/cantilever_modal.toml", {}),
 ]
 
 
@@ -56,12 +58,12 @@ def test_every_analysis_equals_the_cli_bit_for_bit(root, cli, tmp_path, example,
     assert kinds  # at least one analysis compared
 
 
-def test_both_analysis_types_are_covered():
+def test_every_analysis_type_is_covered():
     kinds = set()
     for example, _ in CASES:
         text = (Path(__file__).resolve().parents[2] / "examples" / example).read_text()
-        kinds |= {"static" if 'type = "static"' in text else None, "dynamic" if 'type = "dynamic"' in text else None}
-    assert {"static", "dynamic"} <= kinds
+        kinds |= {t for t in ("static", "dynamic", "modal") if f'type = "{t}"' in text}
+    assert kinds == {"static", "dynamic", "modal"}
 
 
 def test_one_analysis_and_the_ones_it_starts_from(root, tmp_path):
