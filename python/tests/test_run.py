@@ -6,6 +6,7 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 import samara
 import xarray as xr
@@ -200,3 +201,24 @@ def test_displacements_from_the_reference_configuration(root, cli, tmp_path):
     assert svg.stat().st_size > 1000
     with pytest.raises(KeyError, match="no node named"):
         samara.displacement(loaded, "nope")
+
+
+def test_section_reference_configuration(root):
+    """The sections of the unloaded first record of a static run are the reference
+    sections (`section_reference_position`/`_orientation`, computed from the model's node
+    positions and orientations); the beams' node lists name the nodes root to tip."""
+    ds = samara.run(str(root / "examples" / "curved_cantilever.toml"))
+    ds = next(iter(ds.values()))
+    assert float(ds.load_factor[0]) == 0.0
+    # same nodes, same section kernel: equal to round-off (1e-12 m on a 100 m arc)
+    np.testing.assert_allclose(ds.section_position.values[0], ds.section_reference_position.values, rtol=0, atol=1e-12)
+    q, q0 = ds.section_orientation.values[0], ds.section_reference_orientation.values
+    assert np.abs(np.abs(np.sum(q * q0, axis=1)) - 1.0).max() < 1e-12  # q and -q: one rotation
+    assert ds.section_reference_position.attrs["units"] == "m"
+    # the loaded sections moved away from the reference
+    assert np.abs(ds.section_position.values[-1] - ds.section_reference_position.values).max() > 1.0
+    idx = ds.beam_node_index.values
+    names = [n.decode() if isinstance(n, bytes) else str(n) for n in ds.node_name.values]
+    assert len(set(idx)) == len(idx) and set(ds.beam_node_beam.values) == {0}
+    np.testing.assert_allclose(np.linalg.norm(ds.beam_node_offset.values, axis=1), 1.0, atol=1e-14)
+    assert names[idx[-1]] == "tip"
