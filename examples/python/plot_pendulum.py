@@ -1,7 +1,7 @@
 """Open a samara results file with xarray and plot it with matplotlib.
 
     cargo run --release -- run examples/pendulum.toml
-    python3 examples/python/plot_pendulum.py examples/out/swing.nc swing.png
+    python3 examples/python/plot_pendulum.py examples/out/pendulum/swing.nc swing.png
 
 Needs: pip install -r examples/python/requirements.txt
 """

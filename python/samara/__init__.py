@@ -21,7 +21,7 @@ from __future__ import annotations
 import io
 import os
 from pathlib import Path
-from typing import Any, Callable, Dict, Mapping, Optional, Union
+from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Union
 
 from ._samara import Model, ModelError, SamaraError
 from ._samara import version as _engine_version
@@ -35,6 +35,8 @@ __all__ = [
     "run",
     "open_results",
     "displacement",
+    "linearize",
+    "Linearization",
     "sweep",
     "__version__",
 ]
@@ -187,6 +189,41 @@ def displacement(ds, node: Optional[str] = None):
             raise KeyError(f"no node named '{node}' (nodes: {', '.join(names)})")
         u = u.isel(node=names.index(node))
     return u
+
+
+class Linearization(NamedTuple):
+    """The linearized equations of motion ``M ÿ + G ẏ + K y + Bᵀ μ = 0``, ``B y = 0``
+    (docs/linearized-analyses.md) as :mod:`scipy.sparse` CSC matrices.
+
+    ``unknowns`` names each unknown y (columns of every matrix, rows of M, G, K), e.g.
+    ``tip.ux``, ``tip.rz``, ``shaft.theta``; B has one row per constraint equation.
+    """
+
+    M: Any
+    G: Any
+    K: Any
+    B: Any
+    unknowns: List[str]
+
+
+def linearize(model: ModelLike, analysis: Optional[str] = None) -> Linearization:
+    """The linearized matrices M (mass), G (damping, gyroscopic, Coriolis), K (elastic,
+    geometric, centrifugal stiffness) and B (constraint Jacobian) as scipy.sparse matrices.
+
+    About the state of the modal analysis ``analysis`` (after the analyses it starts
+    from, in its rotating frame if it has ``rotation``) — the matrices its
+    ``write_matrices = true`` writes as Matrix Market files — or, without ``analysis``,
+    about the model's initial state. Runs with the GIL released. Raises ``ValueError``
+    for an unknown or non-modal analysis.
+    """
+    import scipy.sparse as sp
+
+    m = load(model)
+    names, mats = m.linearize_raw(analysis)
+    out = {}
+    for tag, (rows, cols, vals, shape) in mats:
+        out[tag] = sp.csc_matrix((vals, (rows, cols)), shape=shape)
+    return Linearization(M=out["M"], G=out["G"], K=out["K"], B=out["B"], unknowns=list(names))
 
 
 def sweep(*args, **kwargs):

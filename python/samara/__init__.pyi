@@ -1,5 +1,7 @@
 import os
-from typing import Any, Callable, Dict, Mapping, Optional, Sequence, Union, overload
+from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Sequence, Union, overload
+
+import scipy.sparse
 
 import xarray
 
@@ -35,6 +37,19 @@ def run(
 ) -> xarray.Dataset: ...
 def open_results(source: Union[bytes, str, "os.PathLike[str]"]) -> xarray.Dataset: ...
 def displacement(ds: xarray.Dataset, node: Optional[str] = None) -> xarray.DataArray: ...
+class Linearization(NamedTuple):
+    """M ÿ + G ẏ + K y + Bᵀ μ = 0, B y = 0 as scipy.sparse CSC matrices; ``unknowns`` names y."""
+
+    M: scipy.sparse.csc_matrix
+    G: scipy.sparse.csc_matrix
+    K: scipy.sparse.csc_matrix
+    B: scipy.sparse.csc_matrix
+    unknowns: List[str]
+
+def linearize(model: ModelLike, analysis: Optional[str] = None) -> Linearization:
+    """The linearized matrices about a modal analysis's state (or the initial state)."""
+    ...
+
 def sweep(
     model: ModelLike,
     parameters: Optional[Mapping[str, Sequence[Any]]] = None,

@@ -51,6 +51,13 @@ class Model:
     @property
     def file(self) -> Optional[Path]:
         """The model file it was read from, if any."""
+    def linearize_raw(
+        self, analysis: Optional[str] = None
+    ) -> Tuple[List[str], List[Tuple[str, Tuple[List[int], List[int], List[float], Tuple[int, int]]]]]:
+        """The linearized matrices as coordinate triplets: ``(unknown names, [(tag, (rows,
+        cols, values, shape))])`` for tags M, G, K, B, about the state of the modal
+        analysis ``analysis`` (or the initial state); the GIL is released."""
+        ...
     def run_raw(
         self,
         analysis: Optional[str] = None,

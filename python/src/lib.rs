@@ -380,6 +380,76 @@ impl Model {
         }
     }
 
+    /// The linearized equations `M ÿ + G ẏ + K y + Bᵀ μ = 0`, `B y = 0` (docs/
+    /// linearized-analyses.md) about the state of the modal analysis `analysis` (after the
+    /// analyses it starts from, in its rotating frame), or about the model's initial state
+    /// when `analysis` is `None`. Returns `(unknown names, {"M"|"G"|"K"|"B": triplets})`;
+    /// runs with the GIL released.
+    #[pyo3(signature = (analysis = None))]
+    fn linearize_raw(&self, py: Python<'_>, analysis: Option<String>) -> PyResult<Linearized> {
+        let loaded = self.load(py, &LoadOptions::default())?;
+        let model = &loaded.model;
+        let (chain, rotation) = match &analysis {
+            None => (Vec::new(), None),
+            Some(name) => {
+                let Some(k) = model.analyses.iter().position(|a| &a.name == name) else {
+                    return Err(PyValueError::new_err(format!(
+                        "the model has no analysis '{name}' (analyses: {})",
+                        self.analyses().join(", ")
+                    )));
+                };
+                let samara::model::AnalysisKind::Modal(settings) = &model.analyses[k].kind else {
+                    return Err(PyValueError::new_err(format!(
+                        "analysis '{name}' is {} and not modal: only a modal analysis says what to linearize about (or pass no analysis for the initial state)",
+                        model.analyses[k].type_name()
+                    )));
+                };
+                // The analyses the modal one starts from, first to last.
+                let mut chain = Vec::new();
+                let mut i = model.analyses[k].start_from;
+                while let Some(j) = i {
+                    chain.push(j);
+                    i = model.analyses[j].start_from;
+                }
+                chain.reverse();
+                (chain, settings.rotation)
+            }
+        };
+        let file = self.file.as_deref();
+        let lin = py
+            .detach(|| -> Result<samara::linear::LinearSystem, samara::Error> {
+                let sys = System::new(model);
+                let mut state = sys.initial_state();
+                for &j in &chain {
+                    let stage = model.analyses[j].stage();
+                    let mut rec = ResultsFile::in_memory(model, file, &sys, stage.as_ref())?;
+                    let summary = stage.run(&sys, state, &mut rec, &mut |_| {})?;
+                    if let Some(f) = &summary.failure {
+                        return Err(samara::Error::Output {
+                            path: PathBuf::from(&model.analyses[j].name),
+                            message: format!(
+                                "analysis '{}' failed at t = {}: {}",
+                                model.analyses[j].name, f.time, f.reason
+                            ),
+                        });
+                    }
+                    state = summary.final_state;
+                }
+                if let Some(rot) = &rotation {
+                    rot.impose(&sys, &mut state);
+                }
+                Ok(samara::linear::linearize(&sys, &state, rotation.as_ref()))
+            })
+            .map_err(|e| samara_error(&e))?;
+        let mats = vec![
+            ("M".to_string(), triplets(&lin.mass)),
+            ("G".to_string(), triplets(&lin.damping)),
+            ("K".to_string(), triplets(&lin.stiffness)),
+            ("B".to_string(), triplets(&lin.constraint_jacobian)),
+        ];
+        Ok((lin.unknown_names, mats))
+    }
+
     /// Runs the analyses (all, or `analysis` and the ones it starts from) with the GIL
     /// released. Returns `[(name, results, summary)]`: `results` is the NetCDF file's
     /// bytes, or its path when `out` (a folder) is given. `progress(analysis, fraction)`
@@ -520,6 +590,25 @@ impl Model {
         Ok(list)
     }
 }
+
+/// A sparse matrix as coordinate triplets: (rows, columns, values, (n_rows, n_cols)).
+type Triplets = (Vec<usize>, Vec<usize>, Vec<f64>, (usize, usize));
+
+fn triplets(a: &samara::linear::SparseMatrix) -> Triplets {
+    let r = a.as_ref();
+    let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+    for j in 0..a.ncols() {
+        for (&i, &v) in r.row_idx_of_col_raw(j).iter().zip(r.val_of_col(j)) {
+            rows.push(i);
+            cols.push(j);
+            vals.push(v);
+        }
+    }
+    (rows, cols, vals, (a.nrows(), a.ncols()))
+}
+
+/// Unknown names and the named matrices of a linearization.
+type Linearized = (Vec<String>, Vec<(String, Triplets)>);
 
 /// One analysis run from Python: name, results (bytes or path), summary.
 type RunOutput = (String, Py<PyAny>, Py<PyDict>);

@@ -6,6 +6,7 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 import samara
 import xarray as xr
@@ -31,6 +32,8 @@ CASES = [
     ("landing_gear.toml", {}),
     # static only, beams
     ("curved_cantilever.toml", {}),
+    # modal (dense and sparse eigensolvers, arrays that are not time records)
+    ("verification/cantilever_modal.toml", {}),
 ]
 
 
@@ -56,12 +59,12 @@ def test_every_analysis_equals_the_cli_bit_for_bit(root, cli, tmp_path, example,
     assert kinds  # at least one analysis compared
 
 
-def test_both_analysis_types_are_covered():
+def test_every_analysis_type_is_covered():
     kinds = set()
     for example, _ in CASES:
         text = (Path(__file__).resolve().parents[2] / "examples" / example).read_text()
-        kinds |= {"static" if 'type = "static"' in text else None, "dynamic" if 'type = "dynamic"' in text else None}
-    assert {"static", "dynamic"} <= kinds
+        kinds |= {t for t in ("static", "dynamic", "modal") if f'type = "{t}"' in text}
+    assert kinds == {"static", "dynamic", "modal"}
 
 
 def test_one_analysis_and_the_ones_it_starts_from(root, tmp_path):
@@ -198,3 +201,24 @@ def test_displacements_from_the_reference_configuration(root, cli, tmp_path):
     assert svg.stat().st_size > 1000
     with pytest.raises(KeyError, match="no node named"):
         samara.displacement(loaded, "nope")
+
+
+def test_section_reference_configuration(root):
+    """The sections of the unloaded first record of a static run are the reference
+    sections (`section_reference_position`/`_orientation`, computed from the model's node
+    positions and orientations); the beams' node lists name the nodes root to tip."""
+    ds = samara.run(str(root / "examples" / "curved_cantilever.toml"))
+    ds = next(iter(ds.values()))
+    assert float(ds.load_factor[0]) == 0.0
+    # same nodes, same section kernel: equal to round-off (1e-12 m on a 100 m arc)
+    np.testing.assert_allclose(ds.section_position.values[0], ds.section_reference_position.values, rtol=0, atol=1e-12)
+    q, q0 = ds.section_orientation.values[0], ds.section_reference_orientation.values
+    assert np.abs(np.abs(np.sum(q * q0, axis=1)) - 1.0).max() < 1e-12  # q and -q: one rotation
+    assert ds.section_reference_position.attrs["units"] == "m"
+    # the loaded sections moved away from the reference
+    assert np.abs(ds.section_position.values[-1] - ds.section_reference_position.values).max() > 1.0
+    idx = ds.beam_node_index.values
+    names = [n.decode() if isinstance(n, bytes) else str(n) for n in ds.node_name.values]
+    assert len(set(idx)) == len(idx) and set(ds.beam_node_beam.values) == {0}
+    np.testing.assert_allclose(np.linalg.norm(ds.beam_node_offset.values, axis=1), 1.0, atol=1e-14)
+    assert names[idx[-1]] == "tip"

@@ -37,7 +37,7 @@ enum Command {
     Run {
         /// Model file (TOML).
         model: PathBuf,
-        /// Results directory [default: out/ beside the model].
+        /// Results directory [default: out/<model file stem>/ beside the model].
         #[arg(long, short)]
         out: Option<PathBuf>,
         /// No progress bar.
@@ -53,7 +53,7 @@ enum Command {
         /// with `"path" = value`; paths such as `bodies.bob.mass`, `model.gravity[2]`.
         #[arg(long, value_name = "PARAMS.toml")]
         grid: PathBuf,
-        /// Results directory [default: out/sweep/ beside the model].
+        /// Results directory [default: out/<model file stem>/sweep/ beside the model].
         #[arg(long, short)]
         out: Option<PathBuf>,
     },
@@ -76,13 +76,22 @@ enum Command {
         #[arg(long, short)]
         out: Option<PathBuf>,
     },
-    /// Write a ParaView time series (.pvd + one .vtu per output time) from a results file.
+    /// Write a ParaView scene from a results file: a time series (.pvd + one binary .vtu
+    /// per output time), `<stem>_scene.py` (`paraview --script=...`), and for modal results
+    /// one animated series per mode.
     Vtk {
         /// Results file (NetCDF) written by `samara run`.
         results: PathBuf,
         /// Output directory [default: `<results stem>_vtk/` beside the results file].
         #[arg(long, short)]
         out: Option<PathBuf>,
+        /// Modal results: scale of the mode shapes [default: largest displacement a tenth
+        /// of the model's size, rotations at most 0.5 rad].
+        #[arg(long)]
+        mode_scale: Option<f64>,
+        /// Modal results: files per period of each mode's animation.
+        #[arg(long, default_value_t = 24)]
+        mode_frames: usize,
     },
     /// Describe a results file: analysis, time span, nodes, joints, solver statistics, variables.
     Info {
@@ -179,7 +188,12 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Vtk { results, out } => {
+        Command::Vtk {
+            results,
+            out,
+            mode_scale,
+            mode_frames,
+        } => {
             let dir = out.unwrap_or_else(|| {
                 let stem = results
                     .file_stem()
@@ -193,16 +207,25 @@ fn main() -> ExitCode {
             let written = samara::output::ResultsReader::open(&results)
                 .map_err(|e| e.to_string())
                 .and_then(|mut r| {
-                    samara::output::write_vtk(&mut r, &dir).map_err(|e| e.to_string())
+                    let options = samara::output::VtkOptions {
+                        mode_scale,
+                        mode_frames,
+                    };
+                    samara::output::write_vtk_with(&mut r, &dir, &options)
+                        .map_err(|e| e.to_string())
                 });
             match written {
                 Ok(s) => {
                     println!(
-                        "{}: {} time steps, {} points each — open it in ParaView",
+                        "{}: {} time steps, {} points each",
                         s.collection.display(),
                         s.files.len(),
                         s.points
                     );
+                    for m in &s.modes {
+                        println!("{}: mode animation", m.display());
+                    }
+                    println!("open the scene: paraview --script={}", s.script.display());
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
@@ -222,9 +245,21 @@ fn main() -> ExitCode {
     }
 }
 
-/// Results directory of a model: `--out`, or `out/` beside the model file.
-fn results_dir(path: &Path, out: Option<PathBuf>) -> PathBuf {
-    out.unwrap_or_else(|| path.parent().unwrap_or(Path::new(".")).join("out"))
+/// Results directory of a model: `--out`, or `out/<model file stem>/` beside the model
+/// file, so that two models of one folder never share a results folder (a folder cannot
+/// hold two files of the same name).
+pub(crate) fn results_dir(path: &Path, out: Option<PathBuf>) -> PathBuf {
+    out.unwrap_or_else(|| {
+        let stem = path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .filter(|s| samara::model::is_plain_file_name(s))
+            .unwrap_or("model");
+        path.parent()
+            .unwrap_or(Path::new("."))
+            .join("out")
+            .join(stem)
+    })
 }
 
 /// Section files named by the model are cached in `<results dir>/sections/`; `write`

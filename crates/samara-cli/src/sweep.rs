@@ -318,13 +318,7 @@ pub fn sweep(model_path: &Path, grid: &Path, out: Option<PathBuf>) -> ExitCode {
             return ExitCode::from(crate::EXIT_MODEL);
         }
     }
-    let out = out.unwrap_or_else(|| {
-        model_path
-            .parent()
-            .unwrap_or(Path::new("."))
-            .join("out")
-            .join("sweep")
-    });
+    let out = out.unwrap_or_else(|| crate::results_dir(model_path, None).join("sweep"));
     if let Err(e) = std::fs::create_dir_all(&out) {
         eprintln!("error: cannot create '{}': {e}", out.display());
         return ExitCode::from(crate::EXIT_MODEL);

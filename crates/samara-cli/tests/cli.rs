@@ -2,7 +2,7 @@
 //! bad input (issue #2, verification 8).
 
 use netcdf3::FileReader;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 mod common;
 use common::*;
@@ -467,8 +467,9 @@ fn vtk_series_reads_back_with_a_vtk_reader() {
     let IOBuffer::F64(points) = &piece.points else {
         panic!("points not f64")
     };
-    // The bob's node, the pivot, the bob's CG (no offset: on the node).
-    assert_eq!(points.len(), 9);
+    // The bob's node, the pivot, the bob's CG (no offset: on the node), then the 8
+    // corners of the bob's equivalent box.
+    assert_eq!(points.len(), 3 * 11);
     let mut rd = FileReader::open(&path).unwrap();
     let x = rd.read_var_f64("position").unwrap();
     for i in 0..3 {
@@ -654,4 +655,61 @@ fn element_states_signals_and_outputs_reach_the_results_file() {
     let last = tension.values.len() - 1;
     assert!(tension.values[last].abs() < 5.0, "{}", tension.values[last]);
     assert!((height.values[last] - (0.5 - 250.0 * 9.81 / 16000.0)).abs() < 1e-3);
+}
+
+/// Two models in one folder with the same analysis name: by default each gets its own
+/// results folder `out/<model file stem>/`, so neither file is moved aside (issue #13).
+#[test]
+fn two_models_of_one_folder_never_share_results() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.toml");
+    let b = dir.path().join("b.toml");
+    std::fs::write(&a, PENDULUM).unwrap();
+    // A different model: a longer pendulum (same analysis name `swing`).
+    let longer = PENDULUM.replacen(
+        "position = [1.0, 0.0, 0.0]",
+        "position = [2.0, 0.0, 0.0]",
+        1,
+    );
+    assert_ne!(longer, PENDULUM);
+    std::fs::write(&b, &longer).unwrap();
+    for m in [&a, &b] {
+        let o = samara(&["run", m.to_str().unwrap(), "-q"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let out = dir.path().join("out");
+    let mut files: Vec<String> = walk(&out);
+    files.sort();
+    assert_eq!(files, ["a/swing.nc", "b/swing.nc"], "{files:?}");
+    let mut ra = FileReader::open(out.join("a/swing.nc")).unwrap();
+    let mut rb = FileReader::open(out.join("b/swing.nc")).unwrap();
+    let xa = ra.read_var_f64("reference_position").unwrap();
+    let xb = rb.read_var_f64("reference_position").unwrap();
+    assert_ne!(xa, xb, "each folder holds its own model's results");
+    // `samara sweep` defaults to out/<model file stem>/sweep/.
+    let grid = dir.path().join("grid.toml");
+    std::fs::write(&grid, "[grid]\n\"analyses.swing.t_end\" = [0.01]\n").unwrap();
+    let o = samara(&[
+        "sweep",
+        a.to_str().unwrap(),
+        "--grid",
+        grid.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("a/sweep/index.csv").exists());
+}
+
+/// Files under `dir`, relative, with `/` separators.
+fn walk(dir: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            let name = p.file_name().unwrap().to_string_lossy().to_string();
+            out.extend(walk(&p).into_iter().map(|f| format!("{name}/{f}")));
+        } else {
+            out.push(p.file_name().unwrap().to_string_lossy().to_string());
+        }
+    }
+    out
 }

@@ -5,6 +5,9 @@ pub mod linearize;
 pub mod matrix_market;
 
 pub use linearize::{LinearSystem, SteadyRotation, linearize, unknown_names};
+
+/// The sparse matrices of [`LinearSystem`] (compressed columns).
+pub type SparseMatrix = faer::sparse::SparseColMat<usize, f64>;
 pub mod eigen;
 pub use eigen::{EigenMethod, EigenOptions, Mode, Spectrum, modes};
 pub mod spin;

@@ -28,6 +28,11 @@ pub(super) struct BeamVars {
     section_name: VarId,
     section_beam: VarId,
     section_eta: VarId,
+    section_reference_position: VarId,
+    section_reference_orientation: VarId,
+    beam_node_index: VarId,
+    beam_node_beam: VarId,
+    beam_node_offset: VarId,
     names: Vec<String>,
     states: Vec<SectionState>,
     buf3: Vec<f64>,
@@ -86,8 +91,50 @@ impl BeamVars {
         let section = d.add_dim("section", n_sections);
         let section_len = names.iter().map(String::len).max().unwrap_or(1).max(1);
         let section_strlen = d.add_dim("section_strlen", section_len);
+        let n_beam_nodes: usize = sys.beams.iter().map(|b| b.nodes_with_offsets().len()).sum();
+        let beam_node = d.add_dim("beam_node", n_beam_nodes);
         let v3 = [time, section, vec3];
         Some(Self {
+            section_reference_position: add(
+                d,
+                "section_reference_position",
+                NcType::Double,
+                &[section, vec3],
+                "m",
+                "reference-line point of the section in the model's reference configuration, global frame",
+            ),
+            section_reference_orientation: add(
+                d,
+                "section_reference_orientation",
+                NcType::Double,
+                &[section, quat],
+                "1",
+                "section frame in the model's reference configuration as a unit quaternion (w, x, y, z), section frame to global",
+            ),
+            beam_node_index: add(
+                d,
+                "beam_node_index",
+                NcType::Int,
+                &[beam_node],
+                "",
+                "nodes of the beams, beam by beam from the root to the tip: index of the node in `node`",
+            ),
+            beam_node_beam: add(
+                d,
+                "beam_node_beam",
+                NcType::Int,
+                &[beam_node],
+                "",
+                "index of the beam node's beam in `beam`",
+            ),
+            beam_node_offset: add(
+                d,
+                "beam_node_offset",
+                NcType::Double,
+                &[beam_node, quat],
+                "1",
+                "node-to-section frame offset o as a unit quaternion (w, x, y, z): section frame at the node = orientation of the node ⊗ o",
+            ),
             beam_name: add(
                 d,
                 "beam_name",
@@ -175,7 +222,8 @@ impl BeamVars {
         })
     }
 
-    /// Writes the fixed variables (names, beam indices, stations).
+    /// Writes the fixed variables (names, beam indices, stations, the reference sections,
+    /// the beams' nodes).
     pub(super) fn write_fixed(&mut self, w: &mut Writer, sys: &System) -> Result<(), NcError> {
         let beams: Vec<&str> = sys.beams.iter().map(|b| b.name.as_str()).collect();
         w.put_fixed_text(self.beam_name, &beams)?;
@@ -194,7 +242,39 @@ impl BeamVars {
             .iter()
             .flat_map(|b| b.elements.iter().flat_map(|e| e.section_etas()))
             .collect();
-        w.put_fixed_f64(self.section_eta, &etas)
+        w.put_fixed_f64(self.section_eta, &etas)?;
+        // Sections of the reference configuration (the model's node positions and
+        // orientations, from which the beams were built).
+        let mut reference = vec![SectionState::default(); self.states.len()];
+        let mut at = 0;
+        for b in &sys.beams {
+            let n = b.n_section_points();
+            b.sections_into(&sys.initial_nodes, &mut reference[at..at + n]);
+            at += n;
+        }
+        let x: Vec<f64> = reference
+            .iter()
+            .flat_map(|s| s.position.iter().copied())
+            .collect();
+        w.put_fixed_f64(self.section_reference_position, &x)?;
+        let q: Vec<f64> = reference
+            .iter()
+            .flat_map(|s| s.orientation.iter().copied())
+            .collect();
+        w.put_fixed_f64(self.section_reference_orientation, &q)?;
+        let mut index = Vec::new();
+        let mut beam = Vec::new();
+        let mut offset = Vec::new();
+        for (i, b) in sys.beams.iter().enumerate() {
+            for (n, o) in b.nodes_with_offsets() {
+                index.push(n as i32);
+                beam.push(i as i32);
+                offset.extend(o);
+            }
+        }
+        w.put_fixed_i32(self.beam_node_index, &index)?;
+        w.put_fixed_i32(self.beam_node_beam, &beam)?;
+        w.put_fixed_f64(self.beam_node_offset, &offset)
     }
 
     /// Stages one record of the beam variables (no allocation).

@@ -6,7 +6,9 @@
 //! - `beam_vars`: the beams' sectional variables of a results file (models with beams);
 //! - `state_vars`: element states and signals of a results file (models with them);
 //! - `reader`: reading results files back (metadata, variables, named channels);
-//! - `vtk`: ParaView time series (`.pvd` + `.vtu`) from a results file.
+//! - `vtk`: ParaView scenes (`.pvd` + binary `.vtu`, a ParaView script, mode animations)
+//!   from a results file;
+//! - `vtu`: the binary VTK XML UnstructuredGrid writer.
 
 mod beam_vars;
 pub mod netcdf;
@@ -14,7 +16,8 @@ mod reader;
 mod results;
 mod state_vars;
 mod vtk;
+pub mod vtu;
 
 pub use reader::{Channel, ReadError, ResultsReader, VariableInfo};
 pub use results::{FORMAT_VERSION, ResultsFile};
-pub use vtk::{VtkSeries, write_vtk};
+pub use vtk::{VtkOptions, VtkSeries, write_vtk, write_vtk_with};

@@ -234,6 +234,11 @@ impl ResultsReader {
             .collect()
     }
 
+    /// Whether the file has a variable of this name.
+    pub fn has_variable(&self, name: &str) -> bool {
+        self.reader.data_set().get_var(name).is_some()
+    }
+
     /// A whole variable as f64 (integers converted).
     pub fn read(&mut self, name: &str) -> Result<Vec<f64>, ReadError> {
         let err = |d: String| ReadError::Variable {

@@ -257,6 +257,7 @@ impl ResultsFile {
             "1",
             "orientation of the node in the model's reference configuration (unit quaternion w, x, y, z; global frame)",
         );
+        let inertia_row = d.add_dim("inertia_row", 3);
         let body_vars = body.map(|b| {
             (
                 var(
@@ -284,6 +285,14 @@ impl ResultsFile {
                     "centre of gravity relative to the node, node frame",
                 ),
                 var(&mut d, "body_mass", NcType::Double, &[b], "kg", "body mass"),
+                var(
+                    &mut d,
+                    "body_inertia",
+                    NcType::Double,
+                    &[b, inertia_row, vec3],
+                    "kg m2",
+                    "inertia tensor about the centre of gravity, node frame (rows inertia_row, columns vec3)",
+                ),
             )
         });
         let joint_name = joint.map(|j| {
@@ -573,7 +582,7 @@ impl ResultsFile {
                 .collect();
             writer.put_fixed_f64(reference_orientation, &q).map_err(e)?;
         }
-        if let Some((bn, bnode, boff, bmass)) = body_vars {
+        if let Some((bn, bnode, boff, bmass, binertia)) = body_vars {
             let e = |err| nc_err(&path, err);
             let names: Vec<&str> = model.bodies.iter().map(|b| b.name.as_str()).collect();
             writer.put_fixed_text(bn, &names).map_err(e)?;
@@ -587,6 +596,12 @@ impl ResultsFile {
             writer.put_fixed_f64(boff, &off).map_err(e)?;
             let mass: Vec<f64> = model.bodies.iter().map(|b| b.mass).collect();
             writer.put_fixed_f64(bmass, &mass).map_err(e)?;
+            let inertia: Vec<f64> = model
+                .bodies
+                .iter()
+                .flat_map(|b| b.inertia.transpose().iter().copied().collect::<Vec<_>>())
+                .collect();
+            writer.put_fixed_f64(binertia, &inertia).map_err(e)?;
         }
         let mut beams = beams;
         if let Some(b) = &mut beams {

@@ -249,6 +249,16 @@ impl BeamElement {
         &self.nodes
     }
 
+    /// The constant node-to-section offset `o_k` of local node `k` as a unit quaternion
+    /// (w, x, y, z): the section frame at the node is `q_k ⊗ o_k` (identity for nodes the
+    /// beam created).
+    pub fn section_offset(&self, k: usize) -> [f64; 4] {
+        match &self.offsets[k] {
+            None => [1.0, 0.0, 0.0, 0.0],
+            Some((o, _)) => [o[0], o[1], o[2], o[3]],
+        }
+    }
+
     pub fn order(&self) -> usize {
         self.nodes.len() - 1
     }

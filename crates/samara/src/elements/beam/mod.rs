@@ -112,6 +112,22 @@ impl Beam {
         }
     }
 
+    /// The beam's nodes root to tip (a node shared by two elements once) with their
+    /// node-to-section offsets (w, x, y, z): the section frame at a node is its
+    /// orientation ⊗ offset.
+    pub fn nodes_with_offsets(&self) -> Vec<(usize, [f64; 4])> {
+        let mut out: Vec<(usize, [f64; 4])> = Vec::new();
+        for e in &self.elements {
+            for (k, &n) in e.nodes_slice().iter().enumerate() {
+                if k == 0 && out.last().is_some_and(|&(last, _)| last == n) {
+                    continue;
+                }
+                out.push((n, e.section_offset(k)));
+            }
+        }
+        out
+    }
+
     pub fn n_section_points(&self) -> usize {
         self.elements.iter().map(|e| e.n_section_points()).sum()
     }
