@@ -724,7 +724,7 @@ shown.PointSize = 6
         let _ = write!(
             s,
             r#"
-beams = Tube(registrationName="beams", Input=cells(4, "beam lines"))
+beams = Tube(registrationName="beams", Input=ExtractSurface(Input=cells(4, "beam lines")))
 beams.Radius = {:e}
 Show(beams, view)
 "#,
@@ -736,12 +736,12 @@ Show(beams, view)
             s,
             r#"
 if series.endswith("{stem}.pvd"):
-    sections = Tube(registrationName="sections", Input=cells(5, "beam sections"))
+    sections = Tube(registrationName="sections", Input=ExtractSurface(Input=cells(5, "beam sections")))
     sections.Radius = {:e}
     shown = Show(sections, view)
     ColorBy(shown, ("POINTS", "beam_moment", "Magnitude"))
 "#,
-            0.004 * size
+            0.007 * size
         );
     }
     if layout.body_box.iter().any(Option::is_some) {
