@@ -31,3 +31,5 @@ python3 docs/images/right_angle_cantilever.py "$tmp/rac/dynamic.nc" docs/images/
 python3 docs/images/beam_frames.py
 $samara section examples/sections/airfoil.section.toml --out "$tmp/section" --plot > /dev/null 2>&1
 cp "$tmp/section/airfoil.png" docs/images/section_airfoil.png
+$samara run examples/verification/rotating_beam_campbell.toml --out "$tmp/campbell" --quiet > /dev/null
+$samara plot "$tmp/campbell/campbell.nc" campbell --out docs/images/rotating_beam_campbell.png
