@@ -159,8 +159,11 @@ step = {h}
     )
 }
 
-/// Runs a model; returns (time, outputs by name) per frame and the system's names.
-fn run(text: &str, dir: &Path) -> (Vec<f64>, Vec<Vec<f64>>, Vec<String>, Vec<Vec<f64>>) {
+/// Per frame: time, element outputs, element states; and the outputs' names.
+type Run = (Vec<f64>, Vec<Vec<f64>>, Vec<String>, Vec<Vec<f64>>);
+
+/// Runs a model's first analysis.
+fn run(text: &str, dir: &Path) -> Run {
     let m = Model::from_toml_str(text, dir.join("m.toml"))
         .unwrap_or_else(|e| panic!("{}", e.render_plain()))
         .model;
