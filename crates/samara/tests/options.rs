@@ -478,3 +478,114 @@ step = 0.01
     // `beam` (instead of `node`) and `aerodyn` (instead of `stations`): tests/aerodynamics.rs
     // (the cantilever wing, the NREL 5-MW rotor).
 }
+
+/// Issue #15: the unsteady-airfoil keys of `[[aero_lines]]` (`unsteady`, `dynamic_stall`,
+/// `stall_time_constant`) each change the residual of a pitching section (node rows and
+/// state rows, states set off their quasi-steady values).
+#[test]
+fn every_unsteady_aero_option_changes_the_residual() {
+    use samara::core::{ElementInput, ElementState, EvalContext, LocalTerms, Need};
+    use samara::model::components::{Build, build_all, initial_nodes};
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv = String::from("alpha,cl,cd,cm\n");
+    for d in -180..=180 {
+        let a = (d as f64).to_radians();
+        csv += &format!(
+            "{d},{},{},0\n",
+            std::f64::consts::PI * (2.0 * a).sin(),
+            0.01 + a.sin().powi(2)
+        );
+    }
+    std::fs::write(dir.path().join("a.csv"), csv).unwrap();
+    let base = r#"[model]
+name = "unsteady_options"
+[[nodes]]
+name = "foil"
+position = [0.0, 0.0, 0.0]
+angular_velocity = [0.0, 1.5, 0.0]
+[[bodies]]
+name = "foil"
+node = "foil"
+mass = 1.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[aero_lines]]
+name = "foil"
+node = "foil"
+root = [0.0, -0.5, 0.0]
+tip = [0.0, 0.5, 0.0]
+chord_direction = [1.0, 0.0, 0.0]
+normal_direction = [0.0, 0.2, 1.0]
+wind = { speed = 10.0, direction = [1.0, 0.0, 0.1] }
+unsteady = "wagner"
+dynamic_stall = "oye"
+stall_time_constant = 4.0
+[[aero_lines.stations]]
+span = 0.5
+chord = 1.0
+airfoil = "a.csv"
+[[analyses]]
+name = "run"
+type = "dynamic"
+t_end = 0.01
+step = 0.01
+"#;
+    let residual = |text: &str| -> Vec<f64> {
+        let m = Model::from_toml_str(text, dir.path().join("m.toml"))
+            .unwrap_or_else(|e| panic!("{}", e.render_plain()))
+            .model;
+        let initial = initial_nodes(&m);
+        let mut parts = Build::new(&initial);
+        build_all(&m, &mut parts);
+        let ctx = EvalContext {
+            time: 0.0,
+            gravity: Vector3::zeros(),
+            load_factor: 1.0,
+        };
+        let e = parts
+            .elements
+            .iter()
+            .find(|e| e.name() == "foil.0")
+            .unwrap();
+        let ns = e.n_states();
+        let mut z0 = vec![0.0; ns];
+        e.initial_states(&mut z0);
+        let states: Vec<ElementState> = z0
+            .iter()
+            .map(|&z| ElementState {
+                z: z + 0.05,
+                zd: 0.0,
+            })
+            .collect();
+        let mut out = LocalTerms::for_element(e.as_ref());
+        let x = ElementInput {
+            nodes: &initial,
+            states: &states,
+            signals: &[],
+        };
+        e.evaluate(&ctx, &x, Need::Residual, &mut out);
+        out.r.iter().copied().collect()
+    };
+    let reference = residual(base);
+    assert_eq!(reference.len(), 6 + 3);
+    for (from, to) in [
+        ("unsteady = \"wagner\"", "unsteady = \"quasi_steady\""),
+        ("unsteady = \"wagner\"", ""),
+        (
+            "dynamic_stall = \"oye\"\nstall_time_constant = 4.0",
+            "dynamic_stall = \"none\"",
+        ),
+        ("stall_time_constant = 4.0", "stall_time_constant = 2.0"),
+    ] {
+        assert!(base.contains(from), "{from}");
+        let v = residual(&base.replacen(from, to, 1));
+        let diff: f64 = if v.len() == reference.len() {
+            v.iter().zip(&reference).map(|(a, b)| (a - b).abs()).sum()
+        } else {
+            1.0
+        };
+        assert!(diff > 1e-9, "`{to}` changed nothing");
+    }
+    // Without stall (default A_τ when only the model is named): same as 4.0.
+    let default_tau = residual(&base.replacen("stall_time_constant = 4.0", "", 1));
+    assert_eq!(default_tau, reference);
+}

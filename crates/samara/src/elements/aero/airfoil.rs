@@ -209,6 +209,11 @@ impl Airfoil {
         }
     }
 
+    /// The knots' angles [rad] and lift coefficients.
+    pub fn knots_cl(&self) -> (&[f64], &[f64]) {
+        (&self.alpha, &self.values[0])
+    }
+
     /// Number of table rows.
     pub fn len(&self) -> usize {
         self.alpha.len()

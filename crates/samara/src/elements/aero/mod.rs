@@ -4,9 +4,11 @@
 pub mod airfoil;
 pub mod bem;
 pub mod station;
+pub mod unsteady;
 pub mod wind;
 
 pub use airfoil::{Airfoil, AirfoilError, Coefficients};
 pub use bem::{BemRotor, Induction, StationFlow};
 pub use station::{AeroStation, Attachment, Inflow, MAX_NODES, Section};
+pub use unsteady::{AttachedFlow, OyeStall};
 pub use wind::Wind;

@@ -22,9 +22,17 @@
 //! Tangents: the kernel is written once over [`Scalar`]; with dual numbers seeded by the
 //! node increments (δx, δθ: Rᵢ ← Rᵢ(I + δθ̃)) and rates (v, Ω) it returns the exact
 //! ∂r/∂q and ∂r/∂v, including the BEM root through the implicit-function theorem.
+//!
+//! **Unsteady airfoil** ([`super::unsteady`]): with Wagner's attached-flow states or Øye's
+//! dynamic stall the station takes the air velocity at the three-quarter-chord point,
+//! U₃/₄ = U − (c/2) ė_c (the point p + (c/2) e_c, p the aerodynamic centre at the
+//! quarter chord), and owns up to three states (Wagner z₁, z₂ [m/s], then Øye's
+//! separation f); their rows follow the node rows, their tangents come from the same
+//! dual pass (directions 6·nodes + j for z, the rate half for ż).
 
 use super::airfoil::Airfoil;
 use super::bem::{BemRotor, StationFlow};
+use super::unsteady::{AttachedFlow, JONES_A, JONES_B, OyeStall};
 use super::wind::Wind;
 use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, NodeState};
 use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
@@ -67,6 +75,30 @@ pub struct Section {
     pub airfoil: Arc<Airfoil>,
 }
 
+/// The unsteady airfoil models of a station (none by default: quasi-steady).
+#[derive(Clone, Debug, Default)]
+pub struct Unsteady {
+    pub attached: AttachedFlow,
+    /// Øye's dynamic stall with its separation curves, and A_τ (τ = A_τ c/V).
+    pub stall: Option<(Arc<OyeStall>, f64)>,
+}
+
+impl Unsteady {
+    fn wagner_states(&self) -> usize {
+        match self.attached {
+            AttachedFlow::QuasiSteady => 0,
+            AttachedFlow::Wagner => 2,
+        }
+    }
+    /// Number of states.
+    pub fn states(&self) -> usize {
+        self.wagner_states() + usize::from(self.stall.is_some())
+    }
+    fn active(&self) -> bool {
+        self.states() > 0
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct AeroStation {
     name: String,
@@ -76,10 +108,14 @@ pub struct AeroStation {
     density: f64,
     wind: Arc<Wind>,
     inflow: Arc<Inflow>,
+    unsteady: Unsteady,
+    initial: [f64; MAX_STATES],
 }
 
 /// The most nodes a station hangs on (a beam element of order ≤ 7).
 pub const MAX_NODES: usize = 8;
+/// The most states a station owns (Wagner's two, Øye's one).
+pub const MAX_STATES: usize = 3;
 
 /// What a station computes besides its loads.
 #[derive(Clone, Copy, Debug)]
@@ -96,6 +132,11 @@ pub struct StationResult<S> {
     pub ap: f64,
     pub normal: f64,
     pub tangential: f64,
+    /// Chordwise and normal air velocity the airfoil sees (at the three-quarter chord
+    /// with unsteady models) and the effective angle of attack α_E.
+    pub uc: f64,
+    pub un: f64,
+    pub alpha_effective: f64,
 }
 
 const OUTPUTS: [(&str, &str); 9] = [
@@ -129,7 +170,37 @@ impl AeroStation {
             density,
             wind,
             inflow,
+            unsteady: Unsteady::default(),
+            initial: [0.0; MAX_STATES],
         }
+    }
+
+    /// The station with unsteady airfoil models; its states start at their
+    /// quasi-steady values for the motion of `nodes` at time `t` (a station already in
+    /// steady flow starts without a transient).
+    pub fn with_unsteady(mut self, unsteady: Unsteady, t: f64, nodes: &[NodeState]) -> Self {
+        self.unsteady = unsteady;
+        self.initial = self.quasi_steady_states(t, nodes);
+        self
+    }
+
+    /// The states' quasi-steady values (ż = 0): z_i = A_i w, f = f_st(α).
+    pub fn quasi_steady_states(&self, t: f64, nodes: &[NodeState]) -> [f64; MAX_STATES] {
+        let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
+        let z = [0.0; MAX_STATES];
+        let mut zr = [0.0; MAX_STATES];
+        let ns = self.unsteady.states();
+        let r = self.compute::<f64>(t, nodes, &z[..ns], &z[..ns], &mut rows, &mut zr);
+        let mut out = [0.0; MAX_STATES];
+        let nw = self.unsteady.wagner_states();
+        if nw == 2 {
+            out[0] = JONES_A[0] * r.un;
+            out[1] = JONES_A[1] * r.un;
+        }
+        if let Some((stall, _)) = &self.unsteady.stall {
+            out[nw] = stall.eval(r.un.atan2(r.uc)).f;
+        }
+        out
     }
 
     /// R b for node i, as a function of the increment δθᵢ.
@@ -164,7 +235,10 @@ impl AeroStation {
         &self,
         t: f64,
         nodes: &[NodeState],
+        z: &[S],
+        zd: &[S],
         rows: &mut [V3<S>; 2 * MAX_NODES],
+        zrows: &mut [S; MAX_STATES],
     ) -> StationResult<S> {
         // Derivative directions: (δx, δθ) of node i at 6i…6i+5, (v, Ω) at vo + 6i…,
         // vo half the directions of S (unused for f64).
@@ -174,6 +248,9 @@ impl AeroStation {
         let mut pd = [zero; 3];
         let mut ec = [zero; 3];
         let mut en = [zero; 3];
+        // ė_c = Σ wᵢ Rᵢ (Ωᵢ × ĉᵢ), for the three-quarter-chord velocity.
+        let mut ecd = [zero; 3];
+        let unsteady = self.unsteady.active();
         for (i, (&n, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
             let ns = &nodes[n];
             let r = ns.r();
@@ -200,6 +277,16 @@ impl AeroStation {
                 &en,
                 &scale(&Self::rot::<S>(i, r, &at.normal_dir), S::cst(w)),
             );
+            if unsteady {
+                let mut cd = Self::rot::<S>(i, r, &ns.w.cross(&at.chord_dir));
+                for j in 0..3 {
+                    let col = r * Vector3::ith(j, 1.0).cross(&at.chord_dir);
+                    for (k, o) in cd.iter_mut().enumerate() {
+                        o.add_deriv(vo + 6 * i + 3 + j, col[k]);
+                    }
+                }
+                ecd = add(&ecd, &scale(&cd, S::cst(w)));
+            }
         }
         let u0 = sub(&self.wind.velocity(&p, t), &pd);
         let mut res = StationResult {
@@ -215,6 +302,9 @@ impl AeroStation {
             ap: 0.0,
             normal: 0.0,
             tangential: 0.0,
+            uc: 0.0,
+            un: 0.0,
+            alpha_effective: 0.0,
         };
         let (u, bem_frame) = match &*self.inflow {
             Inflow::None => (u0, None),
@@ -251,21 +341,57 @@ impl AeroStation {
                 }
             }
         };
+        let (rho, ch, ds) = (self.density, self.section.chord, self.section.width);
+        let u = if unsteady {
+            sub(&u, &scale(&ecd, S::cst(0.5 * ch)))
+        } else {
+            u
+        };
         let uc = dot(&u, &ec);
         let un = dot(&u, &en);
         let q2 = uc * uc + un * un;
+        let nw = self.unsteady.wagner_states();
+        (res.uc, res.un) = (uc.re(), un.re());
         if q2.re() < 1e-20 {
+            // No flow: the states hold.
+            for (zr, &d) in zrows.iter_mut().zip(zd) {
+                *zr = d;
+            }
             return res;
         }
         let speed = q2.sqrt();
         let alpha = un.atan2(uc);
-        let c = self.section.airfoil.eval(alpha.re());
-        let (cl, cd, cm) = (
-            alpha.chain(c.cl, c.dcl),
-            alpha.chain(c.cd, c.dcd),
-            alpha.chain(c.cm, c.dcm),
+        // Wagner: the effective downwash w_E and the states' rows.
+        let alpha_e = if nw == 2 {
+            let k = speed * (2.0 / ch);
+            for i in 0..2 {
+                zrows[i] = zd[i] + k * JONES_B[i] * (z[i] - un * JONES_A[i]);
+            }
+            let we = un * (1.0 - JONES_A[0] - JONES_A[1]) + z[0] + z[1];
+            we.atan2(uc)
+        } else {
+            alpha
+        };
+        let c = self.section.airfoil.eval(alpha_e.re());
+        let (mut cl, cd, cm) = (
+            alpha_e.chain(c.cl, c.dcl),
+            alpha_e.chain(c.cd, c.dcd),
+            alpha_e.chain(c.cm, c.dcm),
         );
-        let (rho, ch, ds) = (self.density, self.section.chord, self.section.width);
+        let mut cl_out = c.cl;
+        if let Some((stall, a_tau)) = &self.unsteady.stall {
+            // Øye: cl = f cl_inv + (1 − f) cl_fs, τ ḟ = f_st − f.
+            let sc = stall.eval(alpha_e.re());
+            let (fst, fs, inv) = (
+                alpha_e.chain(sc.f, sc.df),
+                alpha_e.chain(sc.fs, sc.dfs),
+                alpha_e.chain(sc.inv, sc.dinv),
+            );
+            let f = z[nw];
+            zrows[nw] = zd[nw] + speed * (1.0 / (a_tau * ch)) * (f - fst);
+            cl = f * inv + (S::cst(1.0) - f) * fs;
+            cl_out = cl.re();
+        }
         let qf = speed * (0.5 * rho * ch);
         let f_c = (cd * uc - cl * un) * qf;
         let f_n = (cd * un + cl * uc) * qf;
@@ -273,8 +399,9 @@ impl AeroStation {
         let span = cross(&ec, &en);
         let m = scale(&span, -(q2 * cm * (0.5 * rho * ch * ch)));
         res.alpha = alpha.re();
+        res.alpha_effective = alpha_e.re();
         res.speed = speed.re();
-        (res.cl, res.cd, res.cm) = (c.cl, c.cd, c.cm);
+        (res.cl, res.cd, res.cm) = (cl_out, c.cd, c.cm);
         match bem_frame {
             Some((n, tdir)) => {
                 res.normal = dot(&f, &n).re();
@@ -303,13 +430,38 @@ impl AeroStation {
 }
 
 impl AeroStation {
+    /// The states' values and rates (zero beyond the station's states).
+    fn state_values(&self, x: &ElementInput) -> ([f64; MAX_STATES], [f64; MAX_STATES]) {
+        let mut z = [0.0; MAX_STATES];
+        let mut zd = [0.0; MAX_STATES];
+        for (j, s) in x.states.iter().take(self.unsteady.states()).enumerate() {
+            (z[j], zd[j]) = (s.z, s.zd);
+        }
+        (z, zd)
+    }
+
     /// Residual and tangents with M dual directions (M/2 ≥ 6 × nodes).
     fn tangents<const M: usize>(&self, ctx: &EvalContext, x: &ElementInput, out: &mut LocalTerms) {
         let lf = ctx.load_factor;
         let nn = self.nodes.len();
+        let ns = self.unsteady.states();
         let mut rows = [[Dual::<M>::cst(0.0); 3]; 2 * MAX_NODES];
-        self.compute::<Dual<M>>(ctx.time, x.nodes, &mut rows);
-        let (n, vo) = (6 * nn, M / 2);
+        let mut zrows = [Dual::<M>::cst(0.0); MAX_STATES];
+        let (n, vo) = (6 * nn + ns, M / 2);
+        let mut z = [Dual::<M>::cst(0.0); MAX_STATES];
+        let mut zd = [Dual::<M>::cst(0.0); MAX_STATES];
+        for (j, st) in x.states.iter().take(ns).enumerate() {
+            z[j] = Dual::var(st.z, 6 * nn + j);
+            zd[j] = Dual::var(st.zd, vo + 6 * nn + j);
+        }
+        self.compute::<Dual<M>>(
+            ctx.time,
+            x.nodes,
+            &z[..ns],
+            &zd[..ns],
+            &mut rows,
+            &mut zrows,
+        );
         for (b, row) in rows.iter().take(2 * nn).enumerate() {
             for (k, rk) in row.iter().enumerate() {
                 let ri = 3 * b + k;
@@ -319,6 +471,40 @@ impl AeroStation {
                     out.c[(ri, j)] -= lf * rk.d[vo + j];
                 }
             }
+        }
+        // State rows: not loads, not scaled by the load factor.
+        for (s, zr) in zrows.iter().take(ns).enumerate() {
+            let ri = 6 * nn + s;
+            out.r[ri] += zr.v;
+            for j in 0..n {
+                out.k[(ri, j)] += zr.d[j];
+                out.c[(ri, j)] += zr.d[vo + j];
+            }
+        }
+    }
+
+    /// Residual only (f64).
+    fn residual(&self, ctx: &EvalContext, x: &ElementInput, out: &mut LocalTerms) {
+        let nn = self.nodes.len();
+        let ns = self.unsteady.states();
+        let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
+        let mut zrows = [0.0; MAX_STATES];
+        let (z, zd) = self.state_values(x);
+        self.compute::<f64>(
+            ctx.time,
+            x.nodes,
+            &z[..ns],
+            &zd[..ns],
+            &mut rows,
+            &mut zrows,
+        );
+        for (b, row) in rows.iter().take(2 * nn).enumerate() {
+            for (k, rk) in row.iter().enumerate() {
+                out.r[3 * b + k] -= ctx.load_factor * rk;
+            }
+        }
+        for (s, zr) in zrows.iter().take(ns).enumerate() {
+            out.r[6 * nn + s] += zr;
         }
     }
 }
@@ -331,30 +517,56 @@ impl Element for AeroStation {
         &self.nodes
     }
 
+    fn n_states(&self) -> usize {
+        self.unsteady.states()
+    }
+
+    fn state_names(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        if self.unsteady.wagner_states() == 2 {
+            v.extend(["wagner_1".to_string(), "wagner_2".to_string()]);
+        }
+        if self.unsteady.stall.is_some() {
+            v.push("separation".into());
+        }
+        v
+    }
+
+    fn initial_states(&self, out: &mut [f64]) {
+        let ns = self.unsteady.states();
+        out[..ns].copy_from_slice(&self.initial[..ns]);
+    }
+
     fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
-        let nn = self.nodes.len();
         // Loads are applied loads: scaled by the load factor in statics.
-        let lf = ctx.load_factor;
         if need == Need::Residual {
-            let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
-            self.compute::<f64>(ctx.time, x.nodes, &mut rows);
-            for (b, row) in rows.iter().take(2 * nn).enumerate() {
-                for (k, rk) in row.iter().enumerate() {
-                    out.r[3 * b + k] -= lf * rk;
-                }
-            }
+            self.residual(ctx, x, out);
             return;
         }
-        match nn {
-            0..=2 => self.tangents::<24>(ctx, x, out),
-            3..=4 => self.tangents::<48>(ctx, x, out),
-            _ => self.tangents::<96>(ctx, x, out),
+        // Dual directions: twice the local unknowns (nodes and states), rounded up to
+        // the sizes compiled.
+        match 6 * self.nodes.len() + self.unsteady.states() {
+            0..=12 => self.tangents::<24>(ctx, x, out),
+            13..=16 => self.tangents::<32>(ctx, x, out),
+            17..=24 => self.tangents::<48>(ctx, x, out),
+            25..=48 => self.tangents::<96>(ctx, x, out),
+            _ => self.tangents::<112>(ctx, x, out),
         }
     }
 
     fn external_power(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
         let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
-        self.compute::<f64>(ctx.time, x.nodes, &mut rows);
+        let mut zrows = [0.0; MAX_STATES];
+        let (z, zd) = self.state_values(x);
+        let ns = self.unsteady.states();
+        self.compute::<f64>(
+            ctx.time,
+            x.nodes,
+            &z[..ns],
+            &zd[..ns],
+            &mut rows,
+            &mut zrows,
+        );
         // Power of the loads on the nodes' velocities.
         let mut p = 0.0;
         for (i, &n) in self.nodes.iter().enumerate() {
@@ -367,12 +579,30 @@ impl Element for AeroStation {
     }
 
     fn output_names(&self) -> Vec<(String, &'static str)> {
-        OUTPUTS.iter().map(|(n, u)| (n.to_string(), *u)).collect()
+        let mut v: Vec<(String, &'static str)> =
+            OUTPUTS.iter().map(|(n, u)| (n.to_string(), *u)).collect();
+        if self.unsteady.wagner_states() == 2 {
+            v.push(("effective_alpha".into(), "rad"));
+        }
+        v
     }
 
     fn outputs(&self, ctx: &EvalContext, x: &ElementInput, out: &mut [f64]) {
         let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
-        let r = self.compute::<f64>(ctx.time, x.nodes, &mut rows);
+        let mut zrows = [0.0; MAX_STATES];
+        let (z, zd) = self.state_values(x);
+        let ns = self.unsteady.states();
+        let r = self.compute::<f64>(
+            ctx.time,
+            x.nodes,
+            &z[..ns],
+            &zd[..ns],
+            &mut rows,
+            &mut zrows,
+        );
+        if self.unsteady.wagner_states() == 2 {
+            out[OUTPUTS.len()] = r.alpha_effective;
+        }
         let vals = [
             r.alpha,
             r.speed,

@@ -6,8 +6,10 @@
 
 use super::{Build, ComponentKind};
 use crate::core::NodeRef;
+use crate::elements::aero::station::Unsteady;
 use crate::elements::aero::{
-    AeroStation, Airfoil, Attachment, BemRotor, Inflow, MAX_NODES, Section, Wind,
+    AeroStation, Airfoil, AttachedFlow, Attachment, BemRotor, Inflow, MAX_NODES, OyeStall, Section,
+    Wind,
 };
 use crate::math::TimeFunction;
 use crate::model::input::TimeFunctionInput;
@@ -97,6 +99,26 @@ pub enum InflowInput {
     },
 }
 
+/// The attached-flow model of a line.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum UnsteadyInput {
+    /// Quasi-steady (default).
+    QuasiSteady,
+    /// Wagner's indicial response (R. T. Jones' two exponentials), two states per station.
+    Wagner,
+}
+
+/// The dynamic-stall model of a line.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum DynamicStallInput {
+    /// None (default).
+    None,
+    /// Øye's separation lag, one state per station.
+    Oye,
+}
+
 /// A lifting line on a beam or a node.
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -138,6 +160,15 @@ pub struct AeroLineInput {
     /// Induced velocity; default none.
     #[serde(default)]
     pub inflow: Option<Located<InflowInput>>,
+    /// Attached-flow unsteady aerodynamics: `"quasi_steady"` (default) or `"wagner"`.
+    #[serde(default)]
+    pub unsteady: Option<UnsteadyInput>,
+    /// Dynamic stall: `"none"` (default) or `"oye"`.
+    #[serde(default)]
+    pub dynamic_stall: Option<DynamicStallInput>,
+    /// A_τ of Øye's time constant τ = A_τ c/V; default 4.
+    #[serde(default)]
+    pub stall_time_constant: Option<f64>,
 }
 
 /// A validated station.
@@ -148,6 +179,8 @@ pub struct StationDef {
     pub twist: f64,
     pub ac_offset: f64,
     pub airfoil: Arc<Airfoil>,
+    /// Øye's separation curves of the airfoil (with `dynamic_stall = "oye"`).
+    pub stall: Option<Arc<OyeStall>>,
 }
 
 /// What carries a line.
@@ -181,6 +214,9 @@ pub struct AeroLineDef {
     pub stations: Vec<StationDef>,
     pub wind: Wind,
     pub inflow: Inflow,
+    pub unsteady: AttachedFlow,
+    /// A_τ of Øye's dynamic stall, if on.
+    pub stall_time_constant: Option<f64>,
 }
 
 pub struct AeroLine;
@@ -566,8 +602,63 @@ impl ComponentKind for AeroLine {
                 twist,
                 ac_offset: ac,
                 airfoil,
+                stall: None,
             });
         }
+        // Unsteady airfoil and dynamic stall.
+        let unsteady = match li.unsteady {
+            None | Some(UnsteadyInput::QuasiSteady) => AttachedFlow::QuasiSteady,
+            Some(UnsteadyInput::Wagner) => AttachedFlow::Wagner,
+        };
+        let stall_time_constant = match li.dynamic_stall {
+            None | Some(DynamicStallInput::None) => {
+                if li.stall_time_constant.is_some() {
+                    cx.error(
+                        format!("{what}: `stall_time_constant` without a dynamic-stall model"),
+                        cx.key(&e, "stall_time_constant"),
+                        Some("add `dynamic_stall = \"oye\"`".into()),
+                    );
+                    ok = false;
+                }
+                None
+            }
+            Some(DynamicStallInput::Oye) => {
+                let a = li.stall_time_constant.unwrap_or(4.0);
+                if !(a.is_finite() && a > 0.0) {
+                    cx.error(
+                        format!("{what}: `stall_time_constant` must be > 0 (τ = A_τ c/V)"),
+                        cx.key(&e, "stall_time_constant"),
+                        Some("Øye's model uses A_τ ≈ 4".into()),
+                    );
+                    ok = false;
+                }
+                let mut curves: HashMap<*const Airfoil, Arc<OyeStall>> = HashMap::new();
+                for d in &mut defs {
+                    let key = Arc::as_ptr(&d.airfoil);
+                    if let Some(c) = curves.get(&key) {
+                        d.stall = Some(c.clone());
+                        continue;
+                    }
+                    match OyeStall::new(&d.airfoil) {
+                        Some(c) => {
+                            let c = Arc::new(c);
+                            curves.insert(key, c.clone());
+                            d.stall = Some(c);
+                        }
+                        None => {
+                            cx.error(
+                                format!("{what}: the airfoil of the station at span {} m has no zero-lift angle with a positive lift slope within ±20°: Øye's dynamic stall needs an attached-flow lift curve", d.span),
+                                cx.key(&e, "dynamic_stall"),
+                                Some("use `dynamic_stall = \"none\"` for non-lifting sections (cylinders)".into()),
+                            );
+                            ok = false;
+                            break;
+                        }
+                    }
+                }
+                Some(a)
+            }
+        };
         // Wind.
         let wind = match &li.wind {
             None => Wind::default(),
@@ -677,6 +768,8 @@ impl ComponentKind for AeroLine {
             stations: defs,
             wind,
             inflow,
+            unsteady,
+            stall_time_constant,
         })
     }
 
@@ -717,7 +810,11 @@ impl ComponentKind for AeroLine {
                 })
                 .collect();
             let width = station_width(def, k);
-            parts.elements.push(Box::new(AeroStation::new(
+            let unsteady = Unsteady {
+                attached: def.unsteady,
+                stall: s.stall.clone().zip(def.stall_time_constant),
+            };
+            let station = AeroStation::new(
                 format!("{}.{k}", def.name),
                 nodes,
                 attach,
@@ -729,7 +826,9 @@ impl ComponentKind for AeroLine {
                 def.density,
                 wind.clone(),
                 inflow.clone(),
-            )));
+            )
+            .with_unsteady(unsteady, 0.0, parts.initial);
+            parts.elements.push(Box::new(station));
         }
     }
 
@@ -829,6 +928,58 @@ impl ComponentKind for AeroLine {
                 Box::new(e5),
                 (0..5).map(|i| node(730 + 10 * k as u64 + i)).collect(),
             ));
+            // Unsteady stations (Wagner's two states, Øye's separation) on 1, 2, 5 and
+            // 8 nodes: state rows and the states' coupling into the loads.
+            let stall = Arc::new(OyeStall::new(&section.airfoil).unwrap_or_else(|| unreachable!()));
+            for (m, nn) in [1usize, 2, 5, 8].into_iter().enumerate() {
+                for (a, (attached, with_stall)) in [
+                    (AttachedFlow::Wagner, false),
+                    (AttachedFlow::QuasiSteady, true),
+                    (AttachedFlow::Wagner, true),
+                ]
+                .into_iter()
+                .enumerate()
+                {
+                    let seed = 800 + 100 * k as u64 + 20 * m as u64 + 5 * a as u64;
+                    let nodes: Vec<_> = (0..nn).map(|i| node(seed + i as u64)).collect();
+                    // Lagrange-like weights summing to 1.
+                    let w: Vec<f64> = (0..nn)
+                        .map(|i| {
+                            if nn == 1 {
+                                1.0
+                            } else {
+                                (1.0 + 0.3 * (i as f64).sin()) / nn as f64
+                            }
+                        })
+                        .collect();
+                    let sum: f64 = w.iter().sum();
+                    let unsteady = Unsteady {
+                        attached,
+                        stall: with_stall.then(|| (stall.clone(), 4.0)),
+                    };
+                    let ns = unsteady.states();
+                    let e = AeroStation::new(
+                        "aero_unsteady",
+                        (0..nn).collect(),
+                        w.iter()
+                            .enumerate()
+                            .map(|(i, &wi)| attach(i as f64 - 1.0, wi / sum))
+                            .collect(),
+                        section.clone(),
+                        1.2,
+                        wind.clone(),
+                        e1_inflow.clone(),
+                    )
+                    .with_unsteady(unsteady, 0.0, &nodes);
+                    let states = [(0.3, -0.2), (0.5, 0.1), (0.6, 0.05)];
+                    let states = if attached == AttachedFlow::Wagner {
+                        states[..ns].to_vec()
+                    } else {
+                        vec![states[2]]
+                    };
+                    cases.push(TangentCase::element(Box::new(e), nodes).with_states(states));
+                }
+            }
         }
         cases
     }
