@@ -21,8 +21,8 @@ pub use contact::{
 pub use controller::{Block as ControllerBlock, Controller, Pid, lookup as controller_lookup};
 pub use dc_motor::DcMotor;
 pub use hydraulic::{
-    HydraulicCircuit, Orifice as HydraulicOrifice, OrificeLaw, Port, Volume as HydraulicVolume,
-    actuator as hydraulic_actuator,
+    GasCharge, HydraulicCircuit, Multiplier as OrificeMultiplier, Orifice as HydraulicOrifice,
+    OrificeLaw, Port, Volume as HydraulicVolume, actuator as hydraulic_actuator,
 };
 pub use low_pass::{LowPassSensor, NodeQuantity, SensorInput};
 pub use maxwell::Maxwell;
