@@ -126,3 +126,105 @@ fn adiabatic_turbulent_discharge_matches_an_independent_integration() {
     println!("p({tf}) = {pf:.1} Pa");
     assert!(tf > t_empty + 0.1 && (pf - 1e5).abs() < 1e3, "{pf}");
 }
+
+fn first_error(text: &str) -> (usize, String, String) {
+    let Err(e) = samara::model::Model::from_toml_str(text, "bad.toml") else {
+        panic!("accepted:\n{text}")
+    };
+    let d = e.errors().next().expect("an error");
+    let span = d.span.clone().expect("a located error");
+    let (line, _) = e.source.line_col(span.start);
+    (line, d.message.clone(), d.hint.clone().unwrap_or_default())
+}
+
+fn line_of(text: &str, needle: &str) -> usize {
+    text[..text.find(needle).unwrap()].matches('\n').count() + 1
+}
+
+/// Bad gas charges, metering tables, openings and chambers get located errors.
+#[test]
+fn bad_gas_charge_metering_and_opening_input_is_rejected_where_it_is_written() {
+    let acc = example();
+    let strut = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/hydraulics/strut_drop.toml"),
+    )
+    .unwrap();
+    let cases: &[(&str, &str, &str, &str, &str)] = &[
+        (
+            &acc,
+            "precharge_pressure = 5e6 ",
+            "precharge_pressure = -5e6 ",
+            "`precharge_pressure` must be positive",
+            "precharge_pressure = -5e6",
+        ),
+        (
+            &acc,
+            "gas_volume = 1e-3 ",
+            "gas_volume = -1e-3 ",
+            "`gas_volume` must be positive",
+            "gas_volume = -1e-3",
+        ),
+        (
+            &acc,
+            "polytropic_exponent = 1.4 ",
+            "polytropic_exponent = 0.0 ",
+            "`polytropic_exponent` must be positive",
+            "polytropic_exponent = 0.0",
+        ),
+        (
+            &acc,
+            "bulk_modulus = 1.4e9 ",
+            "bulk_modulus = -1.4e9 ",
+            "`bulk_modulus` must be positive",
+            "bulk_modulus = -1.4e9",
+        ),
+        (
+            &acc,
+            "area = 5e-6 ",
+            "area_table = [[0.0, 1e-6], [0.1, 2e-6]] ",
+            "has no actuator",
+            "area_table =",
+        ),
+        (
+            &acc,
+            "area = 5e-6 ",
+            "area = 5e-6\nopening = \"valv\" ",
+            "unknown signal 'valv'",
+            "opening =",
+        ),
+        (
+            &strut,
+            "area_table = [[-0.4, 1.0e-4], [-0.2, 1.6e-4]",
+            "area_table = [[-0.1, 1.0e-4], [-0.2, 1.6e-4]",
+            "strictly increasing stroke",
+            "area_table =",
+        ),
+        (
+            &strut,
+            "{ volume = \"upper\", area = 4e-3 }",
+            "{ volume = \"uper\", area = 4e-3 }",
+            "unknown volume or reservoir 'uper'",
+            "chambers =",
+        ),
+        (
+            &strut,
+            "initial_pressure = 2e6\ngas_volume",
+            "initial_pressure = 0.0\ngas_volume",
+            "free gas needs a positive `initial_pressure`",
+            "initial_pressure = 0.0",
+        ),
+    ];
+    for (base, from, to, expect, at) in cases {
+        assert!(base.contains(from), "{from}");
+        let text = base.replacen(from, to, 1);
+        let (line, msg, hint) = first_error(&text);
+        println!("line {line}: {msg} | {hint}");
+        assert!(msg.contains(expect), "{msg}");
+        let want = line_of(&text, at);
+        assert!(
+            line + 3 >= want && line <= want + 1,
+            "line {line}, expected about {want}"
+        );
+    }
+}
