@@ -8,6 +8,7 @@
 //!   is below 6e-8 of the gas compliance);
 //! - adiabatic gas (n = 1.4) through a turbulent orifice: an RK4 integration (h = 1e-5 s)
 //!   of (V/β + V_g(p)/(n p)) ṗ = −C_d A √(2/ρ) Δp/(Δp² + Δp_t²)^¼ written here.
+//!
 //! samara integrates the pressure with the first-order generalized-α: O(h²), checked by the
 //! observed order as the step is halved.
 

@@ -8,6 +8,7 @@
 //!   exponential integral (derived in the test);
 //! - a rate limiter's ramp-then-exponential response to a step;
 //! - the step responses of 1/(τ s + 1)-type and second-order transfer functions.
+//!
 //! samara integrates the controller states with the first-order generalized-α: errors are
 //! O(h²) (orders checked where the response is smooth); where a block switches (entering
 //! saturation or the rate limit mid-step) the error is O(h) locally, hence the looser

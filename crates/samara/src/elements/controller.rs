@@ -307,11 +307,11 @@ impl Element for Controller {
                 let (v, dz, du) = self.pid_v(pid, *rm, &z2, u);
                 let (y, dy) = clamp_d(v, pid.limits.0, pid.limits.1);
                 out.values[0] = y;
-                for i in 0..x.states.len() {
-                    out.k[(0, i)] = dy * dz[i];
+                for (i, d) in dz.iter().enumerate().take(x.states.len()) {
+                    out.k[(0, i)] = dy * d;
                 }
-                for j in 0..u.len() {
-                    out.ds[(0, j)] = dy * du[j];
+                for (j, d) in du.iter().enumerate().take(u.len()) {
+                    out.ds[(0, j)] = dy * d;
                 }
             }
         }
@@ -371,8 +371,8 @@ impl Element for Controller {
                 if tangents {
                     out.c[(0, 0)] = 1.0;
                     let g = (dy - 1.0) / tt;
-                    for i in 0..n {
-                        out.k[(0, i)] = -g * dz[i];
+                    for (i, d) in dz.iter().enumerate().take(n) {
+                        out.k[(0, i)] = -g * d;
                     }
                     let ne = if *rm { 2 } else { 1 };
                     for j in 0..u.len() {
@@ -388,8 +388,8 @@ impl Element for Controller {
                         out.c[(1, 1)] = 1.0;
                         out.k[(1, 1)] = 1.0 / tf;
                         let ne = if *rm { 2 } else { 1 };
-                        for j in 0..ne {
-                            out.ds[(1, j)] = -de[j] / tf;
+                        for (j, d) in de.iter().enumerate().take(ne) {
+                            out.ds[(1, j)] = -d / tf;
                         }
                     }
                 }
