@@ -589,3 +589,175 @@ step = 0.01
     let default_tau = residual(&base.replacen("stall_time_constant = 4.0", "", 1));
     assert_eq!(default_tau, reference);
 }
+
+/// Issue #16: every `[[controllers]]` key changes the signals or states it drives (the
+/// sensors' new keys, the hydraulic gas charges, metering tables, openings and chambers are
+/// exercised by tests/control.rs, accumulator.rs, strut.rs and landing_gear_drop.rs).
+#[test]
+fn every_controller_option_changes_the_result() {
+    const BASE: &str = r#"
+[model]
+name = "blocks"
+gravity = [0.0, 0.0, 0.0]
+[[nodes]]
+name = "n"
+position = [0.0, 0.0, 0.0]
+[[bodies]]
+name = "b"
+node = "n"
+mass = 1.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[signals]]
+name = "r"
+function = { type = "sine", amplitude = 1.0, frequency = 1.0 }
+[[signals]]
+name = "e"
+function = { type = "step", time = 0.1, before = 0.2, after = 1.0 }
+[[controllers]]
+name = "pid"
+type = "pid"
+reference = "r"
+measurement = "e"
+kp = 2.0
+ki = 1.0
+kd = 0.1
+derivative_filter = 0.05
+output_min = -1.5
+output_max = 1.5
+tracking_time = 0.2
+initial_integral = 0.1
+[[controllers]]
+name = "pid2"
+type = "pid"
+input = "e"
+kp = 1.0
+kd = 0.3
+measurement_rate = "r"
+[[controllers]]
+name = "tf"
+type = "transfer_function"
+input = "r"
+numerator = [1.0, 2.0]
+denominator = [1.0, 3.0, 2.0]
+initial_state = [0.1, 0.0]
+[[controllers]]
+name = "ss"
+type = "state_space"
+inputs = ["r", "e"]
+a = [[-1.0]]
+b = [[1.0, 0.5]]
+c = [[1.0], [2.0]]
+d = [[0.0, 0.1], [0.2, 0.0]]
+outputs = ["ss1", "ss2"]
+initial_state = [0.3]
+[[controllers]]
+name = "g"
+type = "gain"
+input = "r"
+gain = 3.0
+[[controllers]]
+name = "s"
+type = "sum"
+inputs = ["r", "e"]
+weights = [1.0, -2.0]
+[[controllers]]
+name = "sat"
+type = "saturation"
+input = "g"
+output_min = -2.0
+output_max = 2.5
+[[controllers]]
+name = "rl"
+type = "rate_limit"
+input = "e"
+rate = 2.0
+time_constant = 0.01
+initial = 0.05
+[[controllers]]
+name = "lk"
+type = "lookup"
+input = "r"
+table = [[-1.0, 0.0], [1.0, 4.0]]
+[[analyses]]
+name = "run"
+type = "dynamic"
+t_end = 0.8
+step = 0.001
+"#;
+    // States and signal values, by name, every 25 ms.
+    let outcome = |text: &str| -> Vec<(String, f64)> {
+        let (_, h) = attempt(text);
+        let m = model(text);
+        let sys = System::new(&m);
+        let mut out = Vec::new();
+        for f in h.frames.iter().step_by(25) {
+            let ctx = samara::elements::EvalContext {
+                time: f.time,
+                gravity: Vector3::zeros(),
+                load_factor: 1.0,
+            };
+            let s = sys.signal_values(&ctx, &f.state);
+            out.extend(
+                sys.state_names
+                    .iter()
+                    .cloned()
+                    .zip(f.state.states.iter().map(|z| z.z))
+                    .chain(sys.signals.names.iter().cloned().zip(s)),
+            );
+        }
+        out
+    };
+    let base = outcome(BASE);
+    let cases: &[(&str, &str)] = &[
+        ("kp = 2.0", "kp = 2.5"),
+        ("ki = 1.0", "ki = 1.5"),
+        ("kd = 0.1", "kd = 0.2"),
+        ("derivative_filter = 0.05", "derivative_filter = 0.1"),
+        ("output_min = -1.5", "output_min = -1.0"),
+        ("output_max = 1.5", "output_max = 1.2"),
+        ("tracking_time = 0.2\n", ""),
+        ("initial_integral = 0.1\n", ""),
+        ("kd = 0.3", "kd = 0.4"),
+        ("measurement_rate = \"r\"", "measurement_rate = \"e\""),
+        ("input = \"e\"\nkp = 1.0", "input = \"r\"\nkp = 1.0"),
+        (
+            "reference = \"r\"\nmeasurement = \"e\"",
+            "reference = \"e\"\nmeasurement = \"r\"",
+        ),
+        ("numerator = [1.0, 2.0]", "numerator = [1.0, 1.0]"),
+        (
+            "denominator = [1.0, 3.0, 2.0]",
+            "denominator = [1.0, 4.0, 2.0]",
+        ),
+        ("initial_state = [0.1, 0.0]\n", ""),
+        ("inputs = [\"r\", \"e\"]\na", "inputs = [\"e\", \"r\"]\na"),
+        ("a = [[-1.0]]", "a = [[-2.0]]"),
+        ("b = [[1.0, 0.5]]", "b = [[1.0, 0.7]]"),
+        ("c = [[1.0], [2.0]]", "c = [[1.0], [3.0]]"),
+        ("d = [[0.0, 0.1], [0.2, 0.0]]\n", ""),
+        ("initial_state = [0.3]\n", ""),
+        ("gain = 3.0", "gain = 2.0"),
+        ("weights = [1.0, -2.0]\n", ""),
+        ("output_min = -2.0", "output_min = -0.5"),
+        ("output_max = 2.5", "output_max = 1.0"),
+        ("rate = 2.0", "rate = 1.0"),
+        ("time_constant = 0.01\n", ""),
+        ("initial = 0.05\n", ""),
+        (
+            "table = [[-1.0, 0.0], [1.0, 4.0]]",
+            "table = [[-1.0, 0.0], [1.0, 5.0]]",
+        ),
+    ];
+    for (from, to) in cases {
+        assert_eq!(BASE.matches(from).count(), 1, "{from}");
+        let text = BASE.replacen(from, to, 1);
+        let other = outcome(&text);
+        let changed = base
+            .iter()
+            .zip(&other)
+            .any(|(a, b)| a.0 != b.0 || (a.1 - b.1).abs() > 1e-9);
+        assert!(changed, "`{from}` → `{to}` changed nothing");
+    }
+    // `outputs` names the state-space block's signals.
+    assert!(base.iter().any(|(n, _)| n == "ss2"));
+}

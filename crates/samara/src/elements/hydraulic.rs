@@ -21,8 +21,23 @@
 //! - check valve: the turbulent law times the opening `x = clamp((Δp − p_c)/Δp_o, 0, 1)`
 //!   (cracking pressure p_c, full opening over Δp_o): no flow from b to a.
 //!
-//! **Actuator**: the pressures push the points apart with `F = p_c A_c − p_r A_r` (a
-//! tension `−F` along the line of action).
+//! **Gas-charged volumes** (accumulators, a shock strut's gas chamber): a gas volume V_a at
+//! the precharge pressure p₀, compressed polytropically, p V_gⁿ = p₀ V_aⁿ. Above p₀ the
+//! liquid it holds, V_a − V_g(p), grows with p, so the volume's compliance gains
+//! `dV_l/dp = V_g/(n p) = V_a p₀^{1/n} / (n p^{1+1/n})` (Merritt §3.9; n = 1 isothermal,
+//! n = 1.4 adiabatic air/nitrogen); below p₀ an accumulator's bladder holds no liquid and
+//! only the liquid compliance V/β remains (a free gas charge, as in a shock strut, follows
+//! the law on both sides of p₀). The continuity row becomes
+//! `(V(l)/β + [p > p₀] V_g(p)/(n p)) ṗ + dV/dt − Σ Q_in = 0`.
+//!
+//! **Orifice multipliers**: an orifice's flow may be scaled by a metering-pin area table
+//! A(stroke) (piecewise linear in the actuator's stroke l − l₀, the law's coefficient then
+//! per unit area) or by a valve opening `clamp(s, 0, 1)` read from a signal (a servo
+//! valve driven by a controller).
+//!
+//! **Actuator**: the pressures push the points apart with `F = Σ pᵢ Aᵢ` over its chambers
+//! (signed areas: the cap chamber +A_c, the rod chamber −A_r, further chambers as given;
+//! a tension `−F` along the line of action); chamber i's volume is V₀ + Aᵢ (l − l₀).
 //!
 //! No energies are reported: the circuit's compression energy and the reservoirs' work
 //! are not part of the mechanical energy balance.
@@ -93,6 +108,39 @@ impl OrificeLaw {
     }
 }
 
+/// A gas charge: V_a [m³] at the precharge pressure p₀ [Pa], polytropic exponent n;
+/// in a bladder (an accumulator: the gas cannot expand beyond V_a) or free (a strut's gas
+/// chamber: the law holds on both sides of p₀).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GasCharge {
+    pub volume: f64,
+    pub precharge: f64,
+    pub exponent: f64,
+    pub bladder: bool,
+}
+
+impl GasCharge {
+    /// Gas volume V_g(p) = V_a (p₀/p)^{1/n} (V_a below p₀ in a bladder).
+    pub fn gas_volume(&self, p: f64) -> f64 {
+        if p > self.precharge || (!self.bladder && p > 0.0) {
+            self.volume * (self.precharge / p).powf(1.0 / self.exponent)
+        } else {
+            self.volume
+        }
+    }
+
+    /// `(dV_l/dp, d²V_l/dp²)` of the liquid it holds: V_g/(n p) above p₀, 0 below in a
+    /// bladder.
+    pub fn compliance(&self, p: f64) -> (f64, f64) {
+        if p > self.precharge || (!self.bladder && p > 0.0) {
+            let c = self.gas_volume(p) / (self.exponent * p);
+            (c, -(1.0 + 1.0 / self.exponent) * c / p)
+        } else {
+            (0.0, 0.0)
+        }
+    }
+}
+
 /// A hydraulic volume.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Volume {
@@ -102,6 +150,19 @@ pub struct Volume {
     /// β [Pa] > 0.
     pub bulk_modulus: f64,
     pub initial_pressure: f64,
+    /// A gas charge (accumulator, strut gas chamber).
+    pub gas: Option<GasCharge>,
+}
+
+/// What scales an orifice's flow.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Multiplier {
+    #[default]
+    None,
+    /// Area [m²] against the actuator's stroke l − l₀ (piecewise linear, constant beyond).
+    StrokeTable(Vec<[f64; 2]>),
+    /// Opening clamp(s, 0, 1) of the circuit's input signal with this index.
+    Opening(usize),
 }
 
 /// An orifice between two ports.
@@ -111,18 +172,17 @@ pub struct Orifice {
     pub from: Port,
     pub to: Port,
     pub law: OrificeLaw,
+    pub multiplier: Multiplier,
 }
 
-/// A double-acting actuator: chambers (volume indices) and piston areas.
+/// An actuator: chambers (volume indices) with signed piston areas (+ extends).
 #[derive(Clone, Debug)]
 pub struct Actuator {
     pub line: LineOfAction,
     /// l₀, where the chambers have their volumes V₀.
     pub rest_length: f64,
-    /// Cap chamber (extends the actuator) and its area A_c.
-    pub cap: Option<(usize, f64)>,
-    /// Rod chamber (retracts it) and its area A_r.
-    pub rod: Option<(usize, f64)>,
+    /// (volume, signed area): the cap chamber +A_c, the rod chamber −A_r, others.
+    pub chambers: Vec<(usize, f64)>,
 }
 
 /// A hydraulic circuit.
@@ -133,14 +193,17 @@ pub struct HydraulicCircuit {
     orifices: Vec<Orifice>,
     actuator: Option<Actuator>,
     nodes: Vec<usize>,
+    inputs: Vec<String>,
 }
 
 impl HydraulicCircuit {
+    /// A circuit; `inputs` are the signals the orifices' openings read.
     pub fn new(
         name: impl Into<String>,
         volumes: Vec<Volume>,
         orifices: Vec<Orifice>,
         actuator: Option<Actuator>,
+        inputs: Vec<String>,
     ) -> Self {
         let nodes = actuator
             .as_ref()
@@ -151,6 +214,28 @@ impl HydraulicCircuit {
             orifices,
             actuator,
             nodes,
+            inputs,
+        }
+    }
+
+    /// Flow multiplier m, dm/dl (stroke), dm/ds (its input signal).
+    fn multiplier(&self, o: &Orifice, stroke: f64, x: &ElementInput) -> (f64, f64, f64) {
+        match &o.multiplier {
+            Multiplier::None => (1.0, 0.0, 0.0),
+            Multiplier::StrokeTable(t) => {
+                let (a, d) = super::controller_lookup(t, stroke);
+                (a, d, 0.0)
+            }
+            Multiplier::Opening(i) => {
+                let s = x.signals[*i];
+                if s <= 0.0 {
+                    (0.0, 0.0, 0.0)
+                } else if s >= 1.0 {
+                    (1.0, 0.0, 0.0)
+                } else {
+                    (s, 0.0, 1.0)
+                }
+            }
         }
     }
 
@@ -161,28 +246,19 @@ impl HydraulicCircuit {
         }
     }
 
-    /// Per volume i: `(∂V/∂l)` — +A_c for the cap chamber, −A_r for the rod chamber.
+    /// Per volume i: `∂V/∂l`, the sum of its chambers' signed areas.
     fn chamber_rate(&self, i: usize) -> f64 {
         let Some(a) = &self.actuator else { return 0.0 };
-        let mut s = 0.0;
-        if let Some((c, ac)) = a.cap
-            && c == i
-        {
-            s += ac;
-        }
-        if let Some((r, ar)) = a.rod
-            && r == i
-        {
-            s -= ar;
-        }
-        s
+        a.chambers.iter().filter(|c| c.0 == i).map(|c| c.1).sum()
     }
 
-    /// Actuator force F = p_c A_c − p_r A_r pushing the points apart.
+    /// Actuator force F = Σ pᵢ Aᵢ pushing the points apart.
     fn actuator_force(&self, x: &ElementInput) -> f64 {
         let Some(a) = &self.actuator else { return 0.0 };
-        a.cap.map_or(0.0, |(c, ac)| x.states[c].z * ac)
-            - a.rod.map_or(0.0, |(r, ar)| x.states[r].z * ar)
+        a.chambers
+            .iter()
+            .map(|&(c, area)| x.states[c].z * area)
+            .sum()
     }
 }
 
@@ -212,6 +288,10 @@ impl Element for HydraulicCircuit {
         }
     }
 
+    fn signal_inputs(&self) -> &[String] {
+        &self.inputs
+    }
+
     fn evaluate(&self, _ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
         let nn = 6 * self.nodes.len();
         let tangents = need == Need::ResidualAndTangents;
@@ -226,11 +306,13 @@ impl Element for HydraulicCircuit {
             let s = self.chamber_rate(i);
             let vol = v.volume + s * dl;
             let pd = x.states[i].zd;
-            out.r[row] += vol / v.bulk_modulus * pd + s * ldot;
+            let (cg, dcg) = v.gas.map_or((0.0, 0.0), |g| g.compliance(x.states[i].z));
+            out.r[row] += (vol / v.bulk_modulus + cg) * pd + s * ldot;
             if !tangents {
                 continue;
             }
-            out.c[(row, row)] += vol / v.bulk_modulus;
+            out.c[(row, row)] += vol / v.bulk_modulus + cg;
+            out.k[(row, row)] += dcg * pd;
             if let Some((a, st)) = &line
                 && s != 0.0
             {
@@ -245,7 +327,9 @@ impl Element for HydraulicCircuit {
         // Orifices: outflow of `from`, inflow of `to`.
         for o in &self.orifices {
             let dp = self.pressure(x, o.from) - self.pressure(x, o.to);
-            let (q, dq) = o.law.flow(dp);
+            let (q0, dq0) = o.law.flow(dp);
+            let (m, dm_dl, dm_ds) = self.multiplier(o, dl, x);
+            let (q, dq) = (m * q0, m * dq0);
             for (port, sign) in [(o.from, 1.0), (o.to, -1.0)] {
                 let Port::Volume(i) = port else { continue };
                 out.r[nn + i] += sign * q;
@@ -257,6 +341,15 @@ impl Element for HydraulicCircuit {
                         out.k[(nn + i, nn + j)] += sign * cs * dq;
                     }
                 }
+                if dm_dl != 0.0
+                    && let Some((a, st)) = &line
+                {
+                    a.line
+                        .add_length_gradient(st, sign * q0 * dm_dl, |j, g| out.k[(nn + i, j)] += g);
+                }
+                if let Multiplier::Opening(k) = o.multiplier {
+                    out.ds[(nn + i, k)] += sign * q0 * dm_ds;
+                }
             }
         }
         // Actuator force: tension −F on the line; ∂/∂p through the length gradient.
@@ -265,11 +358,9 @@ impl Element for HydraulicCircuit {
             a.line
                 .add_tension(st, -f, tangents.then_some((0.0, 0.0)), out);
             if tangents {
-                for (chamber, sign) in [(a.cap, -1.0), (a.rod, 1.0)] {
-                    if let Some((i, area)) = chamber {
-                        a.line
-                            .add_length_gradient(st, sign * area, |j, g| out.k[(j, nn + i)] += g);
-                    }
+                for &(i, area) in &a.chambers {
+                    a.line
+                        .add_length_gradient(st, -area, |j, g| out.k[(j, nn + i)] += g);
                 }
             }
         }
@@ -289,9 +380,13 @@ impl Element for HydraulicCircuit {
     }
 
     fn outputs(&self, _ctx: &EvalContext, x: &ElementInput, out: &mut [f64]) {
+        let dl = self
+            .actuator
+            .as_ref()
+            .map_or(0.0, |a| a.line.state(x.nodes).length - a.rest_length);
         for (k, o) in self.orifices.iter().enumerate() {
             let dp = self.pressure(x, o.from) - self.pressure(x, o.to);
-            out[k] = o.law.flow(dp).0;
+            out[k] = self.multiplier(o, dl, x).0 * o.law.flow(dp).0;
         }
         if let Some(a) = &self.actuator {
             let n = self.orifices.len();
@@ -301,20 +396,19 @@ impl Element for HydraulicCircuit {
     }
 }
 
-/// An actuator between `a` and `b` (see [`LineOfAction::new`]).
+/// An actuator between `a` and `b` (see [`LineOfAction::new`]) with chambers of signed
+/// areas (+ extends).
 pub fn actuator(
     a: Option<(usize, Vector3<f64>)>,
     b: Option<(usize, Vector3<f64>)>,
     ground_points: [Vector3<f64>; 2],
     rest_length: f64,
-    cap: Option<(usize, f64)>,
-    rod: Option<(usize, f64)>,
+    chambers: Vec<(usize, f64)>,
 ) -> Actuator {
     Actuator {
         line: LineOfAction::new(a, b, ground_points),
         rest_length,
-        cap,
-        rod,
+        chambers,
     }
 }
 

@@ -8,6 +8,9 @@
 //! it. It applies no force: its node rows are zero. The state row is in units of u; the
 //! assembler scales it by s_z = 1/(∂ż/∂Δz) in dynamics (block `τ + O(h)`).
 //!
+//! Without a filter (τ = 0) the sensor has no state: s = g u, with feedthrough (its
+//! output's derivatives are those of u).
+//!
 //! Measured quantities, global components: position x, velocity v, acceleration v̇,
 //! angular velocity ω = R Ω (∂ω/∂Ω = R, ∂ω/∂θ = −R Ω̃ for the material increment).
 
@@ -44,8 +47,8 @@ pub struct LowPassSensor {
 }
 
 impl LowPassSensor {
-    /// A sensor producing signal `output`; `time_constant > 0`; the state starts at
-    /// `initial`.
+    /// A sensor producing signal `output`; `time_constant > 0` (or 0: no filter, no
+    /// state); the state starts at `initial`.
     pub fn new(
         name: impl Into<String>,
         output: impl Into<String>,
@@ -95,13 +98,19 @@ impl Element for LowPassSensor {
         &self.nodes
     }
     fn n_states(&self) -> usize {
-        1
+        usize::from(self.time_constant > 0.0)
     }
     fn state_names(&self) -> Vec<String> {
-        vec!["output".into()]
+        if self.time_constant > 0.0 {
+            vec!["output".into()]
+        } else {
+            Vec::new()
+        }
     }
     fn initial_states(&self, out: &mut [f64]) {
-        out[0] = self.initial;
+        if let Some(z) = out.first_mut() {
+            *z = self.initial;
+        }
     }
     fn signal_inputs(&self) -> &[String] {
         &self.inputs
@@ -110,16 +119,42 @@ impl Element for LowPassSensor {
         &self.outputs
     }
     fn feedthrough(&self) -> bool {
-        false
+        self.time_constant == 0.0
     }
 
     fn signals(&self, _ctx: &EvalContext, x: &ElementInput, out: &mut SignalTerms) {
+        if self.time_constant == 0.0 {
+            // s = g u: the measurement's derivatives, scaled.
+            let g = self.gain;
+            out.values[0] = g * self.measure(x);
+            match &self.input {
+                SensorInput::Signal(_) => out.ds[(0, 0)] = g,
+                SensorInput::Node { node, quantity } => match *quantity {
+                    NodeQuantity::Position(i) => out.k[(0, i)] = g,
+                    NodeQuantity::Velocity(i) => out.c[(0, i)] = g,
+                    NodeQuantity::Acceleration(i) => out.m[(0, i)] = g,
+                    NodeQuantity::AngularVelocity(i) => {
+                        let n = &x.nodes[*node];
+                        let r = n.r();
+                        let dk = -(r * skew(&n.w));
+                        for j in 0..3 {
+                            out.c[(0, 3 + j)] = g * r[(i, j)];
+                            out.k[(0, 3 + j)] = g * dk[(i, j)];
+                        }
+                    }
+                },
+            }
+            return;
+        }
         let zc = 6 * self.nodes.len();
         out.values[0] = x.states[0].z;
         out.k[(0, zc)] = 1.0;
     }
 
     fn evaluate(&self, _ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+        if self.time_constant == 0.0 {
+            return;
+        }
         let zc = 6 * self.nodes.len();
         let z = x.states[0];
         let (tau, g) = (self.time_constant, self.gain);

@@ -4,6 +4,7 @@ pub mod aero;
 mod applied_load;
 pub mod beam;
 mod contact;
+mod controller;
 mod dc_motor;
 mod hydraulic;
 pub mod line_of_action;
@@ -17,10 +18,11 @@ pub use applied_load::{AppliedLoad, LoadFrame};
 pub use contact::{
     Contact, ContactShape, Friction, GroundPlane, NormalLaw, hunt_crossley_damping, normal_force,
 };
+pub use controller::{Block as ControllerBlock, Controller, Pid, lookup as controller_lookup};
 pub use dc_motor::DcMotor;
 pub use hydraulic::{
-    HydraulicCircuit, Orifice as HydraulicOrifice, OrificeLaw, Port, Volume as HydraulicVolume,
-    actuator as hydraulic_actuator,
+    GasCharge, HydraulicCircuit, Multiplier as OrificeMultiplier, Orifice as HydraulicOrifice,
+    OrificeLaw, Port, Volume as HydraulicVolume, actuator as hydraulic_actuator,
 };
 pub use low_pass::{LowPassSensor, NodeQuantity, SensorInput};
 pub use maxwell::Maxwell;

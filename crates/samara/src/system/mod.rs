@@ -295,7 +295,17 @@ impl System {
             .iter()
             .map(|c| (c.name().to_string(), c.signal_inputs().to_vec()))
             .collect();
-        let signals = SignalGraph::build(&elements, &constraint_inputs, &local_config);
+        let signals = SignalGraph::build(
+            &elements,
+            &constraint_inputs,
+            &local_config,
+            signals::DirectNames {
+                coordinates: &coordinate_names[..nc],
+                states: &state_names,
+                first_coordinate: 6 * n,
+                first_state: 6 * n + nc,
+            },
+        );
         let mut node_mass = vec![0.0; n];
         for b in &bodies {
             node_mass[b.nodes()[0]] += b.mass();

@@ -74,6 +74,59 @@ pub struct SignalGraph {
     input_pos: Vec<Vec<Vec<usize>>>,
     /// Issues found while connecting.
     pub issues: Vec<SignalIssue>,
+    /// Signals read straight from one unknown of the configuration (a joint coordinate
+    /// or an element state, [`DirectSource`]): (signal id, source).
+    pub direct: Vec<(usize, DirectSource)>,
+}
+
+/// What a direct signal reads: a joint coordinate's value, rate or acceleration
+/// (`channel` 0, 1, 2; `index` into [`State::coords`]) or an element state's value or
+/// rate (`index` into [`State::states`]). Named `coordinate:<joint>.<component>`,
+/// `coordinate_rate:…`, `coordinate_acceleration:…`, `state:<element>.<state>`,
+/// `state_rate:…`; nothing else produces names with a colon.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DirectSource {
+    pub coordinate: bool,
+    pub index: usize,
+    pub channel: usize,
+    pub config: ConfigIndex,
+}
+
+/// The unknowns direct signals may read: active coordinate names (in state order) and
+/// element state names, with the configuration offsets of both.
+#[derive(Clone, Copy, Debug)]
+pub struct DirectNames<'a> {
+    pub coordinates: &'a [String],
+    pub states: &'a [String],
+    pub first_coordinate: ConfigIndex,
+    pub first_state: ConfigIndex,
+}
+
+impl DirectNames<'_> {
+    /// The source a direct signal name designates, if any.
+    pub fn resolve(&self, name: &str) -> Option<DirectSource> {
+        let (kind, what) = name.split_once(':')?;
+        let (coordinate, channel) = match kind {
+            "coordinate" => (true, 0),
+            "coordinate_rate" => (true, 1),
+            "coordinate_acceleration" => (true, 2),
+            "state" => (false, 0),
+            "state_rate" => (false, 1),
+            _ => return None,
+        };
+        let (list, first) = if coordinate {
+            (self.coordinates, self.first_coordinate)
+        } else {
+            (self.states, self.first_state)
+        };
+        let index = list.iter().position(|n| n == what)?;
+        Some(DirectSource {
+            coordinate,
+            index,
+            channel,
+            config: first + index,
+        })
+    }
 }
 
 /// Values and configuration derivatives of all signals at one state (scratch reused across
@@ -95,6 +148,7 @@ impl SignalGraph {
         elements: &[Box<dyn Element>],
         constraint_inputs: &[(String, Vec<String>)],
         local_config: &[Vec<ConfigIndex>],
+        direct: DirectNames,
     ) -> Self {
         let mut g = SignalGraph::default();
         let mut id = std::collections::HashMap::new();
@@ -118,6 +172,13 @@ impl SignalGraph {
         let mut resolve = |g: &mut SignalGraph, consumer: &str, name: &String| -> usize {
             if let Some(&s) = id.get(name) {
                 return s;
+            }
+            if let Some(src) = direct.resolve(name) {
+                id.insert(name.clone(), g.names.len());
+                g.direct.push((g.names.len(), src));
+                g.names.push(name.clone());
+                g.producer.push(None);
+                return g.names.len() - 1;
             }
             g.issues.push(SignalIssue::Unknown {
                 consumer: consumer.to_string(),
@@ -146,6 +207,9 @@ impl SignalGraph {
         g.support = vec![Vec::new(); ns];
         g.local_pos = vec![Vec::new(); ns];
         g.input_pos = vec![Vec::new(); ns];
+        for &(s, src) in &g.direct {
+            g.support[s] = vec![src.config];
+        }
         for &k in &g.order.clone() {
             let outs = elements[k].signal_outputs().len();
             for o in 0..outs {
@@ -251,6 +315,20 @@ impl SignalGraph {
         out: &mut SignalValues,
         gradients: bool,
     ) {
+        for &(s, src) in &self.direct {
+            out.values[s] = if src.coordinate {
+                let c = &state.coords[src.index];
+                [c.q, c.v, c.a][src.channel]
+            } else {
+                let z = &state.states[src.index];
+                [z.z, z.zd][src.channel]
+            };
+            if gradients {
+                let mut g = [0.0; 3];
+                g[src.channel] = 1.0;
+                out.gradients[s][0] = g;
+            }
+        }
         for &k in &self.order {
             let e = elements[k].as_ref();
             let Some(t) = out.terms[k].as_mut() else {

@@ -11,6 +11,10 @@
 //! volume = 1e-4                         # V₀ [m³]
 //! bulk_modulus = 1.4e9                  # β [Pa]
 //! initial_pressure = 1e5                # [Pa]
+//! # gas_volume = 1e-3                   # V_a [m³]: a gas charge (accumulator) …
+//! # precharge_pressure = 5e6            # p₀ [Pa] at which the gas fills V_a
+//! # polytropic_exponent = 1.4           # n (default 1.4; 1 isothermal)
+//! # bladder = true                      # false: free gas (a strut), law on both sides of p₀
 //! [[hydraulics.reservoirs]]
 //! name = "supply"
 //! pressure = 2e7                        # [Pa], fixed
@@ -25,6 +29,9 @@
 //! # conductance = 1e-12                 # G [m³/(s Pa)] (laminar)
 //! # cracking_pressure = 2e5             # p_c [Pa]      (check_valve)
 //! # opening_pressure = 5e5              # Δp_o [Pa]     (check_valve)
+//! # area_table = [[-0.3, 2e-4], [0.0, 5e-4]]  # A [m²] vs actuator stroke l − l₀ [m]
+//! #                                     # (metering pin; instead of `area`)
+//! # opening = "valve"                   # flow × clamp(signal, 0, 1) (a servo valve)
 //! [hydraulics.actuator]
 //! node_a = "ground"
 //! node_b = "rod"
@@ -34,13 +41,16 @@
 //! cap_area = 2e-3                       # A_c [m²]
 //! rod = "annulus"
 //! rod_area = 1.2e-3                     # A_r [m²]
+//! # chambers = [{ volume = "gas", area = 0.01 }]  # further chambers, signed area
+//! #                                     # (+ extends, − retracts)
 //! ```
 
 use super::spring::line_ends;
 use super::{Build, ComponentKind};
 use crate::core::NodeRef;
 use crate::elements::{
-    HydraulicCircuit, HydraulicOrifice, HydraulicVolume, OrificeLaw, Port, hydraulic_actuator,
+    GasCharge, HydraulicCircuit, HydraulicOrifice, HydraulicVolume, OrificeLaw, OrificeMultiplier,
+    Port, hydraulic_actuator,
 };
 use crate::model::validate::{Checker, Entry};
 use crate::model::{Located, Model};
@@ -63,6 +73,19 @@ pub struct VolumeInput {
     /// Initial pressure [Pa] (default 0).
     #[serde(default)]
     pub initial_pressure: Option<f64>,
+    /// Gas charge volume V_a [m³] at the precharge pressure (an accumulator, a strut's gas).
+    #[serde(default)]
+    pub gas_volume: Option<f64>,
+    /// Precharge pressure p₀ [Pa] (with `gas_volume`).
+    #[serde(default)]
+    pub precharge_pressure: Option<f64>,
+    /// Polytropic exponent n of p V_gⁿ = const (default 1.4; 1 isothermal).
+    #[serde(default)]
+    pub polytropic_exponent: Option<f64>,
+    /// The gas is in a bladder (default true: it cannot expand beyond V_a below p₀);
+    /// false for free gas (a shock strut).
+    #[serde(default)]
+    pub bladder: Option<bool>,
 }
 
 /// A reservoir at a fixed pressure.
@@ -118,6 +141,23 @@ pub struct OrificeInput {
     /// Pressure rise Δp_o [Pa] over which the check valve opens fully (check valve).
     #[serde(default)]
     pub opening_pressure: Option<f64>,
+    /// Area [m²] against the actuator's stroke l − l₀ [m], [[stroke, area], …] (a metering
+    /// pin; turbulent or check valve, instead of `area`).
+    #[serde(default)]
+    pub area_table: Option<Vec<[f64; 2]>>,
+    /// A signal whose value, clamped to [0, 1], scales the flow (a valve opening).
+    #[serde(default)]
+    pub opening: Option<Located<String>>,
+}
+
+/// A further actuator chamber.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ChamberInput {
+    /// A volume of the circuit.
+    pub volume: Located<String>,
+    /// Signed piston area [m²]: positive extends the actuator, negative retracts it.
+    pub area: f64,
 }
 
 /// A double-acting actuator.
@@ -146,6 +186,9 @@ pub struct ActuatorInput {
     /// Annulus area A_r [m²].
     #[serde(default)]
     pub rod_area: Option<f64>,
+    /// Further chambers with signed areas.
+    #[serde(default)]
+    pub chambers: Vec<Located<ChamberInput>>,
 }
 
 /// A hydraulic circuit.
@@ -178,8 +221,8 @@ pub struct ActuatorDef {
     pub node_b: NodeRef,
     pub point_a: Vector3<f64>,
     pub point_b: Vector3<f64>,
-    pub cap: Option<(usize, f64)>,
-    pub rod: Option<(usize, f64)>,
+    /// (volume, signed area).
+    pub chambers: Vec<(usize, f64)>,
 }
 
 /// A validated circuit.
@@ -189,9 +232,15 @@ pub struct HydraulicDef {
     pub volumes: Vec<HydraulicVolume>,
     pub orifices: Vec<HydraulicOrifice>,
     pub actuator: Option<ActuatorDef>,
+    /// Signals read by the orifices' openings.
+    pub inputs: Vec<String>,
 }
 
 pub struct Hydraulic;
+
+fn multiplier_is_none(m: &OrificeMultiplier) -> bool {
+    matches!(m, OrificeMultiplier::None)
+}
 
 fn positive(cx: &mut Checker, e: &Entry, what: &str, key: &str, v: f64, hint: &str) -> bool {
     if v.is_finite() && v > 0.0 {
@@ -288,12 +337,79 @@ impl ComponentKind for Hydraulic {
                 );
                 ok = false;
             }
+            let gas = match (vi.gas_volume, vi.precharge_pressure) {
+                (None, None) => {
+                    for (key, present) in [
+                        ("polytropic_exponent", vi.polytropic_exponent.is_some()),
+                        ("bladder", vi.bladder.is_some()),
+                    ] {
+                        ok &= not_here(
+                            cx,
+                            &e,
+                            &what,
+                            key,
+                            present,
+                            "a gas charge needs `gas_volume` and `precharge_pressure`",
+                        );
+                    }
+                    None
+                }
+                (va, pc) => {
+                    let va = given(
+                        cx,
+                        &e,
+                        &what,
+                        "gas_volume",
+                        va,
+                        "V_a [m³] of the gas at the precharge pressure",
+                    );
+                    let pc = given(
+                        cx,
+                        &e,
+                        &what,
+                        "precharge_pressure",
+                        pc,
+                        "p₀ [Pa] at which the gas fills V_a",
+                    );
+                    let n = vi.polytropic_exponent.unwrap_or(1.4);
+                    let n_ok = positive(
+                        cx,
+                        &e,
+                        &what,
+                        "polytropic_exponent",
+                        n,
+                        "n of p Vⁿ = const: 1 isothermal, 1.4 adiabatic",
+                    );
+                    let bladder = vi.bladder.unwrap_or(true);
+                    if !bladder && p0 <= 0.0 {
+                        cx.error(
+                            format!("{what}: free gas needs a positive `initial_pressure`"),
+                            cx.key(&e, "initial_pressure"),
+                            Some("absolute pressure [Pa] of the gas".into()),
+                        );
+                        ok = false;
+                    }
+                    match (va, pc) {
+                        (Some(volume), Some(precharge)) if n_ok => Some(GasCharge {
+                            volume,
+                            precharge,
+                            exponent: n,
+                            bladder,
+                        }),
+                        _ => {
+                            ok = false;
+                            None
+                        }
+                    }
+                }
+            };
             ports.insert(vi.name.value.clone(), Port::Volume(volumes.len()));
             volumes.push(HydraulicVolume {
                 name: vi.name.value.clone(),
                 volume: vi.volume,
                 bulk_modulus: vi.bulk_modulus,
                 initial_pressure: p0,
+                gas,
             });
         }
         if volumes.is_empty() {
@@ -352,6 +468,7 @@ impl ComponentKind for Hydraulic {
             p
         };
         let mut orifices = Vec::new();
+        let mut inputs: Vec<String> = Vec::new();
         let mut names = std::collections::HashSet::new();
         for o in &hi.orifices {
             let e = Entry {
@@ -392,8 +509,68 @@ impl ComponentKind for Hydraulic {
                     ok = false;
                 }
             }
+            let mut multiplier = OrificeMultiplier::None;
+            if let Some(t) = &oi.area_table {
+                let flat: Vec<f64> = t.iter().flatten().copied().collect();
+                let good = cx.finite(&e, "area_table", &flat, &what);
+                if oi.kind == OrificeType::Laminar || oi.area.is_some() {
+                    cx.error(format!("{what}: `area_table` replaces `area` of a turbulent orifice or check valve"), cx.key(&e, "area_table"), Some("give either `area` or `area_table`".into()));
+                    ok = false;
+                } else if hi.actuator.is_none() {
+                    cx.error(format!("{what}: `area_table` is against the actuator's stroke, and the circuit has no actuator"), cx.key(&e, "area_table"), Some("add [hydraulics.actuator]".into()));
+                    ok = false;
+                } else if !good
+                    || t.len() < 2
+                    || t.windows(2).any(|w| w[1][0] <= w[0][0])
+                    || t.iter().any(|r| r[1] < 0.0)
+                {
+                    cx.error(format!("{what}: `area_table` needs at least two rows [stroke, area] with strictly increasing stroke and areas ≥ 0"), cx.key(&e, "area_table"), Some("stroke = l − l₀ [m] (negative in compression), area [m²]".into()));
+                    ok = false;
+                } else {
+                    multiplier = OrificeMultiplier::StrokeTable(t.clone());
+                }
+            }
+            if let Some(sig) = &oi.opening {
+                if !multiplier_is_none(&multiplier) {
+                    cx.error(
+                        format!("{what}: `opening` and `area_table` together"),
+                        sig.span.clone(),
+                        Some("one multiplier per orifice".into()),
+                    );
+                    ok = false;
+                } else if !cx.signal_names.contains_key(&sig.value) {
+                    let known: Vec<String> = cx.signal_names.keys().cloned().collect();
+                    let hint = match cx.suggest(&sig.value, known.iter().map(|s| s.as_str())) {
+                        Some(b) => format!("did you mean '{b}'?"),
+                        None => {
+                            "the opening is a signal: from [[signals]], a sensor or a controller"
+                                .into()
+                        }
+                    };
+                    cx.error(
+                        format!("{what}: unknown signal '{}'", sig.value),
+                        sig.span.clone(),
+                        Some(hint),
+                    );
+                    ok = false;
+                } else {
+                    let k = inputs
+                        .iter()
+                        .position(|n| n == &sig.value)
+                        .unwrap_or_else(|| {
+                            inputs.push(sig.value.clone());
+                            inputs.len() - 1
+                        });
+                    multiplier = OrificeMultiplier::Opening(k);
+                }
+            }
+            let has_table = oi.area_table.is_some();
             let turbulent = |cx: &mut Checker| -> Option<(f64, f64)> {
-                let area = given(cx, &e, &what, "area", oi.area, "the orifice area A [m²]");
+                let area = if has_table {
+                    Some(1.0)
+                } else {
+                    given(cx, &e, &what, "area", oi.area, "the orifice area A [m²]")
+                };
                 let cd = oi.discharge_coefficient.unwrap_or(0.7);
                 let cd_ok = positive(
                     cx,
@@ -523,6 +700,7 @@ impl ComponentKind for Hydraulic {
                     from,
                     to,
                     law,
+                    multiplier,
                 }),
                 _ => ok = false,
             }
@@ -573,7 +751,31 @@ impl ComponentKind for Hydraulic {
                 let cap = chamber(cx, &ai.cap, ai.cap_area, "cap", "cap_area");
                 let rod = chamber(cx, &ai.rod, ai.rod_area, "rod", "rod_area");
                 let (cap, rod) = (cap?, rod?);
-                if cap.is_none() && rod.is_none() {
+                let mut extra = Vec::new();
+                for c in &ai.chambers {
+                    let p = port(cx, &c.value.volume, &what)?;
+                    let Port::Volume(i) = p else {
+                        cx.error(
+                            format!("{what}: chamber '{}' is a reservoir", c.value.volume.value),
+                            c.value.volume.span.clone(),
+                            Some("a chamber is one of the circuit's volumes".into()),
+                        );
+                        return None;
+                    };
+                    if !(c.value.area.is_finite() && c.value.area != 0.0) {
+                        cx.error(
+                            format!(
+                                "{what}: chamber '{}' needs a non-zero finite `area`",
+                                c.value.volume.value
+                            ),
+                            c.span.clone(),
+                            Some("signed area [m²]: + extends, − retracts".into()),
+                        );
+                        return None;
+                    }
+                    extra.push((i, c.value.area));
+                }
+                if cap.is_none() && rod.is_none() && extra.is_empty() {
                     cx.error(
                         format!("{what} has no chamber"),
                         e.span.clone(),
@@ -603,13 +805,15 @@ impl ComponentKind for Hydraulic {
                     );
                     return None;
                 }
+                let mut chambers: Vec<(usize, f64)> = cap.into_iter().collect();
+                chambers.extend(rod.map(|(i, a)| (i, -a)));
+                chambers.extend(extra);
                 Some(ActuatorDef {
                     node_a: na,
                     node_b: nb,
                     point_a: pa,
                     point_b: pb,
-                    cap,
-                    rod,
+                    chambers,
                 })
             }
         };
@@ -621,6 +825,7 @@ impl ComponentKind for Hydraulic {
             volumes,
             orifices,
             actuator,
+            inputs,
         })
     }
 
@@ -640,8 +845,7 @@ impl ComponentKind for Hydraulic {
                 parts.local_offset(a.node_b, a.point_b),
                 [a.point_a, a.point_b],
                 (a.point_b - a.point_a).norm(),
-                a.cap,
-                a.rod,
+                a.chambers.clone(),
             )
         });
         parts.elements.push(Box::new(HydraulicCircuit::new(
@@ -649,6 +853,7 @@ impl ComponentKind for Hydraulic {
             def.volumes.clone(),
             def.orifices.clone(),
             actuator,
+            def.inputs.clone(),
         )));
     }
 
@@ -658,6 +863,7 @@ impl ComponentKind for Hydraulic {
             volume: v,
             bulk_modulus: 1e9,
             initial_pressure: 0.0,
+            gas: None,
         };
         // Scaled units keep every block of order one: pressures in MPa-like numbers.
         let orifices = vec![
@@ -669,6 +875,7 @@ impl ComponentKind for Hydraulic {
                     coefficient: 0.2,
                     transition: 0.1,
                 },
+                multiplier: OrificeMultiplier::Opening(0),
             },
             HydraulicOrifice {
                 name: "x".into(),
@@ -680,12 +887,18 @@ impl ComponentKind for Hydraulic {
                     cracking: 0.1,
                     opening: 2.0,
                 },
+                multiplier: OrificeMultiplier::StrokeTable(vec![
+                    [-1.0, 0.5],
+                    [0.0, 1.0],
+                    [2.0, 3.0],
+                ]),
             },
             HydraulicOrifice {
                 name: "leak".into(),
                 from: Port::Volume(1),
                 to: Port::Reservoir(0.0),
                 law: OrificeLaw::Laminar { conductance: 0.05 },
+                multiplier: OrificeMultiplier::None,
             },
             HydraulicOrifice {
                 name: "out".into(),
@@ -695,6 +908,7 @@ impl ComponentKind for Hydraulic {
                     coefficient: 0.1,
                     transition: 0.3,
                 },
+                multiplier: OrificeMultiplier::None,
             },
         ];
         let mut out = Vec::new();
@@ -705,35 +919,64 @@ impl ComponentKind for Hydraulic {
                 Some((1, Vector3::new(-0.1, 0.3, 0.2))),
                 [Vector3::new(0.4, 0.2, -0.3), Vector3::zeros()],
                 0.7,
-                Some((1, 0.8)),
-                (k != 1).then_some((2, 0.5)),
+                [
+                    Some((1, 0.8)),
+                    (k != 1).then_some((2, -0.5)),
+                    (k == 0).then_some((0, 0.3)),
+                ]
+                .into_iter()
+                .flatten()
+                .collect(),
             );
+            let mut volumes = vec![vol("a", 2e9), vol("cap", 1.5e9), vol("rod", 1e9)];
+            // A bladder accumulator above its precharge and a free gas chamber.
+            volumes[0].gas = Some(GasCharge {
+                volume: 0.7,
+                precharge: 0.6,
+                exponent: 1.3,
+                bladder: true,
+            });
+            volumes[1].gas = Some(GasCharge {
+                volume: 0.4,
+                precharge: 2.0,
+                exponent: 1.0,
+                bladder: false,
+            });
             let e = HydraulicCircuit::new(
                 "h",
-                vec![vol("a", 2e9), vol("cap", 1.5e9), vol("rod", 1e9)],
+                volumes,
                 orifices.clone(),
                 Some(act),
+                vec!["valve".into()],
             );
             let nodes = vec![random_node(940 + k), random_node(945 + k)];
-            out.push(TangentCase::element(Box::new(e), nodes).with_states(vec![
-                (1.0, 0.3),
-                (1.7, -0.4),
-                (0.9, 0.8),
-            ]));
+            out.push(
+                TangentCase::element(Box::new(e), nodes)
+                    .with_states(vec![(1.0, 0.3), (1.7, -0.4), (0.9, 0.8)])
+                    .with_signals(vec![0.4]),
+            );
         }
         // Without an actuator (no nodes).
+        let orifices: Vec<HydraulicOrifice> = orifices
+            .into_iter()
+            .map(|mut o| {
+                if matches!(o.multiplier, OrificeMultiplier::StrokeTable(_)) {
+                    o.multiplier = OrificeMultiplier::None;
+                }
+                o
+            })
+            .collect();
         let e = HydraulicCircuit::new(
             "h",
             vec![vol("a", 2e9), vol("cap", 1.5e9), vol("rod", 1e9)],
             orifices,
             None,
+            vec!["valve".into()],
         );
         out.push(
-            TangentCase::element(Box::new(e), Vec::new()).with_states(vec![
-                (1.0, 0.3),
-                (2.2, -0.4),
-                (0.3, 0.8),
-            ]),
+            TangentCase::element(Box::new(e), Vec::new())
+                .with_states(vec![(1.0, 0.3), (2.2, -0.4), (0.3, 0.8)])
+                .with_signals(vec![0.7]),
         );
         out
     }

@@ -15,6 +15,7 @@ pub mod aero;
 pub mod beam;
 pub mod body;
 pub mod contact;
+pub mod controller;
 pub mod force;
 pub mod hydraulic;
 pub mod joint;
@@ -230,6 +231,9 @@ registry! {
     /// Sensors: a node quantity or a signal through a first-order low-pass filter,
     /// producing a signal.
     sensors: sensor::Sensor,
+    /// Control blocks (PID, transfer functions, state space, gain, sum, saturation, rate
+    /// limit, lookup) with their dynamics as element states, producing signals.
+    controllers: controller::Controller,
     /// Joints between two nodes, or a node and the ground.
     joints: joint::JointKind,
     /// Point-to-point spring-dampers.

@@ -1,5 +1,6 @@
-//! `[[sensors]]`: a node quantity (or a signal) through a first-order low-pass filter,
-//! producing a signal named like the sensor (kernel: [`crate::elements::LowPassSensor`]).
+//! `[[sensors]]`: a node quantity, a joint coordinate, an element state or a signal, through
+//! an optional first-order low-pass filter, producing a signal named like the sensor
+//! (kernel: [`crate::elements::LowPassSensor`]).
 //!
 //! ```toml
 //! [[sensors]]
@@ -7,11 +8,15 @@
 //! node = "bob"               # a node quantity …
 //! quantity = "position"      # position | velocity | acceleration | angular_velocity
 //! component = "z"            # global component x | y | z
+//! # joint = "hinge"          # … or a joint coordinate (active: something acts on it),
+//! # coordinate = "theta3"    #   quantity position | velocity | acceleration
+//! # state = "pump.current"   # … or an element state `<element>.<state>` (its value)
 //! # signal = "command"       # … or another signal
-//! time_constant = 0.05       # τ [s] > 0
+//! time_constant = 0.05       # τ [s] > 0; absent: no filter, s = g u (no state)
 //! gain = 1.0                 # g (default 1)
-//! # initial = 0.0            # z(0); default g·u(0) for position, velocity and angular
-//! #                          # velocity (the sensor starts settled), 0 otherwise
+//! # initial = 0.0            # z(0) of the filter; default g·u(0) for node position,
+//! #                          # velocity and angular velocity (the sensor starts settled),
+//! #                          # 0 otherwise
 //! ```
 
 use super::{Build, ComponentKind};
@@ -64,8 +69,18 @@ pub struct SensorEntry {
     /// Measured signal (instead of a node quantity).
     #[serde(default)]
     pub signal: Option<Located<String>>,
-    /// Filter time constant τ [s], positive.
-    pub time_constant: f64,
+    /// Measured joint (with `coordinate` and `quantity`).
+    #[serde(default)]
+    pub joint: Option<Located<String>>,
+    /// Measured joint coordinate (d1, d2, d3, theta1, theta2, theta3).
+    #[serde(default)]
+    pub coordinate: Option<Located<String>>,
+    /// Measured element state `<element>.<state>` (as written in the results).
+    #[serde(default)]
+    pub state: Option<Located<String>>,
+    /// Filter time constant τ [s], positive; absent: no filter.
+    #[serde(default)]
+    pub time_constant: Option<f64>,
     /// Gain g (default 1).
     #[serde(default)]
     pub gain: Option<f64>,
@@ -79,7 +94,14 @@ pub struct SensorEntry {
 pub struct SensorDef {
     pub name: String,
     pub input: SensorInput,
+    /// τ > 0, or 0 without a filter.
     pub time_constant: f64,
+    /// Where the entry is (for whole-model errors).
+    pub span: Option<std::ops::Range<usize>>,
+    /// The joint (name, component, its span) or element state (name, span) read, checked
+    /// once the whole model is known.
+    pub joint: Option<(String, String, Option<std::ops::Range<usize>>)>,
+    pub state: Option<(String, Option<std::ops::Range<usize>>)>,
     pub gain: f64,
     pub initial: f64,
 }
@@ -110,20 +132,69 @@ impl ComponentKind for Sensor {
         let si = &s.value;
         let what = format!("sensor '{}'", si.name.value);
         let mut ok = true;
-        if !(si.time_constant.is_finite() && si.time_constant > 0.0) {
+        let tau = si.time_constant.unwrap_or(0.0);
+        if si.time_constant.is_some() && !(tau.is_finite() && tau > 0.0) {
             cx.error(
-                format!(
-                    "{what}: `time_constant` must be positive (got {})",
-                    si.time_constant
-                ),
+                format!("{what}: `time_constant` must be positive (got {tau})"),
                 cx.key(&e, "time_constant"),
                 Some("τ [s] of the filter τ ż + z = g u; a small τ follows u closely".into()),
             );
             ok = false;
         }
         let gain = si.gain.unwrap_or(1.0);
-        let node_keys = si.node.is_some() || si.quantity.is_some() || si.component.is_some();
+        let mut joint = None;
+        let mut state = None;
+        let joint_keys = si.joint.is_some() || si.coordinate.is_some();
+        let node_keys =
+            si.node.is_some() || si.component.is_some() || (si.quantity.is_some() && !joint_keys);
+        let n_sources = [
+            si.signal.is_some(),
+            node_keys,
+            joint_keys,
+            si.state.is_some(),
+        ]
+        .iter()
+        .filter(|&&b| b)
+        .count();
         let input = match (&si.signal, node_keys) {
+            _ if n_sources != 1 => {
+                cx.error(
+                    format!("{what}: give exactly one of `signal`, `node` (with `quantity` and `component`), `joint` (with `coordinate`) or `state`"),
+                    e.span.clone(),
+                    None,
+                );
+                return None;
+            }
+            _ if joint_keys => {
+                let (Some(j), Some(c)) = (&si.joint, &si.coordinate) else {
+                    cx.error(
+                        format!("{what}: a joint measurement needs `joint` and `coordinate`"),
+                        e.span.clone(),
+                        Some("e.g. joint = \"hinge\", coordinate = \"theta3\"".into()),
+                    );
+                    return None;
+                };
+                let prefix = match si.quantity.unwrap_or(QuantityInput::Position) {
+                    QuantityInput::Position => "coordinate",
+                    QuantityInput::Velocity => "coordinate_rate",
+                    QuantityInput::Acceleration => "coordinate_acceleration",
+                    QuantityInput::AngularVelocity => {
+                        cx.error(
+                            format!("{what}: a joint coordinate has no angular velocity"),
+                            cx.key(&e, "quantity"),
+                            Some("position, velocity or acceleration of the coordinate".into()),
+                        );
+                        return None;
+                    }
+                };
+                joint = Some((j.value.clone(), c.value.clone(), j.span.clone()));
+                SensorInput::Signal(format!("{prefix}:{}.{}", j.value, c.value))
+            }
+            _ if si.state.is_some() => {
+                let st = si.state.as_ref()?;
+                state = Some((st.value.clone(), st.span.clone()));
+                SensorInput::Signal(format!("state:{}", st.value))
+            }
             (Some(sig), false) => {
                 if sig.value == si.name.value {
                     cx.error(
@@ -208,10 +279,96 @@ impl ComponentKind for Sensor {
         ok.then(|| SensorDef {
             name: si.name.value.clone(),
             input,
-            time_constant: si.time_constant,
+            time_constant: tau,
+            span: s.span.clone(),
+            joint,
+            state,
             gain,
             initial,
         })
+    }
+
+    /// Joint coordinates and element states read by sensors exist (the joints and the
+    /// elements' states are known once every kind is validated).
+    fn finish(_input: &super::ModelInput, cx: &mut Checker, model: &Model) {
+        use crate::joints::{COMPONENT_NAMES, JointType};
+        for s in &model.sensors {
+            let what = format!("sensor '{}'", s.name);
+            let Some((jn, comp, span)) = &s.joint else {
+                continue;
+            };
+            let Some(j) = model.joints.iter().find(|j| &j.name == jn) else {
+                let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
+                let hint = match cx.suggest(jn, names.iter().copied()) {
+                    Some(b) => format!("did you mean '{b}'?"),
+                    None => "name a joint of the model".into(),
+                };
+                cx.error(
+                    format!("{what}: unknown joint '{jn}'"),
+                    span.clone(),
+                    Some(hint),
+                );
+                continue;
+            };
+            let Some(c) = COMPONENT_NAMES.iter().position(|n| n == comp) else {
+                cx.error(
+                    format!("{what}: unknown coordinate '{comp}'"),
+                    span.clone(),
+                    Some(format!("one of {}", COMPONENT_NAMES.join(", "))),
+                );
+                continue;
+            };
+            let active = matches!(j.kind, JointType::Screw | JointType::Prescribed)
+                || j.components[c].as_ref().is_some_and(|d| {
+                    d.spring.is_some()
+                        || d.damper.is_some()
+                        || d.backlash.is_some()
+                        || d.drive.is_some()
+                        || d.input.is_some()
+                });
+            if !active {
+                cx.error(
+                    format!("{what}: coordinate '{comp}' of joint '{jn}' is passive (nothing acts on it)"),
+                    span.clone(),
+                    Some(format!("sensors read active coordinates: give [joints.{comp}] a spring, damper, drive or input")),
+                );
+            }
+        }
+        let wanted: Vec<&SensorDef> = model.sensors.iter().filter(|s| s.state.is_some()).collect();
+        if wanted.is_empty()
+            || cx
+                .diags
+                .iter()
+                .any(|d| d.severity == crate::model::Severity::Error)
+        {
+            return;
+        }
+        // The elements' state names, as the system will write them.
+        let initial = super::initial_nodes(model);
+        let mut parts = Build::new(&initial);
+        super::build_all(model, &mut parts);
+        let names: Vec<String> = parts
+            .elements
+            .iter()
+            .flat_map(|e| {
+                let n = e.name().to_string();
+                e.state_names().into_iter().map(move |s| format!("{n}.{s}"))
+            })
+            .collect();
+        for s in wanted {
+            let Some((st, span)) = &s.state else { continue };
+            if !names.contains(st) {
+                let hint = match cx.suggest(st, names.iter().map(|s| s.as_str())) {
+                    Some(b) => format!("did you mean '{b}'?"),
+                    None => "element states are named `<element>.<state>`, as in the results' element_state names".into(),
+                };
+                cx.error(
+                    format!("sensor '{}': unknown element state '{st}'", s.name),
+                    span.clone(),
+                    Some(hint),
+                );
+            }
+        }
     }
 
     fn nodes(_def: &SensorDef) -> Vec<usize> {
@@ -257,6 +414,26 @@ impl ComponentKind for Sensor {
                     .with_states(vec![(0.3, -1.1)])
             })
             .collect();
+        // Without a filter: the measurement itself, scaled.
+        for (k, &q) in quantities.iter().enumerate() {
+            let e = LowPassSensor::new(
+                "s",
+                "s",
+                SensorInput::Node {
+                    node: 0,
+                    quantity: q,
+                },
+                0.0,
+                -1.7,
+                0.0,
+            );
+            out.push(TangentCase::element(
+                Box::new(e),
+                vec![random_node(620 + k as u64)],
+            ));
+        }
+        let e = LowPassSensor::new("s", "s", SensorInput::Signal("u".into()), 0.0, 2.0, 0.0);
+        out.push(TangentCase::element(Box::new(e), Vec::new()).with_signals(vec![0.3]));
         let e = LowPassSensor::new("s", "s", SensorInput::Signal("u".into()), 0.2, -3.0, 0.0);
         out.push(
             TangentCase::element(Box::new(e), Vec::new())
