@@ -478,3 +478,112 @@ step = 0.01
     // `beam` (instead of `node`) and `aerodyn` (instead of `stations`): tests/aerodynamics.rs
     // (the cantilever wing, the NREL 5-MW rotor).
 }
+
+/// Issue #16: every `[[tires]]` option changes the motion of the braked sled of
+/// examples/contact/tire_braking.toml (0.4 s: spin-down, lock and skid); `D` with
+/// `nominal_load` is the same as `mu = D/nominal_load`. (`ground_normal` and the slip
+/// angle: tests/tire.rs, the tilted rig.)
+#[test]
+fn every_tire_option_changes_the_motion() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/contact/tire_braking.toml");
+    let base = std::fs::read_to_string(path)
+        .unwrap()
+        .replace("t_end = 1.5", "t_end = 0.4");
+    let motion = |text: &str| -> Vec<f64> {
+        let (_, h) = attempt(text);
+        assert!(h.last().unwrap().time > 0.399, "{text}");
+        let last = h.last().unwrap();
+        let mut v: Vec<f64> = last
+            .state
+            .nodes
+            .iter()
+            .flat_map(|n| [n.x[0], n.x[2], n.v[0], n.v[1], n.w[1], n.w[2]])
+            .collect();
+        v.extend(last.state.states.iter().map(|s| s.z));
+        // The tire's outputs (forces the joints take are not in the motion).
+        let m = model(text);
+        let sys = System::new(&m);
+        let mut out = vec![0.0; sys.output_names.len()];
+        let ctx = samara::elements::EvalContext {
+            time: last.time,
+            gravity: m.gravity,
+            load_factor: 1.0,
+        };
+        sys.element_outputs(&ctx, &last.state, &mut out);
+        v.extend(out);
+        v
+    };
+    let reference = motion(&base);
+    let lat = "lateral = { B = 10.0, C = 1.3, mu = 1.0, E = 0.97 }";
+    let lat_pulling = "lateral = { B = 10.0, C = 1.3, mu = 1.0, E = 0.97 }\nground_velocity = [0.0, 0.3, 0.0]\nground_point = [0.0, 0.0, 0.001]";
+    let variants: &[(&str, &str)] = &[
+        ("radius = 0.3 ", "radius = 0.301 "),
+        ("rolling_radius = 0.29", "rolling_radius = 0.3"),
+        ("vertical_stiffness = 2e5", "vertical_stiffness = 2.2e5"),
+        (
+            "longitudinal_relaxation_length = 0.1",
+            "longitudinal_relaxation_length = 0.3",
+        ),
+        (
+            "longitudinal = { B = 10.0, C = 1.9, mu = 1.0, E = 0.97 }",
+            "longitudinal = { B = 10.0, C = 1.9, mu = 0.8, E = 0.97 }",
+        ),
+        ("rolling_resistance = 0.01", "rolling_resistance = 0.05"),
+        (
+            "brake = \"brake\"",
+            "brake = \"brake\"\nregularization_speed = 0.01",
+        ),
+        ("brake = \"brake\"\n", ""),
+        (
+            "brake = \"brake\"",
+            "brake = \"brake\"\nground_point = [0.0, 0.0, 0.001]",
+        ),
+        (lat, lat_pulling),
+    ];
+    for (from, to) in variants {
+        assert!(base.contains(from), "{from}");
+        let v = motion(&base.replacen(from, to, 1));
+        let diff: f64 = v.iter().zip(&reference).map(|(a, b)| (a - b).abs()).sum();
+        assert!(diff > 1e-6, "`{to}` changed nothing");
+    }
+    // The lateral set, the lateral relaxation length and the trail act once the ground
+    // pulls sideways, the vertical damping once the tire is not at rest on it.
+    let pulled = base.replacen(lat, lat_pulling, 1);
+    let reference = motion(&pulled);
+    for (from, to) in [
+        (
+            "lateral = { B = 10.0, C = 1.3, mu = 1.0, E = 0.97 }",
+            "lateral = { B = 8.0, C = 1.3, mu = 1.0, E = 0.97 }",
+        ),
+        (
+            "lateral_relaxation_length = 0.3",
+            "lateral_relaxation_length = 0.5",
+        ),
+        (
+            "trail = { B = 8.0, C = 1.2, D = 0.04, E = -0.5 }",
+            "trail = { B = 8.0, C = 1.2, D = 0.06, E = -0.5 }",
+        ),
+        ("trail = { B = 8.0, C = 1.2, D = 0.04, E = -0.5 }\n", ""),
+        ("vertical_damping = 3000.0", "vertical_damping = 1000.0"),
+    ] {
+        assert!(pulled.contains(from), "{from}");
+        let v = motion(&pulled.replacen(from, to, 1));
+        let diff: f64 = v.iter().zip(&reference).map(|(a, b)| (a - b).abs()).sum();
+        assert!(diff > 1e-9, "`{to}` changed nothing");
+    }
+    // D at the nominal load is μ = D/F_z0.
+    let with_d = base.replacen(
+        "longitudinal = { B = 10.0, C = 1.9, mu = 1.0, E = 0.97 }",
+        "longitudinal = { B = 10.0, C = 1.9, D = 4000.0, E = 0.97 }\nnominal_load = 5000.0",
+        1,
+    );
+    let with_mu = base.replacen(
+        "longitudinal = { B = 10.0, C = 1.9, mu = 1.0, E = 0.97 }",
+        "longitudinal = { B = 10.0, C = 1.9, mu = 0.8, E = 0.97 }",
+        1,
+    );
+    let (a, b) = (motion(&with_d), motion(&with_mu));
+    let diff: f64 = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).sum();
+    assert!(diff < 1e-9, "{diff}");
+}

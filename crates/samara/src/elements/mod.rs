@@ -12,6 +12,7 @@ mod maxwell;
 mod rigid_body;
 mod spring_damper;
 mod time_signal;
+mod tire;
 
 pub use applied_load::{AppliedLoad, LoadFrame};
 pub use contact::{
@@ -27,5 +28,6 @@ pub use maxwell::Maxwell;
 pub use rigid_body::RigidBody;
 pub use spring_damper::SpringDamper;
 pub use time_signal::TimeSignal;
+pub use tire::{MagicFormula, Tire, TireGround, TireParameters};
 
 pub use crate::core::{Element, EvalContext, LocalTerms, Need, add_block};
