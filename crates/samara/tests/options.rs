@@ -587,3 +587,31 @@ fn every_tire_option_changes_the_motion() {
     let diff: f64 = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).sum();
     assert!(diff < 1e-9, "{diff}");
 }
+
+/// Issue #16: the body–body keys of `[[contacts]]` — `other_node` turns the contact from
+/// the ground plane to a second sphere, and `other_radius` changes when the spheres meet
+/// (examples/contact/sphere_collision.toml).
+#[test]
+fn body_body_contact_keys_change_the_collision() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/contact/sphere_collision.toml");
+    let base = std::fs::read_to_string(path).unwrap();
+    let speeds = |text: &str| -> [f64; 4] {
+        let (_, h) = attempt(text);
+        let n = &h.last().unwrap().state.nodes;
+        [n[0].v[0], n[1].v[0], n[0].x[0], n[1].x[0]]
+    };
+    let reference = speeds(&base);
+    let bigger = speeds(&base.replace("other_radius = 0.1", "other_radius = 0.12"));
+    // Without `other_node` the contact is with a ground plane (put 1 m below): the nodes
+    // pass through each other untouched.
+    let ground = speeds(
+        &base
+            .replace("other_node = \"b\"\n", "ground_point = [0.0, 0.0, -1.0]\n")
+            .replace("other_radius = 0.1\n", ""),
+    );
+    assert!(reference[0] < 0.0, "{reference:?}");
+    // A bigger sphere meets the other earlier: the same exit speeds, later positions apart.
+    assert!((bigger[3] - bigger[2]) - (reference[3] - reference[2]) > 1e-3);
+    assert_eq!([ground[0], ground[1]], [1.5, -0.5]);
+}

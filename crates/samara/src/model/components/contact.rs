@@ -25,10 +25,13 @@
 //! bristle_damping = 100.0        # σ₁ [s/m]
 //! # viscous_friction = 0.0       # σ₂ [s/m]
 //! ```
+//!
+//! Body–body: `other_node` and `other_radius` put a second sphere on another node instead
+//! of the ground plane (frictionless; kernel [`crate::elements::SpherePair`]).
 
 use super::{Build, ComponentKind, ModelInput};
 use crate::core::NodeRef;
-use crate::elements::{Contact, ContactShape, Friction, GroundPlane, NormalLaw};
+use crate::elements::{Contact, ContactShape, Friction, GroundPlane, NormalLaw, SpherePair};
 use crate::model::input::AnalysisType;
 use crate::model::validate::{Checker, Entry};
 use crate::model::{Located, Model};
@@ -121,6 +124,13 @@ pub struct ContactInput {
     /// Viscous friction σ₂ per unit normal force [s/m], ≥ 0 (default 0).
     #[serde(default)]
     pub viscous_friction: Option<f64>,
+    /// Body–body contact: the node of a second sphere (instead of the ground plane);
+    /// outputs `<name>.normal_force`, `.penetration`. Frictionless.
+    #[serde(default)]
+    pub other_node: Option<Located<String>>,
+    /// Radius of the second sphere [m], positive (with `other_node`).
+    #[serde(default)]
+    pub other_radius: Option<f64>,
 }
 
 /// A validated contact.
@@ -135,6 +145,8 @@ pub struct ContactDef {
     pub plane: GroundPlane,
     pub law: NormalLaw,
     pub friction: Option<Friction>,
+    /// Body–body: the second sphere's node and radius.
+    pub other: Option<(usize, f64)>,
 }
 
 pub struct ContactKind;
@@ -538,6 +550,70 @@ impl ComponentKind for ContactKind {
                 }
             }
         };
+        // Body–body.
+        let mut other = None;
+        if let Some(on) = &ci.other_node {
+            let hint = "a body–body contact is frictionless between two spheres: `shape = \"sphere\"`, `radius`, `other_node`, `other_radius` and the normal law";
+            match cx.node_ref(on, &what) {
+                Some(NodeRef::Node(j)) if Some(j) == node => {
+                    cx.error(
+                        format!("{what}: a contact between a body and itself"),
+                        on.span.clone(),
+                        Some("`other_node` must be another body's node".into()),
+                    );
+                    ok = false;
+                }
+                Some(NodeRef::Node(j)) => other = Some(j),
+                Some(NodeRef::Ground) => {
+                    cx.error(
+                        format!("{what}: `other_node` cannot be the ground"),
+                        on.span.clone(),
+                        Some("against the ground, leave out `other_node` and give the ground plane (`ground_point`, `ground_normal`)".into()),
+                    );
+                    ok = false;
+                }
+                None => ok = false,
+            }
+            if ci.shape != ShapeInput::Sphere {
+                cx.error(
+                    format!("{what}: a body–body contact is between two spheres"),
+                    cx.key(&e, "shape"),
+                    Some(hint.into()),
+                );
+                ok = false;
+            }
+            for (key, given) in [
+                ("ground_point", ci.ground_point.is_some()),
+                ("ground_normal", ci.ground_normal.is_some()),
+                ("ground_velocity", ci.ground_velocity.is_some()),
+                ("static_friction", ci.static_friction.is_some()),
+            ] {
+                ok &= unused(cx, &e, &what, key, given, hint);
+            }
+            match required(cx, &e, &what, "other_radius", ci.other_radius, hint) {
+                Some(r) => {
+                    ok &= check(
+                        cx,
+                        &e,
+                        &what,
+                        ("other_radius", r),
+                        |v| v > 0.0,
+                        "positive",
+                        "the second sphere's radius [m]",
+                    );
+                }
+                None => ok = false,
+            }
+        } else {
+            ok &= unused(
+                cx,
+                &e,
+                &what,
+                "other_radius",
+                ci.other_radius.is_some(),
+                "`other_radius` is the radius of the sphere on `other_node`",
+            );
+        }
         let (node, shape, normal, law) = (node?, shape?, normal?, law?);
         let point = match ci.point {
             Some(p) => Vector3::from(p),
@@ -555,6 +631,7 @@ impl ComponentKind for ContactKind {
             },
             law,
             friction,
+            other: other.zip(ci.other_radius),
         })
     }
 
@@ -583,10 +660,21 @@ impl ComponentKind for ContactKind {
     }
 
     fn nodes(def: &ContactDef) -> Vec<usize> {
-        vec![def.node]
+        let mut v = vec![def.node];
+        v.extend(def.other.map(|o| o.0));
+        v
     }
 
     fn build(def: &ContactDef, parts: &mut Build) {
+        if let (Some((j, rb)), ContactShape::Sphere { radius }) = (def.other, def.shape) {
+            parts.elements.push(Box::new(SpherePair::new(
+                &def.name,
+                [def.node, j],
+                [radius, rb],
+                def.law,
+            )));
+            return;
+        }
         let shape = match def.shape {
             ContactShape::Point { .. } => ContactShape::Point {
                 offset: parts
@@ -655,6 +743,14 @@ impl ComponentKind for ContactKind {
             } else {
                 case
             });
+        }
+        // Sphere pairs: in contact (the radii exceed the distance), both laws.
+        for (k, law) in [hc, lin].into_iter().enumerate() {
+            let a = random_node(930 + k as u64);
+            let b = random_node(935 + k as u64);
+            let dist = (b.x - a.x).norm();
+            let e = SpherePair::new("pair", [0, 1], [0.6 * dist, 0.5 * dist], law);
+            out.push(TangentCase::element(Box::new(e), vec![a, b]));
         }
         out
     }
