@@ -615,3 +615,39 @@ fn body_body_contact_keys_change_the_collision() {
     assert!((bigger[3] - bigger[2]) - (reference[3] - reference[2]) > 1e-3);
     assert_eq!([ground[0], ground[1]], [1.5, -0.5]);
 }
+
+/// Issue #16: `shape = "capsule"` with its `segment` (examples/contact/capsule_rest.toml):
+/// moving the segment's end moves the load between the two end spheres.
+#[test]
+fn capsule_segment_changes_the_end_loads() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/contact/capsule_rest.toml");
+    let base = std::fs::read_to_string(path)
+        .unwrap()
+        .replace("t_end = 1.0", "t_end = 0.5");
+    let end_a = |text: &str| -> f64 {
+        let (_, h) = attempt(text);
+        let m = model(text);
+        let sys = System::new(&m);
+        let last = h.last().unwrap();
+        let mut out = vec![0.0; sys.output_names.len()];
+        let ctx = samara::elements::EvalContext {
+            time: last.time,
+            gravity: m.gravity,
+            load_factor: 1.0,
+        };
+        sys.element_outputs(&ctx, &last.state, &mut out);
+        out[sys
+            .output_names
+            .iter()
+            .position(|o| o == "rest.end_a.normal_force")
+            .unwrap()]
+    };
+    let a = end_a(&base);
+    let b = end_a(&base.replace("[0.5, 0.0, 0.05]]", "[0.3, 0.0, 0.05]]"));
+    // Lever rule: m g · 0.5/0.8 and m g · 0.3/0.6.
+    assert!(
+        (a - 19.62 * 0.5 / 0.8).abs() < 1e-6 && (b - 19.62 * 0.5).abs() < 1e-6,
+        "{a} {b}"
+    );
+}

@@ -26,6 +26,9 @@
 //! # viscous_friction = 0.0       # σ₂ [s/m]
 //! ```
 //!
+//! Capsule: `shape = "capsule"`, `radius` and `segment = [[…], […]]` (the ends of its
+//! axis): a sphere at each end, `<name>.end_a` and `<name>.end_b`.
+//!
 //! Body–body: `other_node` and `other_radius` put a second sphere on another node instead
 //! of the ground plane (frictionless; kernel [`crate::elements::SpherePair`]).
 
@@ -48,6 +51,10 @@ pub enum ShapeInput {
     Sphere,
     /// A material point of the body (`point`).
     Point,
+    /// A capsule: the segment `segment` swept by a sphere of `radius`; it touches the
+    /// ground plane with spheres at its two ends (outputs and states of
+    /// `<name>.end_a` and `<name>.end_b`).
+    Capsule,
 }
 
 /// Normal-force law.
@@ -124,6 +131,9 @@ pub struct ContactInput {
     /// Viscous friction σ₂ per unit normal force [s/m], ≥ 0 (default 0).
     #[serde(default)]
     pub viscous_friction: Option<f64>,
+    /// Capsule: the ends of its axis segment, global, initial configuration [m].
+    #[serde(default)]
+    pub segment: Option<[[f64; 3]; 2]>,
     /// Body–body contact: the node of a second sphere (instead of the ground plane);
     /// outputs `<name>.normal_force`, `.penetration`. Frictionless.
     #[serde(default)]
@@ -147,6 +157,8 @@ pub struct ContactDef {
     pub friction: Option<Friction>,
     /// Body–body: the second sphere's node and radius.
     pub other: Option<(usize, f64)>,
+    /// Capsule: the ends of its segment (global, initial configuration).
+    pub segment: Option<[Vector3<f64>; 2]>,
 }
 
 pub struct ContactKind;
@@ -236,7 +248,64 @@ impl ComponentKind for ContactKind {
             None => None,
         };
         // Geometry.
+        if ci.shape != ShapeInput::Capsule {
+            ok &= unused(
+                cx,
+                &e,
+                &what,
+                "segment",
+                ci.segment.is_some(),
+                "`segment` is the axis of shape = \"capsule\"",
+            );
+        }
+        let mut segment = None;
         let shape = match ci.shape {
+            ShapeInput::Capsule => {
+                ok &= unused(
+                    cx,
+                    &e,
+                    &what,
+                    "point",
+                    ci.point.is_some(),
+                    "a capsule is given by `segment` and `radius`",
+                );
+                let hint = "a capsule: `radius` [m] and `segment = [[x, y, z], [x, y, z]]`, the ends of its axis";
+                let r = required(cx, &e, &what, "radius", ci.radius, hint);
+                let seg = required(cx, &e, &what, "segment", ci.segment.map(|_| 0.0), hint)
+                    .and(ci.segment);
+                if let Some([a, b]) = seg {
+                    let (a, b) = (Vector3::from(a), Vector3::from(b));
+                    let len = (b - a).norm();
+                    if !len.is_finite() || len <= 0.0 {
+                        cx.error(
+                            format!("{what}: the capsule's `segment` must join two different finite points"),
+                            cx.key(&e, "segment"),
+                            Some(hint.into()),
+                        );
+                        ok = false;
+                    } else {
+                        segment = Some([a, b]);
+                    }
+                } else {
+                    ok = false;
+                }
+                match r {
+                    Some(r)
+                        if check(
+                            cx,
+                            &e,
+                            &what,
+                            ("radius", r),
+                            |v| v > 0.0,
+                            "positive",
+                            "a capsule has a positive radius [m]",
+                        ) =>
+                    {
+                        Some(ContactShape::Sphere { radius: r })
+                    }
+                    _ => None,
+                }
+            }
             ShapeInput::Sphere => {
                 ok &= unused(
                     cx,
@@ -632,6 +701,7 @@ impl ComponentKind for ContactKind {
             law,
             friction,
             other: other.zip(ci.other_radius),
+            segment,
         })
     }
 
@@ -673,6 +743,22 @@ impl ComponentKind for ContactKind {
                 [radius, rb],
                 def.law,
             )));
+            return;
+        }
+        if let (Some(seg), ContactShape::Sphere { radius }) = (def.segment, def.shape) {
+            for (end, p) in ["end_a", "end_b"].into_iter().zip(seg) {
+                let offset = parts
+                    .local_offset(NodeRef::Node(def.node), p)
+                    .map_or(Vector3::zeros(), |(_, s)| s);
+                parts.elements.push(Box::new(Contact::new(
+                    format!("{}.{end}", def.name),
+                    def.node,
+                    ContactShape::OffsetSphere { radius, offset },
+                    def.plane,
+                    def.law,
+                    def.friction,
+                )));
+            }
             return;
         }
         let shape = match def.shape {
@@ -727,6 +813,9 @@ impl ComponentKind for ContactKind {
             let a = match shape {
                 ContactShape::Sphere { radius } => -normal * radius,
                 ContactShape::Point { offset } => node.r() * offset,
+                ContactShape::OffsetSphere { radius, offset } => {
+                    node.r() * offset - normal * radius
+                }
             };
             let lift = if k == 5 { -0.1 } else { 0.1 };
             let plane = GroundPlane {
@@ -740,6 +829,29 @@ impl ComponentKind for ContactKind {
             let case = TangentCase::element(Box::new(e), vec![node]);
             out.push(if with_friction {
                 case.with_states(vec![(0.004, -0.3), (-0.002, 0.5)])
+            } else {
+                case
+            });
+        }
+        // Capsule ends (spheres at material points), with and without friction.
+        for k in 0..2u64 {
+            let node = random_node(940 + k);
+            let normal = Vector3::new(-0.1, 0.3, 1.0).normalize();
+            let offset = Vector3::new(0.3, -0.1, 0.2);
+            let a = node.r() * offset - normal * 0.25;
+            let plane = GroundPlane {
+                point: node.x + a + normal * 0.08,
+                normal,
+                velocity: Vector3::new(-0.2, 0.1, 0.0),
+            };
+            let shape = ContactShape::OffsetSphere {
+                radius: 0.25,
+                offset,
+            };
+            let e = Contact::new("end", 0, shape, plane, hc, (k == 0).then_some(friction));
+            let case = TangentCase::element(Box::new(e), vec![node]);
+            out.push(if k == 0 {
+                case.with_states(vec![(0.003, 0.2), (-0.001, -0.4)])
             } else {
                 case
             });
