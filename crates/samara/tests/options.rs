@@ -761,3 +761,176 @@ step = 0.001
     // `outputs` names the state-space block's signals.
     assert!(base.iter().any(|(n, _)| n == "ss2"));
 }
+
+/// Issue #16: every `[[tires]]` option changes the motion of the braked sled of
+/// examples/contact/tire_braking.toml (0.4 s: spin-down, lock and skid); `D` with
+/// `nominal_load` is the same as `mu = D/nominal_load`. (`ground_normal` and the slip
+/// angle: tests/tire.rs, the tilted rig.)
+#[test]
+fn every_tire_option_changes_the_motion() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/contact/tire_braking.toml");
+    let base = std::fs::read_to_string(path)
+        .unwrap()
+        .replace("t_end = 1.5", "t_end = 0.4");
+    let motion = |text: &str| -> Vec<f64> {
+        let (_, h) = attempt(text);
+        assert!(h.last().unwrap().time > 0.399, "{text}");
+        let last = h.last().unwrap();
+        let mut v: Vec<f64> = last
+            .state
+            .nodes
+            .iter()
+            .flat_map(|n| [n.x[0], n.x[2], n.v[0], n.v[1], n.w[1], n.w[2]])
+            .collect();
+        v.extend(last.state.states.iter().map(|s| s.z));
+        // The tire's outputs (forces the joints take are not in the motion).
+        let m = model(text);
+        let sys = System::new(&m);
+        let mut out = vec![0.0; sys.output_names.len()];
+        let ctx = samara::elements::EvalContext {
+            time: last.time,
+            gravity: m.gravity,
+            load_factor: 1.0,
+        };
+        sys.element_outputs(&ctx, &last.state, &mut out);
+        v.extend(out);
+        v
+    };
+    let reference = motion(&base);
+    let lat = "lateral = { B = 10.0, C = 1.3, mu = 1.0, E = 0.97 }";
+    let lat_pulling = "lateral = { B = 10.0, C = 1.3, mu = 1.0, E = 0.97 }\nground_velocity = [0.0, 0.3, 0.0]\nground_point = [0.0, 0.0, 0.001]";
+    let variants: &[(&str, &str)] = &[
+        ("radius = 0.3 ", "radius = 0.301 "),
+        ("rolling_radius = 0.29", "rolling_radius = 0.3"),
+        ("vertical_stiffness = 2e5", "vertical_stiffness = 2.2e5"),
+        (
+            "longitudinal_relaxation_length = 0.1",
+            "longitudinal_relaxation_length = 0.3",
+        ),
+        (
+            "longitudinal = { B = 10.0, C = 1.9, mu = 1.0, E = 0.97 }",
+            "longitudinal = { B = 10.0, C = 1.9, mu = 0.8, E = 0.97 }",
+        ),
+        ("rolling_resistance = 0.01", "rolling_resistance = 0.05"),
+        (
+            "brake = \"brake\"",
+            "brake = \"brake\"\nregularization_speed = 0.01",
+        ),
+        ("brake = \"brake\"\n", ""),
+        (
+            "brake = \"brake\"",
+            "brake = \"brake\"\nground_point = [0.0, 0.0, 0.001]",
+        ),
+        (lat, lat_pulling),
+    ];
+    for (from, to) in variants {
+        assert!(base.contains(from), "{from}");
+        let v = motion(&base.replacen(from, to, 1));
+        let diff: f64 = v.iter().zip(&reference).map(|(a, b)| (a - b).abs()).sum();
+        assert!(diff > 1e-6, "`{to}` changed nothing");
+    }
+    // The lateral set, the lateral relaxation length and the trail act once the ground
+    // pulls sideways, the vertical damping once the tire is not at rest on it.
+    let pulled = base.replacen(lat, lat_pulling, 1);
+    let reference = motion(&pulled);
+    for (from, to) in [
+        (
+            "lateral = { B = 10.0, C = 1.3, mu = 1.0, E = 0.97 }",
+            "lateral = { B = 8.0, C = 1.3, mu = 1.0, E = 0.97 }",
+        ),
+        (
+            "lateral_relaxation_length = 0.3",
+            "lateral_relaxation_length = 0.5",
+        ),
+        (
+            "trail = { B = 8.0, C = 1.2, D = 0.04, E = -0.5 }",
+            "trail = { B = 8.0, C = 1.2, D = 0.06, E = -0.5 }",
+        ),
+        ("trail = { B = 8.0, C = 1.2, D = 0.04, E = -0.5 }\n", ""),
+        ("vertical_damping = 3000.0", "vertical_damping = 1000.0"),
+    ] {
+        assert!(pulled.contains(from), "{from}");
+        let v = motion(&pulled.replacen(from, to, 1));
+        let diff: f64 = v.iter().zip(&reference).map(|(a, b)| (a - b).abs()).sum();
+        assert!(diff > 1e-9, "`{to}` changed nothing");
+    }
+    // D at the nominal load is μ = D/F_z0.
+    let with_d = base.replacen(
+        "longitudinal = { B = 10.0, C = 1.9, mu = 1.0, E = 0.97 }",
+        "longitudinal = { B = 10.0, C = 1.9, D = 4000.0, E = 0.97 }\nnominal_load = 5000.0",
+        1,
+    );
+    let with_mu = base.replacen(
+        "longitudinal = { B = 10.0, C = 1.9, mu = 1.0, E = 0.97 }",
+        "longitudinal = { B = 10.0, C = 1.9, mu = 0.8, E = 0.97 }",
+        1,
+    );
+    let (a, b) = (motion(&with_d), motion(&with_mu));
+    let diff: f64 = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).sum();
+    assert!(diff < 1e-9, "{diff}");
+}
+
+/// Issue #16: the body–body keys of `[[contacts]]` — `other_node` turns the contact from
+/// the ground plane to a second sphere, and `other_radius` changes when the spheres meet
+/// (examples/contact/sphere_collision.toml).
+#[test]
+fn body_body_contact_keys_change_the_collision() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/contact/sphere_collision.toml");
+    let base = std::fs::read_to_string(path).unwrap();
+    let speeds = |text: &str| -> [f64; 4] {
+        let (_, h) = attempt(text);
+        let n = &h.last().unwrap().state.nodes;
+        [n[0].v[0], n[1].v[0], n[0].x[0], n[1].x[0]]
+    };
+    let reference = speeds(&base);
+    let bigger = speeds(&base.replace("other_radius = 0.1", "other_radius = 0.12"));
+    // Without `other_node` the contact is with a ground plane (put 1 m below): the nodes
+    // pass through each other untouched.
+    let ground = speeds(
+        &base
+            .replace("other_node = \"b\"\n", "ground_point = [0.0, 0.0, -1.0]\n")
+            .replace("other_radius = 0.1\n", ""),
+    );
+    assert!(reference[0] < 0.0, "{reference:?}");
+    // A bigger sphere meets the other earlier: the same exit speeds, later positions apart.
+    assert!((bigger[3] - bigger[2]) - (reference[3] - reference[2]) > 1e-3);
+    assert_eq!([ground[0], ground[1]], [1.5, -0.5]);
+}
+
+/// Issue #16: `shape = "capsule"` with its `segment` (examples/contact/capsule_rest.toml):
+/// moving the segment's end moves the load between the two end spheres.
+#[test]
+fn capsule_segment_changes_the_end_loads() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/contact/capsule_rest.toml");
+    let base = std::fs::read_to_string(path)
+        .unwrap()
+        .replace("t_end = 1.0", "t_end = 0.5");
+    let end_a = |text: &str| -> f64 {
+        let (_, h) = attempt(text);
+        let m = model(text);
+        let sys = System::new(&m);
+        let last = h.last().unwrap();
+        let mut out = vec![0.0; sys.output_names.len()];
+        let ctx = samara::elements::EvalContext {
+            time: last.time,
+            gravity: m.gravity,
+            load_factor: 1.0,
+        };
+        sys.element_outputs(&ctx, &last.state, &mut out);
+        out[sys
+            .output_names
+            .iter()
+            .position(|o| o == "rest.end_a.normal_force")
+            .unwrap()]
+    };
+    let a = end_a(&base);
+    let b = end_a(&base.replace("[0.5, 0.0, 0.05]]", "[0.3, 0.0, 0.05]]"));
+    // Lever rule: m g · 0.5/0.8 and m g · 0.3/0.6.
+    assert!(
+        (a - 19.62 * 0.5 / 0.8).abs() < 1e-6 && (b - 19.62 * 0.5).abs() < 1e-6,
+        "{a} {b}"
+    );
+}

@@ -5,7 +5,8 @@
 //! **Kinematics.** The ground is the plane through `p₀` with unit normal `n` (out of the
 //! ground), moving in its own plane at the surface velocity `v_g` (a belt; `n·v_g = 0`).
 //! The body touches it with a point `p = x + a` of its node: a material point (`a = R s`)
-//! or the lowest point of a sphere of radius ρ centred at the node (`a = −ρ n`). The
+//! or the lowest point of a sphere of radius ρ centred at the node (`a = −ρ n`) or at a
+//! material point (`a = R s − ρ n`, each end of a capsule). The
 //! penetration is `δ = −n·(p − p₀)` and the velocity of the material point at `p`
 //! relative to the surface is `u = v + ω × a − v_g` (ω = R Ω); `δ̇ = −n·u`, and the slip
 //! velocity is `w = (t₁·u, t₂·u)` in a tangent basis (t₁, t₂) of the plane.
@@ -49,6 +50,10 @@ pub enum ContactShape {
     Sphere { radius: f64 },
     /// A material point at this offset in the node frame.
     Point { offset: Vector3<f64> },
+    /// A sphere of this radius centred at a material point (offset in the node frame):
+    /// each end of a capsule (a capsule touches a plane at its lowest end, or along a
+    /// line at both ends when it lies flat).
+    OffsetSphere { radius: f64, offset: Vector3<f64> },
 }
 
 /// The normal-force law.
@@ -250,6 +255,9 @@ impl Contact {
         let (a, a_theta) = match self.shape {
             ContactShape::Sphere { radius } => (-n * radius, Matrix3::zeros()),
             ContactShape::Point { offset } => (r * offset, -(r * skew(&offset))),
+            ContactShape::OffsetSphere { radius, offset } => {
+                (r * offset - n * radius, -(r * skew(&offset)))
+            }
         };
         let p = nd.x + a;
         let u = nd.v + omega.cross(&a) - self.plane.velocity;
@@ -374,6 +382,9 @@ impl Element for Contact {
         let geo = match self.shape {
             ContactShape::Point { offset } => -(skew(&offset) * skew(&(rt * f))),
             ContactShape::Sphere { .. } => -skew(&moment),
+            ContactShape::OffsetSphere { radius, offset } => {
+                -(skew(&offset) * skew(&(rt * f))) - skew(&(rt * (-n * radius).cross(&f)))
+            }
         };
         add_block(&mut out.k, 3, 3, &geo);
         let Some(fr) = fr else { return };

@@ -11,8 +11,10 @@ pub mod line_of_action;
 mod low_pass;
 mod maxwell;
 mod rigid_body;
+mod sphere_pair;
 mod spring_damper;
 mod time_signal;
+mod tire;
 
 pub use applied_load::{AppliedLoad, LoadFrame};
 pub use contact::{
@@ -27,7 +29,9 @@ pub use hydraulic::{
 pub use low_pass::{LowPassSensor, NodeQuantity, SensorInput};
 pub use maxwell::Maxwell;
 pub use rigid_body::RigidBody;
+pub use sphere_pair::SpherePair;
 pub use spring_damper::SpringDamper;
 pub use time_signal::TimeSignal;
+pub use tire::{MagicFormula, Tire, TireGround, TireParameters};
 
 pub use crate::core::{Element, EvalContext, LocalTerms, Need, add_block};

@@ -25,10 +25,16 @@
 //! bristle_damping = 100.0        # σ₁ [s/m]
 //! # viscous_friction = 0.0       # σ₂ [s/m]
 //! ```
+//!
+//! Capsule: `shape = "capsule"`, `radius` and `segment = [[…], […]]` (the ends of its
+//! axis): a sphere at each end, `<name>.end_a` and `<name>.end_b`.
+//!
+//! Body–body: `other_node` and `other_radius` put a second sphere on another node instead
+//! of the ground plane (frictionless; kernel [`crate::elements::SpherePair`]).
 
 use super::{Build, ComponentKind, ModelInput};
 use crate::core::NodeRef;
-use crate::elements::{Contact, ContactShape, Friction, GroundPlane, NormalLaw};
+use crate::elements::{Contact, ContactShape, Friction, GroundPlane, NormalLaw, SpherePair};
 use crate::model::input::AnalysisType;
 use crate::model::validate::{Checker, Entry};
 use crate::model::{Located, Model};
@@ -45,6 +51,10 @@ pub enum ShapeInput {
     Sphere,
     /// A material point of the body (`point`).
     Point,
+    /// A capsule: the segment `segment` swept by a sphere of `radius`; it touches the
+    /// ground plane with spheres at its two ends (outputs and states of
+    /// `<name>.end_a` and `<name>.end_b`).
+    Capsule,
 }
 
 /// Normal-force law.
@@ -121,6 +131,16 @@ pub struct ContactInput {
     /// Viscous friction σ₂ per unit normal force [s/m], ≥ 0 (default 0).
     #[serde(default)]
     pub viscous_friction: Option<f64>,
+    /// Capsule: the ends of its axis segment, global, initial configuration [m].
+    #[serde(default)]
+    pub segment: Option<[[f64; 3]; 2]>,
+    /// Body–body contact: the node of a second sphere (instead of the ground plane);
+    /// outputs `<name>.normal_force`, `.penetration`. Frictionless.
+    #[serde(default)]
+    pub other_node: Option<Located<String>>,
+    /// Radius of the second sphere [m], positive (with `other_node`).
+    #[serde(default)]
+    pub other_radius: Option<f64>,
 }
 
 /// A validated contact.
@@ -135,6 +155,10 @@ pub struct ContactDef {
     pub plane: GroundPlane,
     pub law: NormalLaw,
     pub friction: Option<Friction>,
+    /// Body–body: the second sphere's node and radius.
+    pub other: Option<(usize, f64)>,
+    /// Capsule: the ends of its segment (global, initial configuration).
+    pub segment: Option<[Vector3<f64>; 2]>,
 }
 
 pub struct ContactKind;
@@ -224,7 +248,64 @@ impl ComponentKind for ContactKind {
             None => None,
         };
         // Geometry.
+        if ci.shape != ShapeInput::Capsule {
+            ok &= unused(
+                cx,
+                &e,
+                &what,
+                "segment",
+                ci.segment.is_some(),
+                "`segment` is the axis of shape = \"capsule\"",
+            );
+        }
+        let mut segment = None;
         let shape = match ci.shape {
+            ShapeInput::Capsule => {
+                ok &= unused(
+                    cx,
+                    &e,
+                    &what,
+                    "point",
+                    ci.point.is_some(),
+                    "a capsule is given by `segment` and `radius`",
+                );
+                let hint = "a capsule: `radius` [m] and `segment = [[x, y, z], [x, y, z]]`, the ends of its axis";
+                let r = required(cx, &e, &what, "radius", ci.radius, hint);
+                let seg = required(cx, &e, &what, "segment", ci.segment.map(|_| 0.0), hint)
+                    .and(ci.segment);
+                if let Some([a, b]) = seg {
+                    let (a, b) = (Vector3::from(a), Vector3::from(b));
+                    let len = (b - a).norm();
+                    if !len.is_finite() || len <= 0.0 {
+                        cx.error(
+                            format!("{what}: the capsule's `segment` must join two different finite points"),
+                            cx.key(&e, "segment"),
+                            Some(hint.into()),
+                        );
+                        ok = false;
+                    } else {
+                        segment = Some([a, b]);
+                    }
+                } else {
+                    ok = false;
+                }
+                match r {
+                    Some(r)
+                        if check(
+                            cx,
+                            &e,
+                            &what,
+                            ("radius", r),
+                            |v| v > 0.0,
+                            "positive",
+                            "a capsule has a positive radius [m]",
+                        ) =>
+                    {
+                        Some(ContactShape::Sphere { radius: r })
+                    }
+                    _ => None,
+                }
+            }
             ShapeInput::Sphere => {
                 ok &= unused(
                     cx,
@@ -538,6 +619,70 @@ impl ComponentKind for ContactKind {
                 }
             }
         };
+        // Body–body.
+        let mut other = None;
+        if let Some(on) = &ci.other_node {
+            let hint = "a body–body contact is frictionless between two spheres: `shape = \"sphere\"`, `radius`, `other_node`, `other_radius` and the normal law";
+            match cx.node_ref(on, &what) {
+                Some(NodeRef::Node(j)) if Some(j) == node => {
+                    cx.error(
+                        format!("{what}: a contact between a body and itself"),
+                        on.span.clone(),
+                        Some("`other_node` must be another body's node".into()),
+                    );
+                    ok = false;
+                }
+                Some(NodeRef::Node(j)) => other = Some(j),
+                Some(NodeRef::Ground) => {
+                    cx.error(
+                        format!("{what}: `other_node` cannot be the ground"),
+                        on.span.clone(),
+                        Some("against the ground, leave out `other_node` and give the ground plane (`ground_point`, `ground_normal`)".into()),
+                    );
+                    ok = false;
+                }
+                None => ok = false,
+            }
+            if ci.shape != ShapeInput::Sphere {
+                cx.error(
+                    format!("{what}: a body–body contact is between two spheres"),
+                    cx.key(&e, "shape"),
+                    Some(hint.into()),
+                );
+                ok = false;
+            }
+            for (key, given) in [
+                ("ground_point", ci.ground_point.is_some()),
+                ("ground_normal", ci.ground_normal.is_some()),
+                ("ground_velocity", ci.ground_velocity.is_some()),
+                ("static_friction", ci.static_friction.is_some()),
+            ] {
+                ok &= unused(cx, &e, &what, key, given, hint);
+            }
+            match required(cx, &e, &what, "other_radius", ci.other_radius, hint) {
+                Some(r) => {
+                    ok &= check(
+                        cx,
+                        &e,
+                        &what,
+                        ("other_radius", r),
+                        |v| v > 0.0,
+                        "positive",
+                        "the second sphere's radius [m]",
+                    );
+                }
+                None => ok = false,
+            }
+        } else {
+            ok &= unused(
+                cx,
+                &e,
+                &what,
+                "other_radius",
+                ci.other_radius.is_some(),
+                "`other_radius` is the radius of the sphere on `other_node`",
+            );
+        }
         let (node, shape, normal, law) = (node?, shape?, normal?, law?);
         let point = match ci.point {
             Some(p) => Vector3::from(p),
@@ -555,6 +700,8 @@ impl ComponentKind for ContactKind {
             },
             law,
             friction,
+            other: other.zip(ci.other_radius),
+            segment,
         })
     }
 
@@ -583,10 +730,37 @@ impl ComponentKind for ContactKind {
     }
 
     fn nodes(def: &ContactDef) -> Vec<usize> {
-        vec![def.node]
+        let mut v = vec![def.node];
+        v.extend(def.other.map(|o| o.0));
+        v
     }
 
     fn build(def: &ContactDef, parts: &mut Build) {
+        if let (Some((j, rb)), ContactShape::Sphere { radius }) = (def.other, def.shape) {
+            parts.elements.push(Box::new(SpherePair::new(
+                &def.name,
+                [def.node, j],
+                [radius, rb],
+                def.law,
+            )));
+            return;
+        }
+        if let (Some(seg), ContactShape::Sphere { radius }) = (def.segment, def.shape) {
+            for (end, p) in ["end_a", "end_b"].into_iter().zip(seg) {
+                let offset = parts
+                    .local_offset(NodeRef::Node(def.node), p)
+                    .map_or(Vector3::zeros(), |(_, s)| s);
+                parts.elements.push(Box::new(Contact::new(
+                    format!("{}.{end}", def.name),
+                    def.node,
+                    ContactShape::OffsetSphere { radius, offset },
+                    def.plane,
+                    def.law,
+                    def.friction,
+                )));
+            }
+            return;
+        }
         let shape = match def.shape {
             ContactShape::Point { .. } => ContactShape::Point {
                 offset: parts
@@ -639,6 +813,9 @@ impl ComponentKind for ContactKind {
             let a = match shape {
                 ContactShape::Sphere { radius } => -normal * radius,
                 ContactShape::Point { offset } => node.r() * offset,
+                ContactShape::OffsetSphere { radius, offset } => {
+                    node.r() * offset - normal * radius
+                }
             };
             let lift = if k == 5 { -0.1 } else { 0.1 };
             let plane = GroundPlane {
@@ -655,6 +832,37 @@ impl ComponentKind for ContactKind {
             } else {
                 case
             });
+        }
+        // Capsule ends (spheres at material points), with and without friction.
+        for k in 0..2u64 {
+            let node = random_node(940 + k);
+            let normal = Vector3::new(-0.1, 0.3, 1.0).normalize();
+            let offset = Vector3::new(0.3, -0.1, 0.2);
+            let a = node.r() * offset - normal * 0.25;
+            let plane = GroundPlane {
+                point: node.x + a + normal * 0.08,
+                normal,
+                velocity: Vector3::new(-0.2, 0.1, 0.0),
+            };
+            let shape = ContactShape::OffsetSphere {
+                radius: 0.25,
+                offset,
+            };
+            let e = Contact::new("end", 0, shape, plane, hc, (k == 0).then_some(friction));
+            let case = TangentCase::element(Box::new(e), vec![node]);
+            out.push(if k == 0 {
+                case.with_states(vec![(0.003, 0.2), (-0.001, -0.4)])
+            } else {
+                case
+            });
+        }
+        // Sphere pairs: in contact (the radii exceed the distance), both laws.
+        for (k, law) in [hc, lin].into_iter().enumerate() {
+            let a = random_node(930 + k as u64);
+            let b = random_node(935 + k as u64);
+            let dist = (b.x - a.x).norm();
+            let e = SpherePair::new("pair", [0, 1], [0.6 * dist, 0.5 * dist], law);
+            out.push(TangentCase::element(Box::new(e), vec![a, b]));
         }
         out
     }

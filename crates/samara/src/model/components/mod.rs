@@ -23,6 +23,7 @@ pub mod motor;
 pub mod sensor;
 pub mod signal;
 pub mod spring;
+pub mod tire;
 pub mod viscoelastic;
 
 use super::input::{AnalysisInput, ModelHeader, NodeInput};
@@ -254,4 +255,7 @@ registry! {
     /// DC motors between two nodes about an axis, driven by a voltage signal (armature
     /// current as the state).
     motors: motor::Motor,
+    /// Tires on revolute hub joints: Magic-Formula forces from relaxation-length slip
+    /// states, rolling resistance, aligning moment and a brake-torque input.
+    tires: tire::TireKind,
 }
