@@ -98,7 +98,9 @@ fn every_example_runs() {
                 }
                 AnalysisKind::Floquet(fs) => {
                     let f = &h.arrays.iter().find(|a| a.0.name == "floquet_modulus");
-                    let f = &f.unwrap_or_else(|| panic!("{rel}: no Floquet multipliers")).1;
+                    let f = &f
+                        .unwrap_or_else(|| panic!("{rel}: no Floquet multipliers"))
+                        .1;
                     assert_eq!(f.len(), fs.n_modes, "{rel}");
                 }
             }

@@ -79,8 +79,14 @@ fn reference(delta: f64, eps: f64, c: f64) -> Matrix2<f64> {
         for k in 0..n {
             let t = k as f64 * h;
             let k1 = f(t, x);
-            let k2 = f(t + h / 2.0, [x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]]);
-            let k3 = f(t + h / 2.0, [x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]]);
+            let k2 = f(
+                t + h / 2.0,
+                [x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]],
+            );
+            let k3 = f(
+                t + h / 2.0,
+                [x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]],
+            );
             let k4 = f(t + h, [x[0] + h * k3[0], x[1] + h * k3[1]]);
             for i in 0..2 {
                 x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
@@ -115,7 +121,11 @@ fn samara_multipliers(delta: f64, eps: f64, c: f64, steps: usize) -> (Vec<Comple
     )
     .unwrap();
     assert!(s.failure.is_none(), "{:?}", s.failure);
-    let rho = h.arrays.iter().find(|a| a.0.name == "floquet_multiplier").unwrap();
+    let rho = h
+        .arrays
+        .iter()
+        .find(|a| a.0.name == "floquet_multiplier")
+        .unwrap();
     let mut v = Vec::new();
     for k in 0..2 {
         let z = Complex::new(rho.1[2 * k], rho.1[2 * k + 1]);
@@ -133,7 +143,10 @@ fn samara_multipliers(delta: f64, eps: f64, c: f64, steps: usize) -> (Vec<Comple
 }
 
 fn error(a: &[Complex<f64>], b: &[Complex<f64>]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).norm())
+        .fold(0.0, f64::max)
 }
 
 /// The multipliers converge to the reference as h² (the generalized-α scheme is second
@@ -148,7 +161,9 @@ fn mathieu_multipliers_converge_as_h_squared() {
             .map(|&n| error(&samara_multipliers(delta, eps, c, n).0, &exact))
             .collect();
         let orders = common::orders(&errs);
-        eprintln!("δ = {delta}, ε = {eps}, c = {c}: errors {errs:?}, orders {orders:?}, reference {exact:?}");
+        eprintln!(
+            "δ = {delta}, ε = {eps}, c = {c}: errors {errs:?}, orders {orders:?}, reference {exact:?}"
+        );
         for o in &orders {
             assert!((o - 2.0).abs() < 0.15, "order {o} ({errs:?})");
         }
@@ -179,11 +194,19 @@ fn mathieu_stability_on_both_sides_of_the_first_two_tongues() {
         let top = ours[0].norm();
         eprintln!("δ = {delta}, ε = {eps}: |ρ| = {top} (reference {top_ref})");
         assert_eq!(top_ref > 1.0 + 1e-6, unstable, "reference at δ = {delta}");
-        assert_eq!(top > 1.0 + 1e-6, unstable, "samara at δ = {delta}: {ours:?}");
+        assert_eq!(
+            top > 1.0 + 1e-6,
+            unstable,
+            "samara at δ = {delta}: {ours:?}"
+        );
         assert!((top - top_ref).abs() < 2e-3 * top_ref, "{top} {top_ref}");
         // The written modulus, exponent and damping ratio agree with the multiplier.
         let get = |n: &str| &h.arrays.iter().find(|a| a.0.name == n).unwrap().1;
-        let (modulus, expo, zeta) = (get("floquet_modulus"), get("floquet_exponent"), get("damping_ratio"));
+        let (modulus, expo, zeta) = (
+            get("floquet_modulus"),
+            get("floquet_exponent"),
+            get("damping_ratio"),
+        );
         assert!((modulus[0] - top).abs() < 1e-14);
         assert!((expo[0] - top.ln() / (2.0 * PI)).abs() < 1e-12);
         if unstable {
@@ -196,7 +219,9 @@ fn mathieu_stability_on_both_sides_of_the_first_two_tongues() {
 /// multipliers (numerical dissipation), so it changes the result.
 #[test]
 fn speed_gives_the_period_and_rho_inf_changes_the_result() {
-    let m = model(&mathieu(0.6, 0.3, 0.0, 100, "").replace("period = 6.283185307179586", "speed = 1.0"));
+    let m = model(
+        &mathieu(0.6, 0.3, 0.0, 100, "").replace("period = 6.283185307179586", "speed = 1.0"),
+    );
     let AnalysisKind::Floquet(f) = &m.analyses[0].kind else {
         panic!()
     };
@@ -205,9 +230,19 @@ fn speed_gives_the_period_and_rho_inf_changes_the_result() {
         let m = model(&mathieu(0.6, 0.3, 0.0, 100, extra));
         let sys = System::new(&m);
         let mut h = History::default();
-        samara::analysis::run_analysis(&sys, &m.analyses[0], sys.initial_state(), &mut h, &mut |_| {})
-            .unwrap();
-        h.arrays.iter().find(|a| a.0.name == "floquet_modulus").unwrap().1[0]
+        samara::analysis::run_analysis(
+            &sys,
+            &m.analyses[0],
+            sys.initial_state(),
+            &mut h,
+            &mut |_| {},
+        )
+        .unwrap();
+        h.arrays
+            .iter()
+            .find(|a| a.0.name == "floquet_modulus")
+            .unwrap()
+            .1[0]
     };
     let (a, b) = (top(""), top("rho_inf = 0.5"));
     assert!((a - 1.0).abs() < 1e-10, "{a}");
@@ -217,12 +252,24 @@ fn speed_gives_the_period_and_rho_inf_changes_the_result() {
 /// A period that is not a period of the stiffness function stops the analysis with a hint.
 #[test]
 fn a_period_that_is_not_a_period_of_the_loads_is_refused() {
-    let m = model(&mathieu(0.6, 0.3, 0.0, 50, "").replace("period = 6.283185307179586", "period = 5.0"));
+    let m = model(
+        &mathieu(0.6, 0.3, 0.0, 50, "").replace("period = 6.283185307179586", "period = 5.0"),
+    );
     let sys = System::new(&m);
     let mut h = History::default();
-    let s = samara::analysis::run_analysis(&sys, &m.analyses[0], sys.initial_state(), &mut h, &mut |_| {})
-        .unwrap();
+    let s = samara::analysis::run_analysis(
+        &sys,
+        &m.analyses[0],
+        sys.initial_state(),
+        &mut h,
+        &mut |_| {},
+    )
+    .unwrap();
     let f = s.failure.expect("refused");
-    assert!(f.reason.contains("not a period of the loads"), "{}", f.reason);
+    assert!(
+        f.reason.contains("not a period of the loads"),
+        "{}",
+        f.reason
+    );
     assert!(f.hint.unwrap().contains("period"));
 }

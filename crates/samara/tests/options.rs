@@ -520,7 +520,8 @@ type = "floquet"
 #[test]
 fn every_floquet_option_changes_the_result() {
     let function = "stiffness_function = { type = \"sine\", amplitude = 0.3, frequency = 0.15915494309189535, phase = 1.5707963267948966, offset = 0.6 }";
-    let text = |f: &str, keys: &str| format!("{}{keys}\n", MATHIEU.replace("STIFFNESS_FUNCTION", f));
+    let text =
+        |f: &str, keys: &str| format!("{}{keys}\n", MATHIEU.replace("STIFFNESS_FUNCTION", f));
     let rho = |f: &str, keys: &str| {
         let (s, h) = attempt(&text(f, keys));
         assert!(s.failure.is_none(), "{:?}", s.failure);
@@ -531,15 +532,27 @@ fn every_floquet_option_changes_the_result() {
             .1
             .clone()
     };
-    let base = rho(function, "period = 6.283185307179586\nsteps_per_period = 100");
+    let base = rho(
+        function,
+        "period = 6.283185307179586\nsteps_per_period = 100",
+    );
     let by_speed = rho(function, "speed = -1.0\nsteps_per_period = 100");
     assert_eq!(base[..2], by_speed[..2]);
     assert!(base[2..].iter().all(|x| x.is_nan()));
-    let finer = rho(function, "period = 6.283185307179586\nsteps_per_period = 200");
+    let finer = rho(
+        function,
+        "period = 6.283185307179586\nsteps_per_period = 200",
+    );
     assert!((finer[0] - base[0]).abs() > 1e-6);
-    let damped = rho(function, "period = 6.283185307179586\nsteps_per_period = 100\nrho_inf = 0.8");
+    let damped = rho(
+        function,
+        "period = 6.283185307179586\nsteps_per_period = 100\nrho_inf = 0.8",
+    );
     assert!(damped[0].hypot(damped[1]) < base[0].hypot(base[1]) - 1e-6);
-    let one = rho(function, "period = 6.283185307179586\nsteps_per_period = 100\nn_modes = 1");
+    let one = rho(
+        function,
+        "period = 6.283185307179586\nsteps_per_period = 100\nn_modes = 1",
+    );
     assert_eq!((base.len(), one.len()), (20, 2));
     // Constant stiffness: ρ = e^{±i ω T}, ω = √0.6 (h² error at 400 steps: ~1e-4).
     let constant = rho(
@@ -553,7 +566,10 @@ fn every_floquet_option_changes_the_result() {
     );
     for (key, message) in [
         ("t_end = 1.0", "`t_end` is not used by a floquet analysis"),
-        ("speeds = [1.0]", "`speeds` is not used by a floquet analysis"),
+        (
+            "speeds = [1.0]",
+            "`speeds` is not used by a floquet analysis",
+        ),
         ("shift = 1.0", "`shift` is not used by a floquet analysis"),
     ] {
         let bad = text(function, &format!("period = 1.0\n{key}"));

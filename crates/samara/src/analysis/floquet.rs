@@ -23,8 +23,7 @@
 //! `frequency(mode)` and `damping_ratio(mode)` (docs/results.md), largest modulus first.
 
 use super::{
-    AnalysisSummary, ArraySpec, Energy, OutputFrame, Progress, Recorder, Simulation,
-    SolverFailure,
+    AnalysisSummary, ArraySpec, Energy, OutputFrame, Progress, Recorder, Simulation, SolverFailure,
 };
 use crate::core::State;
 use crate::linear::floquet::{FloquetMode, monodromy};
@@ -269,10 +268,7 @@ pub fn run_floquet(
         summary.wall_time = clock.elapsed();
         return Ok(summary);
     }
-    let systems: Vec<LinearSystem> = states
-        .par_iter()
-        .map(|s| linearize(sys, s, None))
-        .collect();
+    let systems: Vec<LinearSystem> = states.par_iter().map(|s| linearize(sys, s, None)).collect();
     progress(0.6);
     let start = &states[0];
     let ctx = sys.context(start.time, 1.0);

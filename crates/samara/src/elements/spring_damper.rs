@@ -87,8 +87,8 @@ impl Element for SpringDamper {
 
     fn outputs(&self, ctx: &EvalContext, x: &ElementInput, out: &mut [f64]) {
         let st = self.line.state(x.nodes);
-        out[0] = self.stiffness_at(ctx.time) * (st.length - self.rest_length)
-            + self.damping * st.rate;
+        out[0] =
+            self.stiffness_at(ctx.time) * (st.length - self.rest_length) + self.damping * st.rate;
         out[1] = st.length;
     }
 

@@ -38,7 +38,12 @@
 //!
 //! (the derivatives of `B y = 0`; Ḃ and B̈ by central differences over the step, using
 //! the periodicity B(t₀ − h) = B(t₀ + T − h)), a₀ = v̇₀, and is read back at t₀ + T as
-//! `(Nᵀ y, Nᵀ ẏ)` (periodicity: B(t₀ + T) = B(t₀)). Index-3 enforcement keeps
+//! `(Nᵀ y, Nᵀ ẏ)` (periodicity: B(t₀ + T) = B(t₀)), with ẏ(t₀ + T) the central difference
+//! `(y_{N+1} − y_{N−1})/2h` of the positions (one more step past the period, with the
+//! matrices of t₀ + h): the algorithmic velocities of index-3 generalized-α carry an O(h)
+//! error when B varies in time (Arnold & Brüls 2007), the positions are second order.
+//! When B is the same at every step the algorithmic velocity ẏ_N is read instead (second
+//! order there, and it keeps det Φ = 1 for an undamped system with ρ∞ = 1). Index-3 enforcement keeps
 //! `B y = 0` at every step. Every independent direction must have inertia (the projected
 //! mass `NᵀMN` regular); element states (first-order unknowns) are not supported.
 //!
@@ -58,11 +63,15 @@ use std::f64::consts::PI;
 pub enum FloquetError {
     #[error("a Floquet analysis needs at least 2 steps per period and the matrices at each")]
     TooFewSteps,
-    #[error("the model has element states ({0}); a Floquet analysis handles second-order unknowns only")]
+    #[error(
+        "the model has element states ({0}); a Floquet analysis handles second-order unknowns only"
+    )]
     ElementStates(usize),
     #[error("the constraints leave no free motion")]
     NoFreedom,
-    #[error("{0} independent direction(s) have no mass: a Floquet analysis needs inertia in every unconstrained direction")]
+    #[error(
+        "{0} independent direction(s) have no mass: a Floquet analysis needs inertia in every unconstrained direction"
+    )]
     Massless(usize),
     #[error("the step matrix is singular at step {0}")]
     Singular(usize),
@@ -133,34 +142,36 @@ fn dense(a: &super::SparseMatrix) -> DMatrix<f64> {
     d
 }
 
-/// Orthonormal basis of the null space of `b` (m × n) and the pseudo-inverse `b⁺`.
+/// Orthonormal basis of the null space of `b` (m × n) and the pseudo-inverse `b⁺`, from
+/// the SVD of `b` padded with zero rows to a square matrix (singular values below
+/// 10⁻¹⁰ of the largest count as zero, as in the dense modal path).
 fn null_space(b: &DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>) {
     let (m, n) = b.shape();
     if m == 0 {
         return (DMatrix::identity(n, n), DMatrix::zeros(n, 0));
     }
-    // Eigen-decomposition of BᵀB (n × n, symmetric): its zero eigenvectors span null B.
-    let btb = b.transpose() * b;
-    let eig = btb.symmetric_eigen();
-    let top = eig.eigenvalues.iter().fold(0.0f64, |a, &x| a.max(x));
+    let rows = m.max(n);
+    let mut padded = DMatrix::zeros(rows, n);
+    padded.view_mut((0, 0), (m, n)).copy_from(b);
+    let svd = padded.svd(true, true);
+    let (u, vt) = (
+        svd.u.as_ref().expect("requested"),
+        svd.v_t.as_ref().expect("requested"),
+    );
+    let top = svd.singular_values.iter().fold(0.0f64, |a, &x| a.max(x));
     let mut null_cols = Vec::new();
-    let mut range_cols = Vec::new();
-    for k in 0..n {
-        if eig.eigenvalues[k] <= 1e-20 * top.max(f64::MIN_POSITIVE) {
+    let mut pinv = DMatrix::zeros(n, m);
+    for (k, &sv) in svd.singular_values.iter().enumerate() {
+        if sv <= 1e-10 * top.max(f64::MIN_POSITIVE) {
             null_cols.push(k);
         } else {
-            range_cols.push(k);
+            // B⁺ = Σ v_k u_kᵀ / σ_k over the range (u_k restricted to the rows of B).
+            let v = vt.row(k).transpose();
+            let uk = u.column(k).rows(0, m).into_owned();
+            pinv += (v * uk.transpose()) / sv;
         }
     }
-    // Deterministic order and sign: by ascending eigenvector index of the decomposition.
-    let basis = DMatrix::from_fn(n, null_cols.len(), |i, j| eig.eigenvectors[(i, null_cols[j])]);
-    // B⁺ = V Λ⁻¹ Vᵀ Bᵀ over the range.
-    let mut pinv = DMatrix::zeros(n, m);
-    for &k in &range_cols {
-        let v = eig.eigenvectors.column(k);
-        let bv = b * v; // m
-        pinv += (v * bv.transpose()) / eig.eigenvalues[k];
-    }
+    let basis = DMatrix::from_fn(n, null_cols.len(), |i, j| vt[(null_cols[j], i)]);
     (basis, pinv)
 }
 
@@ -203,11 +214,7 @@ pub fn monodromy(
     let mp = basis.transpose() * &m0 * &basis;
     let me = mp.clone().symmetric_eigen();
     let top = me.eigenvalues.iter().fold(0.0f64, |a, &x| a.max(x.abs()));
-    let massless = me
-        .eigenvalues
-        .iter()
-        .filter(|&&x| x <= 1e-12 * top)
-        .count();
+    let massless = me.eigenvalues.iter().filter(|&&x| x <= 1e-12 * top).count();
     if massless > 0 || top == 0.0 {
         return Err(FloquetError::Massless(massless.max(1)));
     }
@@ -252,13 +259,31 @@ pub fn monodromy(
     let ga = GeneralizedAlpha::from_rho_inf(rho_inf);
     let (bp, gp) = (ga.beta_prime(h), ga.gamma_prime(h));
     let scale = ga.beta * h * h;
-    for (step, lin) in systems.iter().enumerate().skip(1) {
+    // Steps 1 … N, then one more (N + 1 ≡ 1 by periodicity) for the velocity read-back.
+    let mut before_end: Vec<DVector<f64>> = Vec::new();
+    let mut b_change = 0.0f64;
+    let mut end_v: Vec<DVector<f64>> = Vec::new();
+    let mut at_end: Vec<DVector<f64>> = Vec::new();
+    for step in 1..=steps + 1 {
+        let lin = &systems[if step > steps { 1 } else { step }];
+        if step == steps {
+            before_end = columns.iter().map(|c| c.y.clone()).collect();
+        }
+        if step == steps + 1 {
+            at_end = columns.iter().map(|c| c.y.clone()).collect();
+            end_v = columns.iter().map(|c| c.v.clone()).collect();
+        }
         let (mm, gg, kk, bb) = (
             dense(&lin.mass),
             dense(&lin.damping),
             dense(&lin.stiffness),
             dense(&lin.constraint_jacobian),
         );
+        if bb.shape() == b0.shape() {
+            b_change = b_change.max((&bb - &b0).amax());
+        } else {
+            b_change = f64::INFINITY;
+        }
         let s = (bp * &mm + gp * &gg + &kk) * scale;
         let smax = s.amax().max(f64::MIN_POSITIVE);
         let bmax = bb.amax();
@@ -290,10 +315,20 @@ pub fn monodromy(
             c.y = y1;
         });
     }
+    // A constant B (no order reduction): the algorithmic velocity, which keeps the
+    // scheme's structure (det Φ = 1 for an undamped system with ρ∞ = 1).
+    let constant_b = b_change <= 1e-14 * b0.amax().max(f64::MIN_POSITIVE);
     let mut phi = DMatrix::zeros(2 * r, 2 * r);
     for (j, c) in columns.iter().enumerate() {
-        let eta = basis.transpose() * &c.y;
-        let etad = basis.transpose() * &c.v;
+        // y(t₀ + T), and ẏ(t₀ + T) by the central difference of the positions (the
+        // algorithmic velocities of index-3 generalized-α carry an O(h) error when B
+        // varies in time; the positions are second order).
+        let eta = basis.transpose() * &at_end[j];
+        let etad = if constant_b {
+            basis.transpose() * &end_v[j]
+        } else {
+            basis.transpose() * ((&c.y - &before_end[j]) / (2.0 * h))
+        };
         phi.view_mut((0, j), (r, 1)).copy_from(&eta);
         phi.view_mut((r, j), (r, 1)).copy_from(&etad);
     }
@@ -359,7 +394,10 @@ mod tests {
         assert!((m.frequency() - wn / (2.0 * PI)).abs() < 1e-12);
         assert!((m.damping_ratio() - zeta).abs() < 1e-12);
         // Two real multipliers are two modes, the larger first.
-        let modes = floquet_modes(&DMatrix::from_diagonal(&DVector::from_vec(vec![0.5, -2.0])), 1.0);
+        let modes = floquet_modes(
+            &DMatrix::from_diagonal(&DVector::from_vec(vec![0.5, -2.0])),
+            1.0,
+        );
         assert_eq!(modes.len(), 2);
         assert_eq!(modes[0].multiplier, c64::new(-2.0, 0.0));
         assert!((modes[0].exponent.im - PI).abs() < 1e-15);

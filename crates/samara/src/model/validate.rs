@@ -1394,7 +1394,10 @@ impl<'a> Checker<'a> {
                     self.error(
                         format!("{what}: `rho_inf` must be in [0, 1] (got {rho_inf})"),
                         self.key(&e, "rho_inf"),
-                        Some("ρ∞ = 1 (the default) adds no numerical damping to the multipliers".into()),
+                        Some(
+                            "ρ∞ = 1 (the default) adds no numerical damping to the multipliers"
+                                .into(),
+                        ),
                     );
                     ok = false;
                 }
