@@ -96,6 +96,13 @@ fn every_example_runs() {
                         .1;
                     assert_eq!(f.len(), cs.modal.n_modes * cs.speeds.len(), "{rel}");
                 }
+                AnalysisKind::Floquet(fs) => {
+                    let f = &h.arrays.iter().find(|a| a.0.name == "floquet_modulus");
+                    let f = &f
+                        .unwrap_or_else(|| panic!("{rel}: no Floquet multipliers"))
+                        .1;
+                    assert_eq!(f.len(), fs.n_modes, "{rel}");
+                }
             }
             let finite = last.state.nodes.iter().all(|n| {
                 n.x.iter()

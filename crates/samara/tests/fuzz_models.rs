@@ -204,6 +204,7 @@ fn shorten(m: &mut Model) {
             AnalysisKind::Static(s) => s.load_steps = s.load_steps.min(3),
             AnalysisKind::Modal(_) => {}
             AnalysisKind::Campbell(c) => c.speeds.truncate(2),
+            AnalysisKind::Floquet(f) => f.steps_per_period = f.steps_per_period.min(8),
         }
     }
 }

@@ -934,3 +934,111 @@ fn capsule_segment_changes_the_end_loads() {
         "{a} {b}"
     );
 }
+
+/// Issue #14, Floquet: a 1 kg body on a prismatic joint held by a spring of stiffness
+/// k f(t), f = 0.6 + 0.3 cos t (the Mathieu equation; verification in tests/floquet.rs).
+const MATHIEU: &str = r#"
+[model]
+name = "mathieu"
+[[nodes]]
+name = "mass"
+position = [0.0, 0.0, 0.0]
+[[bodies]]
+name = "mass"
+node = "mass"
+mass = 1.0
+inertia = [[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1]]
+[[joints]]
+name = "slider"
+type = "prismatic"
+node_a = "ground"
+node_b = "mass"
+position = [0.0, 0.0, 0.0]
+axis = [1.0, 0.0, 0.0]
+[[springs]]
+name = "spring"
+node_a = "ground"
+node_b = "mass"
+point_a = [-1.0, 0.0, 0.0]
+stiffness = 1.0
+STIFFNESS_FUNCTION
+[[analyses]]
+name = "floquet"
+type = "floquet"
+"#;
+
+/// Every Floquet key changes the result: `period`/`speed` (the same T = 2π/|Ω|),
+/// `steps_per_period` (the h² error), `rho_inf` (numerical damping of the multipliers),
+/// `n_modes` (the arrays' size), and the spring's `stiffness_function` (constant: the
+/// multipliers of a constant oscillator, e^{±i√0.6·2π}, 400 steps: h² error ~1e-4 within
+/// 1e-3); the keys of other analysis types
+/// are rejected where they are written.
+#[test]
+fn every_floquet_option_changes_the_result() {
+    let function = "stiffness_function = { type = \"sine\", amplitude = 0.3, frequency = 0.15915494309189535, phase = 1.5707963267948966, offset = 0.6 }";
+    let text =
+        |f: &str, keys: &str| format!("{}{keys}\n", MATHIEU.replace("STIFFNESS_FUNCTION", f));
+    let rho = |f: &str, keys: &str| {
+        let (s, h) = attempt(&text(f, keys));
+        assert!(s.failure.is_none(), "{:?}", s.failure);
+        h.arrays
+            .iter()
+            .find(|a| a.0.name == "floquet_multiplier")
+            .unwrap()
+            .1
+            .clone()
+    };
+    let base = rho(
+        function,
+        "period = 6.283185307179586\nsteps_per_period = 100",
+    );
+    let by_speed = rho(function, "speed = -1.0\nsteps_per_period = 100");
+    assert_eq!(base[..2], by_speed[..2]);
+    assert!(base[2..].iter().all(|x| x.is_nan()));
+    let finer = rho(
+        function,
+        "period = 6.283185307179586\nsteps_per_period = 200",
+    );
+    assert!((finer[0] - base[0]).abs() > 1e-6);
+    let damped = rho(
+        function,
+        "period = 6.283185307179586\nsteps_per_period = 100\nrho_inf = 0.8",
+    );
+    assert!(damped[0].hypot(damped[1]) < base[0].hypot(base[1]) - 1e-6);
+    let one = rho(
+        function,
+        "period = 6.283185307179586\nsteps_per_period = 100\nn_modes = 1",
+    );
+    assert_eq!((base.len(), one.len()), (20, 2));
+    // Constant stiffness: ρ = e^{±i ω T}, ω = √0.6 (h² error at 400 steps: ~1e-4).
+    let constant = rho(
+        "stiffness_function = { type = \"constant\", value = 0.6 }",
+        "period = 6.283185307179586\nsteps_per_period = 400",
+    );
+    let w = 0.6f64.sqrt() * 2.0 * std::f64::consts::PI;
+    assert!(
+        (constant[0] - w.cos()).abs() < 1e-3 && (constant[1] - w.sin().abs()).abs() < 1e-3,
+        "{constant:?}"
+    );
+    for (key, message) in [
+        ("t_end = 1.0", "`t_end` is not used by a floquet analysis"),
+        (
+            "speeds = [1.0]",
+            "`speeds` is not used by a floquet analysis",
+        ),
+        ("shift = 1.0", "`shift` is not used by a floquet analysis"),
+    ] {
+        let bad = text(function, &format!("period = 1.0\n{key}"));
+        let (line, m, _) = first_error(&bad);
+        assert_eq!(line, line_of(&bad, key), "{m}");
+        assert!(m.contains(message), "{m}");
+    }
+    let bad = text(function, "period = 1.0\nspeed = 2.0");
+    assert!(first_error(&bad).1.contains("either `period` or `speed`"));
+    let bad = text(function, "steps_per_period = 100");
+    assert!(first_error(&bad).1.contains("needs `period`"));
+    let bad = format!("{BAR_ON_SPRING}steps_per_period = 10\n");
+    let (line, m, _) = first_error(&bad);
+    assert_eq!(line, line_of(&bad, "steps_per_period"));
+    assert!(m.contains("not used by a static analysis"), "{m}");
+}

@@ -5,6 +5,7 @@
 
 pub mod campbell;
 mod dynamic;
+pub mod floquet;
 pub mod generalized_alpha;
 mod history;
 mod initial;
@@ -20,7 +21,8 @@ pub use initial::{
 };
 pub use modal::run_modal;
 pub use stage::{
-    Analysis, ArraySpec, CampbellAnalysis, DynamicAnalysis, ModalAnalysis, StaticAnalysis,
+    Analysis, ArraySpec, CampbellAnalysis, DynamicAnalysis, FloquetAnalysis, ModalAnalysis,
+    StaticAnalysis,
 };
 pub use statics::run_static;
 

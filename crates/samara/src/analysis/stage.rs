@@ -8,7 +8,8 @@
 
 use super::{AnalysisSummary, Progress, Recorder, run_dynamic, run_modal, run_static};
 use crate::model::{
-    AnalysisDef, AnalysisKind, CampbellSettings, DynamicSettings, ModalSettings, StaticSettings,
+    AnalysisDef, AnalysisKind, CampbellSettings, DynamicSettings, FloquetSettings, ModalSettings,
+    StaticSettings,
 };
 use crate::system::{State, System};
 
@@ -173,6 +174,34 @@ impl Analysis for CampbellAnalysis<'_> {
     }
 }
 
+/// Floquet stability about the periodic solution through the starting state
+/// ([`super::floquet::run_floquet`]).
+pub struct FloquetAnalysis<'a> {
+    pub name: &'a str,
+    pub settings: &'a FloquetSettings,
+}
+
+impl Analysis for FloquetAnalysis<'_> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn kind(&self) -> &'static str {
+        "floquet"
+    }
+    fn arrays(&self, _sys: &System) -> Vec<ArraySpec> {
+        super::floquet::floquet_arrays(self.settings.n_modes)
+    }
+    fn run(
+        &self,
+        sys: &System,
+        initial: State,
+        recorder: &mut dyn Recorder,
+        progress: Progress,
+    ) -> Result<AnalysisSummary, crate::Error> {
+        super::floquet::run_floquet(sys, self.name, self.settings, initial, recorder, progress)
+    }
+}
+
 impl AnalysisDef {
     /// The stage that runs this analysis.
     pub fn stage(&self) -> Box<dyn Analysis + '_> {
@@ -190,6 +219,10 @@ impl AnalysisDef {
                 settings: s,
             }),
             AnalysisKind::Campbell(s) => Box::new(CampbellAnalysis {
+                name: &self.name,
+                settings: s,
+            }),
+            AnalysisKind::Floquet(s) => Box::new(FloquetAnalysis {
                 name: &self.name,
                 settings: s,
             }),

@@ -1,9 +1,12 @@
 //! Point-to-point spring-damper between points on two nodes (or a node and the ground):
-//! tension `T = k (l − l₀) + c l̇` along the line ([`super::line_of_action`]).
+//! tension `T = k f(t) (l − l₀) + c l̇` along the line ([`super::line_of_action`]), with
+//! an optional time function f of the stiffness (default 1: a periodically varying
+//! stiffness gives the Mathieu equation of parametric excitation).
 
 use super::line_of_action::LineOfAction;
 use super::{Element, EvalContext, LocalTerms, Need};
 use crate::core::ElementInput;
+use crate::math::TimeFunction;
 use nalgebra::Vector3;
 
 #[derive(Clone, Debug)]
@@ -13,6 +16,8 @@ pub struct SpringDamper {
     stiffness: f64,
     damping: f64,
     rest_length: f64,
+    /// f(t) multiplying the stiffness.
+    stiffness_function: TimeFunction,
 }
 
 impl SpringDamper {
@@ -33,7 +38,19 @@ impl SpringDamper {
             stiffness,
             damping,
             rest_length,
+            stiffness_function: TimeFunction::Constant(1.0),
         }
+    }
+
+    /// The stiffness varies in time as `k f(t)`.
+    pub fn with_stiffness_function(mut self, f: TimeFunction) -> Self {
+        self.stiffness_function = f;
+        self
+    }
+
+    /// k f(t).
+    fn stiffness_at(&self, t: f64) -> f64 {
+        self.stiffness * self.stiffness_function.eval(t)
     }
 }
 
@@ -46,17 +63,17 @@ impl Element for SpringDamper {
         self.line.nodes()
     }
 
-    fn evaluate(&self, _ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+    fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
         let st = self.line.state(x.nodes);
-        let (k, c) = (self.stiffness, self.damping);
+        let (k, c) = (self.stiffness_at(ctx.time), self.damping);
         let tension = k * (st.length - self.rest_length) + c * st.rate;
         let tangents = (need == Need::ResidualAndTangents).then_some((k, c));
         self.line.add_tension(&st, tension, tangents, out);
     }
 
-    fn potential_energy(&self, _ctx: &EvalContext, x: &ElementInput) -> f64 {
+    fn potential_energy(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
         let st = self.line.state(x.nodes);
-        0.5 * self.stiffness * (st.length - self.rest_length).powi(2)
+        0.5 * self.stiffness_at(ctx.time) * (st.length - self.rest_length).powi(2)
     }
 
     fn dissipated_power(&self, x: &ElementInput) -> f64 {
@@ -68,9 +85,14 @@ impl Element for SpringDamper {
         vec![("tension".into(), "N"), ("length".into(), "m")]
     }
 
-    fn outputs(&self, _ctx: &EvalContext, x: &ElementInput, out: &mut [f64]) {
+    fn outputs(&self, ctx: &EvalContext, x: &ElementInput, out: &mut [f64]) {
         let st = self.line.state(x.nodes);
-        out[0] = self.stiffness * (st.length - self.rest_length) + self.damping * st.rate;
+        out[0] =
+            self.stiffness_at(ctx.time) * (st.length - self.rest_length) + self.damping * st.rate;
         out[1] = st.length;
+    }
+
+    fn breakpoints(&self, out: &mut Vec<f64>) {
+        out.extend(self.stiffness_function.breakpoints());
     }
 }

@@ -12,3 +12,5 @@ pub mod eigen;
 pub use eigen::{EigenMethod, EigenOptions, Mode, Spectrum, modes};
 pub mod spin;
 pub use spin::Spin;
+pub mod floquet;
+pub use floquet::{FloquetMode, Monodromy, monodromy};

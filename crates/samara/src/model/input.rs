@@ -152,6 +152,8 @@ pub enum AnalysisType {
     Modal,
     /// Campbell diagram: spinning statics and rotating-frame modes over a speed sweep.
     Campbell,
+    /// Floquet stability of the periodic solution through the starting state.
+    Floquet,
 }
 
 /// Eigensolver of a modal analysis.
@@ -309,6 +311,15 @@ pub struct AnalysisInput {
     /// campbell: rotor speeds [rad/s], a list or `{ start, end, count }` (evenly spaced).
     #[serde(default)]
     pub speeds: Option<SpeedsInput>,
+    /// Floquet: the period T of the periodic solution [s] (or give `speed`).
+    #[serde(default)]
+    pub period: Option<f64>,
+    /// Floquet: the rotor speed Ω [rad/s]; the period is T = 2π/|Ω|.
+    #[serde(default)]
+    pub speed: Option<f64>,
+    /// Floquet: generalized-α steps per period (default 100).
+    #[serde(default)]
+    pub steps_per_period: Option<usize>,
 }
 
 /// The speeds of a Campbell analysis.

@@ -194,12 +194,26 @@ pub struct CampbellSettings {
     pub solver: SolverSettings,
 }
 
+/// Floquet stability settings: the periodic solution through the starting state over
+/// one `period`, integrated and linearized in `steps_per_period` generalized-α steps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FloquetSettings {
+    /// T [s] (given, or 2π/speed).
+    pub period: f64,
+    pub steps_per_period: usize,
+    pub rho_inf: f64,
+    /// Modes written (largest multiplier modulus first).
+    pub n_modes: usize,
+    pub solver: SolverSettings,
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub enum AnalysisKind {
     Dynamic(DynamicSettings),
     Static(StaticSettings),
     Modal(ModalSettings),
     Campbell(CampbellSettings),
+    Floquet(FloquetSettings),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -217,6 +231,7 @@ impl AnalysisDef {
             AnalysisKind::Static(_) => "static",
             AnalysisKind::Modal(_) => "modal",
             AnalysisKind::Campbell(_) => "campbell",
+            AnalysisKind::Floquet(_) => "floquet",
         }
     }
 
@@ -226,7 +241,7 @@ impl AnalysisDef {
         match &self.kind {
             AnalysisKind::Dynamic(d) => Some(d.t_end),
             AnalysisKind::Static(s) => Some(s.time),
-            AnalysisKind::Modal(_) | AnalysisKind::Campbell(_) => None,
+            AnalysisKind::Modal(_) | AnalysisKind::Campbell(_) | AnalysisKind::Floquet(_) => None,
         }
     }
 }

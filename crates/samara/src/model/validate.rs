@@ -771,6 +771,11 @@ impl<'a> Checker<'a> {
             ("eigensolver", ai.eigensolver.is_some()),
         ];
         let campbell_keys: [(&str, bool); 1] = [("speeds", ai.speeds.is_some())];
+        let floquet_keys: [(&str, bool); 3] = [
+            ("period", ai.period.is_some()),
+            ("speed", ai.speed.is_some()),
+            ("steps_per_period", ai.steps_per_period.is_some()),
+        ];
         // A modal analysis solves no nonlinear equations.
         let newton_keys: [(&str, bool); 6] = [
             ("penalty", ai.penalty.is_some()),
@@ -812,11 +817,35 @@ impl<'a> Checker<'a> {
                 .concat(),
                 "campbell",
             ),
+            AnalysisType::Floquet => (
+                [
+                    &dynamic_keys
+                        .iter()
+                        .copied()
+                        .filter(|(k, _)| *k != "rho_inf")
+                        .collect::<Vec<_>>()[..],
+                    &static_keys,
+                    &modal_keys
+                        .iter()
+                        .copied()
+                        .filter(|(k, _)| *k != "n_modes")
+                        .collect::<Vec<_>>(),
+                    &campbell_keys,
+                    &[("rotation", ai.rotation.is_some())],
+                ]
+                .concat(),
+                "floquet",
+            ),
         };
         let wrong = if kind == AnalysisType::Dynamic {
             [&wrong[..], &campbell_keys].concat()
         } else {
             wrong
+        };
+        let wrong = if kind == AnalysisType::Floquet {
+            wrong
+        } else {
+            [&wrong[..], &floquet_keys].concat()
         };
         let mut ok = true;
         for (k, g) in &wrong {
@@ -1309,6 +1338,88 @@ impl<'a> Checker<'a> {
                     }),
                     None => return None,
                 }
+            }
+            AnalysisType::Floquet => {
+                let period = match (ai.period, ai.speed) {
+                    (Some(t), None) => {
+                        if !(t.is_finite() && t > 0.0 && t <= MAX_MAGNITUDE) {
+                            self.error(
+                                format!("{what}: `period` must be a positive time [s] (got {t})"),
+                                self.key(&e, "period"),
+                                None,
+                            );
+                            ok = false;
+                        }
+                        t
+                    }
+                    (None, Some(w)) => {
+                        if !(w.is_finite() && w != 0.0 && w.abs() <= MAX_MAGNITUDE) {
+                            self.error(
+                                format!("{what}: `speed` must be a non-zero rotor speed [rad/s] (got {w})"),
+                                self.key(&e, "speed"),
+                                Some("the period is T = 2π/|speed|".into()),
+                            );
+                            ok = false;
+                        }
+                        std::f64::consts::TAU / w.abs()
+                    }
+                    (Some(_), Some(_)) => {
+                        self.error(
+                            format!("{what}: give either `period` or `speed`, not both"),
+                            self.key(&e, "speed"),
+                            Some("the period is T = 2π/|speed|".into()),
+                        );
+                        return None;
+                    }
+                    (None, None) => {
+                        self.error(
+                            format!("{what}: a Floquet analysis needs `period` [s] or the rotor `speed` [rad/s]"),
+                            a.span.clone(),
+                            Some("e.g. `speed = 40.0` (T = 2π/40 s) or `period = 0.5`".into()),
+                        );
+                        return None;
+                    }
+                };
+                let steps_per_period = ai.steps_per_period.unwrap_or(100);
+                if !(4..=10_000_000).contains(&steps_per_period) {
+                    self.error(
+                        format!("{what}: `steps_per_period` must be 4 … 10000000 (got {steps_per_period})"),
+                        self.key(&e, "steps_per_period"),
+                        Some("the multipliers converge as h²; 100 to 1000 steps per period is usual".into()),
+                    );
+                    ok = false;
+                }
+                let rho_inf = ai.rho_inf.unwrap_or(1.0);
+                if !(0.0..=1.0).contains(&rho_inf) {
+                    self.error(
+                        format!("{what}: `rho_inf` must be in [0, 1] (got {rho_inf})"),
+                        self.key(&e, "rho_inf"),
+                        Some(
+                            "ρ∞ = 1 (the default) adds no numerical damping to the multipliers"
+                                .into(),
+                        ),
+                    );
+                    ok = false;
+                }
+                let mut n_modes = 10;
+                if let Some(n) = &ai.n_modes {
+                    if n.value == 0 {
+                        self.error(
+                            format!("{what}: `n_modes` must be at least 1"),
+                            n.span.clone(),
+                            None,
+                        );
+                        ok = false;
+                    }
+                    n_modes = n.value;
+                }
+                AnalysisKind::Floquet(FloquetSettings {
+                    period,
+                    steps_per_period,
+                    rho_inf,
+                    n_modes,
+                    solver,
+                })
             }
         };
         ok.then(|| AnalysisDef {

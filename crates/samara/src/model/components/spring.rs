@@ -3,6 +3,8 @@
 use super::{Build, ComponentKind};
 use crate::core::NodeRef;
 use crate::elements::SpringDamper;
+use crate::math::TimeFunction;
+use crate::model::input::TimeFunctionInput;
 use crate::model::validate::{Checker, Entry};
 use crate::model::{Located, Model};
 use crate::tangent_check::{TangentCase, random_node};
@@ -36,6 +38,10 @@ pub struct SpringInput {
     /// Rest length l₀ [m]; default: the initial distance between the points.
     #[serde(default)]
     pub rest_length: Option<f64>,
+    /// Time function f(t) multiplying the stiffness (k f(t)); default 1. A sine gives a
+    /// periodically varying stiffness (Mathieu equation).
+    #[serde(default)]
+    pub stiffness_function: Option<Located<TimeFunctionInput>>,
 }
 
 /// A point-to-point spring-damper.
@@ -50,6 +56,8 @@ pub struct SpringDef {
     pub stiffness: f64,
     pub damping: f64,
     pub rest_length: f64,
+    /// f(t) of the stiffness (`None`: constant).
+    pub stiffness_function: Option<TimeFunction>,
 }
 
 pub struct Spring;
@@ -96,6 +104,10 @@ impl ComponentKind for Spring {
                 None,
             );
         }
+        let stiffness_function = match &si.stiffness_function {
+            Some(f) => Some(cx.time_function(f, &format!("{what} stiffness_function"))?),
+            None => None,
+        };
         let (a, b, pa, pb) = ends?;
         let rest = rest_length(cx, &e, &what, si.rest_length, (pb - pa).norm());
         Some(SpringDef {
@@ -107,6 +119,7 @@ impl ComponentKind for Spring {
             stiffness: si.stiffness,
             damping,
             rest_length: rest,
+            stiffness_function,
         })
     }
 
@@ -127,6 +140,10 @@ impl ComponentKind for Spring {
             def.damping,
             def.rest_length,
         );
+        let element = match &def.stiffness_function {
+            Some(f) => element.with_stiffness_function(f.clone()),
+            None => element,
+        };
         parts.elements.push(Box::new(element));
     }
 
@@ -150,6 +167,18 @@ impl ComponentKind for Spring {
                     15.0,
                     0.4,
                 );
+                // The third case with a time-varying stiffness (the check's time).
+                let e = if k == 2 {
+                    e.with_stiffness_function(TimeFunction::Sine {
+                        amplitude: 0.4,
+                        frequency: 1.3,
+                        phase: 0.3,
+                        offset: 0.9,
+                        start: -1.0,
+                    })
+                } else {
+                    e
+                };
                 TangentCase::element(Box::new(e), vec![random_node(20 + k), random_node(30 + k)])
             })
             .collect()
