@@ -3,7 +3,7 @@
 
 use super::line_of_action::LineOfAction;
 use super::{Element, EvalContext, LocalTerms, Need};
-use crate::core::ElementInput;
+use crate::core::{DiscreteStep, ElementInput};
 use nalgebra::Vector3;
 
 #[derive(Clone, Debug)]
@@ -52,6 +52,21 @@ impl Element for SpringDamper {
         let tension = k * (st.length - self.rest_length) + c * st.rate;
         let tangents = (need == Need::ResidualAndTangents).then_some((k, c));
         self.line.add_tension(&st, tension, tangents, out);
+    }
+
+    fn discrete_form(&self) -> Result<(), String> {
+        Ok(())
+    }
+
+    /// Discrete gradient of `V = k(l − l₀)²/2` along the line: the mean tension
+    /// `T̄ = k((l₀ + l₁)/2 − l_rest) + c (l₁ − l₀)/h` along `ē = (d₀ + d₁)/(l₀ + l₁)`, for
+    /// which `ē·Δd = Δl` and `T̄ Δl = ΔV + c Δl²/h` exactly
+    /// ([`LineOfAction::add_discrete_tension`]).
+    fn discrete_residual(&self, step: &DiscreteStep, out: &mut [f64]) {
+        let (l0, l1) = (self.line.length(step.start), self.line.length(step.end));
+        let tension = self.stiffness * (0.5 * (l0 + l1) - self.rest_length)
+            + self.damping * (l1 - l0) / step.h;
+        self.line.add_discrete_tension(step, tension, out);
     }
 
     fn potential_energy(&self, _ctx: &EvalContext, x: &ElementInput) -> f64 {
