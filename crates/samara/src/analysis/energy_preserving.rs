@@ -21,18 +21,18 @@
 //! E₁ − E₀ = −D − ξ (‖v₁ − v₀‖²_M + d) ≤ 0           (no applied loads)
 //! ```
 //!
-//! exactly up to the Newton tolerance, with D ≥ 0 the dampers' dissipation and
-//! `d = |Δ·(∇V(q₁) − ∇V(q₀))|` per element with a potential. With ξ > 0 the potential
-//! forces gain the dissipative part `ξ d Δ/|Δ|²` (for a linear spring exactly the
-//! θ-method's `θ = ½ + ξ`): the decaying scheme is the θ-method of a linear oscillator,
+//! exactly up to the Newton tolerance, with D ≥ 0 the dampers' dissipation and `d ≥ 0`
+//! the dissipation each element with a potential adds for ξ > 0
+//! ([`DiscreteStep::decay`]; `k Δl²` for a spring, the θ-method's `θ = ½ + ξ` on its
+//! length): the decaying scheme is the θ-method of a linear oscillator,
 //! `ρ∞ = (½ − ξ)/(½ + ξ)`, first order in its dissipative terms (error ∝ ξh).
 //!
-//! The Newton matrix is formed by central differences of the step residual (dense LU):
+//! The Newton matrix is formed by forward differences of the step residual (dense LU):
 //! meant for models of a few hundred unknowns.
 
 use super::{AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure};
-use crate::core::{Coordinate, DiscreteStep, EvalContext, NodeState, gonzalez_correction};
-use crate::math::cayley::{cayley, cayley_tangent};
+use crate::core::{Coordinate, DiscreteStep, NodeState, gonzalez_correction};
+use crate::math::cayley::cayley;
 use crate::math::{Rotation, skew};
 use crate::model::{DynamicSettings, IntegratorType};
 use crate::system::{State, System};
@@ -57,6 +57,7 @@ pub struct EnergyStepper<'a> {
     sys: &'a System,
     xi: f64,
     tolerance: f64,
+    relative_tolerance: f64,
     max_iterations: usize,
     state: State,
     /// Scale of the multipliers (λ = m̄ λ̃ / h²) and of the constraint rows.
@@ -67,7 +68,6 @@ pub struct EnergyStepper<'a> {
     // Scratch.
     end: Vec<NodeState>,
     mid: Vec<NodeState>,
-    statics: Vec<NodeState>,
     end_coords: Vec<Coordinate>,
     mid_coords: Vec<Coordinate>,
     local: Vec<f64>,
@@ -94,6 +94,7 @@ impl<'a> EnergyStepper<'a> {
         integrator: IntegratorType,
         rho_inf: f64,
         tolerance: f64,
+        relative_tolerance: f64,
         max_iterations: usize,
         state: State,
     ) -> Result<Self, StepFailure> {
@@ -131,6 +132,7 @@ impl<'a> EnergyStepper<'a> {
             sys,
             xi,
             tolerance,
+            relative_tolerance,
             max_iterations,
             mbar: sys.characteristic_mass,
             n_node,
@@ -138,7 +140,6 @@ impl<'a> EnergyStepper<'a> {
             n,
             end: state.nodes.clone(),
             mid: state.nodes.clone(),
-            statics: state.nodes.clone(),
             end_coords: state.coords.clone(),
             mid_coords: state.coords.clone(),
             local: vec![0.0; max_local],
@@ -230,6 +231,7 @@ impl<'a> EnergyStepper<'a> {
                 end: &self.end,
                 mid: &self.mid,
                 increments: &u[..self.n_node],
+                decay: xi,
             };
             for e in &sys.elements {
                 let nodes = e.nodes();
@@ -237,27 +239,6 @@ impl<'a> EnergyStepper<'a> {
                 let local = &mut self.local[..nl];
                 local.fill(0.0);
                 e.discrete_residual(&step, local);
-                if xi > 0.0 {
-                    // Dissipative part ξ d Δ/|Δ|², d = |Δ·(∇V(q₁) − ∇V(q₀))|.
-                    let d = potential_gradient_change(
-                        &ctx_mid,
-                        e.as_ref(),
-                        &self.state.nodes,
-                        &self.end,
-                        &mut self.statics,
-                        &u[..self.n_node],
-                    );
-                    let delta = &mut self.delta[..nl];
-                    for (a, &ni) in nodes.iter().enumerate() {
-                        delta[6 * a..6 * a + 6].copy_from_slice(&u[6 * ni..6 * ni + 6]);
-                    }
-                    let n2: f64 = delta.iter().map(|x| x * x).sum();
-                    if n2 > 0.0 {
-                        for (l, dl) in local.iter_mut().zip(delta.iter()) {
-                            *l += xi * d.abs() * dl / n2;
-                        }
-                    }
-                }
                 for (a, &ni) in nodes.iter().enumerate() {
                     for k in 0..6 {
                         r[6 * ni + k] += h2 * self.local[6 * a + k];
@@ -368,10 +349,17 @@ impl<'a> EnergyStepper<'a> {
         }
     }
 
-    /// One step of size h. On failure the state is unchanged.
+    /// One step of size h: modified Newton (the matrix kept while it contracts), retried
+    /// once with a new matrix in every iteration. On failure the state is unchanged.
     pub fn step(&mut self, h: f64) -> Result<(), StepFailure> {
+        self.solve_step(h, false)
+            .or_else(|_| self.solve_step(h, true))
+    }
+
+    fn solve_step(&mut self, h: f64, full: bool) -> Result<(), StepFailure> {
         let n = self.n;
         let mut u = vec![0.0; n];
+        // Predictor: Δ = h v₀.
         for (i, nd) in self.state.nodes.iter().enumerate() {
             let p = nd.v * h;
             let w = nd.w * h;
@@ -387,7 +375,6 @@ impl<'a> EnergyStepper<'a> {
         }
         let mut r = vec![0.0; n];
         let mut rp = vec![0.0; n];
-        let mut rm = vec![0.0; n];
         let mut lu = if self.lu_h == h { self.lu.take() } else { None };
         let mut last = f64::INFINITY;
         let mut converged = false;
@@ -400,19 +387,20 @@ impl<'a> EnergyStepper<'a> {
                 });
             }
             if lu.is_none() {
+                // Forward differences from the residual just evaluated.
                 let mut jac = DMatrix::zeros(n, n);
                 let mut up = u.clone();
                 for j in 0..n {
                     let eps = 1e-7 * (1.0 + u[j].abs());
                     up[j] = u[j] + eps;
                     self.residual(h, &up, &mut rp);
-                    up[j] = u[j] - eps;
-                    self.residual(h, &up, &mut rm);
                     up[j] = u[j];
                     for i in 0..n {
-                        jac[(i, j)] = (rp[i] - rm[i]) / (2.0 * eps);
+                        jac[(i, j)] = (rp[i] - r[i]) / eps;
                     }
                 }
+                // `residual` left the scratch states at the last perturbation.
+                self.configure(h, &u);
                 lu = Some(jac.lu());
                 self.factorizations += 1;
             }
@@ -428,7 +416,8 @@ impl<'a> EnergyStepper<'a> {
             for (j, (x, d)) in u.iter_mut().zip(du.iter()).enumerate() {
                 *x -= d;
                 if j < ncfg {
-                    worst = worst.max(d.abs());
+                    worst =
+                        worst.max(d.abs() / (self.tolerance + self.relative_tolerance * x.abs()));
                 }
             }
             self.iterations = it + 1;
@@ -437,12 +426,13 @@ impl<'a> EnergyStepper<'a> {
                     reason: "the Newton correction is not finite".into(),
                 });
             }
-            if worst <= self.tolerance {
+            if worst <= 1.0 {
                 converged = true;
                 break;
             }
-            // Modified Newton: a new matrix when the iteration stops contracting fast.
-            if worst > 0.25 * last {
+            // Modified Newton: a new matrix when the iteration stops contracting fast
+            // (a fresh one contracts quadratically).
+            if full || worst > 0.05 * last {
                 lu = None;
             }
             last = worst;
@@ -477,45 +467,6 @@ impl<'a> EnergyStepper<'a> {
         self.end.clone_from(&self.state.nodes);
         Ok(())
     }
-}
-
-/// `Δ·(∇V(q₁) − ∇V(q₀))` of one element, with ∇V the static part of its residual (zero
-/// velocities and accelerations) in the step's coordinates: at q₁ the rotation columns
-/// are mapped by `T_c(ψ)ᵀ`.
-fn potential_gradient_change(
-    ctx: &EvalContext,
-    e: &dyn crate::core::Element,
-    start: &[NodeState],
-    end: &[NodeState],
-    statics: &mut [NodeState],
-    increments: &[f64],
-) -> f64 {
-    let nodes = e.nodes();
-    let mut terms = crate::core::LocalTerms::for_element(e);
-    let mut total = 0.0;
-    for (sign, src) in [(1.0, end), (-1.0, start)] {
-        for &ni in nodes {
-            statics[ni] = NodeState {
-                x: src[ni].x,
-                rot: src[ni].rot,
-                ..NodeState::default()
-            };
-        }
-        terms.clear(crate::core::Need::Residual);
-        let input = crate::core::ElementInput::nodes(statics);
-        e.evaluate(ctx, &input, crate::core::Need::Residual, &mut terms);
-        for (a, &ni) in nodes.iter().enumerate() {
-            let d = &increments[6 * ni..6 * ni + 6];
-            let psi = Vector3::new(d[3], d[4], d[5]);
-            let f = Vector3::new(terms.r[6 * a], terms.r[6 * a + 1], terms.r[6 * a + 2]);
-            let mut m = Vector3::new(terms.r[6 * a + 3], terms.r[6 * a + 4], terms.r[6 * a + 5]);
-            if sign > 0.0 {
-                m = cayley_tangent(&psi).transpose() * m;
-            }
-            total += sign * (f.dot(&Vector3::new(d[0], d[1], d[2])) + m.dot(&psi));
-        }
-    }
-    total
 }
 
 /// Fails, naming the element or joint, when something in `sys` has no discrete form.
@@ -593,6 +544,7 @@ pub(super) fn run_energy_consistent(
         settings.integrator,
         settings.rho_inf,
         settings.solver.tolerance,
+        settings.solver.relative_tolerance,
         settings.solver.max_iterations,
         state,
     ) {

@@ -34,6 +34,10 @@ pub struct DiscreteStep<'a> {
     pub mid: &'a [NodeState],
     /// `(Δx, ψ)` of every node, 6 per node.
     pub increments: &'a [f64],
+    /// Decay parameter ξ ≥ 0 of the energy-decaying scheme (0: preserving). An element
+    /// with a potential adds a dissipation `ξ d ≥ 0` to its balance (`d = k Δl²` for a
+    /// spring: the θ-method's `θ = ½ + ξ` on its length).
+    pub decay: f64,
 }
 
 impl DiscreteStep<'_> {

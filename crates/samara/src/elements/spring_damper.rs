@@ -59,12 +59,14 @@ impl Element for SpringDamper {
     }
 
     /// Discrete gradient of `V = k(l − l₀)²/2` along the line: the mean tension
-    /// `T̄ = k((l₀ + l₁)/2 − l_rest) + c (l₁ − l₀)/h` along `ē = (d₀ + d₁)/(l₀ + l₁)`, for
-    /// which `ē·Δd = Δl` and `T̄ Δl = ΔV + c Δl²/h` exactly
-    /// ([`LineOfAction::add_discrete_tension`]).
+    /// `T̄ = k((l₀ + l₁)/2 − l_rest) + ξ k (l₁ − l₀) + c (l₁ − l₀)/h` along
+    /// `ē = (d₀ + d₁)/(l₀ + l₁)`, for which `ē·Δd = Δl` and
+    /// `T̄ Δl = ΔV + ξ k Δl² + c Δl²/h` exactly ([`LineOfAction::add_discrete_tension`];
+    /// ξ = [`DiscreteStep::decay`]).
     fn discrete_residual(&self, step: &DiscreteStep, out: &mut [f64]) {
         let (l0, l1) = (self.line.length(step.start), self.line.length(step.end));
         let tension = self.stiffness * (0.5 * (l0 + l1) - self.rest_length)
+            + step.decay * self.stiffness * (l1 - l0)
             + self.damping * (l1 - l0) / step.h;
         self.line.add_discrete_tension(step, tension, out);
     }
