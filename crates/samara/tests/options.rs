@@ -1042,3 +1042,64 @@ fn every_floquet_option_changes_the_result() {
     assert_eq!(line, line_of(&bad, "steps_per_period"));
     assert!(m.contains("not used by a static analysis"), "{m}");
 }
+
+/// `integrator` (issue #17): each choice changes the answer (the schemes differ at O(h²))
+/// and `rho_inf` changes the energy-decaying scheme's dissipation; the preserving scheme
+/// keeps the pendulum's energy to the Newton tolerance where generalized-α at ρ∞ = 0.9
+/// loses some (docs/integrators.md; the verification is tests/energy_schemes.rs).
+#[test]
+fn integrator_and_its_rho_inf_change_the_answer() {
+    let pendulum = |analysis: &str| {
+        format!(
+            r#"
+[model]
+name = "p"
+gravity = [0.0, 0.0, -9.81]
+[[nodes]]
+name = "bob"
+position = [1.0, 0.0, 0.0]
+[[bodies]]
+name = "bob"
+node = "bob"
+mass = 1.0
+inertia = [[1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]
+[[joints]]
+name = "pivot"
+type = "revolute"
+node_a = "ground"
+node_b = "bob"
+position = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+[[analyses]]
+name = "swing"
+type = "dynamic"
+t_end = 2.0
+step = 0.01
+tolerance = 1e-12
+relative_tolerance = 1e-14
+{analysis}
+"#
+        )
+    };
+    let energy = |h: &History| {
+        let e = |f: &samara::analysis::Frame| f.energy.kinetic + f.energy.potential;
+        (e(h.last().unwrap()) - e(&h.frames[0])).abs()
+    };
+    let (_, ga) = attempt(&pendulum("rho_inf = 0.9"));
+    let (_, ep) = attempt(&pendulum("integrator = \"energy_preserving\""));
+    let (_, ed) = attempt(&pendulum("integrator = \"energy_decaying\"\nrho_inf = 0.5"));
+    let (_, ed1) = attempt(&pendulum("integrator = \"energy_decaying\"\nrho_inf = 1.0"));
+    let x = |h: &History| last_node(h);
+    assert!((x(&ga) - x(&ep)).norm() > 1e-6);
+    assert!((x(&ep) - x(&ed)).norm() > 1e-6);
+    // ρ∞ = 1 is the preserving scheme.
+    assert!((x(&ep) - x(&ed1)).norm() < 1e-10);
+    let (e_ga, e_ep, e_ed) = (energy(&ga), energy(&ep), energy(&ed));
+    eprintln!(
+        "|ΔE| over 2 s: generalized-α {e_ga:.2e}, preserving {e_ep:.2e}, decaying {e_ed:.2e}"
+    );
+    assert!(
+        e_ep < 1e-10 && e_ga > 1e-6 && e_ed > 1e-4,
+        "{e_ga} {e_ep} {e_ed}"
+    );
+}

@@ -9,7 +9,7 @@ use super::{
 };
 use crate::core::EvalContext;
 use crate::math::tangent_operator;
-use crate::model::{DynamicSettings, FormulationType, JacobianUpdate};
+use crate::model::{DynamicSettings, FormulationType, IntegratorType, JacobianUpdate};
 use crate::solve::condition::condition_number;
 use crate::solve::newton::{NewtonWork, newton};
 use crate::solve::{
@@ -583,6 +583,22 @@ fn start<'a>(
     Ok((it, viol0))
 }
 
+/// The consistent initial state of a dynamic analysis (assembly onto the joints,
+/// velocities, accelerations and multipliers), for the other integrators. On failure the
+/// reason is in `summary` and the state reached is returned.
+pub(super) fn consistent_start(
+    sys: &System,
+    settings: &DynamicSettings,
+    initial: State,
+    summary: &mut AnalysisSummary,
+) -> Result<State, State> {
+    start(sys, settings, initial, settings.t_start, summary).map(|(it, _)| {
+        let mut s = it.state;
+        s.lambda.clone_from(&it.mu);
+        s
+    })
+}
+
 /// Integrates from `initial` over `[t_start, t_end]`.
 pub fn run_dynamic(
     sys: &System,
@@ -592,6 +608,11 @@ pub fn run_dynamic(
     recorder: &mut dyn Recorder,
     progress: Progress,
 ) -> Result<AnalysisSummary, crate::Error> {
+    if settings.integrator != IntegratorType::GeneralizedAlpha {
+        return super::energy_preserving::run_energy_consistent(
+            sys, name, settings, initial, recorder, progress,
+        );
+    }
     let clock = Instant::now();
     let t0 = settings.t_start;
     let mut summary = AnalysisSummary::new(name, "dynamic");

@@ -5,6 +5,7 @@
 
 pub mod campbell;
 mod dynamic;
+pub mod energy_preserving;
 pub mod floquet;
 pub mod generalized_alpha;
 mod history;

@@ -20,7 +20,7 @@
 //! unknowns ([`Element::signals`]) with their derivatives. The system orders producers so
 //! every signal is known before it is read and applies the chain rule.
 
-use super::{ElementState, NodeState};
+use super::{DiscreteStep, ElementState, NodeState};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// Model-wide inputs of an element evaluation.
@@ -226,4 +226,13 @@ pub trait Element: Send + Sync {
     fn outputs(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut [f64]) {}
     /// Times where the element's loads jump or kink (its time functions' breakpoints).
     fn breakpoints(&self, _out: &mut Vec<f64>) {}
+    /// Whether the element has a discrete form for the energy-consistent integrators
+    /// ([`Element::discrete_residual`]); `Err` says why not (its kind, or the option that
+    /// has none).
+    fn discrete_form(&self) -> Result<(), String> {
+        Err("this element kind has no energy-consistent discrete form yet".into())
+    }
+    /// Discrete residual over a step ([`DiscreteStep`]): 6 rows per node, with
+    /// `Σ Δ·r̄ = ΔT + ΔV + D − W` exactly. Called only when [`Element::discrete_form`] is Ok.
+    fn discrete_residual(&self, _step: &DiscreteStep, _out: &mut [f64]) {}
 }

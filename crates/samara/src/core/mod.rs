@@ -2,10 +2,12 @@
 //! of its elements and constraints.
 
 mod constraint;
+mod discrete;
 mod element;
 mod state;
 
 pub use constraint::{Constraint, CoordinateTangents, RowRole};
+pub use discrete::{DiscreteStep, gonzalez_correction};
 pub use element::{Element, ElementInput, EvalContext, LocalTerms, Need, SignalTerms, add_block};
 pub use state::{Coordinate, ElementState, NodeState, State};
 

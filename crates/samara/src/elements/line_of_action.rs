@@ -8,7 +8,7 @@
 //! `r = T g` with `g = ∂l/∂q` (the generalized direction).
 
 use super::{LocalTerms, add_block};
-use crate::core::NodeState;
+use crate::core::{DiscreteStep, NodeState};
 use crate::math::skew;
 use nalgebra::{Matrix3, Vector3};
 
@@ -102,6 +102,46 @@ impl LineOfAction {
                     h: r * skew(&e.s.cross(&n.w)),
                     r,
                 }
+            }
+        }
+    }
+
+    /// Global position of end `k`.
+    fn point(&self, k: usize, nodes: &[NodeState]) -> Vector3<f64> {
+        let e = &self.ends[k];
+        match e.node {
+            None => e.s,
+            Some(i) => nodes[i].x + nodes[i].r() * e.s,
+        }
+    }
+
+    /// Length |p_B − p_A|.
+    pub fn length(&self, nodes: &[NodeState]) -> f64 {
+        (self.point(1, nodes) - self.point(0, nodes)).norm()
+    }
+
+    /// Adds the discrete residual of a mean tension `T̄` over a step: force `T̄ ē` with
+    /// `ē = (d₀ + d₁)/(l₀ + l₁)` (so that `ē·(d₁ − d₀) = l₁ − l₀`), at the mean arms of the
+    /// ends (−T̄ē on B, +T̄ē on A as applied forces). Then `Σ Δ·r̄ = T̄ (l₁ − l₀)` exactly, and
+    /// the pair has no resultant and no moment about any point at the mean positions, so
+    /// momenta are conserved ([`DiscreteStep`]).
+    pub fn add_discrete_tension(&self, step: &DiscreteStep, tension: f64, out: &mut [f64]) {
+        let d0 = self.point(1, step.start) - self.point(0, step.start);
+        let d1 = self.point(1, step.end) - self.point(0, step.end);
+        let sum = d0.norm() + d1.norm();
+        if sum == 0.0 {
+            return;
+        }
+        let e = (d0 + d1) / sum;
+        for (k, sigma) in SIGMA.iter().enumerate() {
+            let end = &self.ends[k];
+            let Some(i) = end.node else { continue };
+            let f = e * (sigma * tension);
+            let m = step.conjugate_moment(i, &step.mean_arm(i, &end.s).cross(&f));
+            let row = 6 * end.local;
+            for j in 0..3 {
+                out[row + j] += f[j];
+                out[row + 3 + j] += m[j];
             }
         }
     }

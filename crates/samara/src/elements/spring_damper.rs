@@ -5,7 +5,7 @@
 
 use super::line_of_action::LineOfAction;
 use super::{Element, EvalContext, LocalTerms, Need};
-use crate::core::ElementInput;
+use crate::core::{DiscreteStep, ElementInput};
 use crate::math::TimeFunction;
 use nalgebra::Vector3;
 
@@ -69,6 +69,28 @@ impl Element for SpringDamper {
         let tension = k * (st.length - self.rest_length) + c * st.rate;
         let tangents = (need == Need::ResidualAndTangents).then_some((k, c));
         self.line.add_tension(&st, tension, tangents, out);
+    }
+
+    fn discrete_form(&self) -> Result<(), String> {
+        match self.stiffness_function {
+            TimeFunction::Constant(_) => Ok(()),
+            // k f(t) does work of its own: no energy statement to preserve.
+            _ => Err("a spring with a time-varying `stiffness_function`".into()),
+        }
+    }
+
+    /// Discrete gradient of `V = k(l − l₀)²/2` along the line: the mean tension
+    /// `T̄ = k((l₀ + l₁)/2 − l_rest) + ξ k (l₁ − l₀) + c (l₁ − l₀)/h` along
+    /// `ē = (d₀ + d₁)/(l₀ + l₁)`, for which `ē·Δd = Δl` and
+    /// `T̄ Δl = ΔV + ξ k Δl² + c Δl²/h` exactly ([`LineOfAction::add_discrete_tension`];
+    /// ξ = [`DiscreteStep::decay`]).
+    fn discrete_residual(&self, step: &DiscreteStep, out: &mut [f64]) {
+        let (l0, l1) = (self.line.length(step.start), self.line.length(step.end));
+        let k = self.stiffness_at(0.0); // constant (discrete_form)
+        let tension = k * (0.5 * (l0 + l1) - self.rest_length)
+            + step.decay * k * (l1 - l0)
+            + self.damping * (l1 - l0) / step.h;
+        self.line.add_discrete_tension(step, tension, out);
     }
 
     fn potential_energy(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {

@@ -37,4 +37,8 @@ impl Element for TimeSignal {
         out.values[0] = self.function.eval(ctx.time);
     }
     fn evaluate(&self, _ctx: &EvalContext, _x: &ElementInput, _need: Need, _out: &mut LocalTerms) {}
+    /// No nodes, no energy: nothing to discretize.
+    fn discrete_form(&self) -> Result<(), String> {
+        Ok(())
+    }
 }

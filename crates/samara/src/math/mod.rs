@@ -2,6 +2,7 @@
 //!
 //! Pure functions only; everything here is independent of the model and of the analyses.
 
+pub mod cayley;
 pub mod dual;
 pub mod so3;
 pub mod time_function;

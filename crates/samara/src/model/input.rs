@@ -194,6 +194,20 @@ pub enum FormulationType {
     StabilizedIndex2,
 }
 
+/// The time integrator of a dynamic analysis (docs/integrators.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum IntegratorType {
+    /// Lie-group generalized-α with numerical dissipation ρ∞ (default).
+    #[default]
+    GeneralizedAlpha,
+    /// Mid-point discrete-gradient scheme: energy and momenta conserved exactly (up to the
+    /// Newton tolerance).
+    EnergyPreserving,
+    /// The preserving scheme with a provable energy decay in every step, set by `rho_inf`.
+    EnergyDecaying,
+}
+
 /// How a dynamic analysis chooses its steps.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
@@ -234,6 +248,9 @@ pub struct AnalysisInput {
     /// error control (default step/1024); also spelled `step_min`.
     #[serde(default, alias = "step_min")]
     pub min_step: Option<f64>,
+    /// dynamic: `generalized_alpha` (default), `energy_preserving` or `energy_decaying`.
+    #[serde(default)]
+    pub integrator: Option<IntegratorType>,
     /// dynamic: `fixed` (default) or `adaptive` step sizes.
     #[serde(default)]
     pub step_control: Option<StepControlType>,

@@ -25,8 +25,8 @@ pub use components::signal::SignalDef;
 pub use components::spring::SpringDef;
 pub use components::{Model, ModelInput};
 pub use input::{
-    EigensolverType, FormulationType, JacobianUpdate, JointType, LinearSolverType, LoadFrame,
-    StepControlType,
+    EigensolverType, FormulationType, IntegratorType, JacobianUpdate, JointType, LinearSolverType,
+    LoadFrame, StepControlType,
 };
 pub use section_files::LoadOptions;
 pub use validate::{Checker, Entry, validate};
@@ -102,6 +102,8 @@ pub struct DynamicSettings {
     pub solver: SolverSettings,
     /// Adaptive steps (`None`: fixed steps).
     pub adaptive: Option<AdaptiveSettings>,
+    /// The time integrator (generalized-α unless chosen).
+    pub integrator: IntegratorType,
 }
 
 /// Error control of adaptive steps: the local error estimate e of every unknown is kept
@@ -130,6 +132,7 @@ impl DynamicSettings {
             },
             solver: SolverSettings::default(),
             adaptive: None,
+            integrator: IntegratorType::GeneralizedAlpha,
         }
     }
 }

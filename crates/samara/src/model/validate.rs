@@ -1112,6 +1112,50 @@ impl<'a> Checker<'a> {
                         })
                     }
                 };
+                let integrator = ai.integrator.unwrap_or_default();
+                if integrator != IntegratorType::GeneralizedAlpha {
+                    let scheme = if integrator == IntegratorType::EnergyPreserving {
+                        "energy_preserving"
+                    } else {
+                        "energy_decaying"
+                    };
+                    for (k, given) in [
+                        ("step_control", ai.step_control.is_some()),
+                        ("formulation", ai.formulation.is_some()),
+                        ("penalty", ai.penalty.is_some()),
+                        ("jacobian", ai.jacobian.is_some()),
+                        ("scaling", ai.scaling.is_some()),
+                        ("linear_solver", ai.linear_solver.is_some()),
+                        ("diagnostics", ai.diagnostics.is_some()),
+                        (
+                            "rho_inf",
+                            ai.rho_inf.is_some() && integrator == IntegratorType::EnergyPreserving,
+                        ),
+                    ] {
+                        if given {
+                            self.error(
+                                format!("{what}: `{k}` is not used by integrator = \"{scheme}\""),
+                                self.key(&e, k),
+                                Some(if k == "rho_inf" {
+                                    "the preserving scheme has no dissipation; choose integrator = \"energy_decaying\" to set rho_inf".into()
+                                } else {
+                                    "the energy-consistent integrators take fixed steps, enforce Φ = 0 at the end of each step and form their own Newton matrix; remove the key".into()
+                                }),
+                            );
+                            ok = false;
+                        }
+                    }
+                    if let Some((table, entry, why)) =
+                        super::components::without_discrete_form(model)
+                    {
+                        self.error(
+                            format!("{what}: integrator = \"{scheme}\" has no discrete form for {table} `{entry}`: {why}"),
+                            self.key(&e, "integrator"),
+                            Some("use integrator = \"generalized_alpha\" for this model; docs/integrators.md lists the kinds with discrete forms".into()),
+                        );
+                        ok = false;
+                    }
+                }
                 AnalysisKind::Dynamic(DynamicSettings {
                     t_start,
                     t_end,
@@ -1123,6 +1167,7 @@ impl<'a> Checker<'a> {
                     formulation,
                     solver,
                     adaptive,
+                    integrator,
                 })
             }
             AnalysisType::Static => {

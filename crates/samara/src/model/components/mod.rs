@@ -259,3 +259,73 @@ registry! {
     /// states, rolling resistance, aligning moment and a brake-torque input.
     tires: tire::TireKind,
 }
+
+/// The first component of `model` without a discrete form for the energy-consistent
+/// integrators (`integrator = "energy_preserving"` / `"energy_decaying"`): its table, its
+/// name and why. Bodies (with the node at the CG), springs, signals and joints have one.
+pub fn without_discrete_form(model: &super::Model) -> Option<(&'static str, String, String)> {
+    if let Some(b) = model
+        .bodies
+        .iter()
+        .find(|b| b.cg_offset != Vector3::zeros())
+    {
+        return Some((
+            "[[bodies]]",
+            b.name.clone(),
+            "a body with a `cg_offset` (the discrete form is written about the CG: put the node at the CG; joints and springs can attach at offsets)".into(),
+        ));
+    }
+    let none = "this kind has no energy-consistent discrete form yet";
+    let first = |table: &'static str, names: Vec<String>| {
+        names
+            .into_iter()
+            .next()
+            .map(|n| (table, n, none.to_string()))
+    };
+    first(
+        "[[beams]]",
+        model.beams.iter().map(|b| b.name.clone()).collect(),
+    )
+    .or_else(|| {
+        first(
+            "[[forces]]",
+            model.forces.iter().map(|x| x.name.clone()).collect(),
+        )
+    })
+    .or_else(|| {
+        first(
+            "[[viscoelastic]]",
+            model.viscoelastic.iter().map(|x| x.name.clone()).collect(),
+        )
+    })
+    .or_else(|| {
+        first(
+            "[[aero_lines]]",
+            model.aero_lines.iter().map(|x| x.name.clone()).collect(),
+        )
+    })
+    .or_else(|| {
+        first(
+            "[[contacts]]",
+            model.contacts.iter().map(|x| x.name.clone()).collect(),
+        )
+    })
+    .or_else(|| {
+        first(
+            "[[hydraulics]]",
+            model.hydraulics.iter().map(|x| x.name.clone()).collect(),
+        )
+    })
+    .or_else(|| {
+        first(
+            "[[motors]]",
+            model.motors.iter().map(|x| x.name.clone()).collect(),
+        )
+    })
+    .or_else(|| {
+        first(
+            "[[sensors]]",
+            model.sensors.iter().map(|x| x.name.clone()).collect(),
+        )
+    })
+}

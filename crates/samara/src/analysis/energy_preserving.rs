@@ -1,0 +1,660 @@
+//! Energy-consistent time integration: the energy-preserving scheme and its
+//! energy-decaying generalization (`integrator = "energy_preserving"` /
+//! `"energy_decaying"`; docs/integrators.md).
+//!
+//! Each node moves over a step by `Δ = (Δx, ψ)` with `x₁ = x₀ + Δx`, `R₁ = R₀ cay(ψ)`
+//! (Cayley update; Simo & Wong 1991) and the mid-point kinematics
+//!
+//! ```text
+//! Δx/h = (½ − ξ) v₀ + (½ + ξ) v₁,     ψ/h = (½ − ξ) Ω₀ + (½ + ξ) Ω₁
+//! ```
+//!
+//! (ξ = 0: preserving). Equilibrium is imposed in the discrete form of every element
+//! ([`crate::core::DiscreteStep`]; a discrete gradient of its energy) plus the constraint
+//! forces `B̄ᵀλ`, with the constraints enforced at the end of the step, `Φ(q₁, t₁) = 0`.
+//! `B̄` is the mid-point Jacobian corrected row by row after Gonzalez (1996),
+//! `B̄Δ = Φ(q₁, t₁) − Φ(q₀, t₁)`, so the constraint forces do no work over a step
+//! (Gonzalez 1999, "Mechanical systems subject to holonomic constraints", Physica D 132;
+//! Betsch & Leyendecker 2006 reach the same statement by a discrete null space): then
+//!
+//! ```text
+//! E₁ − E₀ = −D − ξ (‖v₁ − v₀‖²_M + d) ≤ 0           (no applied loads)
+//! ```
+//!
+//! exactly up to the Newton tolerance, with D ≥ 0 the dampers' dissipation and `d ≥ 0`
+//! the dissipation each element with a potential adds for ξ > 0
+//! ([`DiscreteStep::decay`]; `k Δl²` for a spring, the θ-method's `θ = ½ + ξ` on its
+//! length): the decaying scheme is the θ-method of a linear oscillator,
+//! `ρ∞ = (½ − ξ)/(½ + ξ)`, first order in its dissipative terms (error ∝ ξh).
+//!
+//! The Newton matrix is formed by forward differences of the step residual (dense LU):
+//! meant for models of a few hundred unknowns.
+
+use super::{AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure};
+use crate::core::{Coordinate, DiscreteStep, NodeState, gonzalez_correction};
+use crate::math::cayley::cayley;
+use crate::math::{Rotation, skew};
+use crate::model::{DynamicSettings, IntegratorType};
+use crate::system::{State, System};
+use nalgebra::{DMatrix, DVector, Vector3};
+use std::time::Instant;
+
+/// ξ of the decaying scheme for a high-frequency spectral radius ρ∞ (linear oscillator):
+/// ρ∞ = (½ − ξ)/(½ + ξ), i.e. ξ = (1 − ρ∞)/(2(1 + ρ∞)).
+pub fn decay_parameter(rho_inf: f64) -> f64 {
+    (1.0 - rho_inf) / (2.0 * (1.0 + rho_inf))
+}
+
+/// One step's failure.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepFailure {
+    pub reason: String,
+}
+
+/// The energy-consistent integrator, stepped by hand ([`EnergyStepper::step`]) or by
+/// [`run_energy_consistent`].
+pub struct EnergyStepper<'a> {
+    sys: &'a System,
+    xi: f64,
+    tolerance: f64,
+    relative_tolerance: f64,
+    max_iterations: usize,
+    state: State,
+    /// Scale of the multipliers (λ = m̄ λ̃ / h²) and of the constraint rows.
+    mbar: f64,
+    n_node: usize,
+    n_coord: usize,
+    n: usize,
+    // Scratch.
+    end: Vec<NodeState>,
+    mid: Vec<NodeState>,
+    end_coords: Vec<Coordinate>,
+    mid_coords: Vec<Coordinate>,
+    local: Vec<f64>,
+    phi0: Vec<f64>,
+    phi1: Vec<f64>,
+    delta: Vec<f64>,
+    /// LU of the Newton matrix and the step it was formed for (modified Newton: kept
+    /// across steps while the iteration contracts).
+    lu: Option<nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>>,
+    lu_h: f64,
+    /// Newton matrices formed so far.
+    pub factorizations: usize,
+    /// max |Φ| after the last step.
+    pub constraint_violation: f64,
+    /// Newton iterations of the last step.
+    pub iterations: usize,
+}
+
+impl<'a> EnergyStepper<'a> {
+    /// From a consistent `state` (on the constraints, velocities tangent to them).
+    /// Fails, naming the element or joint, when something has no discrete form.
+    pub fn new(
+        sys: &'a System,
+        integrator: IntegratorType,
+        rho_inf: f64,
+        tolerance: f64,
+        relative_tolerance: f64,
+        max_iterations: usize,
+        state: State,
+    ) -> Result<Self, StepFailure> {
+        let xi = match integrator {
+            IntegratorType::EnergyPreserving => 0.0,
+            IntegratorType::EnergyDecaying => decay_parameter(rho_inf),
+            IntegratorType::GeneralizedAlpha => {
+                return Err(StepFailure {
+                    reason: "the energy-consistent stepper was asked for generalized-α".into(),
+                });
+            }
+        };
+        check_discrete_forms(sys)?;
+        let n_node = 6 * sys.n_nodes();
+        let n_coord = sys.n_coordinates;
+        let n = n_node + n_coord + sys.n_multipliers;
+        let max_local = sys
+            .elements
+            .iter()
+            .map(|e| 6 * e.nodes().len())
+            .chain(
+                sys.constraints
+                    .iter()
+                    .map(|c| 6 * c.nodes().len() + c.n_coordinates()),
+            )
+            .max()
+            .unwrap_or(0);
+        let max_rows = sys
+            .constraints
+            .iter()
+            .map(|c| c.n_equations())
+            .max()
+            .unwrap_or(0);
+        Ok(Self {
+            sys,
+            xi,
+            tolerance,
+            relative_tolerance,
+            max_iterations,
+            mbar: sys.characteristic_mass,
+            n_node,
+            n_coord,
+            n,
+            end: state.nodes.clone(),
+            mid: state.nodes.clone(),
+            end_coords: state.coords.clone(),
+            mid_coords: state.coords.clone(),
+            local: vec![0.0; max_local],
+            phi0: vec![0.0; max_rows],
+            phi1: vec![0.0; max_rows],
+            delta: vec![0.0; max_local],
+            state,
+            lu: None,
+            lu_h: f64::NAN,
+            factorizations: 0,
+            constraint_violation: 0.0,
+            iterations: 0,
+        })
+    }
+
+    pub fn state(&self) -> &State {
+        &self.state
+    }
+
+    /// The decay parameter ξ (0: preserving).
+    pub fn xi(&self) -> f64 {
+        self.xi
+    }
+
+    /// Kinetic plus potential energy at the current state.
+    pub fn energy(&self) -> f64 {
+        let ctx = self.sys.context(self.state.time, 1.0);
+        self.sys.kinetic_energy(&self.state) + self.sys.potential_energy(&ctx, &self.state)
+    }
+
+    /// Sets node, coordinate and scratch states for the unknowns `u`.
+    fn configure(&mut self, h: f64, u: &[f64]) {
+        let xi = self.xi;
+        let (c0, c1) = (0.5 - xi, 0.5 + xi);
+        for (i, n0) in self.state.nodes.iter().enumerate() {
+            let d = &u[6 * i..6 * i + 6];
+            let dx = Vector3::new(d[0], d[1], d[2]);
+            let psi = Vector3::new(d[3], d[4], d[5]);
+            let v1 = (dx / h - n0.v * c0) / c1;
+            let w1 = (psi / h - n0.w * c0) / c1;
+            let a = (v1 - n0.v) / h;
+            let wd = (w1 - n0.w) / h;
+            let q0 = *n0.rot.quaternion();
+            let e = &mut self.end[i];
+            e.x = n0.x + dx;
+            e.rot = Rotation::from_quaternion(q0 * cayley(&psi));
+            e.v = v1;
+            e.w = w1;
+            e.a = a;
+            e.wd = wd;
+            let m = &mut self.mid[i];
+            m.x = n0.x + dx * 0.5;
+            m.rot = Rotation::from_quaternion(q0 * cayley(&(psi * 0.5)));
+            m.v = dx / h;
+            m.w = psi / h;
+            m.a = a;
+            m.wd = wd;
+        }
+        for (j, c0) in self.state.coords.iter().enumerate().take(self.n_coord) {
+            let dq = u[self.n_node + j];
+            self.end_coords[j] = Coordinate {
+                q: c0.q + dq,
+                v: dq / h,
+                a: 0.0,
+            };
+            self.mid_coords[j] = Coordinate {
+                q: c0.q + 0.5 * dq,
+                v: dq / h,
+                a: 0.0,
+            };
+        }
+    }
+
+    /// Step residual at `u = (Δ, Δν, λ̃)`: equilibrium rows × h², constraint rows × m̄.
+    fn residual(&mut self, h: f64, u: &[f64], r: &mut [f64]) {
+        self.configure(h, u);
+        r.fill(0.0);
+        let sys = self.sys;
+        let t0 = self.state.time;
+        let ctx_mid = sys.context(t0 + 0.5 * h, 1.0);
+        let ctx1 = sys.context(t0 + h, 1.0);
+        let h2 = h * h;
+        let xi = self.xi;
+        {
+            let step = DiscreteStep {
+                h,
+                ctx: ctx_mid,
+                start: &self.state.nodes,
+                end: &self.end,
+                mid: &self.mid,
+                increments: &u[..self.n_node],
+                decay: xi,
+            };
+            for e in &sys.elements {
+                let nodes = e.nodes();
+                let nl = 6 * nodes.len();
+                let local = &mut self.local[..nl];
+                local.fill(0.0);
+                e.discrete_residual(&step, local);
+                for (a, &ni) in nodes.iter().enumerate() {
+                    for k in 0..6 {
+                        r[6 * ni + k] += h2 * self.local[6 * a + k];
+                    }
+                }
+            }
+        }
+        let coords0 = &self.state.coords;
+        for (k, c) in sys.constraints.iter().enumerate() {
+            let nodes = c.nodes();
+            let nn = 6 * nodes.len();
+            let nc = c.n_coordinates();
+            let cols = nn + nc;
+            let m = c.n_equations();
+            let co = sys.coordinate_offsets[k];
+            let mo = sys.multiplier_offsets[k];
+            let delta = &mut self.delta[..cols];
+            for (a, &ni) in nodes.iter().enumerate() {
+                delta[6 * a..6 * a + 6].copy_from_slice(&u[6 * ni..6 * ni + 6]);
+            }
+            delta[nn..].copy_from_slice(&u[self.n_node + co..self.n_node + co + nc]);
+            if m > 0 {
+                c.evaluate(
+                    &ctx1,
+                    &self.state.nodes,
+                    &coords0[co..co + nc],
+                    &mut self.phi0[..m],
+                    None,
+                );
+                c.evaluate(
+                    &ctx1,
+                    &self.end,
+                    &self.end_coords[co..co + nc],
+                    &mut self.phi1[..m],
+                    None,
+                );
+                // Mid-point Jacobian with the rotation columns taken conjugate to ψ the
+                // way the rigid bodies' rows are (their moment rows are
+                // `(I − ψ̃/2) R₀ᵀ m` for a spatial moment m): B_θ(R_mid) Q with
+                // Q = cay(ψ/2)ᵀ (I + ψ̃/2). (The exact ∂/∂ψ, B_θ T_c(ψ/2), differs from it
+                // by O(ψ) across ψ and makes a fast spin drift at O(h).) Qψ = ψ, so the
+                // defect ΔΦ − B̄Δ is O(|Δ|³) and the Gonzalez correction O(|Δ|²).
+                let mut bm = DMatrix::zeros(m, cols);
+                let mut phis = vec![0.0; m];
+                c.evaluate(
+                    &ctx1,
+                    &self.mid,
+                    &self.mid_coords[co..co + nc],
+                    &mut phis,
+                    Some(&mut bm),
+                );
+                for a in 0..nodes.len() {
+                    let psi = Vector3::new(delta[6 * a + 3], delta[6 * a + 4], delta[6 * a + 5]);
+                    let half = cayley(&(psi * 0.5)).to_rotation_matrix().into_inner();
+                    let q = half.transpose() * (nalgebra::Matrix3::identity() + skew(&psi) * 0.5);
+                    let cols_rot = bm.view((0, 6 * a + 3), (m, 3)) * q;
+                    bm.view_mut((0, 6 * a + 3), (m, 3)).copy_from(&cols_rot);
+                }
+                let mut row = vec![0.0; cols];
+                for j in 0..m {
+                    for (x, y) in row.iter_mut().zip(bm.row(j).iter()) {
+                        *x = *y;
+                    }
+                    gonzalez_correction(&mut row, delta, self.phi1[j] - self.phi0[j]);
+                    let lam = u[self.n_node + self.n_coord + mo + j];
+                    for (a, &ni) in nodes.iter().enumerate() {
+                        for q in 0..6 {
+                            r[6 * ni + q] += self.mbar * row[6 * a + q] * lam;
+                        }
+                    }
+                    for q in 0..nc {
+                        r[self.n_node + co + q] += self.mbar * row[nn + q] * lam;
+                    }
+                    r[self.n_node + self.n_coord + mo + j] = self.mbar * self.phi1[j];
+                }
+            }
+            if nc > 0 {
+                // Coordinate springs: Gonzalez discrete gradient of their potential;
+                // dampers at the mean rate Δν/h.
+                let still: Vec<Coordinate> = self.mid_coords[co..co + nc]
+                    .iter()
+                    .map(|x| Coordinate {
+                        q: x.q,
+                        v: 0.0,
+                        a: 0.0,
+                    })
+                    .collect();
+                let mut fs = vec![0.0; nc];
+                c.coordinate_forces(&ctx_mid, &still, &[], &mut fs, None);
+                let dv = c.potential_energy(&self.end_coords[co..co + nc])
+                    - c.potential_energy(&coords0[co..co + nc]);
+                let mut full = vec![0.0; nc];
+                c.coordinate_forces(
+                    &ctx_mid,
+                    &self.mid_coords[co..co + nc],
+                    &[],
+                    &mut full,
+                    None,
+                );
+                for (f, s) in full.iter_mut().zip(&fs) {
+                    *f -= s;
+                }
+                gonzalez_correction(&mut fs, &delta[nn..], dv);
+                for q in 0..nc {
+                    r[self.n_node + co + q] += h2 * (fs[q] + full[q]);
+                }
+            }
+        }
+    }
+
+    /// One step of size h: modified Newton (the matrix kept while it contracts), retried
+    /// once with a new matrix in every iteration. On failure the state is unchanged.
+    pub fn step(&mut self, h: f64) -> Result<(), StepFailure> {
+        self.solve_step(h, false)
+            .or_else(|_| self.solve_step(h, true))
+    }
+
+    fn solve_step(&mut self, h: f64, full: bool) -> Result<(), StepFailure> {
+        let n = self.n;
+        let mut u = vec![0.0; n];
+        // Predictor: Δ = h v₀.
+        for (i, nd) in self.state.nodes.iter().enumerate() {
+            let p = nd.v * h;
+            let w = nd.w * h;
+            u[6 * i..6 * i + 3].copy_from_slice(p.as_slice());
+            u[6 * i + 3..6 * i + 6].copy_from_slice(w.as_slice());
+        }
+        for j in 0..self.n_coord {
+            u[self.n_node + j] = self.state.coords[j].v * h;
+        }
+        let lscale = h * h / self.mbar;
+        for (j, l) in self.state.lambda.iter().enumerate() {
+            u[self.n_node + self.n_coord + j] = l * lscale;
+        }
+        let mut r = vec![0.0; n];
+        let mut rp = vec![0.0; n];
+        let mut lu = if self.lu_h == h { self.lu.take() } else { None };
+        let mut last = f64::INFINITY;
+        let mut converged = false;
+        let ncfg = self.n_node + self.n_coord;
+        for it in 0..self.max_iterations {
+            self.residual(h, &u, &mut r);
+            if r.iter().any(|x| !x.is_finite()) {
+                return Err(StepFailure {
+                    reason: "the step residual is not finite".into(),
+                });
+            }
+            if lu.is_none() {
+                // Forward differences from the residual just evaluated.
+                let mut jac = DMatrix::zeros(n, n);
+                let mut up = u.clone();
+                for j in 0..n {
+                    let eps = 1e-7 * (1.0 + u[j].abs());
+                    up[j] = u[j] + eps;
+                    self.residual(h, &up, &mut rp);
+                    up[j] = u[j];
+                    for i in 0..n {
+                        jac[(i, j)] = (rp[i] - r[i]) / eps;
+                    }
+                }
+                // `residual` left the scratch states at the last perturbation.
+                self.configure(h, &u);
+                lu = Some(jac.lu());
+                self.factorizations += 1;
+            }
+            let Some(dec) = lu.as_ref() else {
+                unreachable!()
+            };
+            let Some(du) = dec.solve(&DVector::from_column_slice(&r)) else {
+                return Err(StepFailure {
+                    reason: "the Newton matrix of the step is singular".into(),
+                });
+            };
+            let mut worst: f64 = 0.0;
+            for (j, (x, d)) in u.iter_mut().zip(du.iter()).enumerate() {
+                *x -= d;
+                if j < ncfg {
+                    worst =
+                        worst.max(d.abs() / (self.tolerance + self.relative_tolerance * x.abs()));
+                }
+            }
+            self.iterations = it + 1;
+            if !worst.is_finite() {
+                return Err(StepFailure {
+                    reason: "the Newton correction is not finite".into(),
+                });
+            }
+            if worst <= 1.0 {
+                converged = true;
+                break;
+            }
+            // Modified Newton: a new matrix when the iteration stops contracting fast
+            // (a fresh one contracts quadratically).
+            if full || worst > 0.05 * last {
+                lu = None;
+            }
+            last = worst;
+        }
+        self.lu = lu;
+        self.lu_h = h;
+        if !converged {
+            self.lu = None;
+            return Err(StepFailure {
+                reason: format!(
+                    "Newton did not converge in {} iterations",
+                    self.max_iterations
+                ),
+            });
+        }
+        self.configure(h, &u);
+        std::mem::swap(&mut self.state.nodes, &mut self.end);
+        for j in 0..self.n_coord {
+            self.state.coords[j] = self.end_coords[j];
+        }
+        let s = self.mbar / (h * h);
+        for (j, l) in self.state.lambda.iter_mut().enumerate() {
+            *l = u[ncfg + j] * s;
+        }
+        self.state.time += h;
+        self.sys.update_passive_coordinates(&mut self.state, true);
+        let ctx = self.sys.context(self.state.time, 1.0);
+        let mut phi = vec![0.0; self.sys.n_multipliers];
+        self.sys.constraint_values(&ctx, &self.state, &mut phi);
+        self.constraint_violation = phi.iter().fold(0.0, |m, x| m.max(x.abs()));
+        // Keep the scratch copies in step with the new state (their rotations are reused).
+        self.end.clone_from(&self.state.nodes);
+        Ok(())
+    }
+}
+
+/// Fails, naming the element or joint, when something in `sys` has no discrete form.
+pub fn check_discrete_forms(sys: &System) -> Result<(), StepFailure> {
+    for e in &sys.elements {
+        if let Err(why) = e.discrete_form() {
+            return Err(StepFailure {
+                reason: format!("element `{}`: {why}", e.name()),
+            });
+        }
+        if e.n_states() > 0 {
+            return Err(StepFailure {
+                reason: format!(
+                    "element `{}` has first-order states, which the energy-consistent integrators do not integrate yet",
+                    e.name()
+                ),
+            });
+        }
+    }
+    for c in &sys.constraints {
+        if !c.signal_inputs().is_empty() {
+            return Err(StepFailure {
+                reason: format!(
+                    "joint `{}` has input ports, which the energy-consistent integrators do not support yet",
+                    c.name()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The dynamic analysis with an energy-consistent integrator: fixed steps (halved after
+/// a Newton failure, down to `min_step`), recorded every `output_every` steps.
+pub(super) fn run_energy_consistent(
+    sys: &System,
+    name: &str,
+    settings: &DynamicSettings,
+    initial: State,
+    recorder: &mut dyn Recorder,
+    progress: Progress,
+) -> Result<AnalysisSummary, crate::Error> {
+    let clock = Instant::now();
+    let mut summary = AnalysisSummary::new(name, "dynamic");
+    let fail = |summary: &mut AnalysisSummary, time: f64, reason: String, hint: Option<String>| {
+        summary.failure = Some(SolverFailure {
+            analysis: name.to_string(),
+            time,
+            reason,
+            hint,
+        });
+    };
+    if let Err(f) = check_discrete_forms(sys) {
+        fail(
+            &mut summary,
+            settings.t_start,
+            f.reason,
+            Some("use integrator = \"generalized_alpha\" for this model (docs/integrators.md lists the element kinds with discrete forms)".into()),
+        );
+        summary.final_state = initial;
+        summary.wall_time = clock.elapsed();
+        return Ok(summary);
+    }
+    let state = match super::dynamic::consistent_start(sys, settings, initial, &mut summary) {
+        Ok(s) => s,
+        Err(s) => {
+            summary.final_state = s;
+            summary.wall_time = clock.elapsed();
+            return Ok(summary);
+        }
+    };
+    let t0 = settings.t_start;
+    let mut it = match EnergyStepper::new(
+        sys,
+        settings.integrator,
+        settings.rho_inf,
+        settings.solver.tolerance,
+        settings.solver.relative_tolerance,
+        settings.solver.max_iterations,
+        state,
+    ) {
+        Ok(it) => it,
+        Err(f) => {
+            fail(&mut summary, t0, f.reason, None);
+            summary.wall_time = clock.elapsed();
+            return Ok(summary);
+        }
+    };
+    let energy_at = |it: &EnergyStepper| {
+        let ctx = sys.context(it.state.time, 1.0);
+        Energy {
+            kinetic: sys.kinetic_energy(&it.state),
+            potential: sys.potential_energy(&ctx, &it.state),
+            external_work: 0.0,
+            dissipated: 0.0,
+        }
+    };
+    let mut p_dis = sys.dissipated_power(&it.state);
+    let mut dissipated = 0.0;
+    let record = |it: &EnergyStepper, energy: Energy, rec: &mut dyn Recorder| {
+        rec.record(
+            sys,
+            &OutputFrame {
+                time: it.state.time,
+                state: &it.state,
+                mu: &it.state.lambda,
+                energy,
+                constraint_violation: it.constraint_violation,
+                load_factor: 1.0,
+                diagnostics: None,
+            },
+        )
+    };
+    record(&it, energy_at(&it), recorder)?;
+    let span = settings.t_end - t0;
+    let mut h = settings.step;
+    let mut grid_k: u64 = 0;
+    let mut good = 0usize;
+    let mut step_index = 0usize;
+    while it.state.time < settings.t_end {
+        let t = it.state.time;
+        let mut target = if h == settings.step {
+            t0 + (grid_k + 1) as f64 * settings.step
+        } else {
+            t + h
+        };
+        if target > settings.t_end || settings.t_end - target < 1e-9 * h {
+            target = settings.t_end;
+        }
+        let h_try = target - t;
+        match it.step(h_try) {
+            Ok(()) => {
+                it.state.time = target;
+                summary.steps += 1;
+                summary.newton_iterations += it.iterations;
+                step_index += 1;
+                if h == settings.step {
+                    grid_k += 1;
+                } else {
+                    good += 1;
+                    if good >= 4 {
+                        h = (2.0 * h).min(settings.step);
+                        good = 0;
+                        if h == settings.step {
+                            grid_k = ((it.state.time - t0) / settings.step).round() as u64;
+                        }
+                    }
+                }
+                summary.max_constraint_violation = summary
+                    .max_constraint_violation
+                    .max(it.constraint_violation);
+                let p1 = sys.dissipated_power(&it.state);
+                dissipated += 0.5 * h_try * (p_dis + p1);
+                p_dis = p1;
+                let last = it.state.time >= settings.t_end;
+                if step_index.is_multiple_of(settings.output_every) || last {
+                    let mut energy = energy_at(&it);
+                    energy.dissipated = dissipated;
+                    if let Some(what) = super::first_non_finite(sys, &it.state, &energy) {
+                        summary.failure =
+                            Some(super::non_finite_failure(name, it.state.time, what));
+                        break;
+                    }
+                    record(&it, energy, recorder)?;
+                }
+                progress(((it.state.time - t0) / span).clamp(0.0, 1.0));
+            }
+            Err(f) => {
+                summary.rejected_steps += 1;
+                let next = h_try / 2.0;
+                if next < settings.min_step {
+                    fail(
+                        &mut summary,
+                        t,
+                        format!("{} with step {h_try:.3e} s", f.reason),
+                        Some(format!(
+                            "the step was cut down to {h_try:.3e} s (min_step {:.3e}); a smaller `step` or a larger `tolerance` may help",
+                            settings.min_step
+                        )),
+                    );
+                    break;
+                }
+                h = next;
+                good = 0;
+            }
+        }
+    }
+    summary.final_state = it.state;
+    summary.wall_time = clock.elapsed();
+    Ok(summary)
+}
