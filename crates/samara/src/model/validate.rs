@@ -582,7 +582,7 @@ impl<'a> Checker<'a> {
         // Analyses.
         self.unique_names(&input.analyses, |a| &a.name, "analysis");
         for (k, a) in input.analyses.iter().enumerate() {
-            if let Some(def) = self.analysis(a, &input.analyses[..k], &model) {
+            if let Some(def) = self.analysis(a, &input.analyses[..k], &model, input) {
                 model.analyses.push(def);
             }
         }
@@ -729,6 +729,7 @@ impl<'a> Checker<'a> {
         a: &Located<AnalysisInput>,
         earlier: &[Located<AnalysisInput>],
         model: &Model,
+        input: &ModelInput,
     ) -> Option<AnalysisDef> {
         let e = Entry {
             span: a.span.clone(),
@@ -1146,7 +1147,7 @@ impl<'a> Checker<'a> {
                         }
                     }
                     if let Some((table, entry, why)) =
-                        super::components::without_discrete_form(model)
+                        super::components::without_discrete_form(input)
                     {
                         self.error(
                             format!("{what}: integrator = \"{scheme}\" has no discrete form for {table} `{entry}`: {why}"),

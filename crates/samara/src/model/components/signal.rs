@@ -35,6 +35,11 @@ impl ComponentKind for Signal {
     type Input = SignalInput;
     type Def = SignalDef;
 
+    /// Signals are functions of time only.
+    fn discrete_form(_input: &SignalInput) -> Result<(), String> {
+        Ok(())
+    }
+
     fn name(input: &SignalInput) -> &Located<String> {
         &input.name
     }

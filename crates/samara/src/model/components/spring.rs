@@ -67,6 +67,15 @@ impl ComponentKind for Spring {
     type Input = SpringInput;
     type Def = SpringDef;
 
+    /// The discrete gradient of k(l − l₀)²/2 (docs/integrators.md); a time-varying
+    /// stiffness does work of its own.
+    fn discrete_form(input: &SpringInput) -> Result<(), String> {
+        match input.stiffness_function {
+            None => Ok(()),
+            Some(_) => Err("a spring with a `stiffness_function`".into()),
+        }
+    }
+
     fn name(input: &SpringInput) -> &Located<String> {
         &input.name
     }
