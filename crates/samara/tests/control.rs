@@ -542,13 +542,14 @@ gain = 0.5
             "{line}"
         );
     }
+    // A PID with no gain would output zero silently.
+    let no_gain = pid.replace("kp = 50.0\n", "").replace("kd = 5.0", "");
+    let no_gain = no_gain.replace("measurement_rate", "# measurement_rate");
+    let (line, msg, hint) = first_error(&no_gain);
+    assert!(msg.contains("at least one of `kp`, `ki`, `kd`"), "{msg}");
+    assert!(hint.contains("kp ="), "{hint}");
+    assert_eq!(line, line_of(&no_gain, "type = \"pid\""));
     // A passive coordinate cannot be read.
-    let text = pid.replace("[joints.theta3]\ninput = \"torque\"", "");
-    let text = text.replace(
-        "[[controllers]]",
-        "[[forces]]\nname = \"_x\"\n[[controllers]]",
-    );
-    let _ = text;
     let passive = pid
         .replace(
             "[joints.theta3]\ninput = \"torque\"                  # the controller's output [N m]",

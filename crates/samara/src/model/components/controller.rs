@@ -596,6 +596,15 @@ impl ComponentKind for Controller {
                 let kp = ci.kp.unwrap_or(0.0);
                 let ki = ci.ki.unwrap_or(0.0);
                 let kd = ci.kd.unwrap_or(0.0);
+                // Absent gains are absent terms (0); a PID with none would output 0 silently.
+                if kp == 0.0 && ki == 0.0 && kd == 0.0 {
+                    cx.error(
+                        format!("{what}: a pid needs at least one of `kp`, `ki`, `kd` ≠ 0"),
+                        cx.key(&e, "type"),
+                        Some("give the gains, e.g. kp = 50.0, kd = 5.0".into()),
+                    );
+                    return None;
+                }
                 let mut good = positive(
                     cx,
                     "derivative_filter",
