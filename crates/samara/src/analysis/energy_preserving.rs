@@ -167,7 +167,8 @@ impl<'a> EnergyStepper<'a> {
     /// Kinetic plus potential energy at the current state.
     pub fn energy(&self) -> f64 {
         let ctx = self.sys.context(self.state.time, 1.0);
-        self.sys.kinetic_energy(&self.state) + self.sys.potential_energy(&ctx, &self.state)
+        let (t, v) = self.sys.discrete_energies(&ctx, &self.state);
+        t + v
     }
 
     /// Sets node, coordinate and scratch states for the unknowns `u`.
@@ -557,15 +558,22 @@ pub(super) fn run_energy_consistent(
     };
     let energy_at = |it: &EnergyStepper| {
         let ctx = sys.context(it.state.time, 1.0);
+        let (kinetic, potential) = sys.discrete_energies(&ctx, &it.state);
         Energy {
-            kinetic: sys.kinetic_energy(&it.state),
-            potential: sys.potential_energy(&ctx, &it.state),
+            kinetic,
+            potential,
             external_work: 0.0,
             dissipated: 0.0,
         }
     };
+    let power_in = |it: &EnergyStepper| {
+        let ctx = sys.context(it.state.time, 1.0);
+        sys.external_power(&ctx, &it.state)
+    };
     let mut p_dis = sys.dissipated_power(&it.state);
+    let mut p_ext = power_in(&it);
     let mut dissipated = 0.0;
+    let mut external_work = 0.0;
     let record = |it: &EnergyStepper, energy: Energy, rec: &mut dyn Recorder| {
         rec.record(
             sys,
@@ -621,10 +629,14 @@ pub(super) fn run_energy_consistent(
                 let p1 = sys.dissipated_power(&it.state);
                 dissipated += 0.5 * h_try * (p_dis + p1);
                 p_dis = p1;
+                let e1 = power_in(&it);
+                external_work += 0.5 * h_try * (p_ext + e1);
+                p_ext = e1;
                 let last = it.state.time >= settings.t_end;
                 if step_index.is_multiple_of(settings.output_every) || last {
                     let mut energy = energy_at(&it);
                     energy.dissipated = dissipated;
+                    energy.external_work = external_work;
                     if let Some(what) = super::first_non_finite(sys, &it.state, &energy) {
                         summary.failure =
                             Some(super::non_finite_failure(name, it.state.time, what));
