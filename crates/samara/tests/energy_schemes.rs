@@ -313,6 +313,55 @@ fn beam_discrete_residual_is_a_discrete_gradient_and_keeps_momenta() {
     assert!(dl < 1e-11 * (l1 - l0).norm().max(l0.norm()), "{dl:e}");
 }
 
+/// Steps land on the load's knots (2.5 s and 5 s) even when they are off the step grid
+/// (h = 0.3 s): the mid-point rule then never straddles a kink and the linear momentum
+/// after the load is its impulse (50, 0, 0) N s exactly (1e-10 relative). Stepping over
+/// the knots would miss it by O(h² × slope jump) ≈ 1e-1 N s.
+#[test]
+fn energy_steps_land_on_the_load_knots() {
+    let m = with_run(model_file(SPAGHETTI), 0.3, 6.0, 1);
+    let sys = System::new(&m);
+    let (s, h) = run(&m);
+    assert!(s.failure.is_none(), "{:?}", s.failure);
+    for knot in [2.5, 5.0] {
+        assert!(
+            h.frames.iter().any(|f| (f.time - knot).abs() < 1e-12),
+            "no step ends on {knot}"
+        );
+    }
+    let (p, _) = sys.momenta(&h.last().unwrap().state);
+    eprintln!("spaghetti at h = 0.3 s: {} steps, p(6 s) = {p:?}", s.steps);
+    assert!(
+        (p - nalgebra::Vector3::new(50.0, 0.0, 0.0)).norm() < 1e-10 * 50.0,
+        "{p:?}"
+    );
+}
+
+/// The decaying scheme never increases the heavy top's energy (ρ∞ = 0.5, 10 precession
+/// periods at 100 steps per period); tolerance 1e-10 of m g l, the Newton tolerance.
+#[test]
+fn decaying_heavy_top_never_gains_energy() {
+    let m = example_with(
+        HEAVY_TOP,
+        &format!(
+            "[[analyses]]\nname = \"p\"\ntype = \"dynamic\"\nintegrator = \"energy_decaying\"\nrho_inf = 0.5\nt_end = {}\nstep = {}\ntolerance = 1e-12\nrelative_tolerance = 1e-14\n",
+            10.0 * TOP_PERIOD,
+            TOP_PERIOD / 100.0
+        ),
+    );
+    let (s, h) = run(&m);
+    assert!(s.failure.is_none(), "{:?}", s.failure);
+    let rise = h
+        .frames
+        .windows(2)
+        .map(|w| energy(&w[1]) - energy(&w[0]))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let lost = energy(&h.frames[0]) - energy(h.last().unwrap());
+    eprintln!("decaying heavy top: largest one-step rise {rise:.2e} J, lost {lost:.3e} J");
+    assert!(rise < 1e-10 * 4.905, "{rise:e}");
+    assert!(lost >= 0.0);
+}
+
 /// The decaying scheme on the flying spaghetti (ρ∞ = 0.5): once the load is gone the
 /// energy falls in every step (1e-9 J: the Newton tolerance times the beam's forces), the
 /// linear momentum stays the load's impulse exactly (all forces internal); the angular

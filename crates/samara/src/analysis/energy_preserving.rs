@@ -501,7 +501,8 @@ pub fn check_discrete_forms(sys: &System) -> Result<(), StepFailure> {
 }
 
 /// The dynamic analysis with an energy-consistent integrator: fixed steps (halved after
-/// a Newton failure, down to `min_step`), recorded every `output_every` steps.
+/// a Newton failure, down to `min_step`; shortened to land on the breakpoints of the time
+/// functions), recorded every `output_every` steps.
 pub(super) fn run_energy_consistent(
     sys: &System,
     name: &str,
@@ -594,6 +595,10 @@ pub(super) fn run_energy_consistent(
     let mut grid_k: u64 = 0;
     let mut good = 0usize;
     let mut step_index = 0usize;
+    // Steps land on the breakpoints of the time functions (load kinks and jumps), so the
+    // mid-point rule never straddles one: a piecewise-linear load then does exactly its
+    // impulse.
+    let breakpoints = sys.breakpoints();
     while it.state.time < settings.t_end {
         let t = it.state.time;
         let mut target = if h == settings.step {
@@ -601,6 +606,13 @@ pub(super) fn run_energy_consistent(
         } else {
             t + h
         };
+        let mut on_breakpoint = false;
+        if let Some(&b) = breakpoints.iter().find(|&&b| b > t + 1e-9 * h)
+            && b < target - 1e-9 * h
+        {
+            target = b;
+            on_breakpoint = true;
+        }
         if target > settings.t_end || settings.t_end - target < 1e-9 * h {
             target = settings.t_end;
         }
@@ -611,7 +623,9 @@ pub(super) fn run_energy_consistent(
                 summary.steps += 1;
                 summary.newton_iterations += it.iterations;
                 step_index += 1;
-                if h == settings.step {
+                if on_breakpoint {
+                    // Short of the grid point: the next step completes it.
+                } else if h == settings.step {
                     grid_k += 1;
                 } else {
                     good += 1;
