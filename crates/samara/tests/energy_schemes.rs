@@ -725,4 +725,24 @@ fn energy_schemes_refuse_what_they_cannot_integrate() {
             .to_string();
         assert!(err.contains("not used by integrator"), "{bad}: {err}");
     }
+    // A beam whose sections' mass centre is off the reference line: refused, located.
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../".to_owned() + SPAGHETTI),
+    )
+    .unwrap();
+    let (row1, row5) = (
+        "  [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],",
+        "  [0.0, 0.0, 0.0, 0.0, 0.0, 10.0],",
+    );
+    assert!(text.contains(row1) && text.contains(row5));
+    let text = text
+        .replace(row1, "  [0.0, 1.0, 0.0, 0.0, 0.0, 0.1],")
+        .replace(row5, "  [0.0, 0.1, 0.0, 0.0, 0.0, 10.0],");
+    let err = Model::from_toml_str(&text, "offset.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("offset.toml:") && err.contains("[[beams]]") && err.contains("mass centre"),
+        "{err}"
+    );
 }
