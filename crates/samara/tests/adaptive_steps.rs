@@ -250,3 +250,29 @@ fn bad_settings_are_located_errors() {
     );
     bad("step_control = \"adaptve\"", "unknown value `adaptve`");
 }
+
+/// Adaptive steps land on every breakpoint of ramps and table knots, not only of steps:
+/// the kicked mass of `examples/adaptive_kick.toml` driven instead by a table force (knots
+/// 0.3, 0.55, 1.2 s) and a ramp (0.7 … 1.9 s). Each knot must end a step (to 1e-12 s);
+/// a controller that stepped over one would be caught here.
+#[test]
+fn adaptive_steps_land_on_ramp_and_table_knots() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/adaptive_kick.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let step = "function = { type = \"step\", time = 0.5, after = 1.0 }";
+    assert!(text.contains(step));
+    let text = text.replace(
+        step,
+        "function = { type = \"table\", points = [[0.3, 0.0], [0.55, 1.0], [1.2, 0.4]] }\n\n[[forces]]\nname = \"push\"\nnode = \"mass\"\nforce = [30.0, 0.0, 0.0]\nfunction = { type = \"ramp\", start = 0.7, end = 1.9, to = 1.0 }",
+    );
+    let text = text.replace("t_end = 5.0", "t_end = 2.5");
+    let (s, h) = run(&model(&text));
+    assert!(s.failure.is_none(), "{:?}", s.failure);
+    for knot in [0.3, 0.55, 0.7, 1.2, 1.9] {
+        assert!(
+            h.frames.iter().any(|f| (f.time - knot).abs() < 1e-12),
+            "no step ends on {knot}"
+        );
+    }
+}

@@ -167,7 +167,8 @@ impl<'a> EnergyStepper<'a> {
     /// Kinetic plus potential energy at the current state.
     pub fn energy(&self) -> f64 {
         let ctx = self.sys.context(self.state.time, 1.0);
-        self.sys.kinetic_energy(&self.state) + self.sys.potential_energy(&ctx, &self.state)
+        let (t, v) = self.sys.discrete_energies(&ctx, &self.state);
+        t + v
     }
 
     /// Sets node, coordinate and scratch states for the unknowns `u`.
@@ -500,7 +501,8 @@ pub fn check_discrete_forms(sys: &System) -> Result<(), StepFailure> {
 }
 
 /// The dynamic analysis with an energy-consistent integrator: fixed steps (halved after
-/// a Newton failure, down to `min_step`), recorded every `output_every` steps.
+/// a Newton failure, down to `min_step`; shortened to land on the breakpoints of the time
+/// functions), recorded every `output_every` steps.
 pub(super) fn run_energy_consistent(
     sys: &System,
     name: &str,
@@ -557,15 +559,22 @@ pub(super) fn run_energy_consistent(
     };
     let energy_at = |it: &EnergyStepper| {
         let ctx = sys.context(it.state.time, 1.0);
+        let (kinetic, potential) = sys.discrete_energies(&ctx, &it.state);
         Energy {
-            kinetic: sys.kinetic_energy(&it.state),
-            potential: sys.potential_energy(&ctx, &it.state),
+            kinetic,
+            potential,
             external_work: 0.0,
             dissipated: 0.0,
         }
     };
+    let power_in = |it: &EnergyStepper| {
+        let ctx = sys.context(it.state.time, 1.0);
+        sys.external_power(&ctx, &it.state)
+    };
     let mut p_dis = sys.dissipated_power(&it.state);
+    let mut p_ext = power_in(&it);
     let mut dissipated = 0.0;
+    let mut external_work = 0.0;
     let record = |it: &EnergyStepper, energy: Energy, rec: &mut dyn Recorder| {
         rec.record(
             sys,
@@ -586,6 +595,10 @@ pub(super) fn run_energy_consistent(
     let mut grid_k: u64 = 0;
     let mut good = 0usize;
     let mut step_index = 0usize;
+    // Steps land on the breakpoints of the time functions (load kinks and jumps), so the
+    // mid-point rule never straddles one: a piecewise-linear load then does exactly its
+    // impulse.
+    let breakpoints = sys.breakpoints();
     while it.state.time < settings.t_end {
         let t = it.state.time;
         let mut target = if h == settings.step {
@@ -593,6 +606,13 @@ pub(super) fn run_energy_consistent(
         } else {
             t + h
         };
+        let mut on_breakpoint = false;
+        if let Some(&b) = breakpoints.iter().find(|&&b| b > t + 1e-9 * h)
+            && b < target - 1e-9 * h
+        {
+            target = b;
+            on_breakpoint = true;
+        }
         if target > settings.t_end || settings.t_end - target < 1e-9 * h {
             target = settings.t_end;
         }
@@ -603,7 +623,9 @@ pub(super) fn run_energy_consistent(
                 summary.steps += 1;
                 summary.newton_iterations += it.iterations;
                 step_index += 1;
-                if h == settings.step {
+                if on_breakpoint {
+                    // Short of the grid point: the next step completes it.
+                } else if h == settings.step {
                     grid_k += 1;
                 } else {
                     good += 1;
@@ -621,10 +643,14 @@ pub(super) fn run_energy_consistent(
                 let p1 = sys.dissipated_power(&it.state);
                 dissipated += 0.5 * h_try * (p_dis + p1);
                 p_dis = p1;
+                let e1 = power_in(&it);
+                external_work += 0.5 * h_try * (p_ext + e1);
+                p_ext = e1;
                 let last = it.state.time >= settings.t_end;
                 if step_index.is_multiple_of(settings.output_every) || last {
                     let mut energy = energy_at(&it);
                     energy.dissipated = dissipated;
+                    energy.external_work = external_work;
                     if let Some(what) = super::first_non_finite(sys, &it.state, &energy) {
                         summary.failure =
                             Some(super::non_finite_failure(name, it.state.time, what));

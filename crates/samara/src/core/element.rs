@@ -235,4 +235,14 @@ pub trait Element: Send + Sync {
     /// Discrete residual over a step ([`DiscreteStep`]): 6 rows per node, with
     /// `Σ Δ·r̄ = ΔT + ΔV + D − W` exactly. Called only when [`Element::discrete_form`] is Ok.
     fn discrete_residual(&self, _step: &DiscreteStep, _out: &mut [f64]) {}
+    /// The kinetic energy whose balance [`Element::discrete_residual`] states (the
+    /// element's own unless its discrete form uses another inertia, as the beam's lumped
+    /// one).
+    fn discrete_kinetic_energy(&self, x: &ElementInput) -> f64 {
+        self.kinetic_energy(x)
+    }
+    /// The potential energy whose balance [`Element::discrete_residual`] states.
+    fn discrete_potential_energy(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
+        self.potential_energy(ctx, x)
+    }
 }

@@ -9,7 +9,7 @@
 //! ```
 
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
-use crate::core::{ElementInput, NodeState};
+use crate::core::{DiscreteStep, ElementInput, NodeState};
 use crate::math::TimeFunction;
 use crate::math::skew;
 use nalgebra::Vector3;
@@ -111,6 +111,32 @@ impl Element for AppliedLoad {
                     add_block(&mut out.k, 0, 3, &(r * skew(&fl)));
                 }
             }
+        }
+    }
+
+    fn discrete_form(&self) -> Result<(), String> {
+        Ok(())
+    }
+
+    /// The load at the mid-point time, a follower one with the mean frame
+    /// `R̄ = (R₀ + R₁)/2`, acting at the mean arm `(R₀s + R₁s)/2`: its work over the step is
+    /// `W = F̄·Δx + m̄·(rotation conjugate to ψ)`, the `W` of the balance
+    /// `Σ Δ·r̄ = ΔT + ΔV + D − W` (docs/integrators.md).
+    fn discrete_residual(&self, step: &DiscreteStep, out: &mut [f64]) {
+        let i = self.node[0];
+        let f = self.function.eval(step.ctx.time) * step.ctx.load_factor;
+        let (fg, mg) = match self.frame {
+            LoadFrame::Global => (self.force * f, self.moment * f),
+            LoadFrame::Node => {
+                let rm = (step.start[i].r() + step.end[i].r()) * 0.5;
+                (rm * self.force * f, rm * self.moment * f)
+            }
+        };
+        let m = mg + step.mean_arm(i, &self.s).cross(&fg);
+        let mr = step.conjugate_moment(i, &m);
+        for q in 0..3 {
+            out[q] -= fg[q];
+            out[3 + q] -= mr[q];
         }
     }
 

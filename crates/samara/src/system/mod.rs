@@ -631,7 +631,9 @@ impl System {
             + self.coordinate_sum(s, |c, q| c.dissipated_power(q))
     }
 
-    /// Total linear and angular momentum (about the global origin) of the rigid bodies.
+    /// Total linear and angular momentum (about the global origin) of the rigid bodies and
+    /// the beams (with their inertia lumped at the nodes, as the energy-consistent
+    /// integrators take it).
     pub fn momenta(&self, s: &State) -> (Vector3<f64>, Vector3<f64>) {
         let mut p = Vector3::zeros();
         let mut h = Vector3::zeros();
@@ -640,7 +642,22 @@ impl System {
             p += pb;
             h += hb;
         }
+        for e in self.beams.iter().flat_map(|b| &b.elements) {
+            let (pb, hb) = e.lumped_momenta(&s.nodes);
+            p += pb;
+            h += hb;
+        }
         (p, h)
+    }
+
+    /// Kinetic and potential energy as the energy-consistent integrators state their
+    /// balance ([`Element::discrete_kinetic_energy`]: a beam's inertia lumped at its nodes).
+    pub fn discrete_energies(&self, ctx: &EvalContext, s: &State) -> (f64, f64) {
+        let signals = self.signal_values(ctx, s);
+        let t = self.element_sum(s, &signals, |e, x| e.discrete_kinetic_energy(x));
+        let v = self.element_sum(s, &signals, |e, x| e.discrete_potential_energy(ctx, x))
+            + self.coordinate_sum(s, |c, q| c.potential_energy(q));
+        (t, v)
     }
 
     /// Constraint values Φ of all constraints, concatenated.

@@ -27,6 +27,8 @@ use nalgebra::{DMatrix, Matrix3, Matrix4x3, Matrix6, Vector3, Vector6};
 use std::cell::RefCell;
 use std::sync::Arc;
 
+mod discrete;
+
 /// Largest supported element order.
 pub const MAX_ORDER: usize = 31;
 
@@ -130,6 +132,18 @@ pub struct ElementSpec<'a> {
     pub loads: Arc<Vec<DistributedLoad>>,
 }
 
+/// The inertia of one node lumped by Gauss–Lobatto quadrature of the kinetic energy (the
+/// inertia of the energy-consistent integrators, [`discrete`]).
+#[derive(Clone, Copy, Debug)]
+struct LumpedNode {
+    /// GLL weight × ds/dξ × mass per length.
+    mass: f64,
+    /// GLL weight × ds/dξ × sectional inertia, node-frame components.
+    inertia: Matrix3<f64>,
+    /// Whether the section's mass centre is off the reference line there.
+    offset: bool,
+}
+
 /// A beam finite element.
 #[derive(Clone, Debug)]
 pub struct BeamElement {
@@ -140,6 +154,7 @@ pub struct BeamElement {
     elastic: Vec<ElasticPoint>,
     inertial: Vec<InertialPoint>,
     loads: Arc<Vec<DistributedLoad>>,
+    lumped: Vec<LumpedNode>,
 }
 
 /// Aligns `s` with `r` (s and −s are the same rotation).
@@ -234,6 +249,32 @@ impl BeamElement {
                 }
             })
             .collect();
+        // GLL lumping: at node k every Lagrange polynomial but h_k vanishes, so the
+        // interpolated section there is the node's own; weight w_k |dx₀/dξ|.
+        let (_, gll_w) = super::gll::gauss_lobatto_legendre(p);
+        let lumped = (0..nn)
+            .map(|k| {
+                super::gll::lagrange(&xi_nodes, xi_nodes[k], &mut h, &mut dh);
+                let jac = (0..nn)
+                    .map(|j| spec.x0[j] * dh[j])
+                    .sum::<Vector3<f64>>()
+                    .norm();
+                let eta = e0 + (xi_nodes[k] + 1.0) * 0.5 * (e1 - e0);
+                let m6 = spec.table.at(eta).mass;
+                let w = gll_w[k] * jac;
+                let j_sec: Matrix3<f64> = m6.fixed_view::<3, 3>(3, 3).into_owned();
+                let j_node = match &offsets[k] {
+                    None => j_sec,
+                    Some((_, om)) => om * j_sec * om.transpose(),
+                };
+                let m_eta = Vector3::new(m6[(5, 1)], m6[(3, 2)], m6[(4, 0)]);
+                LumpedNode {
+                    mass: w * m6[(0, 0)],
+                    inertia: j_node * w,
+                    offset: m_eta.norm() > 1e-12 * m6[(0, 0)].abs().max(f64::MIN_POSITIVE),
+                }
+            })
+            .collect();
         Self {
             name: spec.name,
             nodes: spec.nodes,
@@ -242,6 +283,7 @@ impl BeamElement {
             elastic,
             inertial,
             loads: spec.loads,
+            lumped,
         }
     }
 
@@ -678,6 +720,10 @@ struct Work {
     load_factors: Vec<f64>,
     eo: ElasticOut,
     io: InertialOut,
+    /// Discrete form ([`discrete`]): strains at the start of the step, nodal rows.
+    strain0: Vec<Vector6<f64>>,
+    rows_a: Vec<f64>,
+    rows_b: Vec<f64>,
 }
 
 impl Work {
@@ -694,6 +740,11 @@ impl Work {
         for x in [&mut self.s, &mut self.sd, &mut self.sdd, &mut self.fq] {
             x.resize(nn, q);
         }
+        for x in [&mut self.rows_a, &mut self.rows_b] {
+            x.resize(6 * nn, 0.0);
+        }
+        // One strain per elastic point: at most p + 1 = nn.
+        self.strain0.resize(nn, Vector6::zeros());
         for x in [
             &mut self.w,
             &mut self.wd,
@@ -739,6 +790,22 @@ impl Element for BeamElement {
         for l in self.loads.iter() {
             out.extend(l.function.breakpoints());
         }
+    }
+
+    fn discrete_form(&self) -> Result<(), String> {
+        self.check_discrete_form()
+    }
+
+    fn discrete_residual(&self, step: &crate::core::DiscreteStep, out: &mut [f64]) {
+        self.discrete_rows(step, out)
+    }
+
+    fn discrete_kinetic_energy(&self, x: &ElementInput) -> f64 {
+        self.lumped_kinetic_energy(x.nodes)
+    }
+
+    fn discrete_potential_energy(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
+        self.lumped_potential_energy(ctx, x.nodes)
     }
 
     fn name(&self) -> &str {
@@ -875,5 +942,17 @@ impl Element for Arc<BeamElement> {
     }
     fn breakpoints(&self, out: &mut Vec<f64>) {
         self.as_ref().breakpoints(out)
+    }
+    fn discrete_form(&self) -> Result<(), String> {
+        self.as_ref().discrete_form()
+    }
+    fn discrete_residual(&self, step: &crate::core::DiscreteStep, out: &mut [f64]) {
+        self.as_ref().discrete_residual(step, out)
+    }
+    fn discrete_kinetic_energy(&self, x: &ElementInput) -> f64 {
+        self.as_ref().discrete_kinetic_energy(x)
+    }
+    fn discrete_potential_energy(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
+        self.as_ref().discrete_potential_energy(ctx, x)
     }
 }

@@ -55,6 +55,10 @@ pub struct LoadDef {
 pub struct Force;
 
 impl ComponentKind for Force {
+    /// The load at the mid-point time does its work over the step (docs/integrators.md).
+    fn discrete_form(_input: &ForceInput) -> Result<(), String> {
+        Ok(())
+    }
     const NOUN: &'static str = "force";
     type Input = ForceInput;
     type Def = LoadDef;

@@ -16,6 +16,27 @@ use input::BeamInput;
 pub struct BeamKind;
 
 impl ComponentKind for BeamKind {
+    /// Lumped inertia and a momentum-keeping discrete gradient of the strain energy
+    /// (docs/integrators.md); written about the reference line, without distributed loads.
+    fn discrete_form(input: &BeamInput) -> Result<(), String> {
+        if !input.loads.is_empty() {
+            return Err("a beam with distributed loads (`[[beams.loads]]`) has no energy-consistent discrete form yet: apply the loads at nodes with `[[forces]]`".into());
+        }
+        for s in &input.sections {
+            let off_mass = s
+                .value
+                .mass
+                .is_some_and(|m| m[5][1] != 0.0 || m[3][2] != 0.0 || m[4][0] != 0.0)
+                || s.value
+                    .isotropic
+                    .as_ref()
+                    .is_some_and(|i| i.mass_centre.is_some_and(|c| c != [0.0; 2]));
+            if off_mass {
+                return Err("a beam whose sections' mass centre is off the reference line has no energy-consistent discrete form yet (the lumped inertia is written about the reference line)".into());
+            }
+        }
+        Ok(())
+    }
     const NOUN: &'static str = "beam";
     type Input = BeamInput;
     type Def = BeamDef;
