@@ -855,6 +855,28 @@ fn every_tire_option_changes_the_motion() {
         let diff: f64 = v.iter().zip(&reference).map(|(a, b)| (a - b).abs()).sum();
         assert!(diff > 1e-9, "`{to}` changed nothing");
     }
+    // Low-speed damping: V_low above the sled's 10 m/s so that it acts; then V_low
+    // itself changes the damped motion.
+    let damped = base.replacen(
+        "brake = \"brake\"",
+        "brake = \"brake\"\nlow_speed_damping = 0.05\nlow_speed = 20.0",
+        1,
+    );
+    let reference_damped = motion(&damped);
+    let base_motion = motion(&base);
+    let diff: f64 = reference_damped
+        .iter()
+        .zip(&base_motion)
+        .map(|(a, b)| (a - b).abs())
+        .sum();
+    assert!(diff > 1e-6, "`low_speed_damping` changed nothing");
+    let v = motion(&damped.replacen("low_speed = 20.0", "low_speed = 30.0", 1));
+    let diff: f64 = v
+        .iter()
+        .zip(&reference_damped)
+        .map(|(a, b)| (a - b).abs())
+        .sum();
+    assert!(diff > 1e-6, "`low_speed` changed nothing");
     // D at the nominal load is μ = D/F_z0.
     let with_d = base.replacen(
         "longitudinal = { B = 10.0, C = 1.9, mu = 1.0, E = 0.97 }",
