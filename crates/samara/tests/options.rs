@@ -1125,3 +1125,46 @@ relative_tolerance = 1e-14
         "{e_ga} {e_ep} {e_ed}"
     );
 }
+
+/// Issue #16: a force's `signal` multiplies the load (here a constant signal of 0.5 halves
+/// the push on a free mass: x = ½ (0.5 F/m) t², exact for the integrator at a constant
+/// force). The closed loop through a controller is tests/signal_force.rs.
+#[test]
+fn a_force_signal_scales_the_load() {
+    let text = |signal: &str| {
+        format!(
+            r#"
+[model]
+name = "push"
+gravity = [0.0, 0.0, 0.0]
+[[nodes]]
+name = "mass"
+position = [0.0, 0.0, 0.0]
+[[bodies]]
+name = "mass"
+node = "mass"
+mass = 2.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[signals]]
+name = "half"
+function = {{ type = "constant", value = 0.5 }}
+[[forces]]
+name = "push"
+node = "mass"
+force = [10.0, 0.0, 0.0]
+{signal}
+[[analyses]]
+name = "push"
+type = "dynamic"
+t_end = 1.0
+step = 0.01
+"#
+        )
+    };
+    let (_, plain) = attempt(&text(""));
+    let (_, halved) = attempt(&text("signal = \"half\""));
+    let (x1, x2) = (last_node(&plain)[0], last_node(&halved)[0]);
+    println!("without the signal {x1:.12} m, with 0.5: {x2:.12} m");
+    assert!((x1 - 2.5).abs() < 1e-9, "{x1}");
+    assert!((x2 - 1.25).abs() < 1e-9, "{x2}");
+}
