@@ -72,10 +72,10 @@ fn a_controller_output_drives_a_force() {
 #[test]
 fn an_unknown_force_signal_is_a_located_error() {
     let text = oscillator(1e-3).replace("signal = \"spring_law\"", "signal = \"spring_lw\"");
-    let err = samara::model::Model::from_toml_str(&text, "f.toml")
-        .err()
-        .expect("rejected")
-        .to_string();
+    let err = match samara::model::Model::from_toml_str(&text, "f.toml") {
+        Ok(_) => panic!("an unknown signal was accepted"),
+        Err(e) => e.to_string(),
+    };
     println!("{err}");
     assert!(err.contains("f.toml:"), "{err}");
     assert!(err.contains("unknown signal 'spring_lw'"), "{err}");
