@@ -21,6 +21,12 @@ $samara run examples/landing_gear.toml --out "$tmp/gear" --quiet > /dev/null
 $samara plot "$tmp/gear/retract.nc" joint_coordinate:trunnion.theta3 joint_coordinate:actuator.d3 \
     joint_coordinate:oleo.d3 joint_coordinate_force:actuator.d3 joint_coordinate_force:oleo.d3 \
     --out docs/images/landing_gear.png
+$samara run examples/landing_gear_drop.toml --out "$tmp/gear_drop" --quiet > /dev/null
+$samara plot "$tmp/gear_drop/drop_and_retract.nc" joint_coordinate:oleo.d3 \
+    element_output:shock_strut.actuator.force element_output:tire.normal_force \
+    element_output:tire.longitudinal_force element_output:tire.brake_torque \
+    element_state:tire.slip_ratio joint_coordinate:trunnion.theta3 \
+    --out docs/images/landing_gear_drop.png
 $samara run examples/four_bar.toml --out "$tmp/four_bar" --quiet > /dev/null
 $samara plot "$tmp/four_bar/turn.nc" joint_coordinate:crank_pivot.theta3 joint_coordinate:rocker_pivot.theta3 \
     joint_coordinate_force:crank_pivot.theta3 --out docs/images/four_bar.png

@@ -1,7 +1,8 @@
 //! Landing-gear drop benchmark (issue #16): `examples/landing_gear_drop.toml` — the main gear
-//! with its oleo-pneumatic strut, tire contact with LuGre friction, and the PID-controlled
-//! hydraulic retraction circuit — `T` s simulated (default 1 s: the drop, spin-up, rebound
-//! and lift-off) at the example's step, with the History kept in memory.
+//! with its oleo-pneumatic strut, the Magic-Formula tire with its PI anti-skid brake, and
+//! the PID-controlled hydraulic retraction circuit — `T` s simulated (default 1 s: the drop,
+//! spin-up and half of the anti-skid braking) at the example's step, with the History kept
+//! in memory.
 //!
 //! `cargo bench -p samara --bench drop [-- T]` prints the wall time, steps, Newton
 //! iterations per step and the time per step. Target (issue #16): 1 s in under 0.2 s on

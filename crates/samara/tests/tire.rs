@@ -502,3 +502,126 @@ fn bad_tire_input_is_rejected_where_it_is_written() {
         assert!(!hint.is_empty());
     }
 }
+
+/// The sled of tire_braking.toml at a crawl with its wheel clamped (a stiff torsion spring
+/// on the hub, no brake, no rolling resistance): the slip state is the tread deflection
+/// u = σ_κ κ' = −x (σ κ̇' = −V_sx = −ẋ, the |V_x| κ' term of relative size x/σ ≈ 1e-3),
+/// and the force `F_x = C (κ' − c_low ẋ)` (C = B C μ F_z, the Magic Formula linear at
+/// |κ| ≈ 1e-3) makes the sled a damped oscillator
+/// `M ẍ + C c_low ẋ + (C/σ) x = 0` (Pacejka 2012, §8.6: without the damping the tire is an
+/// undamped spring at standstill). Sled velocity against the closed form from ẋ(0) = v₀,
+/// x(0) = 0, over 0.5 s (3.4 periods): tolerance 1 % of v₀ (the neglected |V_x| κ', of
+/// relative size x/σ ≈ 1e-3 per cycle, a slight amplitude-dependent damping that adds up to
+/// 0.6 % of v₀ over the undamped run; the curvature of the formula, 1e-4; the step's phase
+/// error (ω h)²/12 per radian ≈ 4e-5 over 21 rad at h = 0.5 ms); without the damping the
+/// sled keeps rocking.
+#[test]
+fn low_speed_damping_makes_the_standstill_tire_a_damped_oscillator() {
+    let v0 = 0.005;
+    let base = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/contact/tire_braking.toml"),
+    )
+    .unwrap()
+    .replace("brake = \"brake\"\n", "")
+    .replace("rolling_resistance = 0.01", "rolling_resistance = 0.0")
+    .replace(
+        "velocity = [10.0, 0.0, 0.0]",
+        &format!("velocity = [{v0}, 0.0, 0.0]"),
+    )
+    .replace(
+        "angular_velocity = [0.0, 34.48275862068966, 0.0]",
+        "angular_velocity = [0.0, 0.0, 0.0]",
+    )
+    .replace(
+        "# spin axis: forward is axis × ground normal = +x",
+        "\n[joints.theta3]\nstiffness = 1e9",
+    )
+    .replace("t_end = 1.5", "t_end = 0.5")
+    .replace("step = 1e-3", "step = 5e-4");
+    assert!(base.contains("stiffness = 1e9"));
+    let damped = base.replace(
+        "rolling_resistance = 0.0",
+        "rolling_resistance = 0.0\nlow_speed_damping = 0.1\nlow_speed = 1.0",
+    );
+    let mass = 300.0;
+    for (text, c_low) in [(&damped, 0.1), (&base, 0.0)] {
+        let m = model(text);
+        let (_, h) = run(&m);
+        let fz = outputs(&m, &h, &["tire.normal_force"])[0][0];
+        let c = 10.0 * 1.9 * 1.0 * fz;
+        let omega = (c / (0.1 * mass)).sqrt();
+        let zeta = c * c_low / (2.0 * mass * omega);
+        let wd = omega * (1.0 - zeta * zeta).sqrt();
+        let mut worst = 0.0f64;
+        for f in &h.frames {
+            let t = f.time;
+            let exact = v0
+                * (-zeta * omega * t).exp()
+                * ((wd * t).cos() - zeta * omega / wd * (wd * t).sin());
+            worst = worst.max((f.state.nodes[0].v[0] - exact).abs());
+        }
+        let late = h
+            .frames
+            .iter()
+            .filter(|f| f.time > 0.35)
+            .map(|f| f.state.nodes[0].v[0].abs())
+            .fold(0.0, f64::max);
+        println!(
+            "c_low = {c_low}: ω = {omega:.3} rad/s, ζ = {zeta:.4}; velocity error {:.2e} of v₀; late amplitude {:.3} v₀",
+            worst / v0,
+            late / v0
+        );
+        assert!(worst < 1e-2 * v0, "{worst}");
+        if c_low == 0.0 {
+            assert!(late > 0.95 * v0, "undamped: keeps rocking");
+        } else {
+            assert!(late < 0.15 * v0, "damped: {late}");
+        }
+    }
+}
+
+/// Out of contact the slip states relax to zero: the braked sled's wheel skids with
+/// κ' ≈ −1, then a force lifts the carrier off the ground; from the first frame out of
+/// contact κ'(t) = κ'(t₁) exp(−(V + v_ε)(t − t₁)/σ_κ) (the sled coasts at constant V).
+/// Tolerance 2e-3 of κ'(t₁): the trapezoidal-like step's error (h/τ)²/12 with
+/// τ = σ/(V + v_ε) ≈ 15 ms and h = 0.25 ms.
+#[test]
+fn slip_states_relax_to_zero_out_of_contact() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/contact/tire_braking.toml"),
+    )
+    .unwrap()
+    .replace("t_end = 1.5", "t_end = 0.65")
+    .replace("step = 1e-3", "step = 2.5e-4")
+        + r#"
+[[forces]]
+name = "lift"
+node = "carrier"
+force = [0.0, 0.0, 8000.0]
+function = { type = "table", points = [[0.0, 0.0], [0.5, 0.0], [0.51, 1.0]] }
+"#;
+    let m = model(&text);
+    let (_, h) = run(&m);
+    let o = outputs(&m, &h, &["tire.deflection", "tire.slip_ratio"]);
+    let k1 = o
+        .iter()
+        .position(|r| r[0] <= 0.0)
+        .expect("the tire leaves the ground");
+    let (t1, kappa1) = (h.frames[k1].time, o[k1][1]);
+    let v = h.frames[k1].state.nodes[2].v[0];
+    let mut worst = 0.0f64;
+    for (f, r) in h.frames.iter().zip(&o).skip(k1) {
+        assert!(r[0] <= 0.0, "stays in the air");
+        let exact = kappa1 * (-(v + 0.05) * (f.time - t1) / 0.1).exp();
+        worst = worst.max((r[1] - exact).abs());
+    }
+    let last = o.last().unwrap()[1];
+    println!(
+        "lift-off at {t1:.4} s with κ' = {kappa1:.4}, V = {v:.3} m/s; error {:.2e} of κ'(t₁); κ' at the end {last:.2e}",
+        worst / kappa1.abs()
+    );
+    assert!(kappa1 < -0.9, "locked before lift-off");
+    assert!(worst < 2e-3 * kappa1.abs(), "{worst}");
+}

@@ -1,4 +1,6 @@
-//! Applied force and moment on a node, scaled by a time function.
+//! Applied force and moment on a node, scaled by a time function and, optionally, by a
+//! signal s (a controller's output, a sensor): the load is `f(t) s (F, M)`, its derivative
+//! with respect to the signal the load at s = 1.
 //!
 //! A dead load has fixed global components; a follower load has node-frame components.
 //! The force acts at a point `p = x + R s` fixed to the node. Residual (`r = −f`):
@@ -37,6 +39,8 @@ pub struct AppliedLoad {
     /// Point of application relative to the node, node frame.
     s: Vector3<f64>,
     function: TimeFunction,
+    /// The scaling signal, if any.
+    inputs: Vec<String>,
 }
 
 impl AppliedLoad {
@@ -57,12 +61,33 @@ impl AppliedLoad {
             frame,
             s: offset,
             function,
+            inputs: Vec::new(),
+        }
+    }
+
+    /// The load scaled by the named signal as well.
+    pub fn with_signal(mut self, signal: impl Into<String>) -> Self {
+        self.inputs = vec![signal.into()];
+        self
+    }
+
+    /// The signal factor s (1 without a signal).
+    fn signal_factor(&self, x: &ElementInput) -> f64 {
+        if self.inputs.is_empty() {
+            1.0
+        } else {
+            x.signals[0]
         }
     }
 
     /// Force and moment in global components at the current state, moment about the node.
-    fn global_load(&self, ctx: &EvalContext, n: &NodeState) -> (Vector3<f64>, Vector3<f64>) {
-        let f = self.function.eval(ctx.time) * ctx.load_factor;
+    fn global_load(
+        &self,
+        ctx: &EvalContext,
+        n: &NodeState,
+        signal: f64,
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let f = self.function.eval(ctx.time) * ctx.load_factor * signal;
         let r = n.r();
         let (fg, mg) = match self.frame {
             LoadFrame::Global => (self.force * f, self.moment * f),
@@ -85,31 +110,44 @@ impl Element for AppliedLoad {
         &self.node
     }
 
+    fn signal_inputs(&self) -> &[String] {
+        &self.inputs
+    }
+
     fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
         let nodes = x.nodes;
         let n = &nodes[self.node[0]];
-        let f = self.function.eval(ctx.time) * ctx.load_factor;
+        // The residual is linear in the factor: computed at f₀ = f(t) λ, scaled by s; its
+        // derivative with respect to s is the residual at s = 1.
+        let f0 = self.function.eval(ctx.time) * ctx.load_factor;
+        let sig = self.signal_factor(x);
         let r = n.r();
         let st = skew(&self.s);
-        match self.frame {
+        let (rx, rt) = match self.frame {
             LoadFrame::Global => {
-                let fg = self.force * f;
-                let mg = self.moment * f;
+                let fg = self.force * f0;
+                let mg = self.moment * f0;
                 let rtf = r.transpose() * fg;
                 let rtm = r.transpose() * mg;
-                out.add_r(0, &(-fg));
-                out.add_r(3, &(-(st * rtf) - rtm));
                 if need == Need::ResidualAndTangents {
-                    add_block(&mut out.k, 3, 3, &(-(st * skew(&rtf)) - skew(&rtm)));
+                    add_block(&mut out.k, 3, 3, &((-(st * skew(&rtf)) - skew(&rtm)) * sig));
                 }
+                (-fg, -(st * rtf) - rtm)
             }
             LoadFrame::Node => {
-                let fl = self.force * f;
-                out.add_r(0, &(-(r * fl)));
-                out.add_r(3, &(-(st * fl) - self.moment * f));
+                let fl = self.force * f0;
                 if need == Need::ResidualAndTangents {
-                    add_block(&mut out.k, 0, 3, &(r * skew(&fl)));
+                    add_block(&mut out.k, 0, 3, &(r * skew(&fl) * sig));
                 }
+                (-(r * fl), -(st * fl) - self.moment * f0)
+            }
+        };
+        out.add_r(0, &(rx * sig));
+        out.add_r(3, &(rt * sig));
+        if need == Need::ResidualAndTangents && !self.inputs.is_empty() {
+            for k in 0..3 {
+                out.ds[(k, 0)] += rx[k];
+                out.ds[(3 + k, 0)] += rt[k];
             }
         }
     }
@@ -143,7 +181,7 @@ impl Element for AppliedLoad {
     fn external_power(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
         let nodes = x.nodes;
         let n = &nodes[self.node[0]];
-        let (fg, mg) = self.global_load(ctx, n);
+        let (fg, mg) = self.global_load(ctx, n, self.signal_factor(x));
         // Power = F·ẋ_node + M_node·ω, with M about the node including the lever arm.
         fg.dot(&n.v) + mg.dot(&(n.r() * n.w))
     }

@@ -29,6 +29,16 @@
 //! ground `V_x = e_x·(v − v_g)`, `V_y = e_y·(v − v_g)`; spin `Ω = s₀·Ω_W` (absolute);
 //! slip velocities `V_sx = V_x − R_e Ω`, `V_sy = V_y` (R_e the effective rolling radius).
 //!
+//! **Out of contact** (δ ≤ 0) the contact patch is gone: the slip states relax to zero,
+//! `σ ż + (|V_x| + v_ε) z = 0`, so a wheel touches down with undeflected tread whatever its
+//! spin in the air (Pacejka §7.2: the deflection u = σ κ' of the tread).
+//!
+//! **Low-speed damping.** At standstill the relaxation model is an undamped spring of
+//! stiffness C/σ (Pacejka §8.6, the low-speed problem of the transient model); the forces
+//! use the damped slips `κ_d = κ' − c_low w(V_x) V_sx`, `tan α_d = tan α' − c_low w(V_x) V_sy`
+//! with `w = ½(1 + cos(π |V_x|/V_low))` below V_low (0 above), a damping force
+//! `−C c_low V_s` (C = B C μ F_z the slip stiffness) that fades out by V_low.
+//!
 //! **Forces.** `F_z = max(0, k δ + c δ̇)` for δ > 0; `F_x = μ_x F_z sin(C_x φ(B_x, E_x, κ'))`,
 //! `F_y = μ_y F_z sin(C_y φ(B_y, E_y, α'))` with `φ(B, E, x) = arctan(B x − E(B x −
 //! arctan B x))` — the peak D = μ F_z grows linearly with the load (a constant friction
@@ -114,8 +124,28 @@ pub struct TireParameters {
     pub trail: Option<MagicFormula>,
     /// Rolling-resistance coefficient f_r.
     pub rolling_resistance: f64,
-    /// Regularization speed v_ε [m/s] of the rolling resistance and the brake.
+    /// Regularization speed v_ε [m/s] of the rolling resistance and the brake; out of
+    /// contact the slip states relax at |V_x| + v_ε.
     pub regularization_speed: f64,
+    /// Low-speed damping c_low [s/m] of the slip states (0: none).
+    pub low_speed_damping: f64,
+    /// Speed V_low [m/s] below which the low-speed damping fades in.
+    pub low_speed: f64,
+}
+
+/// The low-speed damping weight `w(V) = ½ (1 + cos(π |V|/V_low))` below V_low, 0 above:
+/// one at standstill, fading out with a continuous slope at V_low.
+fn low_speed_weight<S: Scalar>(v: S, v_low: f64) -> S {
+    let a = v.re().abs();
+    if a >= v_low {
+        return S::cst(0.0);
+    }
+    let ph = std::f64::consts::PI / v_low;
+    let sign = if v.re() < 0.0 { -1.0 } else { 1.0 };
+    v.chain(
+        0.5 * (1.0 + (ph * a).cos()),
+        -0.5 * ph * (ph * a).sin() * sign,
+    )
 }
 
 /// Derivative directions: local unknown k at k (K), its rate at `NV + k` (C), the brake
@@ -274,12 +304,24 @@ impl Tire {
             zj
         });
         let avx = vx.abs();
-        let state_rows = [
-            zd[0] * p.relaxation[0] + avx * z[0] + vsx,
-            zd[1] * p.relaxation[1] + avx * z[1] + vy,
-        ];
-        let kappa = z[0];
-        let alpha = atan(z[1]);
+        let state_rows = if delta.re() > 0.0 {
+            [
+                zd[0] * p.relaxation[0] + avx * z[0] + vsx,
+                zd[1] * p.relaxation[1] + avx * z[1] + vy,
+            ]
+        } else {
+            let rate = avx + p.regularization_speed;
+            [
+                zd[0] * p.relaxation[0] + rate * z[0],
+                zd[1] * p.relaxation[1] + rate * z[1],
+            ]
+        };
+        let (kappa, alpha) = if p.low_speed_damping > 0.0 {
+            let d = low_speed_weight(vx, p.low_speed) * p.low_speed_damping;
+            (z[0] - d * vsx, atan(z[1] - d * vy))
+        } else {
+            (z[0], atan(z[1]))
+        };
         let fx = fz * p.longitudinal.sine(kappa);
         let fy = fz * p.lateral.sine(alpha);
         let mz = match &p.trail {
@@ -508,6 +550,8 @@ mod tests {
             trail: None,
             rolling_resistance: 0.01,
             regularization_speed: 0.05,
+            low_speed_damping: 0.0,
+            low_speed: 1.0,
         };
         let ground = TireGround {
             point: Vector3::new(0.0, 0.0, -5.0),

@@ -1,5 +1,6 @@
 //! `[[forces]]`: an applied force and moment on a node, dead or follower, scaled by a
-//! time function (kernel: [`crate::elements::AppliedLoad`]).
+//! time function and optionally by a signal — a controller's output or a sensor (kernel:
+//! [`crate::elements::AppliedLoad`]).
 
 use super::{Build, ComponentKind};
 use crate::core::NodeRef;
@@ -37,6 +38,10 @@ pub struct ForceInput {
     /// Time function multiplying force and moment; default constant 1.
     #[serde(default)]
     pub function: Option<Located<TimeFunctionInput>>,
+    /// A signal multiplying force and moment as well (from `[[signals]]`, a sensor or a
+    /// controller): the load is function(t) · signal · (force, moment).
+    #[serde(default)]
+    pub signal: Option<Located<String>>,
 }
 
 /// An applied force and moment on a node.
@@ -50,6 +55,8 @@ pub struct LoadDef {
     /// Global point of application in the initial configuration.
     pub point: Vector3<f64>,
     pub function: TimeFunction,
+    /// The signal multiplying the load, if any.
+    pub signal: Option<String>,
 }
 
 pub struct Force;
@@ -94,6 +101,21 @@ impl ComponentKind for Force {
             Some(func) => cx.time_function(func, &what).unwrap_or_default(),
             None => TimeFunction::Constant(1.0),
         };
+        if let Some(sig) = &fi.signal
+            && !cx.signal_names.contains_key(&sig.value)
+        {
+            let known: Vec<String> = cx.signal_names.keys().cloned().collect();
+            let hint = match cx.suggest(&sig.value, known.iter().map(|s| s.as_str())) {
+                Some(b) => format!("did you mean '{b}'?"),
+                None => "the factor is a signal: from [[signals]], a sensor or a controller".into(),
+            };
+            cx.error(
+                format!("{what}: unknown signal '{}'", sig.value),
+                sig.span.clone(),
+                Some(hint),
+            );
+            return None;
+        }
         match node {
             Some(NodeRef::Node(n)) => {
                 let point = fi
@@ -109,6 +131,7 @@ impl ComponentKind for Force {
                     frame: fi.frame.unwrap_or_default(),
                     point,
                     function,
+                    signal: fi.signal.as_ref().map(|s| s.value.clone()),
                 });
             }
             Some(NodeRef::Ground) => {
@@ -139,25 +162,43 @@ impl ComponentKind for Force {
             n.r().transpose() * (def.point - n.x),
             def.function.clone(),
         );
+        let element = match &def.signal {
+            Some(sig) => element.with_signal(sig),
+            None => element,
+        };
         parts.elements.push(Box::new(element));
     }
 
     fn tangent_cases() -> Vec<TangentCase> {
-        [LoadFrame::Global, LoadFrame::Node]
-            .into_iter()
-            .enumerate()
-            .map(|(k, frame)| {
-                let e = AppliedLoad::new(
-                    "force",
-                    0,
-                    Vector3::new(3.0, -1.0, 2.0),
-                    Vector3::new(0.5, 0.2, -0.7),
-                    frame,
-                    Vector3::new(0.3, -0.1, 0.2),
-                    TimeFunction::Constant(1.5),
-                );
+        // Each frame without and with a scaling signal.
+        [
+            (LoadFrame::Global, false),
+            (LoadFrame::Node, false),
+            (LoadFrame::Global, true),
+            (LoadFrame::Node, true),
+        ]
+        .into_iter()
+        .enumerate()
+        .map(|(k, (frame, with_signal))| {
+            let e = AppliedLoad::new(
+                "force",
+                0,
+                Vector3::new(3.0, -1.0, 2.0),
+                Vector3::new(0.5, 0.2, -0.7),
+                frame,
+                Vector3::new(0.3, -0.1, 0.2),
+                TimeFunction::Constant(1.5),
+            );
+            if with_signal {
+                TangentCase::element(
+                    Box::new(e.with_signal("gain")),
+                    vec![random_node(40 + k as u64)],
+                )
+                .with_signals(vec![-0.7])
+            } else {
                 TangentCase::element(Box::new(e), vec![random_node(40 + k as u64)])
-            })
-            .collect()
+            }
+        })
+        .collect()
     }
 }

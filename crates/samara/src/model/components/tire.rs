@@ -19,6 +19,8 @@
 //! trail = { B = 10.0, C = 1.2, D = 0.03, E = -1.0 }          # pneumatic trail, D [m]
 //! rolling_resistance = 0.01     # f_r (default 0)
 //! # regularization_speed = 0.05 # v_ε [m/s] of rolling resistance and brake
+//! # low_speed_damping = 0.1      # c_low [s/m]: damped slips κ' − c_low w V_sx at low speed
+//! # low_speed = 1.0              # V_low [m/s] below which that damping fades in
 //! brake = "brake"               # a signal: brake torque capacity [N m]
 //! ground_point = [0.0, 0.0, 0.0]
 //! ground_normal = [0.0, 0.0, 1.0]
@@ -103,6 +105,15 @@ pub struct TireInput {
     /// (tanh(R_e ω/v_ε)); default 0.05.
     #[serde(default)]
     pub regularization_speed: Option<f64>,
+    /// Low-speed damping c_low [s/m] ≥ 0 of the slip states: the forces take the damped
+    /// slips κ' − c_low w V_sx, tan α' − c_low w V_sy with w = ½(1 + cos(π|V_x|/V_low))
+    /// below `low_speed` (Pacejka 2012, §8.6); default 0.
+    #[serde(default)]
+    pub low_speed_damping: Option<f64>,
+    /// V_low [m/s], positive: the speed below which the low-speed damping fades in
+    /// (default 1.0).
+    #[serde(default)]
+    pub low_speed: Option<f64>,
     /// A signal giving the brake-torque capacity T_b [N m] between wheel and carrier.
     #[serde(default)]
     pub brake: Option<Located<String>>,
@@ -327,6 +338,13 @@ impl ComponentKind for TireKind {
             reg,
             "v_ε [m/s]: rolling resistance and brake fade out below it",
         );
+        let v_low = ti.low_speed.unwrap_or(1.0);
+        pos(
+            cx,
+            "low_speed",
+            v_low,
+            "V_low [m/s]: the low-speed damping fades in below it, about 1 m/s",
+        );
         if let Some(f0) = ti.nominal_load {
             pos(
                 cx,
@@ -349,7 +367,14 @@ impl ComponentKind for TireKind {
         };
         let damping = ti.vertical_damping.unwrap_or(0.0);
         let fr = ti.rolling_resistance.unwrap_or(0.0);
+        let c_low = ti.low_speed_damping.unwrap_or(0.0);
         ok &= nonneg(cx, "vertical_damping", damping, "c [N s/m]");
+        ok &= nonneg(
+            cx,
+            "low_speed_damping",
+            c_low,
+            "c_low [s/m]: damping force C c_low V_s at standstill (C the slip stiffness)",
+        );
         ok &= nonneg(
             cx,
             "rolling_resistance",
@@ -457,6 +482,8 @@ impl ComponentKind for TireKind {
                 trail,
                 rolling_resistance: fr,
                 regularization_speed: reg,
+                low_speed_damping: c_low,
+                low_speed: v_low,
             },
             brake: ti.brake.as_ref().map(|b| b.value.clone()),
         })
@@ -508,6 +535,8 @@ impl ComponentKind for TireKind {
             }),
             rolling_resistance: 0.02,
             regularization_speed: 0.8,
+            low_speed_damping: 0.0,
+            low_speed: 1.0,
         };
         let mut out = Vec::new();
         for k in 0..4u64 {
@@ -530,13 +559,19 @@ impl ComponentKind for TireKind {
                     Vector3::zeros()
                 },
             };
-            let p = if k == 2 {
-                TireParameters {
+            // Cases 0 and 3: low-speed damping, V_low above the random speeds so that the
+            // fading weight and its slope are in play.
+            let p = match k {
+                2 => TireParameters {
                     trail: None,
                     ..params
-                }
-            } else {
-                params
+                },
+                0 | 3 => TireParameters {
+                    low_speed_damping: 0.4,
+                    low_speed: 30.0,
+                    ..params
+                },
+                _ => params,
             };
             let with_carrier = k != 1;
             let brake = (k != 2).then(|| "brake".to_string());
