@@ -745,4 +745,23 @@ fn energy_schemes_refuse_what_they_cannot_integrate() {
         err.contains("offset.toml:") && err.contains("[[beams]]") && err.contains("mass centre"),
         "{err}"
     );
+    // A force scaled by a signal: the discrete step carries no signals, so it is refused.
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../".to_owned() + SPAGHETTI),
+    )
+    .unwrap();
+    let anchor = "function = { type = \"table\", points = [[0.0, 0.0], [2.5, 1.0], [5.0, 0.0]] }\n";
+    assert!(text.contains(anchor));
+    let text = text.replacen(
+        anchor,
+        &format!("{anchor}signal = \"gain\"\n\n[[signals]]\nname = \"gain\"\nfunction = {{ type = \"constant\", value = 0.5 }}\n"),
+        1,
+    );
+    let err = Model::from_toml_str(&text, "signal.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("signal.toml:") && err.contains("[[forces]]") && err.contains("signal"),
+        "{err}"
+    );
 }

@@ -152,8 +152,13 @@ impl Element for AppliedLoad {
         }
     }
 
+    /// A load scaled by a signal has none: the discrete step does not carry signals.
     fn discrete_form(&self) -> Result<(), String> {
-        Ok(())
+        if self.inputs.is_empty() {
+            Ok(())
+        } else {
+            Err("a force scaled by a `signal`".into())
+        }
     }
 
     /// The load at the mid-point time, a follower one with the mean frame

@@ -63,8 +63,11 @@ pub struct Force;
 
 impl ComponentKind for Force {
     /// The load at the mid-point time does its work over the step (docs/integrators.md).
-    fn discrete_form(_input: &ForceInput) -> Result<(), String> {
-        Ok(())
+    fn discrete_form(input: &ForceInput) -> Result<(), String> {
+        match input.signal {
+            None => Ok(()),
+            Some(_) => Err("a force scaled by a `signal`".into()),
+        }
     }
     const NOUN: &'static str = "force";
     type Input = ForceInput;
