@@ -706,8 +706,8 @@ fn nrel5mw_flexible_rotor_matches_the_reference_power_and_thrust() {
     // 2. With BeamDyn's own torsion: the aerodynamic pitching moment twists the blades
     //    toward feather; in region 3 (pitch 10–17°) the power is very sensitive to it
     //    (dP/dθ ≈ −64 … −95 MW/rad, Jonkman et al. Table 7-1): 1° of elastic twist costs
-    //    1.1–1.7 MW. Checked: below rated (pitch 0) within the same band; everywhere
-    //    below the torsion-stiff blade's power (the twist goes toward feather). Region 3
+    //    1.1–1.7 MW. Checked: below rated (pitch 0) within the same band; in region 3
+    //    at least 5 % below the torsion-stiff blade's power (the twist goes toward feather). Region 3
     //    with torsion has no reference here (the OpenFAST tables are ElastoDyn's).
     let dir = tempfile::tempdir().unwrap();
     let stiff = stiff_in_torsion(dir.path(), 1e3);
@@ -756,6 +756,9 @@ fn nrel5mw_flexible_rotor_matches_the_reference_power_and_thrust() {
                 "thrust at {ws} m/s"
             );
         }
-        assert!(pf < p && oopf > 0.0, "{pf} {p} {oopf}");
+        assert!(oopf > 0.0, "{oopf}");
+        if ws >= 15.0 {
+            assert!(pf < 0.95 * p, "{pf} {p}");
+        }
     }
 }
