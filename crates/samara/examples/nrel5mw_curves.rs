@@ -48,8 +48,12 @@ fn main() {
         }
         let p_ref = v[7] * v[1] * std::f64::consts::PI / 30.0;
         for (case, bd) in [("torsion_stiff", &stiff), ("beamdyn", &beamdyn)] {
-            let (p, t, _, _) = nrel5mw_flexible_at(bd, v[0], v[1], v[2]);
-            println!("{case},{},{},{},{p_ref},{},{p},{t}", v[0], v[1], v[2], v[6]);
+            match nrel5mw_flexible_try(bd, v[0], v[1], v[2]) {
+                Ok((p, t, _, _)) => {
+                    println!("{case},{},{},{},{p_ref},{},{p},{t}", v[0], v[1], v[2], v[6])
+                }
+                Err(e) => eprintln!("{case} at {} m/s: no steady state: {e}", v[0]),
+            }
         }
     }
     std::fs::remove_dir_all(&dir).ok();

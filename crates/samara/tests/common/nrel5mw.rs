@@ -158,6 +158,16 @@ inflow = {{ type = "bem", centre = [0.0, 0.0, 90.0], axis = [1.0, 0.0, 0.0], bla
 /// power [kW] (Σ f·v + m·ω of the stations on the nodes), thrust [kN] (Σ f along the
 /// shaft) and blade 1's tip deflection [m] (out of plane, downwind; in plane).
 pub fn nrel5mw_flexible_at(bd: &Path, wind: f64, rpm: f64, pitch_deg: f64) -> (f64, f64, f64, f64) {
+    nrel5mw_flexible_try(bd, wind, rpm, pitch_deg).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// [`nrel5mw_flexible_at`], with the solver's failure as an error.
+pub fn nrel5mw_flexible_try(
+    bd: &Path,
+    wind: f64,
+    rpm: f64,
+    pitch_deg: f64,
+) -> Result<(f64, f64, f64, f64), String> {
     let om = rpm * std::f64::consts::PI / 30.0;
     let analysis = format!(
         "[[analyses]]\nname = \"steady\"\ntype = \"static\"\nload_steps = 4\nrotation = {{ axis = [1.0, 0.0, 0.0], omega = {om}, centre = [0.0, 0.0, 90.0] }}\n"
@@ -176,7 +186,9 @@ pub fn nrel5mw_flexible_at(bd: &Path, wind: f64, rpm: f64, pitch_deg: f64) -> (f
         &mut |_| {},
     )
     .unwrap();
-    assert!(s.failure.is_none(), "{:?}", s.failure);
+    if let Some(f) = &s.failure {
+        return Err(format!("{f:?}"));
+    }
     let nodes = &s.final_state.nodes;
     let initial = initial_nodes(&m);
     let mut parts = Build::new(&initial);
@@ -195,7 +207,7 @@ pub fn nrel5mw_flexible_at(bd: &Path, wind: f64, rpm: f64, pitch_deg: f64) -> (f
     }
     let tip = m.node_index("blade1.12").unwrap();
     let d = nodes[tip].x - m.nodes[tip].position;
-    (power / 1e3, thrust / 1e3, d.x, d.y)
+    Ok((power / 1e3, thrust / 1e3, d.x, d.y))
 }
 
 /// A copy of the 5-MW BeamDyn files in `dir` with the torsional stiffness (BeamDyn's
