@@ -307,8 +307,11 @@ fn beamdyn_ordered_matrices_are_converted() {
     assert!((th[0] / (0.025 * l / 100.0) - 1.0).abs() < 1e-5, "{th:?}");
 }
 
+/// An edit of the (primary, blade) file texts.
+type Edit = dyn Fn(&mut String, &mut String);
+
 /// A copy of the 5-MW BeamDyn files in `dir`, with `edit` applied to (primary, blade).
-fn broken_copy(dir: &Path, edit: &dyn Fn(&mut String, &mut String)) -> PathBuf {
+fn broken_copy(dir: &Path, edit: &Edit) -> PathBuf {
     let mut p = std::fs::read_to_string(primary()).unwrap();
     let mut b =
         std::fs::read_to_string(structure().join("NRELOffshrBsline5MW_BeamDyn_Blade.dat")).unwrap();
@@ -334,7 +337,7 @@ fn malformed_beamdyn_files_are_located_errors() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     // Each error names the model's `beamdyn` line, the file, its line and what was expected.
-    let cases: Vec<(Box<dyn Fn(&mut String, &mut String)>, &str, &str)> = vec![
+    let cases: Vec<(Box<Edit>, &str, &str)> = vec![
         (
             Box::new(|p: &mut String, _: &mut String| {
                 *p = p.replacen(

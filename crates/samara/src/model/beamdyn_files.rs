@@ -170,7 +170,7 @@ pub fn read_beamdyn(primary: &Path) -> Result<BeamDynBlade, FileError> {
         if let Some(q) = key_points.last() {
             let q: &[f64; 4] = q;
             let d = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
-            if !(d > 0.0) {
+            if d.is_nan() || d <= 0.0 {
                 return Err(f.err(k + 1, "this key point repeats the one before"));
             }
         }
