@@ -39,3 +39,5 @@ $samara section examples/sections/airfoil.section.toml --out "$tmp/section" --pl
 cp "$tmp/section/airfoil.png" docs/images/section_airfoil.png
 $samara run examples/verification/rotating_beam_campbell.toml --out "$tmp/campbell" --quiet > /dev/null
 $samara plot "$tmp/campbell/campbell.nc" campbell --out docs/images/rotating_beam_campbell.png
+cargo run --release --quiet -p samara --example nrel5mw_curves > "$tmp/curves.csv"
+python3 docs/images/nrel5mw_curves.py "$tmp/curves.csv" docs/images/nrel5mw_curves.png

@@ -43,6 +43,7 @@ fn every_example_runs() {
         "bench/chain_revolute_1000.toml",
         "bench/cantilever_10000.toml",
         "rotor/nrel5mw_rotor.toml",
+        "rotor/nrel5mw_flexible.toml",
     ] {
         assert!(files.contains(&root.join(name)), "{name} not found");
     }

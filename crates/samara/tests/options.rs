@@ -1168,3 +1168,49 @@ step = 0.01
     assert!((x1 - 2.5).abs() < 1e-9, "{x1}");
     assert!((x2 - 1.25).abs() < 1e-9, "{x2}");
 }
+
+/// `[[beams]] beamdyn`, `root_position`, `root_axes`, and `[[beams.sections]] ordering`
+/// (issue #15; their verification is in tests/beamdyn_files.rs): each changes the beam.
+#[test]
+fn every_beamdyn_option_changes_the_beam() {
+    let bd = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/reference/nrel5mw/structure/NRELOffshrBsline5MW_BeamDyn.dat");
+    let blade = |extra: &str| {
+        model(&format!(
+            "[model]\nname = \"b\"\n[[beams]]\nname = \"b\"\nbeamdyn = \"{}\"\n{extra}\n",
+            bd.display()
+        ))
+    };
+    let plain = blade("");
+    // The file's 49 key points to 61.5 m, order_elem 5, its damping.
+    assert_eq!(plain.beams[0].order, 5);
+    let tip = |m: &Model| m.nodes[*m.beams[0].nodes.last().unwrap()].position;
+    assert!((tip(&plain) - Vector3::new(0.0, 0.0, 61.5)).norm() < 1e-9);
+    let moved = blade("root_position = [1.0, 0.0, 0.0]");
+    assert!((tip(&moved) - Vector3::new(1.0, 0.0, 61.5)).norm() < 1e-9);
+    let turned = blade("root_axes = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]");
+    assert!((tip(&turned) - Vector3::new(61.5, 0.0, 0.0)).norm() < 1e-9);
+    let section = |ordering: &str| {
+        let m = model(&format!(
+            "[model]\nname = \"s\"\n[[beams]]\nname = \"s\"\norder = 1\npoints = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]\n[[beams.sections]]\nstation = 0.0\n{ordering}\nstiffness = [[1.0, 0, 0, 0, 0, 0], [0, 2.0, 0, 0, 0, 0], [0, 0, 3.0, 0, 0, 0], [0, 0, 0, 4.0, 0, 0], [0, 0, 0, 0, 5.0, 0], [0, 0, 0, 0, 0, 6.0]]\n"
+        ));
+        let c = m.beams[0].table.at(0.0).stiffness;
+        [
+            c[(0, 0)],
+            c[(1, 1)],
+            c[(2, 2)],
+            c[(3, 3)],
+            c[(4, 4)],
+            c[(5, 5)],
+        ]
+    };
+    assert_eq!(section(""), [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+    assert_eq!(
+        section("ordering = \"samara\""),
+        [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]
+    );
+    assert_eq!(
+        section("ordering = \"beamdyn\""),
+        [3.0, 1.0, 2.0, 6.0, 4.0, 5.0]
+    );
+}

@@ -4,6 +4,7 @@
 //! diagnostics with file, line and column. Everything downstream (system, analyses) reads
 //! only the validated [`Model`].
 
+pub mod beamdyn_files;
 pub mod components;
 pub mod document;
 pub mod input;
@@ -285,7 +286,8 @@ impl Model {
                 });
             }
         };
-        let notes = section_files::resolve(&mut input, &source, options);
+        let mut notes = beamdyn_files::resolve(&mut input, &source);
+        notes.extend(section_files::resolve(&mut input, &source, options));
         if notes.iter().any(|d| d.severity == Severity::Error) {
             return Err(ModelError {
                 source,

@@ -98,6 +98,24 @@ pub fn mass_matrix(m: f64, eta: &Vector3<f64>, j_cg: &Matrix3<f64>) -> Matrix6<f
     out
 }
 
+/// For each samara sectional index, the BeamDyn index it comes from. samara orders
+/// (axial, shear y, shear z, torsion, bending y, bending z) with the beam along x;
+/// BeamDyn orders (shear x, shear y, axial, bending x, bending y, torsion) with the beam
+/// along z. With samara's section y, z along BeamDyn's x, y (a cyclic, right-handed
+/// relabelling x_s = z_BD, y_s = x_BD, z_s = y_BD), C_s[i][j] = C_BD[p[i]][p[j]].
+pub const BEAMDYN_INDEX: [usize; 6] = [2, 0, 1, 5, 3, 4];
+
+/// A BeamDyn-ordered 6×6 sectional matrix (stiffness or mass) in samara's ordering.
+pub fn from_beamdyn_ordering(m: &Matrix6<f64>) -> Matrix6<f64> {
+    Matrix6::from_fn(|i, j| m[(BEAMDYN_INDEX[i], BEAMDYN_INDEX[j])])
+}
+
+/// BeamDyn's damping coefficients μ (shear x, shear y, axial, bending x, bending y,
+/// torsion) in samara's ordering.
+pub fn damping_from_beamdyn_ordering(mu: &[f64; 6]) -> [f64; 6] {
+    std::array::from_fn(|i| mu[BEAMDYN_INDEX[i]])
+}
+
 /// Why a 6×6 matrix is not acceptable as sectional stiffness or mass.
 pub fn check_stiffness(c: &Matrix6<f64>) -> Result<(), String> {
     check_symmetric(c, "stiffness")?;

@@ -17,7 +17,7 @@ use crate::elements::beam::element::{DistributedLoad, MAX_ORDER, Quadrature};
 use crate::elements::beam::gll::{gauss_legendre, gauss_lobatto_legendre, lagrange};
 use crate::elements::beam::reference_line::ReferenceLine;
 use crate::elements::beam::section::{
-    IsotropicSection, Section, SectionTable, check_mass, check_stiffness,
+    IsotropicSection, Section, SectionTable, check_mass, check_stiffness, from_beamdyn_ordering,
 };
 use crate::math::Rotation;
 use crate::model::validate::{Checker, Entry};
@@ -49,6 +49,21 @@ impl Checker<'_> {
                 Some("p = 1 is the two-node element; high orders (4–15) converge fastest on smooth problems".into()),
             );
             return None;
+        }
+        if bi.beamdyn.is_none() {
+            for (key, given) in [
+                ("root_position", bi.root_position.is_some()),
+                ("root_axes", bi.root_axes.is_some()),
+            ] {
+                if given {
+                    self.error(
+                        format!("{what}: `{key}` places a BeamDyn blade; it needs `beamdyn`"),
+                        self.key(&e, key),
+                        Some("with `points`, give the key points in global coordinates and the section frame with `y_axis` and `twist`".into()),
+                    );
+                    ok = false;
+                }
+            }
         }
         let ne = bi.elements.unwrap_or(1);
         if ne == 0 {
@@ -417,6 +432,10 @@ impl Checker<'_> {
                     let sw = format!("{what}, section at station {}", si.station);
                     let section = match (&si.isotropic, &si.stiffness) {
                         (Some(iso), None) => {
+                            if si.ordering.is_some() {
+                                self.error(format!("{sw}: `ordering` applies to `stiffness` and `mass` matrices, not to `isotropic`"), self.key(&se, "ordering"), Some("remove `ordering`, or give the matrices".into()));
+                                return None;
+                            }
                             if si.mass.is_some() {
                                 self.error(format!("{sw}: `mass` is computed from `isotropic` (density)"), self.key(&se, "mass"), Some("give `density` inside `isotropic`, or the full `stiffness` and `mass` matrices".into()));
                                 return None;
@@ -462,12 +481,21 @@ impl Checker<'_> {
                             }
                             .build()
                         }
-                        (None, Some(k)) => Section {
-                            stiffness: Matrix6::from_fn(|i, j| k[i][j]),
-                            mass: si
-                                .mass
-                                .map_or(Matrix6::zeros(), |m| Matrix6::from_fn(|i, j| m[i][j])),
-                        },
+                        (None, Some(k)) => {
+                            let s = Section {
+                                stiffness: Matrix6::from_fn(|i, j| k[i][j]),
+                                mass: si
+                                    .mass
+                                    .map_or(Matrix6::zeros(), |m| Matrix6::from_fn(|i, j| m[i][j])),
+                            };
+                            match si.ordering.unwrap_or_default() {
+                                SectionOrdering::Samara => s,
+                                SectionOrdering::Beamdyn => Section {
+                                    stiffness: from_beamdyn_ordering(&s.stiffness),
+                                    mass: from_beamdyn_ordering(&s.mass),
+                                },
+                            }
+                        }
                         _ => {
                             self.error(
                                 format!(

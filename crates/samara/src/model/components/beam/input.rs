@@ -23,7 +23,25 @@ pub struct BeamInput {
     /// Unique beam name; created nodes are named `<name>.<k>` (k = 0 … elements·order).
     pub name: Located<String>,
     /// Polynomial order p ≥ 1 of each element (p + 1 nodes at Gauss–Lobatto–Legendre points).
+    /// With `beamdyn` it may be left out: the file's `order_elem` is used.
+    #[serde(default)]
     pub order: usize,
+    /// An OpenFAST BeamDyn primary input file (path relative to the model file): key
+    /// points, initial twist, `order_elem`, `quadrature` and, through its `BldFile`, the
+    /// blade's stations of 6×6 stiffness and mass and its damping, converted to samara's
+    /// conventions (docs/aerodynamics.md, "BeamDyn blade files"). Replaces `points`,
+    /// `twist`, `y_axis` and the sections; `order`, `quadrature` and `damping` given here
+    /// override the file's.
+    #[serde(default)]
+    pub beamdyn: Option<Located<String>>,
+    /// With `beamdyn`: the global position of BeamDyn's blade-root origin (its GlbPos;
+    /// default the origin).
+    #[serde(default)]
+    pub root_position: Option<[f64; 3]>,
+    /// With `beamdyn`: the global directions of BeamDyn's blade axes x, y, z (rows; its
+    /// GlbDCM transposed), orthonormal and right-handed. Default the global axes.
+    #[serde(default)]
+    pub root_axes: Option<[[f64; 3]; 3]>,
     /// Number of elements of equal arc length (default 1).
     #[serde(default)]
     pub elements: Option<usize>,
@@ -98,6 +116,22 @@ pub struct SectionInput {
     /// Isotropic section instead of the matrices.
     #[serde(default)]
     pub isotropic: Option<IsotropicInput>,
+    /// Index ordering of `stiffness` and `mass`: `samara` (default; axial, shear y,
+    /// shear z, torsion, bending y, bending z) or `beamdyn` (shear x, shear y, axial,
+    /// bending x, bending y, torsion, as in a BeamDyn blade file), converted on reading.
+    #[serde(default)]
+    pub ordering: Option<SectionOrdering>,
+}
+
+/// Index ordering of a 6×6 sectional matrix.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum SectionOrdering {
+    /// (axial, shear y, shear z, torsion, bending y, bending z).
+    #[default]
+    Samara,
+    /// BeamDyn's (shear x, shear y, axial, bending x, bending y, torsion).
+    Beamdyn,
 }
 
 /// Isotropic, homogeneous section.
