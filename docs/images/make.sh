@@ -33,3 +33,5 @@ $samara section examples/sections/airfoil.section.toml --out "$tmp/section" --pl
 cp "$tmp/section/airfoil.png" docs/images/section_airfoil.png
 $samara run examples/verification/rotating_beam_campbell.toml --out "$tmp/campbell" --quiet > /dev/null
 $samara plot "$tmp/campbell/campbell.nc" campbell --out docs/images/rotating_beam_campbell.png
+$samara run examples/rotor/hingeless_blade_campbell.toml --out "$tmp/hingeless" --quiet > /dev/null
+$samara plot "$tmp/hingeless/campbell.nc" campbell --out docs/images/hingeless_blade_campbell.png
