@@ -12,7 +12,7 @@ use pyo3::types::{PyBool, PyBytes, PyDict, PyFloat, PyInt, PyList, PyString, PyT
 use samara::model::document::Document;
 use samara::model::{LoadOptions, LoadedModel, ModelError as CoreModelError, Severity};
 use samara::output::ResultsFile;
-use samara::system::{State, System};
+use samara::system::System;
 use std::path::PathBuf;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};

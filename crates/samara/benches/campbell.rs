@@ -20,8 +20,8 @@ fn main() {
         .skip(1)
         .find_map(|a| a.parse().ok())
         .unwrap_or(50);
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/rotor/hingeless_blade_campbell.toml");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/rotor/hingeless_blade_campbell.toml");
     let text = std::fs::read_to_string(&path).unwrap();
     let start = text.find("[[beams]]").unwrap();
     let end = text.find("[[analyses]]").unwrap();
@@ -66,8 +66,14 @@ fn main() {
         pool.install(|| {
             let t0 = Instant::now();
             let mut h = History::default();
-            let s = run_analysis(&sys, &m.analyses[0], sys.initial_state(), &mut h, &mut |_| {})
-                .unwrap();
+            let s = run_analysis(
+                &sys,
+                &m.analyses[0],
+                sys.initial_state(),
+                &mut h,
+                &mut |_| {},
+            )
+            .unwrap();
             assert!(s.failure.is_none(), "{:?}", s.failure);
             let f = h
                 .arrays
@@ -86,7 +92,13 @@ fn main() {
     let (t1, f1) = sweep(1);
     let (t2, f2) = sweep(2);
     assert_eq!(f1, f2, "the sweep depends on the number of threads");
-    println!("1 thread : {t1:.3} s ({:.1} ms per point)", t1 * 1e3 / points as f64);
-    println!("2 threads: {t2:.3} s ({:.1} ms per point)", t2 * 1e3 / points as f64);
+    println!(
+        "1 thread : {t1:.3} s ({:.1} ms per point)",
+        t1 * 1e3 / points as f64
+    );
+    println!(
+        "2 threads: {t2:.3} s ({:.1} ms per point)",
+        t2 * 1e3 / points as f64
+    );
     println!("speed-up : {:.2}", t1 / t2);
 }
