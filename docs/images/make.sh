@@ -41,3 +41,5 @@ $samara run examples/verification/rotating_beam_campbell.toml --out "$tmp/campbe
 $samara plot "$tmp/campbell/campbell.nc" campbell --out docs/images/rotating_beam_campbell.png
 cargo run --release --quiet -p samara --example nrel5mw_curves > "$tmp/curves.csv"
 python3 docs/images/nrel5mw_curves.py "$tmp/curves.csv" docs/images/nrel5mw_curves.png
+$samara run examples/rotor/hingeless_blade_campbell.toml --out "$tmp/hingeless" --quiet > /dev/null
+$samara plot "$tmp/hingeless/campbell.nc" campbell --out docs/images/hingeless_blade_campbell.png

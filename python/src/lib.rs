@@ -12,7 +12,7 @@ use pyo3::types::{PyBool, PyBytes, PyDict, PyFloat, PyInt, PyList, PyString, PyT
 use samara::model::document::Document;
 use samara::model::{LoadOptions, LoadedModel, ModelError as CoreModelError, Severity};
 use samara::output::ResultsFile;
-use samara::system::{State, System};
+use samara::system::System;
 use std::path::PathBuf;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -389,8 +389,8 @@ impl Model {
     fn linearize_raw(&self, py: Python<'_>, analysis: Option<String>) -> PyResult<Linearized> {
         let loaded = self.load(py, &LoadOptions::default())?;
         let model = &loaded.model;
-        let (chain, rotation) = match &analysis {
-            None => (Vec::new(), None),
+        let (chain, rotation, target) = match &analysis {
+            None => (Vec::new(), None, None),
             Some(name) => {
                 let Some(k) = model.analyses.iter().position(|a| &a.name == name) else {
                     return Err(PyValueError::new_err(format!(
@@ -412,18 +412,24 @@ impl Model {
                     i = model.analyses[j].start_from;
                 }
                 chain.reverse();
-                (chain, settings.rotation)
+                (chain, settings.rotation, Some(k))
             }
         };
         let file = self.file.as_deref();
         let lin = py
             .detach(|| -> Result<samara::linear::LinearSystem, samara::Error> {
                 let sys = System::new(model);
-                let mut state = sys.initial_state();
+                let mut starts = samara::analysis::Chain::new(model);
                 for &j in &chain {
-                    let stage = model.analyses[j].stage();
+                    let def = &model.analyses[j];
+                    let stage = def.stage();
                     let mut rec = ResultsFile::in_memory(model, file, &sys, stage.as_ref())?;
-                    let summary = stage.run(&sys, state, &mut rec, &mut |_| {})?;
+                    let state = starts
+                        .initial(&sys, def)
+                        .expect("an analysis starts from an earlier one");
+                    let mut capture = starts.capture(j, &mut rec);
+                    let summary = stage.run(&sys, state, &mut capture, &mut |_| {})?;
+                    starts.finish(j, capture, summary.final_state.clone());
                     if let Some(f) = &summary.failure {
                         return Err(samara::Error::Output {
                             path: PathBuf::from(&model.analyses[j].name),
@@ -433,8 +439,13 @@ impl Model {
                             ),
                         });
                     }
-                    state = summary.final_state;
                 }
+                let mut state = match target {
+                    Some(k) => starts
+                        .initial(&sys, &model.analyses[k])
+                        .expect("the analyses it starts from have run"),
+                    None => sys.initial_state(),
+                };
                 if let Some(rot) = &rotation {
                     rot.impose(&sys, &mut state);
                 }
@@ -499,18 +510,15 @@ impl Model {
         let file = self.file.as_deref();
         let outcome = py.detach(|| -> Result<Vec<Finished>, samara::Error> {
             let sys = System::new(model);
-            let mut finals: Vec<Option<State>> = vec![None; model.analyses.len()];
+            let mut finals = samara::analysis::Chain::new(model);
             let mut done = Vec::new();
             for (k, def) in model.analyses.iter().enumerate() {
                 if !wanted[k] {
                     continue;
                 }
-                let initial = match def.start_from {
-                    Some(i) => finals[i]
-                        .clone()
-                        .expect("an analysis starts from an earlier one"),
-                    None => sys.initial_state(),
-                };
+                let initial = finals
+                    .initial(&sys, def)
+                    .expect("an analysis starts from an earlier one");
                 let stage = def.stage();
                 let inner = match &out {
                     Some(dir) => ResultsFile::create_for(dir, model, file, &sys, stage.as_ref())?,
@@ -534,13 +542,14 @@ impl Model {
                         }
                     });
                 };
-                let summary = stage.run(&sys, initial, &mut rec, &mut poll)?;
+                let mut capture = finals.capture(k, &mut rec);
+                let summary = stage.run(&sys, initial, &mut capture, &mut poll)?;
+                finals.finish(k, capture, summary.final_state.clone());
                 let results = match &out {
                     Some(_) => Results::File(rec.inner.finish(&summary)?),
                     None => Results::Bytes(rec.inner.finish_in_memory(&summary)?),
                 };
                 let failed = summary.failure.is_some();
-                finals[k] = Some(summary.final_state.clone());
                 done.push(Finished {
                     name: def.name.clone(),
                     results,

@@ -10,10 +10,10 @@ mod sweep;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use samara::analysis::run_analysis;
+use samara::analysis::{Chain, run_analysis};
 use samara::model::{LoadOptions, LoadedModel, Model, ModelInput};
 use samara::output::ResultsFile;
-use samara::system::{State, System};
+use samara::system::System;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -297,6 +297,24 @@ fn load(path: &Path, options: &LoadOptions) -> Option<LoadedModel> {
     }
 }
 
+/// The model checks that need the built system (`samara::analysis::check_analyses`),
+/// printed like the file's other errors; false if there are any.
+fn system_checks(loaded: &LoadedModel, sys: &System) -> bool {
+    match samara::analysis::check_analyses(loaded, sys) {
+        Ok(()) => true,
+        Err(e) => {
+            report::diagnostics(&e.source, &e.diagnostics);
+            let n = e.errors().count();
+            eprintln!(
+                "{}: {n} error{} — nothing was run",
+                e.source.path.display(),
+                if n == 1 { "" } else { "s" }
+            );
+            false
+        }
+    }
+}
+
 fn check(path: &Path) -> ExitCode {
     let Some(loaded) = load(path, &load_options(&results_dir(path, None), false)) else {
         return ExitCode::from(EXIT_MODEL);
@@ -305,6 +323,9 @@ fn check(path: &Path) -> ExitCode {
     let sys = System::new(m);
     for w in &sys.warnings {
         eprintln!("warning: {}: {w}", path.display());
+    }
+    if !system_checks(&loaded, &sys) {
+        return ExitCode::from(EXIT_MODEL);
     }
     let dropped: usize = sys.loops.iter().map(|l| l.dropped.len()).sum();
     println!(
@@ -338,15 +359,21 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
     for w in &sys.warnings {
         eprintln!("warning: {w}");
     }
+    if !system_checks(&loaded, &sys) {
+        return ExitCode::from(EXIT_MODEL);
+    }
     let show_progress = !quiet && std::io::stderr().is_terminal();
     let clock = Instant::now();
     let mut rows = Vec::new();
-    let mut finals: Vec<State> = Vec::new();
+    let mut chain = Chain::new(model);
     let mut failed = false;
-    for def in &model.analyses {
-        let initial = match def.start_from {
-            Some(i) => finals[i].clone(),
-            None => sys.initial_state(),
+    for (index, def) in model.analyses.iter().enumerate() {
+        let Some(initial) = chain.initial(&sys, def) else {
+            eprintln!(
+                "error: analysis '{}': the analysis it starts from left no state to start from",
+                def.name
+            );
+            return ExitCode::from(EXIT_MODEL);
         };
         let mut file = match ResultsFile::create(&out_dir, model, Some(path), &sys, def) {
             Ok(f) => f,
@@ -381,7 +408,8 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
             ProgressBar::hidden()
         };
         let mut progress = |f: f64| bar.set_position((f * 1000.0).round() as u64);
-        let result = run_analysis(&sys, def, initial, &mut file, &mut progress);
+        let mut capture = chain.capture(index, &mut file);
+        let result = run_analysis(&sys, def, initial, &mut capture, &mut progress);
         bar.finish_and_clear();
         let summary = match result {
             Ok(s) => s,
@@ -390,6 +418,7 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
                 return ExitCode::from(EXIT_MODEL);
             }
         };
+        chain.finish(index, capture, summary.final_state.clone());
         let records = file.records();
         let written = match file.finish(&summary) {
             Ok(p) => p,
@@ -412,7 +441,6 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
             records,
             end_time,
         });
-        finals.push(summary.final_state);
         if failed {
             break;
         }

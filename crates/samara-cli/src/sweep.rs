@@ -243,14 +243,13 @@ fn run_case(base: &Document, case: &Case, model_file: &Path, dir: &Path) -> Outc
     };
     let model = &loaded.model;
     let sys = System::new(model);
-    let mut finals: Vec<samara::system::State> = Vec::new();
-    for def in &model.analyses {
-        let initial = match def.start_from {
-            Some(i) => match finals.get(i) {
-                Some(s) => s.clone(),
-                None => return Outcome::Error(format!("analysis '{}' has no start", def.name)),
-            },
-            None => sys.initial_state(),
+    if let Err(e) = samara::analysis::check_analyses(&loaded, &sys) {
+        return Outcome::Error(model_error_text(&doc, &e));
+    }
+    let mut chain = samara::analysis::Chain::new(model);
+    for (index, def) in model.analyses.iter().enumerate() {
+        let Some(initial) = chain.initial(&sys, def) else {
+            return Outcome::Error(format!("analysis '{}' has no start", def.name));
         };
         let stage = def.stage();
         let mut file =
@@ -258,17 +257,18 @@ fn run_case(base: &Document, case: &Case, model_file: &Path, dir: &Path) -> Outc
                 Ok(f) => f,
                 Err(e) => return Outcome::Error(e.to_string()),
             };
-        let summary = match stage.run(&sys, initial, &mut file, &mut |_| {}) {
+        let mut capture = chain.capture(index, &mut file);
+        let summary = match stage.run(&sys, initial, &mut capture, &mut |_| {}) {
             Ok(s) => s,
             Err(e) => return Outcome::Error(e.to_string()),
         };
+        chain.finish(index, capture, summary.final_state.clone());
         if let Err(e) = file.finish(&summary) {
             return Outcome::Error(e.to_string());
         }
         if let Some(f) = &summary.failure {
             return Outcome::Failed(format!("{}: t = {}: {}", def.name, f.time, f.reason));
         }
-        finals.push(summary.final_state);
     }
     Outcome::Completed
 }

@@ -118,20 +118,32 @@ type = "modal"
 n_modes = 6
 "#;
 
+/// `n_modes` above the degrees of freedom is a model error located at the key, from
+/// `samara run` (nothing runs) and from `samara check`.
 #[test]
-fn too_many_modes_is_a_clear_failure() {
-    let (o, _d) = run_text(&SPRING_MASS.replace("n_modes = 6", "n_modes = 7"));
+fn too_many_modes_is_a_located_error() {
+    let text = SPRING_MASS.replace("n_modes = 6", "n_modes = 7");
+    let line = text[..text.find("n_modes = 7").unwrap()]
+        .matches('\n')
+        .count()
+        + 1;
+    let (o, _d) = run_text(&text);
     let e = stderr(&o);
-    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert_eq!(o.status.code(), Some(1), "{e}");
     assert!(
-        e.contains("7 modes requested") && e.contains("only 6 degrees of freedom"),
+        e.contains("`n_modes` = 7 is more than the model's 6 degrees of freedom"),
         "{e}"
     );
-    assert!(e.contains("lower `n_modes`"), "{e}");
+    assert!(e.contains("nothing was run"), "{e}");
+    let (o, path, _d) = check_text("m.toml", &text);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains(&format!("{}:{line}:", path.display())), "{e}");
+    assert!(e.contains("at most n_modes = 6"), "{e}");
 }
 
 #[test]
-fn a_model_without_mass_is_a_clear_failure() {
+fn a_model_without_mass_is_a_located_error() {
     let text = r#"
 [model]
 name = "massless"
@@ -161,8 +173,13 @@ n_modes = 2
 "#;
     let (o, _d) = run_text(text);
     let e = stderr(&o);
-    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert_eq!(o.status.code(), Some(1), "{e}");
     assert!(e.contains("no mass") && e.contains("density"), "{e}");
+    let line = text[..text.find("name = \"modes\"").unwrap()]
+        .matches('\n')
+        .count()
+        + 1;
+    assert!(e.contains(&format!(":{line}:")), "{e}");
 }
 
 #[test]

@@ -1214,3 +1214,139 @@ fn every_beamdyn_option_changes_the_beam() {
         [3.0, 1.0, 2.0, 6.0, 4.0, 5.0]
     );
 }
+
+/// A pendulum released horizontally swings through its lowest point; `swing` is written
+/// every 5th step of 1 ms.
+const SWINGING_PENDULUM: &str = r#"
+[model]
+name = "pendulum"
+gravity = [0.0, 0.0, -9.81]
+[[nodes]]
+name = "bob"
+position = [1.0, 0.0, 0.0]
+[[bodies]]
+name = "bob"
+node = "bob"
+mass = 1.0
+inertia = [[1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]
+[[joints]]
+name = "pivot"
+type = "revolute"
+node_a = "ground"
+node_b = "bob"
+position = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+[[analyses]]
+name = "swing"
+type = "dynamic"
+t_end = 0.5
+step = 1e-3
+output_every = 5
+"#;
+
+/// Issue #14: `start_from = { analysis, time }` linearizes about the state of the earlier
+/// dynamic run stored at the output time nearest `time` (not interpolated): the modal
+/// analysis's recorded state is that record of `swing`, exactly (t = 0.2013 → the record
+/// at 0.200; t = 0.4 → 0.400); the two instants of the swing give different frequencies
+/// (the bob is lower and faster at 0.4 s: larger joint reaction, stiffer); `time = t_end`
+/// is the same as starting from the final state; a time outside the run, and a time of an
+/// analysis that is not dynamic, are located errors at `start_from`.
+#[test]
+fn start_from_time_linearizes_about_the_stored_state_at_that_time() {
+    let with = |start: &str| {
+        format!(
+            "{SWINGING_PENDULUM}[[analyses]]\nname = \"modes\"\ntype = \"modal\"\nstart_from = {start}\nn_modes = 1\n"
+        )
+    };
+    let run = |text: &str| {
+        let m = model(text);
+        let sys = System::new(&m);
+        let out =
+            samara::analysis::run_all(&m, &sys, |_| Ok(History::default()), |_, _| {}).unwrap();
+        assert!(out.iter().all(|(s, _)| s.failure.is_none()));
+        out
+    };
+    let freq = |h: &History| h.arrays.iter().find(|a| a.0.name == "frequency").unwrap().1[0];
+    let mut f = Vec::new();
+    for (t, stored) in [(0.2013, 0.2), (0.4, 0.4)] {
+        let out = run(&with(&format!("{{ analysis = \"swing\", time = {t} }}")));
+        let (swing, modes) = (&out[0].1, &out[1].1);
+        let record = swing
+            .frames
+            .iter()
+            .find(|fr| (fr.time - stored).abs() < 1e-12)
+            .unwrap();
+        let used = &modes.frames[0].state;
+        assert_eq!(used.time, record.state.time, "t = {t}");
+        assert_eq!(used.nodes[0].x, record.state.nodes[0].x, "t = {t}");
+        assert_eq!(used.nodes[0].v, record.state.nodes[0].v, "t = {t}");
+        assert_eq!(used.lambda, record.state.lambda, "t = {t}");
+        f.push(freq(modes));
+    }
+    assert!((f[0] - f[1]).abs() > 1e-2 * f[0], "{f:?}");
+    let at_end = run(&with("{ analysis = \"swing\", time = 0.5 }"));
+    let final_state = run(&with("\"swing\""));
+    assert_eq!(freq(&at_end[1].1), freq(&final_state[1].1));
+    // Located errors.
+    for (start, needle) in [
+        ("{ analysis = \"swing\", time = 0.6 }", "outside the run"),
+        ("{ analysis = \"swing\", time = -0.1 }", "outside the run"),
+    ] {
+        let text = with(start);
+        let (line, message, hint) = first_error(&text);
+        assert_eq!(line, line_of(&text, "start_from = {"), "{message}");
+        assert!(message.contains(needle), "{message}");
+        assert!(hint.contains("t_start"), "{hint}");
+    }
+    let text = BAR_ON_SPRING.to_string()
+        + "[[analyses]]\nname = \"modes\"\ntype = \"modal\"\nstart_from = { analysis = \"sag\", time = 0.0 }\n";
+    let (line, message, _) = first_error(&text);
+    assert_eq!(line, line_of(&text, "start_from = {"));
+    assert!(message.contains("needs a dynamic analysis"), "{message}");
+}
+
+/// Issue #14: the `time` of a Campbell analysis is the time its loads are taken at. A
+/// rotating cantilever pulled along its axis by a tip force ramped in time: at `time = 1`
+/// the tension stiffens flap and lag, at `time = 0` there is none.
+#[test]
+fn campbell_time_sets_the_time_of_the_loads() {
+    let base = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/verification/rotating_beam_campbell.toml"),
+    )
+    .unwrap();
+    let frequencies = |time: Option<f64>| {
+        let sweep = format!(
+            "[[forces]]\nname = \"pull\"\nnode = \"tip\"\nforce = [20.0, 0.0, 0.0]\nfunction = {{ type = \"ramp\", start = 0.0, end = 1.0, to = 1.0 }}\n\n[[analyses]]\nname = \"sweep\"\ntype = \"campbell\"\nrotation = {{ axis = [0.0, 0.0, 1.0] }}\nspeeds = [2.0]\nn_modes = 2\n{}\n[[analyses]]\nname = \"spin\"",
+            time.map_or(String::new(), |t| format!("time = {t}\n"))
+        );
+        let text = base.replace("[[analyses]]\nname = \"spin\"", &sweep);
+        let m = model(&text);
+        let sys = System::new(&m);
+        let mut h = History::default();
+        let s = run_analysis(
+            &sys,
+            &m.analyses[0],
+            sys.initial_state(),
+            &mut h,
+            &mut |_| {},
+        )
+        .unwrap();
+        assert!(s.failure.is_none(), "{:?}", s.failure);
+        h.arrays
+            .iter()
+            .find(|a| a.0.name == "campbell_frequency")
+            .unwrap()
+            .1
+            .clone()
+    };
+    let (default, t0, t1) = (
+        frequencies(None),
+        frequencies(Some(0.0)),
+        frequencies(Some(1.0)),
+    );
+    assert_eq!(default, t0);
+    for (a, b) in t0.iter().zip(&t1) {
+        assert!(b > &(a * 1.05), "{t0:?} {t1:?}");
+    }
+}

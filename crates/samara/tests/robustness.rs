@@ -127,3 +127,162 @@ fn results_files_stay_in_their_folder_for_models_built_in_code() {
     }
     assert!(!dir.path().join("escape.nc").exists());
 }
+
+/// The first error of `check_analyses` (the checks that need the built system) on a model
+/// that validates: its 1-based line, message and hint.
+fn system_error(text: &str) -> (usize, String, String) {
+    let loaded = Model::from_toml_str(text, "bad.toml").unwrap_or_else(|e| panic!("{e}"));
+    let sys = System::new(&loaded.model);
+    let Err(e) = samara::analysis::check_analyses(&loaded, &sys) else {
+        panic!("accepted:\n{text}")
+    };
+    let d = e.errors().next().expect("an error");
+    let span = d.span.clone().expect("a located error");
+    let (line, _) = e.source.line_col(span.start);
+    (line, d.message.clone(), d.hint.clone().unwrap_or_default())
+}
+
+fn line_of(text: &str, needle: &str) -> usize {
+    text[..text.find(needle).unwrap()].matches('\n').count() + 1
+}
+
+const PENDULUM: &str = r#"[model]
+name = "pendulum"
+gravity = [0.0, 0.0, -9.81]
+[[nodes]]
+name = "bob"
+position = [1.0, 0.0, 0.0]
+[[bodies]]
+name = "bob"
+node = "bob"
+mass = 1.0
+inertia = [[1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]
+[[joints]]
+name = "pivot"
+type = "revolute"
+node_a = "ground"
+node_b = "bob"
+position = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+"#;
+
+/// Issue #14: bad input of the linearized analyses is a located error before anything
+/// runs — `samara check` and `samara run` report it with the file's other errors:
+/// - a modal analysis of a model without mass (a beam with stiffness only), at the
+///   analysis's name;
+/// - `n_modes` above the degrees of freedom (the pendulum has one: 6 unknowns, 5
+///   constraint equations), at the key; the default of 10 at the analysis's name; the same
+///   in a Campbell analysis;
+/// - a Floquet period that is not a period of the loads (a stiffness function of period
+///   2π, T = 5 s), at `period`; T = 2π passes;
+/// - a rotation axis of zero length, at validation, at the rotation.
+#[test]
+fn linearized_analyses_bad_input_is_located() {
+    let modal = |extra: &str| {
+        format!("{PENDULUM}[[analyses]]\nname = \"modes\"\ntype = \"modal\"\n{extra}")
+    };
+    let text = modal("n_modes = 3\n");
+    let (line, message, hint) = system_error(&text);
+    assert_eq!(line, line_of(&text, "n_modes = 3"));
+    assert!(message.contains("1 degrees of freedom"), "{message}");
+    assert!(hint.contains("n_modes = 1"), "{hint}");
+    let text = modal("");
+    let (line, message, _) = system_error(&text);
+    assert_eq!(line, line_of(&text, "name = \"modes\""));
+    assert!(message.contains("default n_modes = 10"), "{message}");
+    let loaded = Model::from_toml_str(&modal("n_modes = 1\n"), "ok.toml").unwrap();
+    let sys = System::new(&loaded.model);
+    assert!(samara::analysis::check_analyses(&loaded, &sys).is_ok());
+    let text = format!(
+        "{PENDULUM}[[analyses]]\nname = \"sweep\"\ntype = \"campbell\"\nrotation = {{ axis = [0.0, 0.0, 1.0] }}\nspeeds = [0.0, 1.0]\nn_modes = 2\n"
+    );
+    let (line, message, _) = system_error(&text);
+    assert_eq!(line, line_of(&text, "n_modes = 2"));
+    assert!(message.contains("degrees of freedom"), "{message}");
+
+    let massless = r#"[model]
+name = "massless"
+[[beams]]
+name = "beam"
+order = 2
+points = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]
+root = "root"
+[[beams.sections]]
+station = 0.0
+stiffness = [
+  [1e6, 0.0, 0.0, 0.0, 0.0, 0.0],
+  [0.0, 1e6, 0.0, 0.0, 0.0, 0.0],
+  [0.0, 0.0, 1e6, 0.0, 0.0, 0.0],
+  [0.0, 0.0, 0.0, 1e3, 0.0, 0.0],
+  [0.0, 0.0, 0.0, 0.0, 1e3, 0.0],
+  [0.0, 0.0, 0.0, 0.0, 0.0, 1e3],
+]
+[[joints]]
+name = "clamp"
+type = "fixed"
+node_a = "ground"
+node_b = "root"
+[[analyses]]
+name = "modes"
+type = "modal"
+n_modes = 2
+"#;
+    let (line, message, hint) = system_error(massless);
+    assert_eq!(line, line_of(massless, "name = \"modes\""));
+    assert!(message.contains("no mass"), "{message}");
+    assert!(hint.contains("mass"), "{hint}");
+
+    let mathieu = |period: &str| {
+        format!(
+            r#"[model]
+name = "mathieu"
+[[nodes]]
+name = "mass"
+position = [0.0, 0.0, 0.0]
+[[bodies]]
+name = "mass"
+node = "mass"
+mass = 1.0
+inertia = [[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1]]
+[[joints]]
+name = "slider"
+type = "prismatic"
+node_a = "ground"
+node_b = "mass"
+position = [0.0, 0.0, 0.0]
+axis = [1.0, 0.0, 0.0]
+[[springs]]
+name = "spring"
+node_a = "ground"
+node_b = "mass"
+point_a = [-1.0, 0.0, 0.0]
+stiffness = 1.0
+stiffness_function = {{ type = "sine", amplitude = 0.3, frequency = 0.15915494309189535, offset = 0.6 }}
+[[analyses]]
+name = "floquet"
+type = "floquet"
+{period}
+steps_per_period = 50
+"#
+        )
+    };
+    let text = mathieu("period = 5.0");
+    let (line, message, hint) = system_error(&text);
+    assert_eq!(line, line_of(&text, "period = 5.0"));
+    assert!(message.contains("not a period of the loads"), "{message}");
+    assert!(hint.contains("period"), "{hint}");
+    let text = mathieu("period = 6.283185307179586");
+    let loaded = Model::from_toml_str(&text, "ok.toml").unwrap();
+    let sys = System::new(&loaded.model);
+    assert!(samara::analysis::check_analyses(&loaded, &sys).is_ok());
+
+    let text = modal("rotation = { axis = [0.0, 0.0, 0.0], omega = 1.0 }\nn_modes = 1\n");
+    let Err(e) = Model::from_toml_str(&text, "bad.toml") else {
+        panic!("accepted")
+    };
+    let d = e.errors().next().unwrap();
+    let (line, _) = e.source.line_col(d.span.clone().expect("located").start);
+    assert_eq!(line, line_of(&text, "rotation = {"));
+    assert!(d.message.contains("non-zero"), "{}", d.message);
+    assert!(d.hint.as_deref().unwrap_or("").contains("direction"));
+}

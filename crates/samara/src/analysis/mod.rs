@@ -4,6 +4,8 @@
 //! the state; they never know element types. Results leave through a [`Recorder`].
 
 pub mod campbell;
+pub mod chain;
+pub mod check;
 mod dynamic;
 pub mod energy_preserving;
 pub mod floquet;
@@ -14,6 +16,8 @@ pub mod modal;
 mod stage;
 mod statics;
 
+pub use chain::{Capture, Chain};
+pub use check::check_analyses;
 pub use dynamic::{Simulation, StepReport, run_dynamic};
 pub use generalized_alpha::{FirstOrderAlpha, GeneralizedAlpha};
 pub use history::{Frame, History};
@@ -161,7 +165,7 @@ pub fn run_analysis(
     def.stage().run(sys, initial, recorder, progress)
 }
 
-/// Runs every analysis of a model in order, chaining `start_from`. `make_recorder` is
+/// Runs every analysis of a model in order, chaining `start_from` ([`Chain`]). `make_recorder` is
 /// called once per analysis.
 pub fn run_all<R: Recorder>(
     model: &Model,
@@ -170,14 +174,24 @@ pub fn run_all<R: Recorder>(
     mut progress: impl FnMut(&AnalysisDef, f64),
 ) -> Result<Vec<(AnalysisSummary, R)>, crate::Error> {
     let mut out: Vec<(AnalysisSummary, R)> = Vec::new();
-    for def in &model.analyses {
-        let initial = match def.start_from {
-            Some(i) => out[i].0.final_state.clone(),
-            None => sys.initial_state(),
-        };
+    let mut chain = Chain::new(model);
+    for (index, def) in model.analyses.iter().enumerate() {
         let mut rec = make_recorder(def)?;
+        let Some(initial) = chain.initial(sys, def) else {
+            let mut summary = AnalysisSummary::new(&def.name, def.type_name());
+            summary.failure = Some(SolverFailure {
+                analysis: def.name.clone(),
+                time: def.start_time.unwrap_or(0.0),
+                reason: "the analysis it starts from left no state at that time".into(),
+                hint: Some("check `start_from`".into()),
+            });
+            out.push((summary, rec));
+            break;
+        };
         let mut p = |f: f64| progress(def, f);
-        let summary = run_analysis(sys, def, initial, &mut rec, &mut p)?;
+        let mut capture = chain.capture(index, &mut rec);
+        let summary = run_analysis(sys, def, initial, &mut capture, &mut p)?;
+        chain.finish(index, capture, summary.final_state.clone());
         let failed = summary.failure.is_some();
         out.push((summary, rec));
         if failed {

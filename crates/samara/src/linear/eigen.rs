@@ -256,14 +256,7 @@ fn dense_eigenpairs(lin: &LinearSystem) -> Result<Eigenpairs, EigenError> {
             e[(r + i, r + j)] = m[(i, j)];
         }
     }
-    let gev = a
-        .generalized_eigen(&e)
-        .map_err(|e| EigenError::Dense(format!("{e:?}")))?;
-    let (sa, sb, u) = (
-        gev.S_a().column_vector(),
-        gev.S_b().column_vector(),
-        gev.U(),
-    );
+    let (sa, sb, u) = real_generalized_eigen(&a, &e)?;
     let scale = a.norm_max().max(e.norm_max());
     let mut values = Vec::new();
     let mut vectors = Vec::new();
@@ -300,6 +293,72 @@ fn dense_eigenpairs(lin: &LinearSystem) -> Result<Eigenpairs, EigenError> {
         })
         .collect();
     Ok((values, vectors, Some(rigid)))
+}
+
+/// The generalized eigenvalues α/β and right eigenvectors of the real pencil (A, E), by
+/// faer's real QZ. faer's own `generalized_eigen` sizes its work space for the reduction
+/// only, which is too small for the eigenvector stage of very small pencils (a 2 × 2 pencil
+/// with a complex pair panics); this gives that stage room (n × 8 plus two columns).
+/// Complex pairs come as (re, im) columns j, j + 1 of the real vectors.
+#[allow(clippy::type_complexity)]
+fn real_generalized_eigen(
+    a: &Mat<f64>,
+    e: &Mat<f64>,
+) -> Result<(Vec<c64>, Vec<c64>, Mat<c64>), EigenError> {
+    use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+    use faer::linalg::evd::ComputeEigenvectors;
+    let n = a.nrows();
+    let par = faer::get_global_parallelism();
+    let mut u = Mat::<f64>::zeros(n, n);
+    let (mut re, mut im, mut beta) = (
+        faer::diag::Diag::<f64>::zeros(n),
+        faer::diag::Diag::<f64>::zeros(n),
+        faer::diag::Diag::<f64>::zeros(n),
+    );
+    let (mut a, mut e) = (a.clone(), e.clone());
+    let req = StackReq::any_of(&[
+        faer::linalg::gevd::gevd_scratch::<f64>(
+            n,
+            ComputeEigenvectors::No,
+            ComputeEigenvectors::Yes,
+            par,
+            Default::default(),
+        ),
+        faer::linalg::temp_mat_scratch::<f64>(n, 10),
+    ]);
+    faer::linalg::gevd::gevd_real(
+        a.as_mut(),
+        e.as_mut(),
+        re.as_mut(),
+        im.as_mut(),
+        beta.as_mut(),
+        None,
+        Some(u.as_mut()),
+        par,
+        MemStack::new(&mut MemBuffer::new(req)),
+        Default::default(),
+    )
+    .map_err(|e| EigenError::Dense(format!("{e:?}")))?;
+    let (re, im, beta) = (re.column_vector(), im.column_vector(), beta.column_vector());
+    let alpha: Vec<c64> = (0..n).map(|j| c64::new(re[j], im[j])).collect();
+    let beta: Vec<c64> = (0..n).map(|j| c64::new(beta[j], 0.0)).collect();
+    let mut v = Mat::<c64>::zeros(n, n);
+    let mut j = 0;
+    while j < n {
+        if im[j] != 0.0 && j + 1 < n {
+            for i in 0..n {
+                v[(i, j)] = c64::new(u[(i, j)], u[(i, j + 1)]);
+                v[(i, j + 1)] = c64::new(u[(i, j)], -u[(i, j + 1)]);
+            }
+            j += 2;
+        } else {
+            for i in 0..n {
+                v[(i, j)] = c64::new(u[(i, j)], 0.0);
+            }
+            j += 1;
+        }
+    }
+    Ok((alpha, beta, v))
 }
 
 /// The scalars of the shift-invert operator: real for a real target (half the work of

@@ -229,9 +229,11 @@ pub struct AnalysisInput {
     #[serde(rename = "type")]
     pub kind: Located<AnalysisType>,
     /// Start from the final state of an earlier analysis of this model instead of the
-    /// initial conditions written in the model.
+    /// initial conditions written in the model (`start_from = "name"`), or from the state
+    /// of an earlier dynamic analysis at a time of its run
+    /// (`start_from = { analysis = "name", time = t }`: the stored output nearest t).
     #[serde(default)]
-    pub start_from: Option<Located<String>>,
+    pub start_from: Option<Located<StartFromInput>>,
     /// dynamic: start time [s] (default 0).
     #[serde(default)]
     pub t_start: Option<f64>,
@@ -337,6 +339,37 @@ pub struct AnalysisInput {
     /// Floquet: generalized-α steps per period (default 100).
     #[serde(default)]
     pub steps_per_period: Option<usize>,
+}
+
+/// Where an analysis starts: an earlier analysis's final state, or its state at a time.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(
+    untagged,
+    expecting = "an earlier analysis's name, or { analysis = \"name\", time = t }"
+)]
+pub enum StartFromInput {
+    /// The final state of the named analysis.
+    Name(String),
+    /// The state of the named dynamic analysis at `time` [s] (the stored output nearest
+    /// it).
+    At { analysis: String, time: f64 },
+}
+
+impl StartFromInput {
+    /// The analysis named.
+    pub fn analysis(&self) -> &str {
+        match self {
+            Self::Name(n) | Self::At { analysis: n, .. } => n,
+        }
+    }
+
+    /// The time asked for, if any.
+    pub fn time(&self) -> Option<f64> {
+        match self {
+            Self::Name(_) => None,
+            Self::At { time, .. } => Some(*time),
+        }
+    }
 }
 
 /// The speeds of a Campbell analysis.

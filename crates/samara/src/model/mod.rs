@@ -225,7 +225,24 @@ pub struct AnalysisDef {
     pub name: String,
     /// Index of an earlier analysis whose final state is the initial state of this one.
     pub start_from: Option<usize>,
+    /// With `start_from` a dynamic analysis: the time of its run whose stored state
+    /// (the output nearest it) is the initial state instead of the final one.
+    pub start_time: Option<f64>,
     pub kind: AnalysisKind,
+    /// Where the analysis's keys are in the model file, for the checks that need the
+    /// built system (`samara::analysis::check_analyses`).
+    pub spans: AnalysisSpans,
+}
+
+/// Byte ranges in the model file of an analysis's entries (`None`: not written there).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AnalysisSpans {
+    /// The analysis's name.
+    pub name: Option<std::ops::Range<usize>>,
+    /// `n_modes`.
+    pub n_modes: Option<std::ops::Range<usize>>,
+    /// `period` or `speed` (Floquet).
+    pub period: Option<std::ops::Range<usize>>,
 }
 
 impl AnalysisDef {

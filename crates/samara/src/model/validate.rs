@@ -678,6 +678,42 @@ impl<'a> Checker<'a> {
         })
     }
 
+    /// The eigensolution keys shared by modal and Campbell analyses (`n_modes`, `shift`,
+    /// `eigensolver`), parsed in one place; `ok` is cleared on an error.
+    fn eigen_settings(
+        &mut self,
+        ai: &AnalysisInput,
+        e: &Entry,
+        what: &str,
+        ok: &mut bool,
+    ) -> ModalSettings {
+        let mut m = ModalSettings::default();
+        if let Some(n) = &ai.n_modes {
+            if n.value == 0 {
+                self.error(
+                    format!("{what}: `n_modes` must be at least 1"),
+                    n.span.clone(),
+                    None,
+                );
+                *ok = false;
+            }
+            m.n_modes = n.value;
+        }
+        if let Some(f) = ai.shift {
+            if !(f.is_finite() && f >= 0.0) {
+                self.error(
+                    format!("{what}: `shift` must be a frequency ≥ 0 Hz (got {f})"),
+                    self.key(e, "shift"),
+                    Some("the modes nearest this frequency are computed; leave it out for the lowest modes".into()),
+                );
+                *ok = false;
+            }
+            m.shift = Some(f);
+        }
+        m.eigensolver = ai.eigensolver.unwrap_or_default();
+        m
+    }
+
     /// Node indices (ascending, distinct) of the nodes, beams and bodies named in `parts`.
     fn spinning_nodes(
         &mut self,
@@ -861,18 +897,21 @@ impl<'a> Checker<'a> {
         }
         let start_from = match &ai.start_from {
             None => None,
-            Some(s) => match earlier.iter().position(|x| x.value.name.value == s.value) {
+            Some(s) => match earlier
+                .iter()
+                .position(|x| x.value.name.value == s.value.analysis())
+            {
                 Some(i) => Some(i),
                 None => {
                     let hint = match self.suggest(
-                        &s.value,
+                        s.value.analysis(),
                         earlier.iter().map(|x| x.value.name.value.as_str()),
                     ) {
                         Some(b) => format!("did you mean '{b}'?"),
                         None => "`start_from` names an analysis listed before this one".to_string(),
                     };
                     self.error(
-                        format!("{what}: unknown earlier analysis '{}'", s.value),
+                        format!("{what}: unknown earlier analysis '{}'", s.value.analysis()),
                         s.span.clone(),
                         Some(hint),
                     );
@@ -880,6 +919,39 @@ impl<'a> Checker<'a> {
                     None
                 }
             },
+        };
+        let start_time = match (&ai.start_from, start_from) {
+            (Some(s), Some(i)) => match s.value.time() {
+                None => None,
+                Some(t) => {
+                    let from = &earlier[i].value;
+                    let range = (from.kind.value == AnalysisType::Dynamic)
+                        .then(|| (from.t_start.unwrap_or(0.0), from.t_end.unwrap_or(f64::NAN)));
+                    match range {
+                        None => {
+                            self.error(
+                                format!("{what}: `start_from.time` needs a dynamic analysis, and '{}' is not one", from.name.value),
+                                s.span.clone(),
+                                Some(format!("write start_from = \"{}\" to start from its final state", from.name.value)),
+                            );
+                            ok = false;
+                        }
+                        Some((t0, t1)) => {
+                            let slack = 1e-12 * t0.abs().max(t1.abs()).max(1.0);
+                            if !(t.is_finite() && t >= t0 - slack && t <= t1 + slack) {
+                                self.error(
+                                    format!("{what}: `start_from.time` = {t} is outside the run of '{}' ({t0} … {t1} s)", from.name.value),
+                                    s.span.clone(),
+                                    Some("give a time between that analysis's t_start and t_end; the state stored nearest it is used".into()),
+                                );
+                                ok = false;
+                            }
+                        }
+                    }
+                    Some(t)
+                }
+            },
+            _ => None,
         };
         let mut solver = SolverSettings::default();
         if let Some(s) = ai.scaling {
@@ -1218,31 +1290,8 @@ impl<'a> Checker<'a> {
                 })
             }
             AnalysisType::Modal => {
-                let mut m = ModalSettings::default();
-                if let Some(n) = &ai.n_modes {
-                    if n.value == 0 {
-                        self.error(
-                            format!("{what}: `n_modes` must be at least 1"),
-                            n.span.clone(),
-                            None,
-                        );
-                        ok = false;
-                    }
-                    m.n_modes = n.value;
-                }
-                if let Some(f) = ai.shift {
-                    if !(f.is_finite() && f >= 0.0) {
-                        self.error(
-                            format!("{what}: `shift` must be a frequency ≥ 0 Hz (got {f})"),
-                            self.key(&e, "shift"),
-                            Some("the modes nearest this frequency are computed; leave it out for the lowest modes".into()),
-                        );
-                        ok = false;
-                    }
-                    m.shift = Some(f);
-                }
+                let mut m = self.eigen_settings(ai, &e, &what, &mut ok);
                 m.write_matrices = ai.write_matrices.unwrap_or(false);
-                m.eigensolver = ai.eigensolver.unwrap_or_default();
                 if let Some(r) = &ai.rotation {
                     if let Some(p) = r.parts.as_ref().and_then(|p| p.first()) {
                         self.error(
@@ -1269,30 +1318,7 @@ impl<'a> Checker<'a> {
                 AnalysisKind::Modal(m)
             }
             AnalysisType::Campbell => {
-                let mut m = ModalSettings::default();
-                if let Some(n) = &ai.n_modes {
-                    if n.value == 0 {
-                        self.error(
-                            format!("{what}: `n_modes` must be at least 1"),
-                            n.span.clone(),
-                            None,
-                        );
-                        ok = false;
-                    }
-                    m.n_modes = n.value;
-                }
-                if let Some(f) = ai.shift {
-                    if !(f.is_finite() && f >= 0.0) {
-                        self.error(
-                            format!("{what}: `shift` must be a frequency ≥ 0 Hz (got {f})"),
-                            self.key(&e, "shift"),
-                            None,
-                        );
-                        ok = false;
-                    }
-                    m.shift = Some(f);
-                }
-                m.eigensolver = ai.eigensolver.unwrap_or_default();
+                let m = self.eigen_settings(ai, &e, &what, &mut ok);
                 let rotation = match &ai.rotation {
                     Some(r) => {
                         if let Some(p) = r.parts.as_ref().and_then(|p| p.first()) {
@@ -1471,7 +1497,13 @@ impl<'a> Checker<'a> {
         ok.then(|| AnalysisDef {
             name: ai.name.value.clone(),
             start_from,
+            start_time,
             kind,
+            spans: AnalysisSpans {
+                name: ai.name.span.clone(),
+                n_modes: ai.n_modes.as_ref().and_then(|n| n.span.clone()),
+                period: self.key(&e, "period").or_else(|| self.key(&e, "speed")),
+            },
         })
     }
 }
