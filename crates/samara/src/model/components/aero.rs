@@ -6,6 +6,7 @@
 
 use super::{Build, ComponentKind};
 use crate::core::NodeRef;
+use crate::elements::aero::RotorDisc;
 use crate::elements::aero::station::Unsteady;
 use crate::elements::aero::{
     AeroStation, Airfoil, AttachedFlow, Attachment, BemRotor, Inflow, MAX_NODES, OyeStall, Section,
@@ -96,6 +97,12 @@ pub enum InflowInput {
         /// Tangential induction a'; default true.
         #[serde(default)]
         tangential_induction: Option<bool>,
+    },
+    /// Pitt–Peters dynamic inflow of a `[[rotors]]` entry (its three inflow states,
+    /// shared by every line naming it).
+    PittPeters {
+        /// Name of the `[[rotors]]` entry.
+        rotor: String,
     },
 }
 
@@ -217,6 +224,8 @@ pub struct AeroLineDef {
     pub unsteady: AttachedFlow,
     /// A_τ of Øye's dynamic stall, if on.
     pub stall_time_constant: Option<f64>,
+    /// Where the `inflow` is given (for errors found once every kind is validated).
+    pub inflow_span: Option<std::ops::Range<usize>>,
 }
 
 pub struct AeroLine;
@@ -757,6 +766,17 @@ impl ComponentKind for AeroLine {
                     },
                 }
             }
+            // The disc is filled in by the rotor's validation (`[[rotors]]` follows the
+            // lines); a rotor that does not exist is reported by `finish`.
+            Some(InflowInput::PittPeters { rotor }) => Inflow::PittPeters {
+                rotor: rotor.clone(),
+                disc: RotorDisc {
+                    centre: Vector3::zeros(),
+                    axis: Vector3::z(),
+                    azimuth_reference: Vector3::x(),
+                    radius: 1.0,
+                },
+            },
         };
         (ok && !defs.is_empty()).then(|| AeroLineDef {
             name: li.name.value.clone(),
@@ -770,7 +790,35 @@ impl ComponentKind for AeroLine {
             inflow,
             unsteady,
             stall_time_constant,
+            inflow_span: li.inflow.as_ref().and_then(|i| i.span.clone()),
         })
+    }
+
+    /// Every Pitt–Peters line names a rotor that exists.
+    fn finish(_input: &super::ModelInput, cx: &mut Checker, model: &Model) {
+        for l in &model.aero_lines {
+            let Inflow::PittPeters { rotor, .. } = &l.inflow else {
+                continue;
+            };
+            if model.rotors.iter().any(|r| &r.name == rotor) {
+                continue;
+            }
+            let names: Vec<&str> = model.rotors.iter().map(|r| r.name.as_str()).collect();
+            let hint = match cx.suggest(rotor, names.iter().copied()) {
+                Some(b) => format!("did you mean '{b}'?"),
+                None => format!(
+                    "define the rotor: `[[rotors]]` with name = \"{rotor}\", centre, axis and radius"
+                ),
+            };
+            cx.error(
+                format!(
+                    "aerodynamic line '{}': Pitt–Peters inflow names rotor '{rotor}', which is not defined",
+                    l.name
+                ),
+                l.inflow_span.clone(),
+                Some(hint),
+            );
+        }
     }
 
     fn nodes(_def: &AeroLineDef) -> Vec<usize> {
@@ -868,8 +916,26 @@ impl ComponentKind for AeroLine {
                 centre: Vector3::new(0.0, 0.0, 0.0),
                 axis: Vector3::x(),
             },
+            Inflow::PittPeters {
+                rotor: "rotor".into(),
+                disc: RotorDisc {
+                    centre: Vector3::new(0.3, 0.0, 0.1),
+                    axis: Vector3::new(-1.0, 0.1, 0.0).normalize(),
+                    azimuth_reference: Vector3::new(0.0, 0.2, 1.0).normalize(),
+                    radius: 2.5,
+                },
+            },
         ];
         for (k, inflow) in inflows.into_iter().enumerate() {
+            // Pitt–Peters stations read the rotor's (v₀, v_s, v_c).
+            let pp = matches!(inflow, Inflow::PittPeters { .. });
+            let with_inflow = |c: TangentCase| {
+                if pp {
+                    c.with_signals(vec![2.0, 0.4, -0.3])
+                } else {
+                    c
+                }
+            };
             let inflow = Arc::new(inflow);
             // Two nodes of a beam (weights 0.3/0.7) and one node of a body.
             let e2 = AeroStation::new(
@@ -902,14 +968,14 @@ impl ComponentKind for AeroLine {
                     .compose_exp(&(0.1 * crate::math::Rotation::identity().relative_log(&n.rot)));
                 n
             };
-            cases.push(TangentCase::element(
+            cases.push(with_inflow(TangentCase::element(
                 Box::new(e2),
                 vec![node(700 + k as u64), node(710 + k as u64)],
-            ));
-            cases.push(TangentCase::element(
+            )));
+            cases.push(with_inflow(TangentCase::element(
                 Box::new(e1),
                 vec![node(720 + k as u64)],
-            ));
+            )));
             // Five nodes of an order-4 beam element (Lagrange weights, summing to 1).
             let w5 = [-0.1, 0.4, 0.5, 0.3, -0.1];
             let e5 = AeroStation::new(
@@ -924,10 +990,10 @@ impl ComponentKind for AeroLine {
                 wind.clone(),
                 e1_inflow.clone(),
             );
-            cases.push(TangentCase::element(
+            cases.push(with_inflow(TangentCase::element(
                 Box::new(e5),
                 (0..5).map(|i| node(730 + 10 * k as u64 + i)).collect(),
-            ));
+            )));
             // Unsteady stations (Wagner's two states, Øye's separation) on 1, 2, 5 and
             // 8 nodes: state rows and the states' coupling into the loads.
             let stall = Arc::new(OyeStall::new(&section.airfoil).unwrap_or_else(|| unreachable!()));
@@ -977,7 +1043,9 @@ impl ComponentKind for AeroLine {
                     } else {
                         vec![states[2]]
                     };
-                    cases.push(TangentCase::element(Box::new(e), nodes).with_states(states));
+                    cases.push(with_inflow(
+                        TangentCase::element(Box::new(e), nodes).with_states(states),
+                    ));
                 }
             }
         }
