@@ -291,3 +291,47 @@ fn pitt_peters_uniform_inflow_after_a_climb_step_follows_the_closed_form() {
     // point being the step itself): tolerance 1 % at h = 0.5 ms.
     assert!(worst < 1e-2, "{worst}");
 }
+
+fn model_error(dir: &Path, text: &str) -> String {
+    match Model::from_toml_str(text, dir.join("bad.toml")) {
+        Ok(_) => panic!("accepted"),
+        Err(e) => e.render_plain(),
+    }
+}
+
+#[test]
+fn bad_rotor_inputs_are_located_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = rotor_model(dir.path(), 2, "-0.1", 0.0, "", 0.01, 0.01);
+    assert!(Model::from_toml_str(&good, dir.path().join("ok.toml")).is_ok());
+    let line_of = |text: &str, pat: &str| text.lines().position(|l| l.contains(pat)).unwrap() + 1;
+    // Pitt–Peters on a line whose rotor is not defined: located at that line's `inflow`.
+    let bad = good.replacen("rotor = \"main\"", "rotor = \"mian\"", 1);
+    let e = model_error(dir.path(), &bad);
+    assert!(e.contains("which is not defined") && e.contains("did you mean 'main'"), "{e}");
+    assert!(e.contains(&format!("bad.toml:{}:", line_of(&bad, "mian"))), "{e}");
+    // A non-positive radius: located at the key.
+    for r in ["0.0", "-5.0"] {
+        let bad = good.replacen(&format!("radius = {RADIUS}"), &format!("radius = {r}"), 1);
+        let e = model_error(dir.path(), &bad);
+        assert!(e.contains("`radius` must be > 0"), "{e}");
+        assert!(e.contains(&format!("bad.toml:{}:", line_of(&bad, "radius ="))), "{e}");
+    }
+    // A zero axis, an azimuth reference along the axis.
+    let bad = good.replacen("axis = [0.0, 0.0, -1.0]", "axis = [0.0, 0.0, 0.0]", 1);
+    assert!(model_error(dir.path(), &bad).contains("`axis` must be non-zero"));
+    let bad = good.replacen(
+        "radius = ",
+        "azimuth_reference = [0.0, 0.0, 2.0]\nradius = ",
+        1,
+    );
+    assert!(model_error(dir.path(), &bad).contains("must not be parallel to the axis"));
+    // A rotor no line uses: located at its name.
+    let bad = good.replace("inflow = { type = \"pitt_peters\", rotor = \"main\" }", "");
+    let e = model_error(dir.path(), &bad);
+    assert!(e.contains("rotor 'main': no lifting line uses it"), "{e}");
+    assert!(e.contains(&format!("bad.toml:{}:", line_of(&bad, "name = \"main\""))), "{e}");
+    // Lines of one rotor in different air.
+    let bad = good.replacen("wind = { speed = 0", "air_density = 1.0\nwind = { speed = 0", 1);
+    assert!(model_error(dir.path(), &bad).contains("differ in air density or wind"));
+}
