@@ -454,6 +454,12 @@ step = 0.01
             "tangential_induction = true",
             "tangential_induction = false",
         ),
+        // Øye's dynamic wake: the station uses its filter state (here 0, the states not
+        // given) instead of the quasi-steady induction (tests/dynamic_wake.rs).
+        (
+            "tangential_induction = true }",
+            "tangential_induction = true, dynamic_wake = \"oye\" }",
+        ),
         ("span = 4.2", "span = 4.0"),
         ("chord = 0.6", "chord = 0.7"),
         ("twist = 0.2", "twist = 0.25"),

@@ -87,6 +87,8 @@ pub struct Unsteady {
     pub attached: AttachedFlow,
     /// Øye's dynamic stall with its separation curves, and A_τ (τ = A_τ c/V).
     pub stall: Option<(Arc<OyeStall>, f64)>,
+    /// Øye's dynamic wake on the BEM axial induction (two filter states).
+    pub dynamic_wake: bool,
 }
 
 impl Unsteady {
@@ -96,12 +98,17 @@ impl Unsteady {
             AttachedFlow::Wagner => 2,
         }
     }
-    /// Number of states.
-    pub fn states(&self) -> usize {
+    /// Number of airfoil states (Wagner, Øye's stall).
+    fn airfoil_states(&self) -> usize {
         self.wagner_states() + usize::from(self.stall.is_some())
     }
+    /// Number of states (airfoil states, then the dynamic wake's two).
+    pub fn states(&self) -> usize {
+        self.airfoil_states() + if self.dynamic_wake { 2 } else { 0 }
+    }
+    /// Whether the airfoil is unsteady (three-quarter-chord velocity).
     fn active(&self) -> bool {
-        self.states() > 0
+        self.airfoil_states() > 0
     }
 }
 
@@ -121,10 +128,13 @@ pub struct AeroStation {
     outputs: Vec<String>,
 }
 
+/// Floor of the free-stream speed in the dynamic wake's time constants [m/s].
+const WAKE_MIN_SPEED: f64 = 0.1;
+
 /// The most nodes a station hangs on (a beam element of order ≤ 7).
 pub const MAX_NODES: usize = 8;
-/// The most states a station owns (Wagner's two, Øye's one).
-pub const MAX_STATES: usize = 3;
+/// The most states a station owns (Wagner's two, Øye's stall one, the dynamic wake two).
+pub const MAX_STATES: usize = 5;
 
 /// What a station computes besides its loads.
 #[derive(Clone, Copy, Debug)]
@@ -148,6 +158,8 @@ pub struct StationResult<S> {
     pub alpha_effective: f64,
     /// Pitt–Peters forcing of the station: dT, dT (r/R) sin ψ, dT (r/R) cos ψ.
     pub rotor_forcing: [S; 3],
+    /// The quasi-steady BEM axial induction (before the dynamic wake).
+    pub a_quasi_steady: f64,
 }
 
 const OUTPUTS: [(&str, &str); 9] = [
@@ -219,6 +231,11 @@ impl AeroStation {
         }
         if let Some((stall, _)) = &self.unsteady.stall {
             out[nw] = stall.eval(r.un.atan2(r.uc)).f;
+        }
+        if self.unsteady.dynamic_wake {
+            let iw = self.unsteady.airfoil_states();
+            out[iw] = r.a_quasi_steady;
+            out[iw + 1] = r.a_quasi_steady;
         }
         out
     }
@@ -327,6 +344,7 @@ impl AeroStation {
             un: 0.0,
             alpha_effective: 0.0,
             rotor_forcing: [zero; 3],
+            a_quasi_steady: 0.0,
         };
         let (u, bem_frame) = match &*self.inflow {
             Inflow::None => (u0, None),
@@ -351,15 +369,45 @@ impl AeroStation {
                     chord: self.section.chord,
                     theta,
                 };
-                match rotor.solve(&flow, &self.section.airfoil) {
-                    Some(ind) => {
-                        res.a = ind.a.re();
+                let ind = rotor.solve(&flow, &self.section.airfoil);
+                let a_qs = ind.map_or(zero, |i| i.a);
+                res.a_quasi_steady = a_qs.re();
+                // Øye's dynamic wake: the axial induction the station uses is the
+                // quasi-steady one through two first-order filters,
+                // τ₁ ż₁ + z₁ = a_qs, τ₂ ż₂ + z₂ = z₁, a = z₂ (rows in 1/s).
+                let a = if self.unsteady.dynamic_wake {
+                    let iw = self.unsteady.airfoil_states();
+                    let v0 = dot(&self.wind.velocity(&p, t), &n);
+                    let v0 = if v0.re() < WAKE_MIN_SPEED {
+                        S::cst(WAKE_MIN_SPEED)
+                    } else {
+                        v0
+                    };
+                    let ac = if a_qs.re() > 0.5 { S::cst(0.5) } else { a_qs };
+                    let tau1 = S::cst(1.1 * rotor.tip_radius) / ((S::cst(1.0) - ac * 1.3) * v0);
+                    let x = rr / rotor.tip_radius;
+                    let tau2 = tau1 * (S::cst(0.39) - x * x * 0.26);
+                    zrows[iw] = zd[iw] + (z[iw] - a_qs) / tau1;
+                    zrows[iw + 1] = zd[iw + 1] + (z[iw + 1] - z[iw]) / tau2;
+                    Some(z[iw + 1])
+                } else {
+                    ind.map(|i| i.a)
+                };
+                match (ind, a) {
+                    (Some(ind), Some(a)) => {
+                        res.a = a.re();
                         res.ap = ind.ap.re();
-                        let ax = vx * (S::cst(1.0) - ind.a);
+                        let ax = vx * (S::cst(1.0) - a);
                         let tg = vy * (S::cst(1.0) + ind.ap);
                         (sub(&scale(&n, ax), &scale(&tdir, tg)), Some((n, tdir)))
                     }
-                    None => (u0, Some((n, tdir))),
+                    (None, Some(a)) => {
+                        // No BEM root: the filtered induction still applies axially.
+                        res.a = a.re();
+                        let u = sub(&u0, &scale(&n, vx * a));
+                        (u, Some((n, tdir)))
+                    }
+                    _ => (u0, Some((n, tdir))),
                 }
             }
             Inflow::PittPeters { disc, .. } => {
@@ -385,8 +433,12 @@ impl AeroStation {
         let nw = self.unsteady.wagner_states();
         (res.uc, res.un) = (uc.re(), un.re());
         if q2.re() < 1e-20 {
-            // No flow: the states hold.
-            for (zr, &d) in zrows.iter_mut().zip(zd) {
+            // No flow: the airfoil states hold.
+            for (zr, &d) in zrows
+                .iter_mut()
+                .zip(zd)
+                .take(self.unsteady.airfoil_states())
+            {
                 *zr = d;
             }
             return res;
@@ -640,6 +692,9 @@ impl Element for AeroStation {
         }
         if self.unsteady.stall.is_some() {
             v.push("separation".into());
+        }
+        if self.unsteady.dynamic_wake {
+            v.extend(["wake_1".to_string(), "wake_2".to_string()]);
         }
         v
     }

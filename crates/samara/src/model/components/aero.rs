@@ -97,6 +97,10 @@ pub enum InflowInput {
         /// Tangential induction a'; default true.
         #[serde(default)]
         tangential_induction: Option<bool>,
+        /// Dynamic wake on the axial induction: `"none"` (default, quasi-steady) or
+        /// `"oye"` (Øye's two first-order filters, two states per station).
+        #[serde(default)]
+        dynamic_wake: Option<DynamicWakeInput>,
     },
     /// Pitt–Peters dynamic inflow of a `[[rotors]]` entry (its three inflow states,
     /// shared by every line naming it).
@@ -104,6 +108,16 @@ pub enum InflowInput {
         /// Name of the `[[rotors]]` entry.
         rotor: String,
     },
+}
+
+/// The dynamic-wake model of a BEM line.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum DynamicWakeInput {
+    /// Quasi-steady induction (default).
+    None,
+    /// Øye's dynamic wake: τ₁ = 1.1/(1 − 1.3a) R/V₀, τ₂ = (0.39 − 0.26 (r/R)²) τ₁.
+    Oye,
 }
 
 /// The attached-flow model of a line.
@@ -226,6 +240,8 @@ pub struct AeroLineDef {
     pub stall_time_constant: Option<f64>,
     /// Where the `inflow` is given (for errors found once every kind is validated).
     pub inflow_span: Option<std::ops::Range<usize>>,
+    /// Øye's dynamic wake on the BEM induction.
+    pub dynamic_wake: bool,
 }
 
 pub struct AeroLine;
@@ -730,6 +746,7 @@ impl ComponentKind for AeroLine {
                 tip_loss,
                 hub_loss,
                 tangential_induction,
+                ..
             }) => {
                 let span = li.inflow.as_ref().and_then(|i| i.span.clone());
                 let axis = Vector3::from(*axis);
@@ -791,6 +808,13 @@ impl ComponentKind for AeroLine {
             unsteady,
             stall_time_constant,
             inflow_span: li.inflow.as_ref().and_then(|i| i.span.clone()),
+            dynamic_wake: matches!(
+                li.inflow.as_ref().map(|i| &i.value),
+                Some(InflowInput::Bem {
+                    dynamic_wake: Some(DynamicWakeInput::Oye),
+                    ..
+                })
+            ),
         })
     }
 
@@ -861,6 +885,7 @@ impl ComponentKind for AeroLine {
             let unsteady = Unsteady {
                 attached: def.unsteady,
                 stall: s.stall.clone().zip(def.stall_time_constant),
+                dynamic_wake: def.dynamic_wake,
             };
             let station = AeroStation::new(
                 format!("{}.{k}", def.name),
@@ -1022,6 +1047,7 @@ impl ComponentKind for AeroLine {
                     let unsteady = Unsteady {
                         attached,
                         stall: with_stall.then(|| (stall.clone(), 4.0)),
+                        dynamic_wake: false,
                     };
                     let ns = unsteady.states();
                     let e = AeroStation::new(
@@ -1047,6 +1073,72 @@ impl ComponentKind for AeroLine {
                         TangentCase::element(Box::new(e), nodes).with_states(states),
                     ));
                 }
+            }
+        }
+        // BEM with Øye's dynamic wake (two states), alone and with Wagner + Øye's stall,
+        // on 1, 2 and 5 nodes.
+        let bem = Arc::new(Inflow::Bem {
+            rotor: BemRotor {
+                blades: 3,
+                hub_radius: 0.2,
+                tip_radius: 4.0,
+                tip_loss: true,
+                hub_loss: true,
+                tangential_induction: true,
+            },
+            centre: Vector3::zeros(),
+            axis: Vector3::x(),
+        });
+        let stall = Arc::new(OyeStall::new(&section.airfoil).unwrap_or_else(|| unreachable!()));
+        for (m, nn) in [1usize, 2, 5].into_iter().enumerate() {
+            for (a, airfoil_states) in [false, true].into_iter().enumerate() {
+                let seed = 1500 + 20 * m as u64 + 7 * a as u64;
+                let mut n = random_node(seed);
+                let nodes: Vec<_> = (0..nn)
+                    .map(|i| {
+                        n = random_node(seed + i as u64);
+                        n.x = Vector3::new(0.05, 0.1, 2.0) + 0.02 * n.x;
+                        n.v = Vector3::new(0.3, -12.0, 0.2) + 0.1 * n.v;
+                        n.w *= 0.3;
+                        n.rot = crate::math::Rotation::identity().compose_exp(
+                            &(0.1 * crate::math::Rotation::identity().relative_log(&n.rot)),
+                        );
+                        n.clone()
+                    })
+                    .collect();
+                let w: Vec<f64> = (0..nn)
+                    .map(|i| (1.0 + 0.3 * (i as f64).sin()) / nn as f64)
+                    .collect();
+                let sum: f64 = w.iter().sum();
+                let unsteady = Unsteady {
+                    attached: if airfoil_states {
+                        AttachedFlow::Wagner
+                    } else {
+                        AttachedFlow::QuasiSteady
+                    },
+                    stall: airfoil_states.then(|| (stall.clone(), 4.0)),
+                    dynamic_wake: true,
+                };
+                let e = AeroStation::new(
+                    "aero_wake",
+                    (0..nn).collect(),
+                    w.iter()
+                        .enumerate()
+                        .map(|(i, &wi)| attach(i as f64 - 1.0, wi / sum))
+                        .collect(),
+                    section.clone(),
+                    1.2,
+                    wind.clone(),
+                    bem.clone(),
+                )
+                .with_unsteady(unsteady, 0.0, &nodes);
+                let wake = [(0.25, 0.1), (0.2, -0.05)];
+                let states = if airfoil_states {
+                    vec![(0.3, -0.2), (0.5, 0.1), (0.6, 0.05), wake[0], wake[1]]
+                } else {
+                    wake.to_vec()
+                };
+                cases.push(TangentCase::element(Box::new(e), nodes).with_states(states));
             }
         }
         cases
