@@ -127,15 +127,24 @@ fn oye_dynamic_wake_relaxes_the_induction_as_two_filters_after_a_wind_step() {
         dir.path(),
         ", dynamic_wake = \"oye\"",
         v1,
-        &format!(", function = {{ type = \"step\", time = {t_step}, before = {}, after = 1.0 }}", v0 / v1),
+        &format!(
+            ", function = {{ type = \"step\", time = {t_step}, before = {}, after = 1.0 }}",
+            v0 / v1
+        ),
         3.5,
         0.005,
     );
     let m = load(&text, dir.path());
     let sys = System::new(&m);
     let mut hist = History::default();
-    let s = run_analysis(&sys, &m.analyses[0], sys.initial_state(), &mut hist, &mut |_| {})
-        .unwrap();
+    let s = run_analysis(
+        &sys,
+        &m.analyses[0],
+        sys.initial_state(),
+        &mut hist,
+        &mut |_| {},
+    )
+    .unwrap();
     assert!(s.failure.is_none(), "{:?}", s.failure);
     for k in [2usize, 5, 9] {
         let station = format!("blade0.{k}");

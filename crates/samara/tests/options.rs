@@ -1181,7 +1181,11 @@ step = 0.01
         let inflow = [2.0, 0.5, -0.7];
         let mut out = Vec::new();
         let mut thrust = Vec::new();
-        for e in parts.elements.iter().filter(|e| e.name().starts_with("blade.")) {
+        for e in parts
+            .elements
+            .iter()
+            .filter(|e| e.name().starts_with("blade."))
+        {
             let sig: Vec<f64> = inflow[..e.signal_inputs().len()].to_vec();
             let x = ElementInput {
                 nodes: &initial,
@@ -1235,7 +1239,11 @@ step = 0.01
     assert_eq!(default.len(), reference.len());
     // Without Pitt–Peters (no rotor) the stations see no induced velocity.
     let none = base
-        .replacen("inflow = { type = \"pitt_peters\", rotor = \"main\" }", "", 1)
+        .replacen(
+            "inflow = { type = \"pitt_peters\", rotor = \"main\" }",
+            "",
+            1,
+        )
         .split("[[rotors]]")
         .next()
         .unwrap()

@@ -150,8 +150,16 @@ impl PittPeters {
         // L̃ in (uniform, sine, cosine): the downstream direction d = (d_s, d_c).
         let l = [
             [S::cst(0.5), k * ds, k * dc],
-            [k * ds, lat + (down - lat) * (ds * ds), (down - lat) * (ds * dc)],
-            [k * dc, (down - lat) * (ds * dc), lat + (down - lat) * (dc * dc)],
+            [
+                k * ds,
+                lat + (down - lat) * (ds * ds),
+                (down - lat) * (ds * dc),
+            ],
+            [
+                k * dc,
+                (down - lat) * (ds * dc),
+                lat + (down - lat) * (dc * dc),
+            ],
         ];
         let x = solve3(&l, v);
         [

@@ -187,9 +187,10 @@ impl AeroStation {
     ) -> Self {
         let name = name.into();
         let (inputs, outputs) = match &*inflow {
-            Inflow::PittPeters { rotor, .. } => {
-                (inflow_signals(rotor).to_vec(), thrust_signals(&name).to_vec())
-            }
+            Inflow::PittPeters { rotor, .. } => (
+                inflow_signals(rotor).to_vec(),
+                thrust_signals(&name).to_vec(),
+            ),
             _ => (Vec::new(), Vec::new()),
         };
         Self {
