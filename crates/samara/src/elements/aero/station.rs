@@ -269,6 +269,9 @@ impl AeroStation {
     }
 
     /// The station's kinematics, loads and node rows (force, moment per node).
+    /// (The node states, the element states and rates, and the input signals are the
+    /// kernel's inputs; the two row arrays its outputs.)
+    #[allow(clippy::too_many_arguments)]
     pub fn compute<S: Scalar>(
         &self,
         t: f64,
