@@ -454,6 +454,12 @@ step = 0.01
             "tangential_induction = true",
             "tangential_induction = false",
         ),
+        // Øye's dynamic wake: the station uses its filter state (here 0, the states not
+        // given) instead of the quasi-steady induction (tests/dynamic_wake.rs).
+        (
+            "tangential_induction = true }",
+            "tangential_induction = true, dynamic_wake = \"oye\" }",
+        ),
         ("span = 4.2", "span = 4.0"),
         ("chord = 0.6", "chord = 0.7"),
         ("twist = 0.2", "twist = 0.25"),
@@ -1349,4 +1355,147 @@ fn campbell_time_sets_the_time_of_the_loads() {
     for (a, b) in t0.iter().zip(&t1) {
         assert!(b > &(a * 1.05), "{t0:?} {t1:?}");
     }
+}
+
+/// Issue #15: every key of `[[rotors]]` (Pitt–Peters dynamic inflow) and the line's
+/// `inflow = { type = "pitt_peters", rotor }` change the equations: the stations' loads
+/// and thrust signals at given inflow states, and the rotor's inflow rows.
+#[test]
+fn every_rotor_option_changes_the_inflow_equations() {
+    use samara::core::{ElementInput, ElementState, EvalContext, LocalTerms, Need, SignalTerms};
+    use samara::model::components::{Build, build_all, initial_nodes};
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv = String::from("alpha,cl,cd,cm\n");
+    for d in -180..=180 {
+        let a = (d as f64).to_radians();
+        csv += &format!("{d},{},0.01,0\n", std::f64::consts::PI * (2.0 * a).sin());
+    }
+    std::fs::write(dir.path().join("a.csv"), csv).unwrap();
+    let base = r#"[model]
+name = "rotor_options"
+[[nodes]]
+name = "hub"
+position = [0.0, 0.0, 0.0]
+angular_velocity = [0.0, 0.0, 30.0]
+[[bodies]]
+name = "hub"
+node = "hub"
+mass = 1.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[aero_lines]]
+name = "blade"
+node = "hub"
+root = [0.5, 0.0, 0.0]
+tip = [4.0, 0.0, 0.0]
+chord_direction = [0.0, -1.0, 0.0]
+normal_direction = [0.0, 0.0, 1.0]
+pitch = -0.1
+wind = { speed = 10.0, direction = [1.0, 0.0, -0.3] }
+inflow = { type = "pitt_peters", rotor = "main" }
+[[aero_lines.stations]]
+span = 1.0
+chord = 0.3
+airfoil = "a.csv"
+[[aero_lines.stations]]
+span = 3.0
+chord = 0.3
+airfoil = "a.csv"
+[[rotors]]
+name = "main"
+centre = [0.0, 0.0, 0.0]
+axis = [0.0, 0.0, -1.0]
+azimuth_reference = [1.0, 0.0, 0.0]
+radius = 4.0
+[[analyses]]
+name = "spin"
+type = "dynamic"
+t_end = 0.01
+step = 0.01
+"#;
+    // Station loads and thrust signals at v = (2, 0.5, −0.7), then the rotor's rows.
+    let equations = |text: &str| -> Vec<f64> {
+        let m = Model::from_toml_str(text, dir.path().join("m.toml"))
+            .unwrap_or_else(|e| panic!("{}", e.render_plain()))
+            .model;
+        let initial = initial_nodes(&m);
+        let mut parts = Build::new(&initial);
+        build_all(&m, &mut parts);
+        let ctx = EvalContext {
+            time: 0.0,
+            gravity: Vector3::zeros(),
+            load_factor: 1.0,
+        };
+        let inflow = [2.0, 0.5, -0.7];
+        let mut out = Vec::new();
+        let mut thrust = Vec::new();
+        for e in parts
+            .elements
+            .iter()
+            .filter(|e| e.name().starts_with("blade."))
+        {
+            let sig: Vec<f64> = inflow[..e.signal_inputs().len()].to_vec();
+            let x = ElementInput {
+                nodes: &initial,
+                states: &[],
+                signals: &sig,
+            };
+            let mut t = LocalTerms::for_element(e.as_ref());
+            e.evaluate(&ctx, &x, Need::Residual, &mut t);
+            out.extend(t.r.iter().copied());
+            let mut s = SignalTerms::for_element(e.as_ref());
+            e.signals(&ctx, &x, &mut s);
+            thrust.extend(s.values.iter().copied());
+        }
+        if let Some(r) = parts.elements.iter().find(|e| e.name() == "main") {
+            let states: Vec<ElementState> = inflow
+                .iter()
+                .map(|&z| ElementState { z, zd: 0.1 })
+                .collect();
+            let x = ElementInput {
+                nodes: &initial,
+                states: &states,
+                signals: &thrust,
+            };
+            let mut t = LocalTerms::for_element(r.as_ref());
+            r.evaluate(&ctx, &x, Need::Residual, &mut t);
+            out.extend(t.r.iter().copied());
+        }
+        out.extend(thrust);
+        out
+    };
+    let reference = equations(base);
+    let variants = [
+        ("centre = [0.0, 0.0, 0.0]", "centre = [0.0, 0.2, 0.0]"),
+        ("axis = [0.0, 0.0, -1.0]", "axis = [0.1, 0.0, -1.0]"),
+        (
+            "azimuth_reference = [1.0, 0.0, 0.0]",
+            "azimuth_reference = [0.0, 1.0, 0.0]",
+        ),
+        ("radius = 4.0", "radius = 4.5"),
+    ];
+    for (from, to) in variants {
+        assert!(base.contains(from), "{from}");
+        let v = equations(&base.replacen(from, to, 1));
+        assert_eq!(v.len(), reference.len());
+        let diff: f64 = v.iter().zip(&reference).map(|(a, b)| (a - b).abs()).sum();
+        assert!(diff > 1e-6, "`{to}` changed nothing");
+    }
+    // The default azimuth reference is a direction normal to the axis: valid, and a
+    // different one from [1, 0, 0] here changes the harmonics.
+    let default = equations(&base.replacen("azimuth_reference = [1.0, 0.0, 0.0]\n", "", 1));
+    assert_eq!(default.len(), reference.len());
+    // Without Pitt–Peters (no rotor) the stations see no induced velocity.
+    let none = base
+        .replacen(
+            "inflow = { type = \"pitt_peters\", rotor = \"main\" }",
+            "",
+            1,
+        )
+        .split("[[rotors]]")
+        .next()
+        .unwrap()
+        .to_string()
+        + "[[analyses]]\nname = \"spin\"\ntype = \"dynamic\"\nt_end = 0.01\nstep = 0.01\n";
+    let n = equations(&none);
+    assert!(n[..12] != reference[..12], "the inflow changes the loads");
 }

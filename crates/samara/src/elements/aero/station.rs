@@ -32,9 +32,10 @@
 
 use super::airfoil::Airfoil;
 use super::bem::{BemRotor, StationFlow};
+use super::dynamic_inflow::{RotorDisc, inflow_signals, thrust_signals};
 use super::unsteady::{AttachedFlow, JONES_A, JONES_B, OyeStall};
 use super::wind::Wind;
-use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, NodeState};
+use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, NodeState, SignalTerms};
 use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
 use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
@@ -53,6 +54,11 @@ pub enum Inflow {
         centre: Vector3<f64>,
         axis: Vector3<f64>,
     },
+    /// Pitt–Peters dynamic inflow of the rotor `rotor` ([`super::dynamic_inflow`]): the
+    /// station reads the rotor's states v₀, v_s, v_c as signals, takes the induced
+    /// velocity v = v₀ + v_s (r/R) sin ψ + v_c (r/R) cos ψ along the disc axis, and
+    /// produces its thrust dT = −f·n and first moments dT (r/R) sin ψ, dT (r/R) cos ψ.
+    PittPeters { rotor: String, disc: RotorDisc },
 }
 
 /// How a station hangs on one node.
@@ -81,6 +87,8 @@ pub struct Unsteady {
     pub attached: AttachedFlow,
     /// Øye's dynamic stall with its separation curves, and A_τ (τ = A_τ c/V).
     pub stall: Option<(Arc<OyeStall>, f64)>,
+    /// Øye's dynamic wake on the BEM axial induction (two filter states).
+    pub dynamic_wake: bool,
 }
 
 impl Unsteady {
@@ -90,12 +98,17 @@ impl Unsteady {
             AttachedFlow::Wagner => 2,
         }
     }
-    /// Number of states.
-    pub fn states(&self) -> usize {
+    /// Number of airfoil states (Wagner, Øye's stall).
+    fn airfoil_states(&self) -> usize {
         self.wagner_states() + usize::from(self.stall.is_some())
     }
+    /// Number of states (airfoil states, then the dynamic wake's two).
+    pub fn states(&self) -> usize {
+        self.airfoil_states() + if self.dynamic_wake { 2 } else { 0 }
+    }
+    /// Whether the airfoil is unsteady (three-quarter-chord velocity).
     fn active(&self) -> bool {
-        self.states() > 0
+        self.airfoil_states() > 0
     }
 }
 
@@ -110,12 +123,18 @@ pub struct AeroStation {
     inflow: Arc<Inflow>,
     unsteady: Unsteady,
     initial: [f64; MAX_STATES],
+    /// Signals read (the rotor's inflow states) and produced (the thrust), Pitt–Peters.
+    inputs: Vec<String>,
+    outputs: Vec<String>,
 }
+
+/// Floor of the free-stream speed in the dynamic wake's time constants [m/s].
+const WAKE_MIN_SPEED: f64 = 0.1;
 
 /// The most nodes a station hangs on (a beam element of order ≤ 7).
 pub const MAX_NODES: usize = 8;
-/// The most states a station owns (Wagner's two, Øye's one).
-pub const MAX_STATES: usize = 3;
+/// The most states a station owns (Wagner's two, Øye's stall one, the dynamic wake two).
+pub const MAX_STATES: usize = 5;
 
 /// What a station computes besides its loads.
 #[derive(Clone, Copy, Debug)]
@@ -137,6 +156,10 @@ pub struct StationResult<S> {
     pub uc: f64,
     pub un: f64,
     pub alpha_effective: f64,
+    /// Pitt–Peters forcing of the station: dT, dT (r/R) sin ψ, dT (r/R) cos ψ.
+    pub rotor_forcing: [S; 3],
+    /// The quasi-steady BEM axial induction (before the dynamic wake).
+    pub a_quasi_steady: f64,
 }
 
 const OUTPUTS: [(&str, &str); 9] = [
@@ -162,8 +185,16 @@ impl AeroStation {
         wind: Arc<Wind>,
         inflow: Arc<Inflow>,
     ) -> Self {
+        let name = name.into();
+        let (inputs, outputs) = match &*inflow {
+            Inflow::PittPeters { rotor, .. } => (
+                inflow_signals(rotor).to_vec(),
+                thrust_signals(&name).to_vec(),
+            ),
+            _ => (Vec::new(), Vec::new()),
+        };
         Self {
-            name: name.into(),
+            name,
             nodes,
             attach,
             section,
@@ -172,6 +203,8 @@ impl AeroStation {
             inflow,
             unsteady: Unsteady::default(),
             initial: [0.0; MAX_STATES],
+            inputs,
+            outputs,
         }
     }
 
@@ -190,7 +223,7 @@ impl AeroStation {
         let z = [0.0; MAX_STATES];
         let mut zr = [0.0; MAX_STATES];
         let ns = self.unsteady.states();
-        let r = self.compute::<f64>(t, nodes, &z[..ns], &z[..ns], &mut rows, &mut zr);
+        let r = self.compute::<f64>(t, nodes, &z[..ns], &z[..ns], &[], &mut rows, &mut zr);
         let mut out = [0.0; MAX_STATES];
         let nw = self.unsteady.wagner_states();
         if nw == 2 {
@@ -199,6 +232,11 @@ impl AeroStation {
         }
         if let Some((stall, _)) = &self.unsteady.stall {
             out[nw] = stall.eval(r.un.atan2(r.uc)).f;
+        }
+        if self.unsteady.dynamic_wake {
+            let iw = self.unsteady.airfoil_states();
+            out[iw] = r.a_quasi_steady;
+            out[iw + 1] = r.a_quasi_steady;
         }
         out
     }
@@ -231,12 +269,16 @@ impl AeroStation {
     }
 
     /// The station's kinematics, loads and node rows (force, moment per node).
+    /// (The node states, the element states and rates, and the input signals are the
+    /// kernel's inputs; the two row arrays its outputs.)
+    #[allow(clippy::too_many_arguments)]
     pub fn compute<S: Scalar>(
         &self,
         t: f64,
         nodes: &[NodeState],
         z: &[S],
         zd: &[S],
+        sig: &[S],
         rows: &mut [V3<S>; 2 * MAX_NODES],
         zrows: &mut [S; MAX_STATES],
     ) -> StationResult<S> {
@@ -305,6 +347,8 @@ impl AeroStation {
             uc: 0.0,
             un: 0.0,
             alpha_effective: 0.0,
+            rotor_forcing: [zero; 3],
+            a_quasi_steady: 0.0,
         };
         let (u, bem_frame) = match &*self.inflow {
             Inflow::None => (u0, None),
@@ -329,16 +373,56 @@ impl AeroStation {
                     chord: self.section.chord,
                     theta,
                 };
-                match rotor.solve(&flow, &self.section.airfoil) {
-                    Some(ind) => {
-                        res.a = ind.a.re();
+                let ind = rotor.solve(&flow, &self.section.airfoil);
+                let a_qs = ind.map_or(zero, |i| i.a);
+                res.a_quasi_steady = a_qs.re();
+                // Øye's dynamic wake: the axial induction the station uses is the
+                // quasi-steady one through two first-order filters,
+                // τ₁ ż₁ + z₁ = a_qs, τ₂ ż₂ + z₂ = z₁, a = z₂ (rows in 1/s).
+                let a = if self.unsteady.dynamic_wake {
+                    let iw = self.unsteady.airfoil_states();
+                    let v0 = dot(&self.wind.velocity(&p, t), &n);
+                    let v0 = if v0.re() < WAKE_MIN_SPEED {
+                        S::cst(WAKE_MIN_SPEED)
+                    } else {
+                        v0
+                    };
+                    let ac = if a_qs.re() > 0.5 { S::cst(0.5) } else { a_qs };
+                    let tau1 = S::cst(1.1 * rotor.tip_radius) / ((S::cst(1.0) - ac * 1.3) * v0);
+                    let x = rr / rotor.tip_radius;
+                    let tau2 = tau1 * (S::cst(0.39) - x * x * 0.26);
+                    zrows[iw] = zd[iw] + (z[iw] - a_qs) / tau1;
+                    zrows[iw + 1] = zd[iw + 1] + (z[iw + 1] - z[iw]) / tau2;
+                    Some(z[iw + 1])
+                } else {
+                    ind.map(|i| i.a)
+                };
+                match (ind, a) {
+                    (Some(ind), Some(a)) => {
+                        res.a = a.re();
                         res.ap = ind.ap.re();
-                        let ax = vx * (S::cst(1.0) - ind.a);
+                        let ax = vx * (S::cst(1.0) - a);
                         let tg = vy * (S::cst(1.0) + ind.ap);
                         (sub(&scale(&n, ax), &scale(&tdir, tg)), Some((n, tdir)))
                     }
-                    None => (u0, Some((n, tdir))),
+                    (None, Some(a)) => {
+                        // No BEM root: the filtered induction still applies axially.
+                        res.a = a.re();
+                        let u = sub(&u0, &scale(&n, vx * a));
+                        (u, Some((n, tdir)))
+                    }
+                    _ => (u0, Some((n, tdir))),
                 }
+            }
+            Inflow::PittPeters { disc, .. } => {
+                // Signals missing (a station evaluated alone): no induced velocity.
+                let v = if sig.len() == 3 {
+                    let (hs, hc) = disc.harmonics(&p);
+                    sig[0] + sig[1] * hs + sig[2] * hc
+                } else {
+                    zero
+                };
+                (add(&u0, &scale(&cst3(&disc.axis), v)), None)
             }
         };
         let (rho, ch, ds) = (self.density, self.section.chord, self.section.width);
@@ -353,8 +437,12 @@ impl AeroStation {
         let nw = self.unsteady.wagner_states();
         (res.uc, res.un) = (uc.re(), un.re());
         if q2.re() < 1e-20 {
-            // No flow: the states hold.
-            for (zr, &d) in zrows.iter_mut().zip(zd) {
+            // No flow: the airfoil states hold.
+            for (zr, &d) in zrows
+                .iter_mut()
+                .zip(zd)
+                .take(self.unsteady.airfoil_states())
+            {
                 *zr = d;
             }
             return res;
@@ -423,6 +511,11 @@ impl AeroStation {
             rows[2 * i] = scale(&f, w);
             rows[2 * i + 1] = scale(&add(&cross(&arm, &ft), &mt), w);
         }
+        if let Inflow::PittPeters { disc, .. } = &*self.inflow {
+            let dt = -dot(&f, &cst3(&disc.axis));
+            let (hs, hc) = disc.harmonics(&p);
+            res.rotor_forcing = [dt, dt * hs, dt * hc];
+        }
         res.force = f;
         res.moment = m;
         res
@@ -430,6 +523,11 @@ impl AeroStation {
 }
 
 impl AeroStation {
+    /// Local dual directions needed: nodes, states and input signals.
+    fn directions(&self) -> usize {
+        6 * self.nodes.len() + self.unsteady.states() + self.inputs.len()
+    }
+
     /// The states' values and rates (zero beyond the station's states).
     fn state_values(&self, x: &ElementInput) -> ([f64; MAX_STATES], [f64; MAX_STATES]) {
         let mut z = [0.0; MAX_STATES];
@@ -440,28 +538,63 @@ impl AeroStation {
         (z, zd)
     }
 
-    /// Residual and tangents with M dual directions (M/2 ≥ 6 × nodes).
-    fn tangents<const M: usize>(&self, ctx: &EvalContext, x: &ElementInput, out: &mut LocalTerms) {
-        let lf = ctx.load_factor;
+    /// The input signals (the rotor's inflow states) as f64, zero where absent.
+    fn signal_values(&self, x: &ElementInput) -> [f64; 3] {
+        let mut s = [0.0; 3];
+        for (k, v) in x.signals.iter().take(self.inputs.len()).enumerate() {
+            s[k] = *v;
+        }
+        s
+    }
+
+    /// The station evaluated with M dual directions: nodes (δx, δθ) at 6i…, states at
+    /// 6·nodes + j, input signals after them, and the rate half (v, Ω, ż) from M/2.
+    fn dual_pass<const M: usize>(
+        &self,
+        ctx: &EvalContext,
+        x: &ElementInput,
+        rows: &mut [V3<Dual<M>>; 2 * MAX_NODES],
+        zrows: &mut [Dual<M>; MAX_STATES],
+    ) -> StationResult<Dual<M>> {
         let nn = self.nodes.len();
         let ns = self.unsteady.states();
-        let mut rows = [[Dual::<M>::cst(0.0); 3]; 2 * MAX_NODES];
-        let mut zrows = [Dual::<M>::cst(0.0); MAX_STATES];
-        let (n, vo) = (6 * nn + ns, M / 2);
+        let vo = M / 2;
         let mut z = [Dual::<M>::cst(0.0); MAX_STATES];
         let mut zd = [Dual::<M>::cst(0.0); MAX_STATES];
         for (j, st) in x.states.iter().take(ns).enumerate() {
             z[j] = Dual::var(st.z, 6 * nn + j);
             zd[j] = Dual::var(st.zd, vo + 6 * nn + j);
         }
+        let ni = self.inputs.len();
+        let sv = self.signal_values(x);
+        let sig: [Dual<M>; 3] = std::array::from_fn(|k| {
+            if k < ni {
+                Dual::var(sv[k], 6 * nn + ns + k)
+            } else {
+                Dual::cst(0.0)
+            }
+        });
         self.compute::<Dual<M>>(
             ctx.time,
             x.nodes,
             &z[..ns],
             &zd[..ns],
-            &mut rows,
-            &mut zrows,
-        );
+            &sig[..ni],
+            rows,
+            zrows,
+        )
+    }
+
+    /// Residual and tangents with M dual directions (M/2 ≥ 6 × nodes + states + inputs).
+    fn tangents<const M: usize>(&self, ctx: &EvalContext, x: &ElementInput, out: &mut LocalTerms) {
+        let lf = ctx.load_factor;
+        let nn = self.nodes.len();
+        let ns = self.unsteady.states();
+        let ni = self.inputs.len();
+        let mut rows = [[Dual::<M>::cst(0.0); 3]; 2 * MAX_NODES];
+        let mut zrows = [Dual::<M>::cst(0.0); MAX_STATES];
+        let (n, vo) = (6 * nn + ns, M / 2);
+        self.dual_pass::<M>(ctx, x, &mut rows, &mut zrows);
         for (b, row) in rows.iter().take(2 * nn).enumerate() {
             for (k, rk) in row.iter().enumerate() {
                 let ri = 3 * b + k;
@@ -469,6 +602,9 @@ impl AeroStation {
                 for j in 0..n {
                     out.k[(ri, j)] -= lf * rk.d[j];
                     out.c[(ri, j)] -= lf * rk.d[vo + j];
+                }
+                for j in 0..ni {
+                    out.ds[(ri, j)] -= lf * rk.d[n + j];
                 }
             }
         }
@@ -480,6 +616,36 @@ impl AeroStation {
                 out.k[(ri, j)] += zr.d[j];
                 out.c[(ri, j)] += zr.d[vo + j];
             }
+            for j in 0..ni {
+                out.ds[(ri, j)] += zr.d[n + j];
+            }
+        }
+    }
+
+    /// The produced thrust signals and their derivatives (M dual directions), scaled by
+    /// the load factor like the loads.
+    fn signal_terms<const M: usize>(
+        &self,
+        ctx: &EvalContext,
+        x: &ElementInput,
+        out: &mut SignalTerms,
+    ) {
+        let lf = ctx.load_factor;
+        let n = 6 * self.nodes.len() + self.unsteady.states();
+        let ni = self.inputs.len();
+        let vo = M / 2;
+        let mut rows = [[Dual::<M>::cst(0.0); 3]; 2 * MAX_NODES];
+        let mut zrows = [Dual::<M>::cst(0.0); MAX_STATES];
+        let r = self.dual_pass::<M>(ctx, x, &mut rows, &mut zrows);
+        for (o, f) in r.rotor_forcing.iter().enumerate() {
+            out.values[o] = lf * f.v;
+            for j in 0..n {
+                out.k[(o, j)] = lf * f.d[j];
+                out.c[(o, j)] = lf * f.d[vo + j];
+            }
+            for j in 0..ni {
+                out.ds[(o, j)] = lf * f.d[n + j];
+            }
         }
     }
 
@@ -490,11 +656,13 @@ impl AeroStation {
         let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
         let mut zrows = [0.0; MAX_STATES];
         let (z, zd) = self.state_values(x);
+        let sv = self.signal_values(x);
         self.compute::<f64>(
             ctx.time,
             x.nodes,
             &z[..ns],
             &zd[..ns],
+            &sv[..self.inputs.len()],
             &mut rows,
             &mut zrows,
         );
@@ -529,6 +697,9 @@ impl Element for AeroStation {
         if self.unsteady.stall.is_some() {
             v.push("separation".into());
         }
+        if self.unsteady.dynamic_wake {
+            v.extend(["wake_1".to_string(), "wake_2".to_string()]);
+        }
         v
     }
 
@@ -545,7 +716,7 @@ impl Element for AeroStation {
         }
         // Dual directions: twice the local unknowns (nodes and states), rounded up to
         // the sizes compiled.
-        match 6 * self.nodes.len() + self.unsteady.states() {
+        match self.directions() {
             0..=12 => self.tangents::<24>(ctx, x, out),
             13..=16 => self.tangents::<32>(ctx, x, out),
             17..=24 => self.tangents::<48>(ctx, x, out),
@@ -554,16 +725,39 @@ impl Element for AeroStation {
         }
     }
 
+    fn signal_inputs(&self) -> &[String] {
+        &self.inputs
+    }
+
+    fn signal_outputs(&self) -> &[String] {
+        &self.outputs
+    }
+
+    fn signals(&self, ctx: &EvalContext, x: &ElementInput, out: &mut SignalTerms) {
+        if self.outputs.is_empty() {
+            return;
+        }
+        match self.directions() {
+            0..=12 => self.signal_terms::<24>(ctx, x, out),
+            13..=16 => self.signal_terms::<32>(ctx, x, out),
+            17..=24 => self.signal_terms::<48>(ctx, x, out),
+            25..=48 => self.signal_terms::<96>(ctx, x, out),
+            _ => self.signal_terms::<112>(ctx, x, out),
+        }
+    }
+
     fn external_power(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
         let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
         let mut zrows = [0.0; MAX_STATES];
         let (z, zd) = self.state_values(x);
         let ns = self.unsteady.states();
+        let sv = self.signal_values(x);
         self.compute::<f64>(
             ctx.time,
             x.nodes,
             &z[..ns],
             &zd[..ns],
+            &sv[..self.inputs.len()],
             &mut rows,
             &mut zrows,
         );
@@ -592,11 +786,13 @@ impl Element for AeroStation {
         let mut zrows = [0.0; MAX_STATES];
         let (z, zd) = self.state_values(x);
         let ns = self.unsteady.states();
+        let sv = self.signal_values(x);
         let r = self.compute::<f64>(
             ctx.time,
             x.nodes,
             &z[..ns],
             &zd[..ns],
+            &sv[..self.inputs.len()],
             &mut rows,
             &mut zrows,
         );

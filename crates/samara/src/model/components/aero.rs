@@ -6,6 +6,7 @@
 
 use super::{Build, ComponentKind};
 use crate::core::NodeRef;
+use crate::elements::aero::RotorDisc;
 use crate::elements::aero::station::Unsteady;
 use crate::elements::aero::{
     AeroStation, Airfoil, AttachedFlow, Attachment, BemRotor, Inflow, MAX_NODES, OyeStall, Section,
@@ -96,7 +97,27 @@ pub enum InflowInput {
         /// Tangential induction a'; default true.
         #[serde(default)]
         tangential_induction: Option<bool>,
+        /// Dynamic wake on the axial induction: `"none"` (default, quasi-steady) or
+        /// `"oye"` (Øye's two first-order filters, two states per station).
+        #[serde(default)]
+        dynamic_wake: Option<DynamicWakeInput>,
     },
+    /// Pitt–Peters dynamic inflow of a `[[rotors]]` entry (its three inflow states,
+    /// shared by every line naming it).
+    PittPeters {
+        /// Name of the `[[rotors]]` entry.
+        rotor: String,
+    },
+}
+
+/// The dynamic-wake model of a BEM line.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum DynamicWakeInput {
+    /// Quasi-steady induction (default).
+    None,
+    /// Øye's dynamic wake: τ₁ = 1.1/(1 − 1.3a) R/V₀, τ₂ = (0.39 − 0.26 (r/R)²) τ₁.
+    Oye,
 }
 
 /// The attached-flow model of a line.
@@ -217,6 +238,10 @@ pub struct AeroLineDef {
     pub unsteady: AttachedFlow,
     /// A_τ of Øye's dynamic stall, if on.
     pub stall_time_constant: Option<f64>,
+    /// Where the `inflow` is given (for errors found once every kind is validated).
+    pub inflow_span: Option<std::ops::Range<usize>>,
+    /// Øye's dynamic wake on the BEM induction.
+    pub dynamic_wake: bool,
 }
 
 pub struct AeroLine;
@@ -721,6 +746,7 @@ impl ComponentKind for AeroLine {
                 tip_loss,
                 hub_loss,
                 tangential_induction,
+                ..
             }) => {
                 let span = li.inflow.as_ref().and_then(|i| i.span.clone());
                 let axis = Vector3::from(*axis);
@@ -757,6 +783,17 @@ impl ComponentKind for AeroLine {
                     },
                 }
             }
+            // The disc is filled in by the rotor's validation (`[[rotors]]` follows the
+            // lines); a rotor that does not exist is reported by `finish`.
+            Some(InflowInput::PittPeters { rotor }) => Inflow::PittPeters {
+                rotor: rotor.clone(),
+                disc: RotorDisc {
+                    centre: Vector3::zeros(),
+                    axis: Vector3::z(),
+                    azimuth_reference: Vector3::x(),
+                    radius: 1.0,
+                },
+            },
         };
         (ok && !defs.is_empty()).then(|| AeroLineDef {
             name: li.name.value.clone(),
@@ -770,7 +807,42 @@ impl ComponentKind for AeroLine {
             inflow,
             unsteady,
             stall_time_constant,
+            inflow_span: li.inflow.as_ref().and_then(|i| i.span.clone()),
+            dynamic_wake: matches!(
+                li.inflow.as_ref().map(|i| &i.value),
+                Some(InflowInput::Bem {
+                    dynamic_wake: Some(DynamicWakeInput::Oye),
+                    ..
+                })
+            ),
         })
+    }
+
+    /// Every Pitt–Peters line names a rotor that exists.
+    fn finish(_input: &super::ModelInput, cx: &mut Checker, model: &Model) {
+        for l in &model.aero_lines {
+            let Inflow::PittPeters { rotor, .. } = &l.inflow else {
+                continue;
+            };
+            if model.rotors.iter().any(|r| &r.name == rotor) {
+                continue;
+            }
+            let names: Vec<&str> = model.rotors.iter().map(|r| r.name.as_str()).collect();
+            let hint = match cx.suggest(rotor, names.iter().copied()) {
+                Some(b) => format!("did you mean '{b}'?"),
+                None => format!(
+                    "define the rotor: `[[rotors]]` with name = \"{rotor}\", centre, axis and radius"
+                ),
+            };
+            cx.error(
+                format!(
+                    "aerodynamic line '{}': Pitt–Peters inflow names rotor '{rotor}', which is not defined",
+                    l.name
+                ),
+                l.inflow_span.clone(),
+                Some(hint),
+            );
+        }
     }
 
     fn nodes(_def: &AeroLineDef) -> Vec<usize> {
@@ -813,6 +885,7 @@ impl ComponentKind for AeroLine {
             let unsteady = Unsteady {
                 attached: def.unsteady,
                 stall: s.stall.clone().zip(def.stall_time_constant),
+                dynamic_wake: def.dynamic_wake,
             };
             let station = AeroStation::new(
                 format!("{}.{k}", def.name),
@@ -868,8 +941,26 @@ impl ComponentKind for AeroLine {
                 centre: Vector3::new(0.0, 0.0, 0.0),
                 axis: Vector3::x(),
             },
+            Inflow::PittPeters {
+                rotor: "rotor".into(),
+                disc: RotorDisc {
+                    centre: Vector3::new(0.3, 0.0, 0.1),
+                    axis: Vector3::new(-1.0, 0.1, 0.0).normalize(),
+                    azimuth_reference: Vector3::new(0.0, 0.2, 1.0).normalize(),
+                    radius: 2.5,
+                },
+            },
         ];
         for (k, inflow) in inflows.into_iter().enumerate() {
+            // Pitt–Peters stations read the rotor's (v₀, v_s, v_c).
+            let pp = matches!(inflow, Inflow::PittPeters { .. });
+            let with_inflow = |c: TangentCase| {
+                if pp {
+                    c.with_signals(vec![2.0, 0.4, -0.3])
+                } else {
+                    c
+                }
+            };
             let inflow = Arc::new(inflow);
             // Two nodes of a beam (weights 0.3/0.7) and one node of a body.
             let e2 = AeroStation::new(
@@ -902,14 +993,14 @@ impl ComponentKind for AeroLine {
                     .compose_exp(&(0.1 * crate::math::Rotation::identity().relative_log(&n.rot)));
                 n
             };
-            cases.push(TangentCase::element(
+            cases.push(with_inflow(TangentCase::element(
                 Box::new(e2),
                 vec![node(700 + k as u64), node(710 + k as u64)],
-            ));
-            cases.push(TangentCase::element(
+            )));
+            cases.push(with_inflow(TangentCase::element(
                 Box::new(e1),
                 vec![node(720 + k as u64)],
-            ));
+            )));
             // Five nodes of an order-4 beam element (Lagrange weights, summing to 1).
             let w5 = [-0.1, 0.4, 0.5, 0.3, -0.1];
             let e5 = AeroStation::new(
@@ -924,10 +1015,10 @@ impl ComponentKind for AeroLine {
                 wind.clone(),
                 e1_inflow.clone(),
             );
-            cases.push(TangentCase::element(
+            cases.push(with_inflow(TangentCase::element(
                 Box::new(e5),
                 (0..5).map(|i| node(730 + 10 * k as u64 + i)).collect(),
-            ));
+            )));
             // Unsteady stations (Wagner's two states, Øye's separation) on 1, 2, 5 and
             // 8 nodes: state rows and the states' coupling into the loads.
             let stall = Arc::new(OyeStall::new(&section.airfoil).unwrap_or_else(|| unreachable!()));
@@ -956,6 +1047,7 @@ impl ComponentKind for AeroLine {
                     let unsteady = Unsteady {
                         attached,
                         stall: with_stall.then(|| (stall.clone(), 4.0)),
+                        dynamic_wake: false,
                     };
                     let ns = unsteady.states();
                     let e = AeroStation::new(
@@ -977,8 +1069,76 @@ impl ComponentKind for AeroLine {
                     } else {
                         vec![states[2]]
                     };
-                    cases.push(TangentCase::element(Box::new(e), nodes).with_states(states));
+                    cases.push(with_inflow(
+                        TangentCase::element(Box::new(e), nodes).with_states(states),
+                    ));
                 }
+            }
+        }
+        // BEM with Øye's dynamic wake (two states), alone and with Wagner + Øye's stall,
+        // on 1, 2 and 5 nodes.
+        let bem = Arc::new(Inflow::Bem {
+            rotor: BemRotor {
+                blades: 3,
+                hub_radius: 0.2,
+                tip_radius: 4.0,
+                tip_loss: true,
+                hub_loss: true,
+                tangential_induction: true,
+            },
+            centre: Vector3::zeros(),
+            axis: Vector3::x(),
+        });
+        let stall = Arc::new(OyeStall::new(&section.airfoil).unwrap_or_else(|| unreachable!()));
+        for (m, nn) in [1usize, 2, 5].into_iter().enumerate() {
+            for (a, airfoil_states) in [false, true].into_iter().enumerate() {
+                let seed = 1500 + 20 * m as u64 + 7 * a as u64;
+                let mut n = random_node(seed);
+                let nodes: Vec<_> = (0..nn)
+                    .map(|i| {
+                        n = random_node(seed + i as u64);
+                        n.x = Vector3::new(0.05, 0.1, 2.0) + 0.02 * n.x;
+                        n.v = Vector3::new(0.3, -12.0, 0.2) + 0.1 * n.v;
+                        n.w *= 0.3;
+                        n.rot = crate::math::Rotation::identity().compose_exp(
+                            &(0.1 * crate::math::Rotation::identity().relative_log(&n.rot)),
+                        );
+                        n.clone()
+                    })
+                    .collect();
+                let w: Vec<f64> = (0..nn)
+                    .map(|i| (1.0 + 0.3 * (i as f64).sin()) / nn as f64)
+                    .collect();
+                let sum: f64 = w.iter().sum();
+                let unsteady = Unsteady {
+                    attached: if airfoil_states {
+                        AttachedFlow::Wagner
+                    } else {
+                        AttachedFlow::QuasiSteady
+                    },
+                    stall: airfoil_states.then(|| (stall.clone(), 4.0)),
+                    dynamic_wake: true,
+                };
+                let e = AeroStation::new(
+                    "aero_wake",
+                    (0..nn).collect(),
+                    w.iter()
+                        .enumerate()
+                        .map(|(i, &wi)| attach(i as f64 - 1.0, wi / sum))
+                        .collect(),
+                    section.clone(),
+                    1.2,
+                    wind.clone(),
+                    bem.clone(),
+                )
+                .with_unsteady(unsteady, 0.0, &nodes);
+                let wake = [(0.25, 0.1), (0.2, -0.05)];
+                let states = if airfoil_states {
+                    vec![(0.3, -0.2), (0.5, 0.1), (0.6, 0.05), wake[0], wake[1]]
+                } else {
+                    wake.to_vec()
+                };
+                cases.push(TangentCase::element(Box::new(e), nodes).with_states(states));
             }
         }
         cases

@@ -20,6 +20,7 @@ pub mod force;
 pub mod hydraulic;
 pub mod joint;
 pub mod motor;
+pub mod rotor;
 pub mod sensor;
 pub mod signal;
 pub mod spring;
@@ -265,6 +266,9 @@ registry! {
     /// Lifting lines on beams or nodes: aerodynamic stations with airfoil tables, wind
     /// and induced velocity (docs/aerodynamics.md).
     aero_lines: aero::AeroLine,
+    /// Rotor discs with Pitt–Peters dynamic inflow states, shared by the lifting lines
+    /// that name them (docs/aerodynamics.md).
+    rotors: rotor::RotorKind,
     /// Contacts of bodies with a ground plane (Hunt–Crossley or linear normal force,
     /// LuGre friction with bristle states).
     contacts: contact::ContactKind,
