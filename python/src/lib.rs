@@ -484,6 +484,10 @@ impl Model {
             None => LoadOptions::default(),
         };
         let loaded = self.load(py, &options)?;
+        // The checks that need the built system, as `samara run` makes them: a located
+        // ModelError before anything runs.
+        samara::analysis::check_analyses(&loaded, &System::new(&loaded.model))
+            .map_err(|e| model_error(py, &self.doc, &e))?;
         let model = &loaded.model;
         let wanted = match &analysis {
             None => vec![true; model.analyses.len()],

@@ -119,3 +119,18 @@ def test_a_solver_failure_keeps_the_partial_results():
     assert "failure" in partial.attrs
     again = samara.run(m, raise_on_failure=False)
     assert again["swing"].attrs["status"] == "failed"
+
+
+def test_too_many_modes_is_located_before_anything_runs(tmp_path):
+    # The pendulum has one degree of freedom; 5 modes are asked. Like `samara run`, the
+    # Python run stops with a ModelError at the `n_modes` key instead of a runtime error.
+    f = tmp_path / "modes.toml"
+    f.write_text(
+        PENDULUM
+        + '\n[[analyses]]\nname = "modes"\ntype = "modal"\nn_modes = 5\n'
+    )
+    with pytest.raises(samara.ModelError) as e:
+        samara.run(samara.load(str(f)))
+    [d] = errors(e.value)
+    assert "n_modes" in d["message"] or "modes" in d["message"]
+    assert d["line"] == (PENDULUM + '\n[[analyses]]\nname = "modes"\ntype = "modal"\n').count("\n") + 1
