@@ -424,9 +424,7 @@ impl Model {
                     let def = &model.analyses[j];
                     let stage = def.stage();
                     let mut rec = ResultsFile::in_memory(model, file, &sys, stage.as_ref())?;
-                    let state = starts
-                        .initial(&sys, def)
-                        .expect("an analysis starts from an earlier one");
+                    let state = starts.start(&sys, def)?;
                     let mut capture = starts.capture(j, &mut rec);
                     let summary = stage.run(&sys, state, &mut capture, &mut |_| {})?;
                     starts.finish(j, capture, summary.final_state.clone());
@@ -441,9 +439,7 @@ impl Model {
                     }
                 }
                 let mut state = match target {
-                    Some(k) => starts
-                        .initial(&sys, &model.analyses[k])
-                        .expect("the analyses it starts from have run"),
+                    Some(k) => starts.start(&sys, &model.analyses[k])?,
                     None => sys.initial_state(),
                 };
                 if let Some(rot) = &rotation {
@@ -520,9 +516,7 @@ impl Model {
                 if !wanted[k] {
                     continue;
                 }
-                let initial = finals
-                    .initial(&sys, def)
-                    .expect("an analysis starts from an earlier one");
+                let initial = finals.start(&sys, def)?;
                 let stage = def.stage();
                 let inner = match &out {
                     Some(dir) => ResultsFile::create_for(dir, model, file, &sys, stage.as_ref())?,

@@ -368,12 +368,12 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
     let mut chain = Chain::new(model);
     let mut failed = false;
     for (index, def) in model.analyses.iter().enumerate() {
-        let Some(initial) = chain.initial(&sys, def) else {
-            eprintln!(
-                "error: analysis '{}': the analysis it starts from left no state to start from",
-                def.name
-            );
-            return ExitCode::from(EXIT_MODEL);
+        let initial = match chain.start(&sys, def) {
+            Ok(state) => state,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(EXIT_MODEL);
+            }
         };
         let mut file = match ResultsFile::create(&out_dir, model, Some(path), &sys, def) {
             Ok(f) => f,

@@ -248,8 +248,9 @@ fn run_case(base: &Document, case: &Case, model_file: &Path, dir: &Path) -> Outc
     }
     let mut chain = samara::analysis::Chain::new(model);
     for (index, def) in model.analyses.iter().enumerate() {
-        let Some(initial) = chain.initial(&sys, def) else {
-            return Outcome::Error(format!("analysis '{}' has no start", def.name));
+        let initial = match chain.start(&sys, def) {
+            Ok(state) => state,
+            Err(e) => return Outcome::Error(e.to_string()),
         };
         let stage = def.stage();
         let mut file =

@@ -78,4 +78,7 @@ pub enum Error {
     /// A results file could not be written.
     #[error("results file '{}': {message}", path.display())]
     Output { path: PathBuf, message: String },
+    /// An analysis cannot start: the state its `start_from` names is not there.
+    #[error("analysis '{analysis}': {message}")]
+    Start { analysis: String, message: String },
 }

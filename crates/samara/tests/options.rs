@@ -1499,3 +1499,60 @@ step = 0.01
     let n = equations(&none);
     assert!(n[..12] != reference[..12], "the inflow changes the loads");
 }
+
+/// `start_from` whose state is not there (the library caller did not run the earlier
+/// analysis through the chain) is an error naming the analysis and why, never a panic;
+/// with the earlier analysis run, the same call gives the state.
+#[test]
+fn a_missing_start_state_is_an_error_not_a_panic() {
+    for (start, needle) in [
+        ("\"swing\"", "has not run"),
+        (
+            "{ analysis = \"swing\", time = 0.2 }",
+            "no state near t = 0.2",
+        ),
+    ] {
+        let m = model(&format!(
+            "{SWINGING_PENDULUM}[[analyses]]\nname = \"modes\"\ntype = \"modal\"\nstart_from = {start}\nn_modes = 1\n"
+        ));
+        let sys = System::new(&m);
+        let mut chain = samara::analysis::Chain::new(&m);
+        let err = chain.start(&sys, &m.analyses[1]).unwrap_err().to_string();
+        assert!(
+            err.contains("analysis 'modes'") && err.contains(needle),
+            "{err}"
+        );
+        let mut hist = History::default();
+        let mut capture = chain.capture(0, &mut hist);
+        let def = &m.analyses[0];
+        let s = def
+            .stage()
+            .run(
+                &sys,
+                chain.start(&sys, def).unwrap(),
+                &mut capture,
+                &mut |_| {},
+            )
+            .unwrap();
+        chain.finish(0, capture, s.final_state);
+        assert!(chain.start(&sys, &m.analyses[1]).is_ok(), "{start}");
+    }
+}
+
+/// `start_from.time` on a dynamic analysis that lacks `t_end`: the one error is that
+/// analysis's missing `t_end`, not a range check against an unknown end (no NaN printed).
+#[test]
+fn start_from_time_on_a_run_without_t_end_reports_only_the_missing_t_end() {
+    let text = format!(
+        "{}[[analyses]]\nname = \"modes\"\ntype = \"modal\"\nstart_from = {{ analysis = \"swing\", time = 0.2 }}\nn_modes = 1\n",
+        SWINGING_PENDULUM.replace("t_end = 0.5\n", "")
+    );
+    let err = Model::from_toml_str(&text, "p.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("needs `t_end`"), "{err}");
+    assert!(
+        !err.contains("NaN") && !err.contains("outside the run"),
+        "{err}"
+    );
+}

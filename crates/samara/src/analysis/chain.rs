@@ -67,6 +67,19 @@ impl Chain {
         }
     }
 
+    /// The starting state of `def`, or the error that says why there is none.
+    pub fn start(&self, sys: &System, def: &AnalysisDef) -> Result<State, crate::Error> {
+        self.initial(sys, def).ok_or_else(|| crate::Error::Start {
+            analysis: def.name.clone(),
+            message: match def.start_time {
+                Some(t) => format!(
+                    "the analysis `start_from` names recorded no state near t = {t}, so there is none to start from"
+                ),
+                None => "the analysis `start_from` names has not run, so there is no state to start from".into(),
+            },
+        })
+    }
+
     /// A recorder that passes everything to `inner` and catches the states of analysis
     /// `index` that later analyses start from.
     pub fn capture<'r>(&self, index: usize, inner: &'r mut dyn Recorder) -> Capture<'r> {

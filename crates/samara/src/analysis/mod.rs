@@ -177,16 +177,22 @@ pub fn run_all<R: Recorder>(
     let mut chain = Chain::new(model);
     for (index, def) in model.analyses.iter().enumerate() {
         let mut rec = make_recorder(def)?;
-        let Some(initial) = chain.initial(sys, def) else {
-            let mut summary = AnalysisSummary::new(&def.name, def.type_name());
-            summary.failure = Some(SolverFailure {
-                analysis: def.name.clone(),
-                time: def.start_time.unwrap_or(0.0),
-                reason: "the analysis it starts from left no state at that time".into(),
-                hint: Some("check `start_from`".into()),
-            });
-            out.push((summary, rec));
-            break;
+        let initial = match chain.start(sys, def) {
+            Ok(state) => state,
+            // Only a `start_from.time` with no record near it gets here (analyses run in
+            // order and the loop stops at the first failure, so the analysis named has
+            // run). Reported as a failure, so the results before it are kept.
+            Err(e) => {
+                let mut summary = AnalysisSummary::new(&def.name, def.type_name());
+                summary.failure = Some(SolverFailure {
+                    analysis: def.name.clone(),
+                    time: def.start_time.unwrap_or_else(|| sys.initial_state().time),
+                    reason: e.to_string(),
+                    hint: Some("check `start_from`".into()),
+                });
+                out.push((summary, rec));
+                break;
+            }
         };
         let mut p = |f: f64| progress(def, f);
         let mut capture = chain.capture(index, &mut rec);

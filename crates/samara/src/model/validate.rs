@@ -925,8 +925,10 @@ impl<'a> Checker<'a> {
                 None => None,
                 Some(t) => {
                     let from = &earlier[i].value;
+                    // t_start's default is the dynamic analysis's own (0); a missing t_end
+                    // is reported on that analysis, so there is no range to check here.
                     let range = (from.kind.value == AnalysisType::Dynamic)
-                        .then(|| (from.t_start.unwrap_or(0.0), from.t_end.unwrap_or(f64::NAN)));
+                        .then(|| (from.t_start.unwrap_or(0.0), from.t_end));
                     match range {
                         None => {
                             self.error(
@@ -936,7 +938,8 @@ impl<'a> Checker<'a> {
                             );
                             ok = false;
                         }
-                        Some((t0, t1)) => {
+                        Some((_, None)) => {}
+                        Some((t0, Some(t1))) => {
                             let slack = 1e-12 * t0.abs().max(t1.abs()).max(1.0);
                             if !(t.is_finite() && t >= t0 - slack && t <= t1 + slack) {
                                 self.error(
