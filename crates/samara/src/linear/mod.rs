@@ -9,6 +9,7 @@ pub use linearize::{LinearSystem, SteadyRotation, linearize, unknown_names};
 /// The sparse matrices of [`LinearSystem`] (compressed columns).
 pub type SparseMatrix = faer::sparse::SparseColMat<usize, f64>;
 pub mod eigen;
+pub mod lanczos;
 pub use eigen::{EigenMethod, EigenOptions, Mode, Spectrum, modes};
 pub mod spin;
 pub use spin::Spin;
