@@ -169,6 +169,10 @@ pub fn closure(a: &State, b: &State, period: f64) -> f64 {
             .max((p.v - q.v).norm() / vs)
             .max((p.w - q.w).norm() / ws);
     }
+    // Element states in their own units: relative to their size, absolute below 10⁻⁶.
+    for (p, q) in a.states.iter().zip(&b.states) {
+        worst = worst.max((p.z - q.z).abs() / p.z.abs().max(q.z.abs()).max(1e-6));
+    }
     worst
 }
 
@@ -310,7 +314,7 @@ pub fn run_floquet(
             &mut summary,
             t0,
             e.to_string(),
-            "give every moving part a mass, and model first-order dynamics (element states) outside the Floquet analysis",
+            "give every moving part a mass; element states must be first-order unknowns that no constraint acts on",
         ),
     }
     progress(1.0);

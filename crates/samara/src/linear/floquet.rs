@@ -45,7 +45,15 @@
 //! When B is the same at every step the algorithmic velocity ẏ_N is read instead (second
 //! order there, and it keeps det Φ = 1 for an undamped system with ρ∞ = 1). Index-3 enforcement keeps
 //! `B y = 0` at every step. Every independent direction must have inertia (the projected
-//! mass `NᵀMN` regular); element states (first-order unknowns) are not supported.
+//! mass `NᵀMN` regular).
+//!
+//! **Element states.** The last n_z unknowns z (inflow, controller, viscoelastic states)
+//! are first order: no inertia, no constraint. They are integrated in the same steps by
+//! the first-order generalized-α of the dynamic analyses ([`FirstOrderAlpha`]:
+//! `z_{n+1} = z_n + h(1 − γ₁)w_n + hγ₁w_{n+1}`, `ż_{n+1}` from the algorithmic rate w), so
+//! the step matrix gains the columns `γ₁'G_z + K_z` (γ₁' = ∂ż_{n+1}/∂z_{n+1}), the start
+//! solves `[M_s G_z Bᵀ; B 0 0][v̇; ż; μ] = [−G_sẏ − Ky; −2Ḃẏ − B̈y]`, and the state is
+//! `(η, η̇, z)`: 2r + n_z columns.
 //!
 //! **Exponents.** `λ = (ln|ρ| + i arg ρ)/T` on the principal branch, arg ρ ∈ (−π, π]: the
 //! imaginary part, hence the frequency, is known only up to multiples of 2π/T (a rotor:
@@ -53,7 +61,7 @@
 //! `ln|ρ|/T` (growth rate) are unambiguous.
 
 use super::LinearSystem;
-use crate::analysis::GeneralizedAlpha;
+use crate::analysis::{FirstOrderAlpha, GeneralizedAlpha};
 use faer::c64;
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
@@ -63,10 +71,10 @@ use std::f64::consts::PI;
 pub enum FloquetError {
     #[error("a Floquet analysis needs at least 2 steps per period and the matrices at each")]
     TooFewSteps,
-    #[error(
-        "the model has element states ({0}); a Floquet analysis handles second-order unknowns only"
-    )]
-    ElementStates(usize),
+    #[error("a constraint acts on an element state: constraints must act on the configuration")]
+    ConstrainedStates,
+    #[error("an element state has inertia: element states are first-order unknowns")]
+    StateInertia,
     #[error("the constraints leave no free motion")]
     NoFreedom,
     #[error(
@@ -122,9 +130,10 @@ impl FloquetMode {
 #[derive(Clone, Debug)]
 pub struct Monodromy {
     pub period: f64,
-    /// Φ, 2r × 2r, on `(η, η̇)`.
+    /// Φ, (2r + n_z) × (2r + n_z), on `(η, η̇, z)` (z: the element states).
     pub matrix: DMatrix<f64>,
-    /// N, n × r: the independent coordinates `y = N η` at t₀.
+    /// N, n_s × r: the independent coordinates `y = N η` of the n_s structural unknowns
+    /// (nodes and joint coordinates) at t₀.
     pub basis: DMatrix<f64>,
     /// One mode per multiplier with Im ρ ≥ 0 (a conjugate pair is one mode, each real
     /// multiplier one mode), largest modulus first.
@@ -175,18 +184,23 @@ fn null_space(b: &DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>) {
     (basis, pinv)
 }
 
-/// One column of the integration: y, ẏ, v̇ and the algorithmic acceleration a.
+/// One column of the integration: the structural part (y, ẏ, v̇ and the algorithmic
+/// acceleration a) and the element states (z, ż and the algorithmic rate w).
 #[derive(Clone)]
 struct Column {
     y: DVector<f64>,
     v: DVector<f64>,
     vd: DVector<f64>,
     a: DVector<f64>,
+    z: DVector<f64>,
+    zd: DVector<f64>,
+    w: DVector<f64>,
 }
 
 /// The monodromy matrix of the linear equations `systems[k]` at `t₀ + k h`,
 /// `k = 0 … N` (`h = T/N`; `systems[N]` is the state after one period, `systems[N − 1]`
 /// also stands for t₀ − h), integrated by generalized-α with spectral radius `rho_inf`.
+/// The last `n_states` unknowns of the systems are element states (first order).
 pub fn monodromy(
     period: f64,
     systems: &[LinearSystem],
@@ -194,143 +208,190 @@ pub fn monodromy(
     n_states: usize,
 ) -> Result<Monodromy, FloquetError> {
     use rayon::prelude::*;
-    if n_states > 0 {
-        return Err(FloquetError::ElementStates(n_states));
-    }
     if systems.len() < 3 {
         return Err(FloquetError::TooFewSteps);
     }
     let steps = systems.len() - 1;
     let h = period / steps as f64;
     let n = systems[0].n;
-    let b0 = dense(&systems[0].constraint_jacobian);
+    let nz = n_states.min(n);
+    let ns = n - nz;
+    // The constraints act on the configuration, never on element states, and no state
+    // has inertia (z̈ appears nowhere).
+    let structural = |lin: &LinearSystem| -> Result<DMatrix<f64>, FloquetError> {
+        let b = dense(&lin.constraint_jacobian);
+        if b.ncols() != n || (nz > 0 && b.columns(ns, nz).amax() > 0.0) {
+            return Err(FloquetError::ConstrainedStates);
+        }
+        if nz > 0 && dense(&lin.mass).columns(ns, nz).amax() > 0.0 {
+            return Err(FloquetError::StateInertia);
+        }
+        Ok(b.columns(0, ns).into_owned())
+    };
+    let b0 = structural(&systems[0])?;
     let (basis, pinv) = null_space(&b0);
     let r = basis.ncols();
-    if r == 0 {
+    if r == 0 && nz == 0 {
         return Err(FloquetError::NoFreedom);
     }
     // Every independent direction has mass.
     let m0 = dense(&systems[0].mass);
-    let mp = basis.transpose() * &m0 * &basis;
-    let me = mp.clone().symmetric_eigen();
-    let top = me.eigenvalues.iter().fold(0.0f64, |a, &x| a.max(x.abs()));
-    let massless = me.eigenvalues.iter().filter(|&&x| x <= 1e-12 * top).count();
-    if massless > 0 || top == 0.0 {
-        return Err(FloquetError::Massless(massless.max(1)));
+    if r > 0 {
+        let mp = basis.transpose() * m0.view((0, 0), (ns, ns)) * &basis;
+        let me = mp.symmetric_eigen();
+        let top = me.eigenvalues.iter().fold(0.0f64, |a, &x| a.max(x.abs()));
+        let massless = me.eigenvalues.iter().filter(|&&x| x <= 1e-12 * top).count();
+        if massless > 0 || top == 0.0 {
+            return Err(FloquetError::Massless(massless.max(1)));
+        }
     }
     // Ḃ, B̈ at t₀ by central differences (B(t₀ − h) = B(t₀ + T − h) by periodicity).
-    let b1 = dense(&systems[1].constraint_jacobian);
-    let bm = dense(&systems[steps - 1].constraint_jacobian);
+    let b1 = structural(&systems[1])?;
+    let bm = structural(&systems[steps - 1])?;
     let bdot = (&b1 - &bm) / (2.0 * h);
     let bddot = (&b1 - 2.0 * &b0 + &bm) / (h * h);
     let (g0, k0) = (dense(&systems[0].damping), dense(&systems[0].stiffness));
     let m = b0.nrows();
-    // Initial columns.
+    // Consistent start: [M_s G_z Bᵀ; B_s 0 0] [v̇; ż; μ] = [−G_s ẏ − K y; −2Ḃẏ − B̈y].
     let mut start = DMatrix::zeros(n + m, n + m);
-    start.view_mut((0, 0), (n, n)).copy_from(&m0);
-    start.view_mut((0, n), (n, m)).copy_from(&b0.transpose());
-    start.view_mut((n, 0), (m, n)).copy_from(&b0);
+    start
+        .view_mut((0, 0), (n, ns))
+        .copy_from(&m0.columns(0, ns));
+    start
+        .view_mut((0, ns), (n, nz))
+        .copy_from(&g0.columns(ns, nz));
+    start.view_mut((0, n), (ns, m)).copy_from(&b0.transpose());
+    start.view_mut((n, 0), (m, ns)).copy_from(&b0);
     let start_lu = start.lu();
-    let mut columns: Vec<Column> = (0..2 * r)
+    if !start_lu.is_invertible() {
+        return Err(FloquetError::Singular(0));
+    }
+    let mut columns: Vec<Column> = (0..2 * r + nz)
         .map(|j| {
-            let (eta, etad) = if j < r {
-                (basis.column(j).into_owned(), DVector::zeros(n))
+            let (mut y, mut etad, mut z) =
+                (DVector::zeros(ns), DVector::zeros(ns), DVector::zeros(nz));
+            if j < r {
+                y = basis.column(j).into_owned();
+            } else if j < 2 * r {
+                etad = basis.column(j - r).into_owned();
             } else {
-                (DVector::zeros(n), basis.column(j - r).into_owned())
-            };
-            let y = eta;
+                z[j - 2 * r] = 1.0;
+            }
             let v = etad - &pinv * (&bdot * &y);
+            let mut full = DVector::zeros(n);
+            full.rows_mut(0, ns).copy_from(&y);
+            full.rows_mut(ns, nz).copy_from(&z);
             let mut rhs = DVector::zeros(n + m);
-            rhs.rows_mut(0, n).copy_from(&(-(&g0 * &v) - &k0 * &y));
+            rhs.rows_mut(0, n)
+                .copy_from(&(-(g0.columns(0, ns) * &v) - &k0 * &full));
             rhs.rows_mut(n, m)
                 .copy_from(&(-2.0 * (&bdot * &v) - &bddot * &y));
-            let vd = start_lu
+            let x = start_lu
                 .solve(&rhs)
-                .map(|x| x.rows(0, n).into_owned())
-                .unwrap_or_else(|| DVector::from_element(n, f64::NAN));
+                .unwrap_or_else(|| DVector::from_element(n + m, f64::NAN));
+            let vd = x.rows(0, ns).into_owned();
+            let zd = x.rows(ns, nz).into_owned();
             Column {
                 a: vd.clone(),
                 y,
                 v,
                 vd,
+                w: zd.clone(),
+                z,
+                zd,
             }
         })
         .collect();
     let ga = GeneralizedAlpha::from_rho_inf(rho_inf);
-    let (bp, gp) = (ga.beta_prime(h), ga.gamma_prime(h));
+    let fa = FirstOrderAlpha::from_rho_inf(rho_inf);
+    let (bp, gp, rp) = (ga.beta_prime(h), ga.gamma_prime(h), fa.rate_prime(h));
     let scale = ga.beta * h * h;
     // Steps 1 … N, then one more (N + 1 ≡ 1 by periodicity) for the velocity read-back.
     let mut before_end: Vec<DVector<f64>> = Vec::new();
     let mut b_change = 0.0f64;
-    let mut end_v: Vec<DVector<f64>> = Vec::new();
-    let mut at_end: Vec<DVector<f64>> = Vec::new();
+    let mut end: Vec<Column> = Vec::new();
     for step in 1..=steps + 1 {
         let lin = &systems[if step > steps { 1 } else { step }];
         if step == steps {
             before_end = columns.iter().map(|c| c.y.clone()).collect();
         }
         if step == steps + 1 {
-            at_end = columns.iter().map(|c| c.y.clone()).collect();
-            end_v = columns.iter().map(|c| c.v.clone()).collect();
+            end = columns.clone();
         }
         let (mm, gg, kk, bb) = (
             dense(&lin.mass),
             dense(&lin.damping),
             dense(&lin.stiffness),
-            dense(&lin.constraint_jacobian),
+            structural(lin)?,
         );
         if bb.shape() == b0.shape() {
             b_change = b_change.max((&bb - &b0).amax());
         } else {
             b_change = f64::INFINITY;
         }
-        let s = (bp * &mm + gp * &gg + &kk) * scale;
+        // ∂(residual)/∂(y_{n+1}, z_{n+1}), times βh².
+        let mut s = kk.clone();
+        for j in 0..n {
+            let (mf, gf) = if j < ns { (bp, gp) } else { (0.0, rp) };
+            for i in 0..n {
+                s[(i, j)] = (s[(i, j)] + mf * mm[(i, j)] + gf * gg[(i, j)]) * scale;
+            }
+        }
         let smax = s.amax().max(f64::MIN_POSITIVE);
         let bmax = bb.amax();
         let bs = if bmax > 0.0 { smax / bmax } else { 1.0 };
         let m = bb.nrows();
         let mut a = DMatrix::zeros(n + m, n + m);
         a.view_mut((0, 0), (n, n)).copy_from(&s);
-        a.view_mut((0, n), (n, m)).copy_from(&(bb.transpose() * bs));
-        a.view_mut((n, 0), (m, n)).copy_from(&(&bb * bs));
+        a.view_mut((0, n), (ns, m))
+            .copy_from(&(bb.transpose() * bs));
+        a.view_mut((n, 0), (m, ns)).copy_from(&(&bb * bs));
         let lu = a.lu();
         if !lu.is_invertible() {
             return Err(FloquetError::Singular(step));
         }
+        let (ms, gs, gz) = (mm.columns(0, ns), gg.columns(0, ns), gg.columns(ns, nz));
         columns.par_iter_mut().for_each(|c| {
-            // a_{n+1} = y_{n+1}/(βh²) + c_a.
+            // a_{n+1} = y_{n+1}/(βh²) + c_a; w_{n+1} = z_{n+1}/(hγ₁) + c_w.
             let c_a = -(&c.y + h * &c.v + (h * h * (0.5 - ga.beta)) * &c.a) / scale;
             let c_v = &c.v + (h * (1.0 - ga.gamma)) * &c.a + (h * ga.gamma) * &c_a;
             let c_d = ((1.0 - ga.alpha_m) * &c_a + ga.alpha_m * &c.a - ga.alpha_f * &c.vd)
                 / (1.0 - ga.alpha_f);
+            let c_w = -(&c.z + (h * (1.0 - fa.gamma)) * &c.w) / (h * fa.gamma);
+            let c_zd = ((1.0 - fa.alpha_m) * &c_w + fa.alpha_m * &c.w - fa.alpha_f * &c.zd)
+                / (1.0 - fa.alpha_f);
             let mut rhs = DVector::zeros(n + m);
             rhs.rows_mut(0, n)
-                .copy_from(&((-(&mm * &c_d) - &gg * &c_v) * scale));
+                .copy_from(&((-(ms * &c_d) - gs * &c_v - gz * &c_zd) * scale));
             let x = lu.solve(&rhs).expect("the LU is invertible");
-            let y1 = x.rows(0, n).into_owned();
-            let a1 = &y1 / scale + &c_a;
+            let y1 = x.rows(0, ns).into_owned();
+            let z1 = x.rows(ns, nz).into_owned();
             c.v = &c_v + (h * ga.gamma) * (&y1 / scale);
             c.vd = &c_d + bp * &y1;
-            c.a = a1;
+            c.a = &y1 / scale + &c_a;
             c.y = y1;
+            c.w = &z1 / (h * fa.gamma) + &c_w;
+            c.zd = &c_zd + rp * &z1;
+            c.z = z1;
         });
     }
     // A constant B (no order reduction): the algorithmic velocity, which keeps the
     // scheme's structure (det Φ = 1 for an undamped system with ρ∞ = 1).
     let constant_b = b_change <= 1e-14 * b0.amax().max(f64::MIN_POSITIVE);
-    let mut phi = DMatrix::zeros(2 * r, 2 * r);
+    let mut phi = DMatrix::zeros(2 * r + nz, 2 * r + nz);
     for (j, c) in columns.iter().enumerate() {
         // y(t₀ + T), and ẏ(t₀ + T) by the central difference of the positions (the
         // algorithmic velocities of index-3 generalized-α carry an O(h) error when B
         // varies in time; the positions are second order).
-        let eta = basis.transpose() * &at_end[j];
+        let eta = basis.transpose() * &end[j].y;
         let etad = if constant_b {
-            basis.transpose() * &end_v[j]
+            basis.transpose() * &end[j].v
         } else {
             basis.transpose() * ((&c.y - &before_end[j]) / (2.0 * h))
         };
         phi.view_mut((0, j), (r, 1)).copy_from(&eta);
         phi.view_mut((r, j), (r, 1)).copy_from(&etad);
+        phi.view_mut((2 * r, j), (nz, 1)).copy_from(&end[j].z);
     }
     if !phi.iter().all(|x| x.is_finite()) {
         return Err(FloquetError::NotFinite);
