@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Draws the NREL 5-MW aerodynamic power and thrust curves: samara's rigid and flexible
 rotors (from `cargo run --release -p samara --example nrel5mw_curves`) against the
-OpenFAST steady tables they run at (rpm and pitch from the tables; ../shared/reference/nrel5mw/).
+OpenFAST steady tables they run at (rpm and pitch from the tables; reference/nrel5mw/).
 
 Usage: nrel5mw_curves.py CURVES.csv FIGURE.png   (docs/images/make.sh runs it)
 """

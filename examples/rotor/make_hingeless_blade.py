@@ -3,7 +3,7 @@ from the BeamDyn blade file of the NREL 5-MW reference blade.
 
 SOURCE: NREL/ROSCO @ fc11f43984876559c8b355e5070dd8147c4225da,
 Examples/Test_Cases/NREL-5MW/NRELOffshrBsline5MW_BeamDyn_Blade.dat (copied unchanged to
-../shared/reference/nrel5mw/structure/; 49 stations of 6x6 stiffness and mass).
+reference/nrel5mw/structure/; 49 stations of 6x6 stiffness and mass).
 
 BeamDyn orders the section (shear x, shear y, axial | bending x, bending y, torsion) with
 the beam along z; samara (axial, shear y, shear z | torsion, bending y, bending z) with the
@@ -18,7 +18,7 @@ import sys
 
 PERM = [2, 0, 1, 5, 3, 4]
 HERE = os.path.dirname(os.path.abspath(__file__))
-DEFAULT = os.path.join(HERE, "..", "..", "..", "shared", "reference", "nrel5mw",
+DEFAULT = os.path.join(HERE, "..", "..", "reference", "nrel5mw",
                        "structure", "NRELOffshrBsline5MW_BeamDyn_Blade.dat")
 
 

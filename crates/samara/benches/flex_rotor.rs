@@ -73,7 +73,7 @@ fn main() {
         .unwrap_or(10.0);
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let example = root.join("examples/rotor/nrel5mw_flexible.toml");
-    let reference = root.join("../shared/reference/nrel5mw");
+    let reference = root.join("reference/nrel5mw");
     let st = stations(&reference);
     let mut text = String::new();
     for l in std::fs::read_to_string(&example).unwrap().lines() {

@@ -1,5 +1,5 @@
 //! The NREL 5-MW power and thrust curves for the README picture: at the rpm and pitch of
-//! OpenFAST's rigid and flexible steady tables (../shared/reference/nrel5mw/), the rigid
+//! OpenFAST's rigid and flexible steady tables (reference/nrel5mw/), the rigid
 //! rotor of examples/rotor/nrel5mw_rotor.toml and the flexible rotor of
 //! examples/rotor/nrel5mw_flexible.toml (BeamDyn blades, and the same blades stiff in
 //! torsion as ElastoDyn's), with the tables' own aerodynamic power and thrust.

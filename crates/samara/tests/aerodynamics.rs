@@ -1,7 +1,7 @@
 //! Aerodynamics (issue #15): airfoil tables, lifting-line stations and quasi-steady BEM
 //! against references nobody here wrote: Glauert's optimum rotor (closed-form integral),
 //! the NREL 5-MW rotor from its public OpenFAST files against the reference operating
-//! tables (../shared/reference/nrel5mw/), and located errors for bad inputs.
+//! tables (reference/nrel5mw/), and located errors for bad inputs.
 
 use nalgebra::Vector3;
 use samara::core::{Element, NodeState};

@@ -1,7 +1,7 @@
 //! Issue #4, verification of the beam in statics: roll-up (closed form, exponential
 //! convergence in p), Timoshenko cantilever (closed forms with shear), extension–twist
 //! coupling (compliance closed form), the BeamDyn regression cases and the Kynema composite
-//! beam (../shared/reference/), the Bathe–Bolourchi 45° bend.
+//! beam (reference/), the Bathe–Bolourchi 45° bend.
 
 mod common;
 

@@ -1,5 +1,5 @@
 //! Reading OpenFAST BeamDyn blade files (issue #15): the NREL 5-MW blade read from its
-//! BeamDyn files (../shared/reference/nrel5mw/structure/) against an Euler–Bernoulli
+//! BeamDyn files (reference/nrel5mw/structure/) against an Euler–Bernoulli
 //! quadrature of the ElastoDyn blade file of the same turbine (flap and edge stiffness,
 //! mass, structural twist; a different file, written for a different code), hand-written
 //! BeamDyn-ordered matrices (`ordering = "beamdyn"`) against closed forms, and located
@@ -13,7 +13,7 @@ use samara::model::Model;
 use std::path::{Path, PathBuf};
 
 fn structure() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/reference/nrel5mw/structure")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../reference/nrel5mw/structure")
 }
 
 fn primary() -> PathBuf {

@@ -244,7 +244,7 @@ fn slender_cantilever_converges_exponentially_in_p_to_timoshenko_and_euler_berno
 
 #[test]
 fn stocky_rollup_beam_against_timoshenko_and_torsion() {
-    // The bd_isotropic_rollup beam (shared/reference): EI = 100, κGA = 1e4, EA = 1e4,
+    // The bd_isotropic_rollup beam (reference/): EI = 100, κGA = 1e4, EA = 1e4,
     // GJ = 200, m = 1, ρI = 1, ρJ = 2, L = 10: slenderness L/r = 10, so rotary inertia and
     // shear matter (Timoshenko is 2–25 % below EB over the first modes).
     let (len, ei, kga, ea, gj, m, ri, rj): (f64, f64, f64, f64, f64, f64, f64, f64) =

@@ -1180,7 +1180,7 @@ step = 0.01
 #[test]
 fn every_beamdyn_option_changes_the_beam() {
     let bd = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/reference/nrel5mw/structure/NRELOffshrBsline5MW_BeamDyn.dat");
+        .join("../../reference/nrel5mw/structure/NRELOffshrBsline5MW_BeamDyn.dat");
     let blade = |extra: &str| {
         model(&format!(
             "[model]\nname = \"b\"\n[[beams]]\nname = \"b\"\nbeamdyn = \"{}\"\n{extra}\n",

@@ -329,7 +329,7 @@ fn wagner_states_give_the_wagner_function_for_an_impulsive_start() {
 }
 
 fn du21() -> Airfoil {
-    let p = repo().join("../shared/reference/nrel5mw/aero/Airfoils/DU21_A17.dat");
+    let p = repo().join("reference/nrel5mw/aero/Airfoils/DU21_A17.dat");
     Airfoil::parse(&std::fs::read_to_string(p).unwrap(), false).unwrap()
 }
 
@@ -374,7 +374,7 @@ fn oye_separation_state_relaxes_with_its_time_constant() {
     // Generalized-α at h = τ/800; the wind arrives between two steps (±h/2): 2e-3.
     let dir = tempfile::tempdir().unwrap();
     std::fs::copy(
-        repo().join("../shared/reference/nrel5mw/aero/Airfoils/DU21_A17.dat"),
+        repo().join("reference/nrel5mw/aero/Airfoils/DU21_A17.dat"),
         dir.path().join("du21.dat"),
     )
     .unwrap();

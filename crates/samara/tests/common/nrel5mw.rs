@@ -15,7 +15,7 @@ pub fn repo() -> PathBuf {
 }
 
 pub fn reference() -> PathBuf {
-    repo().join("../shared/reference/nrel5mw")
+    repo().join("reference/nrel5mw")
 }
 
 pub fn ctx(t: f64) -> EvalContext {
