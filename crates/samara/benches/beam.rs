@@ -2,9 +2,11 @@
 //! (N two-node elements; `cantilever_p8x4.toml`: 4 elements of order 8), static in 10 load
 //! steps and 1 s of dynamics at h = 1e-3, ρ∞ = 0.9, full and modified Newton.
 //!
-//! `cargo bench -p samara --bench beam [-- N…]` (default N = 10, 100, 1000) prints wall
-//! time, Newton iterations, ms per step and the tip displacement at the end of each
-//! analysis, then the fitted growth exponent of the dynamic wall time with N.
+//! `cargo bench -p samara --bench beam [-- N… t_end=T]` (default N = 10, 100, 1000) prints
+//! wall time, Newton iterations, ms per step and the tip displacement at the end of each
+//! analysis, then the fitted growth exponent of the dynamic wall time with N. `t_end`
+//! shortens the dynamic runs (for the large models and for profiling); the elements are
+//! evaluated on rayon's threads (`RAYON_NUM_THREADS`) from `PARALLEL_MIN_ELEMENTS` on.
 
 use samara::analysis::History;
 use samara::analysis::run_all;
@@ -14,10 +16,14 @@ use std::path::Path;
 use std::time::Instant;
 
 fn main() {
-    let args: Vec<String> = std::env::args()
+    let all: Vec<String> = std::env::args()
         .skip(1)
         .filter(|a| !a.starts_with('-'))
         .collect();
+    let t_end: Option<f64> = all
+        .iter()
+        .find_map(|a| a.strip_prefix("t_end=")?.parse().ok());
+    let args: Vec<String> = all.into_iter().filter(|a| !a.contains('=')).collect();
     let cases: Vec<String> = if args.is_empty() {
         vec!["10".into(), "100".into(), "1000".into(), "p8x4".into()]
     } else {
@@ -39,6 +45,9 @@ fn main() {
             let mut model = loaded.model.clone();
             for a in &mut model.analyses {
                 if let AnalysisKind::Dynamic(d) = &mut a.kind {
+                    if let Some(t) = t_end {
+                        d.t_end = t;
+                    }
                     d.jacobian = if newton == "full" {
                         JacobianUpdate::Full
                     } else {
