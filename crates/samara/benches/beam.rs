@@ -31,8 +31,8 @@ fn main() {
     };
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     println!(
-        "{:<8} {:<8} {:<9} {:>9} {:>8} {:>9} {:>12}",
-        "model", "analysis", "newton", "wall [s]", "it/step", "ms/step", "tip w [m]"
+        "{:<8} {:<8} {:<9} {:>9} {:>8} {:>8} {:>9} {:>12}",
+        "model", "analysis", "newton", "wall [s]", "cpu [s]", "it/step", "ms/step", "tip w [m]"
     );
     let mut growth: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     for case in &cases {
@@ -66,10 +66,11 @@ fn main() {
                 let mut single = model.clone();
                 single.analyses = vec![def.clone()];
                 let _ = k;
-                let clock = Instant::now();
+                let (clock, cpu0) = (Instant::now(), cpu_seconds());
                 let out = run_all(&single, &sys, |_| Ok(History::default()), |_, _| {})
                     .expect("in-memory");
                 let wall = clock.elapsed().as_secs_f64();
+                let cpu = cpu_seconds() - cpu0;
                 let (s, h) = &out[0];
                 if let Some(f) = &s.failure {
                     println!("{case:<8} {:<8} {newton:<9} FAILED: {}", def.name, f.reason);
@@ -77,7 +78,7 @@ fn main() {
                 }
                 let w = h.last().unwrap().state.nodes[tip].x.z - x0.z;
                 println!(
-                    "{case:<8} {:<8} {newton:<9} {wall:>9.3} {:>8.2} {:>9.3} {w:>12.6e}",
+                    "{case:<8} {:<8} {newton:<9} {wall:>9.3} {cpu:>8.2} {:>8.2} {:>9.3} {w:>12.6e}",
                     def.name,
                     s.newton_iterations as f64 / s.steps as f64,
                     1e3 * wall / s.steps as f64
@@ -109,5 +110,23 @@ fn main() {
                 sxy / sxx
             );
         }
+    }
+}
+
+/// CPU time of the process, all threads, user + system (Linux `/proc/self/stat`, in clock
+/// ticks of 10 ms; NaN elsewhere): on a shared machine it is steadier than wall time.
+fn cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return f64::NAN;
+    };
+    // Fields after the command name: state is field 3, utime 14 and stime 15.
+    let Some((_, rest)) = stat.rsplit_once(')') else {
+        return f64::NAN;
+    };
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |i: usize| f.get(i - 3).and_then(|x| x.parse::<f64>().ok());
+    match (ticks(14), ticks(15)) {
+        (Some(u), Some(s)) => (u + s) / 100.0,
+        _ => f64::NAN,
     }
 }
