@@ -2,9 +2,11 @@
 //! (N two-node elements; `cantilever_p8x4.toml`: 4 elements of order 8), static in 10 load
 //! steps and 1 s of dynamics at h = 1e-3, ρ∞ = 0.9, full and modified Newton.
 //!
-//! `cargo bench -p samara --bench beam [-- N…]` (default N = 10, 100, 1000) prints wall
-//! time, Newton iterations, ms per step and the tip displacement at the end of each
-//! analysis, then the fitted growth exponent of the dynamic wall time with N.
+//! `cargo bench -p samara --bench beam [-- N… t_end=T]` (default N = 10, 100, 1000) prints
+//! wall time, Newton iterations, ms per step and the tip displacement at the end of each
+//! analysis, then the fitted growth exponent of the dynamic wall time with N. `t_end`
+//! shortens the dynamic runs (for the large models and for profiling); the elements are
+//! evaluated on rayon's threads (`RAYON_NUM_THREADS`) from `PARALLEL_MIN_ELEMENTS` on.
 
 use samara::analysis::History;
 use samara::analysis::run_all;
@@ -14,10 +16,14 @@ use std::path::Path;
 use std::time::Instant;
 
 fn main() {
-    let args: Vec<String> = std::env::args()
+    let all: Vec<String> = std::env::args()
         .skip(1)
         .filter(|a| !a.starts_with('-'))
         .collect();
+    let t_end: Option<f64> = all
+        .iter()
+        .find_map(|a| a.strip_prefix("t_end=")?.parse().ok());
+    let args: Vec<String> = all.into_iter().filter(|a| !a.contains('=')).collect();
     let cases: Vec<String> = if args.is_empty() {
         vec!["10".into(), "100".into(), "1000".into(), "p8x4".into()]
     } else {
@@ -25,8 +31,8 @@ fn main() {
     };
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     println!(
-        "{:<8} {:<8} {:<9} {:>9} {:>8} {:>9} {:>12}",
-        "model", "analysis", "newton", "wall [s]", "it/step", "ms/step", "tip w [m]"
+        "{:<8} {:<8} {:<9} {:>9} {:>8} {:>8} {:>9} {:>12}",
+        "model", "analysis", "newton", "wall [s]", "cpu [s]", "it/step", "ms/step", "tip w [m]"
     );
     let mut growth: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     for case in &cases {
@@ -39,6 +45,9 @@ fn main() {
             let mut model = loaded.model.clone();
             for a in &mut model.analyses {
                 if let AnalysisKind::Dynamic(d) = &mut a.kind {
+                    if let Some(t) = t_end {
+                        d.t_end = t;
+                    }
                     d.jacobian = if newton == "full" {
                         JacobianUpdate::Full
                     } else {
@@ -57,10 +66,11 @@ fn main() {
                 let mut single = model.clone();
                 single.analyses = vec![def.clone()];
                 let _ = k;
-                let clock = Instant::now();
+                let (clock, cpu0) = (Instant::now(), cpu_seconds());
                 let out = run_all(&single, &sys, |_| Ok(History::default()), |_, _| {})
                     .expect("in-memory");
                 let wall = clock.elapsed().as_secs_f64();
+                let cpu = cpu_seconds() - cpu0;
                 let (s, h) = &out[0];
                 if let Some(f) = &s.failure {
                     println!("{case:<8} {:<8} {newton:<9} FAILED: {}", def.name, f.reason);
@@ -68,7 +78,7 @@ fn main() {
                 }
                 let w = h.last().unwrap().state.nodes[tip].x.z - x0.z;
                 println!(
-                    "{case:<8} {:<8} {newton:<9} {wall:>9.3} {:>8.2} {:>9.3} {w:>12.6e}",
+                    "{case:<8} {:<8} {newton:<9} {wall:>9.3} {cpu:>8.2} {:>8.2} {:>9.3} {w:>12.6e}",
                     def.name,
                     s.newton_iterations as f64 / s.steps as f64,
                     1e3 * wall / s.steps as f64
@@ -100,5 +110,23 @@ fn main() {
                 sxy / sxx
             );
         }
+    }
+}
+
+/// CPU time of the process, all threads, user + system (Linux `/proc/self/stat`, in clock
+/// ticks of 10 ms; NaN elsewhere): on a shared machine it is steadier than wall time.
+fn cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return f64::NAN;
+    };
+    // Fields after the command name: state is field 3, utime 14 and stime 15.
+    let Some((_, rest)) = stat.rsplit_once(')') else {
+        return f64::NAN;
+    };
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |i: usize| f.get(i - 3).and_then(|x| x.parse::<f64>().ok());
+    match (ticks(14), ticks(15)) {
+        (Some(u), Some(s)) => (u + s) / 100.0,
+        _ => f64::NAN,
     }
 }

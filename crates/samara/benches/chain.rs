@@ -2,9 +2,12 @@
 //! ρ∞ = 0.9 and ρ∞ = 1, on revolute joints (released from rest) and on spherical joints
 //! (spinning at 1 rad/s about z). Models: `examples/bench/chain_{revolute,spherical}_N.toml`.
 //!
-//! `cargo bench -p samara --bench chain [-- N…]` prints, per run: wall time, Newton
-//! iterations, tip position at 1 s, energy drift, max constraint violation; then the
-//! fitted growth exponent of wall time with N.
+//! `cargo bench -p samara --bench chain [-- N… WORD… t_end=T repeats=R]` prints, per run:
+//! wall time, Newton iterations, tip position at 1 s, energy drift, max constraint
+//! violation; then the fitted growth exponent of wall time with N. Words keep only the
+//! runs whose joint kind, analysis name or Newton variant they name (`revolute rho0.9
+//! full`); `t_end` shortens the runs and `repeats` overrides the repetitions (for
+//! profiling and instruction counts).
 
 use samara::analysis::{History, run_analysis};
 use samara::model::Model;
@@ -17,6 +20,18 @@ fn main() {
         .skip(1)
         .filter_map(|a| a.parse().ok())
         .collect();
+    let words: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-') && a.parse::<usize>().is_err())
+        .collect();
+    let setting = |key: &str| {
+        words
+            .iter()
+            .find_map(|w| w.strip_prefix(key)?.strip_prefix('=')?.parse::<f64>().ok())
+    };
+    let (t_end, repeats_set) = (setting("t_end"), setting("repeats"));
+    let filters: Vec<&String> = words.iter().filter(|w| !w.contains('=')).collect();
+    let wanted = |kind: &str| filters.is_empty() || filters.iter().any(|f| *f == kind);
     let sizes = if args.is_empty() {
         vec![10, 100, 1000]
     } else {
@@ -37,7 +52,16 @@ fn main() {
         "max |Φ|"
     );
     let mut growth: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
-    for kind in ["revolute", "spherical"] {
+    let kinds: Vec<&str> = ["revolute", "spherical"]
+        .into_iter()
+        .filter(|k| {
+            wanted(k)
+                || !filters
+                    .iter()
+                    .any(|f| *f == "revolute" || *f == "spherical")
+        })
+        .collect();
+    for kind in kinds {
         for &n in &sizes {
             let path = root.join(format!("examples/bench/chain_{kind}_{n}.toml"));
             let loaded = match Model::from_file(&path) {
@@ -49,17 +73,33 @@ fn main() {
             };
             let model = loaded.model;
             let sys = System::new(&model);
-            let variants = model.analyses.iter().flat_map(|d| {
-                let mut m = d.clone();
-                if let samara::model::AnalysisKind::Dynamic(s) = &mut m.kind {
-                    s.jacobian = samara::model::JacobianUpdate::Modified;
-                }
-                [(d.clone(), "full"), (m, "modified")]
-            });
+            let named = |w: &str, options: &[&str]| {
+                !filters.iter().any(|f| options.contains(&f.as_str())) || wanted(w)
+            };
+            let names: Vec<&str> = model.analyses.iter().map(|d| d.name.as_str()).collect();
+            let variants = model
+                .analyses
+                .iter()
+                .flat_map(|d| {
+                    let mut d = d.clone();
+                    if let (samara::model::AnalysisKind::Dynamic(s), Some(t)) = (&mut d.kind, t_end)
+                    {
+                        s.t_end = t;
+                    }
+                    let mut m = d.clone();
+                    if let samara::model::AnalysisKind::Dynamic(s) = &mut m.kind {
+                        s.jacobian = samara::model::JacobianUpdate::Modified;
+                    }
+                    [(d, "full"), (m, "modified")]
+                })
+                .filter(|(d, newton)| {
+                    named(&d.name, &names) && named(newton, &["full", "modified"])
+                })
+                .collect::<Vec<_>>();
             for (def, newton) in variants {
                 let def = &def;
                 // The machine is shared: small runs are repeated and the fastest is kept.
-                let repeats = if n <= 100 { 3 } else { 1 };
+                let repeats = repeats_set.map_or(if n <= 100 { 3 } else { 1 }, |r| r as usize);
                 let mut best = f64::INFINITY;
                 let mut kept = None;
                 for _ in 0..repeats {

@@ -459,10 +459,15 @@ impl BlockLu {
         for sc in &sym.scatter {
             let src = &av[sc.src..sc.src + sc.len];
             let dst = &mut vals[sc.dst..sc.dst + sc.len];
+            dst.copy_from_slice(src);
+            // Same value as a fold of `f64::max` (NaN entries are skipped either way), in a
+            // form the compiler vectorizes.
             let mut m = 0.0f64;
-            for (d, &x) in dst.iter_mut().zip(src) {
-                *d = x;
-                m = m.max(x.abs());
+            for &x in src {
+                let a = x.abs();
+                if a > m {
+                    m = a;
+                }
             }
             let c = &mut colmax[sc.col];
             *c = c.max(m);

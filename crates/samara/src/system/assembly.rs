@@ -191,6 +191,10 @@ pub struct Assembler {
     terms: Vec<LocalTerms>,
     /// Index into `terms` of each element.
     term_of: Vec<usize>,
+    /// Models of [`PARALLEL_MIN_ELEMENTS`] elements or more: the terms and input-signal
+    /// scratch of each element, for the parallel evaluation (empty otherwise).
+    element_terms: Vec<LocalTerms>,
+    element_inputs: Vec<Vec<f64>>,
     /// Local blocks of each element and the value offset of each (row block, column
     /// block) pair, row-major over the element's blocks.
     element_blocks: Vec<Vec<LocalBlock>>,
@@ -524,11 +528,30 @@ impl Assembler {
             .iter()
             .map(|s| vec![0.0; s.len()])
             .collect();
+        let parallel = sys.elements.len() >= PARALLEL_MIN_ELEMENTS;
+        let element_terms = if parallel {
+            sys.elements
+                .iter()
+                .map(|e| LocalTerms::for_element(e.as_ref()))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let element_inputs = if parallel {
+            sys.elements
+                .iter()
+                .map(|e| Vec::with_capacity(e.signal_inputs().len()))
+                .collect()
+        } else {
+            Vec::new()
+        };
         Self {
             formulation,
             structure,
             terms,
             term_of,
+            element_terms,
+            element_inputs,
             element_blocks,
             element_slots,
             state_place,
@@ -700,11 +723,6 @@ impl Assembler {
     ) {
         let stabilized = self.formulation == Formulation::StabilizedIndex2;
         residual.fill(0.0);
-        let need = if matrix.is_some() {
-            Need::ResidualAndTangents
-        } else {
-            Need::Residual
-        };
         if let Some(m) = matrix.as_deref_mut() {
             m.fill_zero();
         }
@@ -726,124 +744,46 @@ impl Assembler {
                 self.combine_signal_gradients(sys, coef, tangent_ops);
             }
         }
-        let n_node_cfg = 6 * sys.n_nodes() + sys.n_coordinates;
-        for (k, e) in sys.elements.iter().enumerate() {
-            let t = &mut self.terms[self.term_of[k]];
-            t.clear(need);
-            let x = sys.element_input(k, state, &self.signal_values.values, &mut self.inputs);
-            e.evaluate(ctx, &x, need, t);
-            let en = e.nodes();
-            for (a, &na) in en.iter().enumerate() {
-                for i in 0..6 {
-                    residual[6 * na + i] += sr * t.r[6 * a + i];
-                }
+        let tangents = matrix.is_some().then_some(TangentInputs {
+            coef,
+            tangent_ops,
+            rate_maps: &self.rate_maps,
+        });
+        if self.element_terms.is_empty() {
+            // Evaluate and scatter element by element through the shared scratch.
+            for k in 0..sys.elements.len() {
+                let t = &mut self.terms[self.term_of[k]];
+                element_terms(
+                    sys,
+                    k,
+                    state,
+                    ctx,
+                    &self.signal_values.values,
+                    tangents.as_ref(),
+                    t,
+                    &mut self.inputs,
+                );
+                let t = &self.terms[self.term_of[k]];
+                self.scatter_element(sys, k, t, coef, residual, matrix.as_deref_mut());
             }
-            let nz = e.n_states();
-            if let Some(o) = self.state_place[k] {
-                for i in 0..nz {
-                    residual[o + i] += coef.state_row_scale * t.r[6 * en.len() + i];
-                }
-            }
-            let Some(mat) = matrix.as_deref_mut() else {
-                continue;
-            };
-            apply_tangent_ops(&mut t.k, en, tangent_ops);
-            if !self.rate_maps.is_empty() {
-                add_rate_terms(t, en, &self.rate_maps);
-            }
-            let (cm, cc, ck) = (sr * coef.mass, sr * coef.damping, sr * coef.stiffness);
-            let n6 = 6 * en.len();
-            if nz == 0 {
-                // K_eff = s_r (c_M M + c_C C + c_K K), combined in place in `k`.
-                for ((k, m), c) in
-                    t.k.as_mut_slice()
-                        .iter_mut()
-                        .zip(t.m.as_slice())
-                        .zip(t.c.as_slice())
-                {
-                    *k = ck * *k + cm * m + cc * c;
-                }
-            } else {
-                // Node columns as above; state columns: c_K ∂r/∂z + (∂ż/∂Δz) ∂r/∂ż. State
-                // rows are scaled by s_z instead of s_r.
-                let nl = n6 + nz;
-                for j in 0..nl {
-                    let (cmj, ccj) = if j < n6 {
-                        (coef.mass, coef.damping)
-                    } else {
-                        (0.0, coef.state_rate)
-                    };
-                    for i in 0..nl {
-                        let rs = if i < n6 { sr } else { coef.state_row_scale };
-                        t.k[(i, j)] = rs
-                            * (coef.stiffness * t.k[(i, j)]
-                                + cmj * t.m[(i, j)]
-                                + ccj * t.c[(i, j)]);
-                    }
-                }
-            }
-            let blocks = &self.element_blocks[k];
-            let nb = blocks.len();
-            let slots = &self.element_slots[k];
-            let nl = n6 + nz;
-            if nz == 0 {
-                // Node blocks only: 6×6 each (sizes known at compile time: the hot path).
-                let n = en.len();
-                for a in 0..n {
-                    for b in 0..n {
-                        let off = slots[a * n + b];
-                        add_sub(
-                            &mut mat.values[off..off + 36],
-                            6,
-                            (0, 0),
-                            t.k.as_slice(),
-                            nl,
-                            (6 * a, 6 * b),
-                            (6, 6),
-                            1.0,
-                        );
-                    }
-                }
-            } else {
-                for (a, ra) in blocks.iter().enumerate() {
-                    for (b, cb) in blocks.iter().enumerate() {
-                        let off = slots[a * nb + b];
-                        add_sub(
-                            &mut mat.values[off..off + ra.size * cb.size],
-                            cb.size,
-                            (0, 0),
-                            t.k.as_slice(),
-                            nl,
-                            (ra.local, cb.local),
-                            (ra.size, cb.size),
-                            1.0,
-                        );
-                    }
-                }
-            }
-            // Chain rule through the input signals: rows · (∂r/∂s) (∂s/∂x).
-            for (j, supports) in self.element_signal_slots[k].iter().enumerate() {
-                let g = &self.signal_combined[sys.signals.element_inputs[k][j]];
-                for sp in supports {
-                    let gv = g[sp.pos];
-                    if gv == 0.0 {
-                        continue;
-                    }
-                    for (a, ra) in blocks.iter().enumerate() {
-                        let rs = if ra.local < n6 {
-                            sr
-                        } else {
-                            coef.state_row_scale
-                        };
-                        for i in 0..ra.size {
-                            let d = t.ds[(ra.local + i, j)];
-                            mat.values[sp.slots[a] + i * sp.width + sp.col] += rs * d * gv;
-                        }
-                    }
-                }
+        } else {
+            // Large models: every element into its own storage in parallel, then the same
+            // scatter in element order, so the sums (and results) do not depend on the
+            // number of threads.
+            use rayon::prelude::*;
+            let values = &self.signal_values.values;
+            self.element_terms
+                .par_iter_mut()
+                .zip(self.element_inputs.par_iter_mut())
+                .enumerate()
+                .with_min_len(PARALLEL_CHUNK)
+                .for_each(|(k, (t, inputs))| {
+                    element_terms(sys, k, state, ctx, values, tangents.as_ref(), t, inputs);
+                });
+            for (k, t) in self.element_terms.iter().enumerate() {
+                self.scatter_element(sys, k, t, coef, residual, matrix.as_deref_mut());
             }
         }
-        let _ = n_node_cfg;
 
         for (k, c) in sys.constraints.iter().enumerate() {
             let w = &mut self.constraints[k];
@@ -1100,6 +1040,88 @@ impl Assembler {
         }
     }
 
+    /// Adds element k's terms (from [`element_terms`]) into the residual and, if given,
+    /// the iteration matrix, with the chain rule through its input signals.
+    fn scatter_element(
+        &self,
+        sys: &System,
+        k: usize,
+        t: &LocalTerms,
+        coef: &Coefficients,
+        residual: &mut [f64],
+        matrix: Option<&mut BlockMatrix>,
+    ) {
+        let e = &sys.elements[k];
+        let sr = coef.row_scale;
+        let en = e.nodes();
+        for (a, &na) in en.iter().enumerate() {
+            for i in 0..6 {
+                residual[6 * na + i] += sr * t.r[6 * a + i];
+            }
+        }
+        let nz = e.n_states();
+        if let Some(o) = self.state_place[k] {
+            for i in 0..nz {
+                residual[o + i] += coef.state_row_scale * t.r[6 * en.len() + i];
+            }
+        }
+        let Some(mat) = matrix else {
+            return;
+        };
+        let n6 = 6 * en.len();
+        let blocks = &self.element_blocks[k];
+        let nb = blocks.len();
+        let slots = &self.element_slots[k];
+        let nl = n6 + nz;
+        if nz == 0 {
+            // Node blocks only: 6×6 each (sizes known at compile time: the hot path).
+            let n = en.len();
+            for a in 0..n {
+                for b in 0..n {
+                    let off = slots[a * n + b];
+                    add_block6(&mut mat.values[off..off + 36], t.k.as_slice(), nl, a, b);
+                }
+            }
+        } else {
+            for (a, ra) in blocks.iter().enumerate() {
+                for (b, cb) in blocks.iter().enumerate() {
+                    let off = slots[a * nb + b];
+                    add_sub(
+                        &mut mat.values[off..off + ra.size * cb.size],
+                        cb.size,
+                        (0, 0),
+                        t.k.as_slice(),
+                        nl,
+                        (ra.local, cb.local),
+                        (ra.size, cb.size),
+                        1.0,
+                    );
+                }
+            }
+        }
+        // Chain rule through the input signals: rows · (∂r/∂s) (∂s/∂x).
+        for (j, supports) in self.element_signal_slots[k].iter().enumerate() {
+            let g = &self.signal_combined[sys.signals.element_inputs[k][j]];
+            for sp in supports {
+                let gv = g[sp.pos];
+                if gv == 0.0 {
+                    continue;
+                }
+                for (a, ra) in blocks.iter().enumerate() {
+                    let rs = if ra.local < n6 {
+                        sr
+                    } else {
+                        coef.state_row_scale
+                    };
+                    for i in 0..ra.size {
+                        let d = t.ds[(ra.local + i, j)];
+                        mat.values[sp.slots[a] + i * sp.width + sp.col] += rs * d * gv;
+                    }
+                }
+            }
+        }
+    }
+
     /// `∂s/∂Δ` of every signal for the iteration matrix: the K channel times the tangent
     /// operator on node rotations, plus the C and M channels with the coefficients of the
     /// column's kind (second order: γ', β'; element states: ∂ż/∂Δz, 0).
@@ -1231,6 +1253,100 @@ impl Assembler {
                 }
                 residual[w.place.lam + i] = acc;
             }
+        }
+    }
+}
+
+/// Elements from which [`Assembler`] evaluates elements in parallel (rayon), each into
+/// its own storage; below, one shared scratch per element size keeps the working set small.
+pub const PARALLEL_MIN_ELEMENTS: usize = 256;
+
+/// Elements per parallel task (amortizes rayon's scheduling against a few µs per element).
+const PARALLEL_CHUNK: usize = 32;
+
+/// What the iteration matrix needs besides the element's own terms.
+struct TangentInputs<'a> {
+    coef: &'a Coefficients,
+    tangent_ops: &'a [Matrix3<f64>],
+    rate_maps: &'a [RateMaps],
+}
+
+/// Element k's residual and, with `tangents`, its combined iteration-matrix block in
+/// `t.k`: `s_r (c_M M + c_C C + c_K K T)` on node rows (`T` the tangent operators, plus
+/// `C A_v + M A₀` with rate maps), `s_z (c_K ∂r/∂z + (∂ż/∂Δz) ∂r/∂ż)` on state rows and
+/// columns. Pure: touches nothing but `t` and the input scratch.
+#[allow(clippy::too_many_arguments)]
+fn element_terms(
+    sys: &System,
+    k: usize,
+    state: &State,
+    ctx: &EvalContext,
+    signals: &[f64],
+    tangents: Option<&TangentInputs>,
+    t: &mut LocalTerms,
+    inputs: &mut Vec<f64>,
+) {
+    let e = &sys.elements[k];
+    let need = if tangents.is_some() {
+        Need::ResidualAndTangents
+    } else {
+        Need::Residual
+    };
+    t.clear(need);
+    let x = sys.element_input(k, state, signals, inputs);
+    e.evaluate(ctx, &x, need, t);
+    let Some(tg) = tangents else {
+        return;
+    };
+    let coef = tg.coef;
+    let en = e.nodes();
+    apply_tangent_ops(&mut t.k, en, tg.tangent_ops);
+    if !tg.rate_maps.is_empty() {
+        add_rate_terms(t, en, tg.rate_maps);
+    }
+    let sr = coef.row_scale;
+    let (cm, cc, ck) = (sr * coef.mass, sr * coef.damping, sr * coef.stiffness);
+    let n6 = 6 * en.len();
+    let nz = e.n_states();
+    if nz == 0 {
+        // K_eff = s_r (c_M M + c_C C + c_K K), combined in place in `k`.
+        for ((k, m), c) in
+            t.k.as_mut_slice()
+                .iter_mut()
+                .zip(t.m.as_slice())
+                .zip(t.c.as_slice())
+        {
+            *k = ck * *k + cm * m + cc * c;
+        }
+    } else {
+        // Node columns as above; state columns: c_K ∂r/∂z + (∂ż/∂Δz) ∂r/∂ż. State
+        // rows are scaled by s_z instead of s_r.
+        let nl = n6 + nz;
+        for j in 0..nl {
+            let (cmj, ccj) = if j < n6 {
+                (coef.mass, coef.damping)
+            } else {
+                (0.0, coef.state_rate)
+            };
+            for i in 0..nl {
+                let rs = if i < n6 { sr } else { coef.state_row_scale };
+                t.k[(i, j)] =
+                    rs * (coef.stiffness * t.k[(i, j)] + cmj * t.m[(i, j)] + ccj * t.c[(i, j)]);
+            }
+        }
+    }
+}
+
+/// `dst += src[6a.., 6b..]` for the 6×6 block (a, b) of a column-major `src` with `nr`
+/// rows; `dst` row-major.
+#[inline]
+fn add_block6(dst: &mut [f64], src: &[f64], nr: usize, a: usize, b: usize) {
+    let dst: &mut [f64; 36] = (&mut dst[..36]).try_into().expect("6×6 block");
+    for c in 0..6 {
+        let o = (6 * b + c) * nr + 6 * a;
+        let col: &[f64; 6] = src[o..o + 6].try_into().expect("6 rows");
+        for (r, v) in col.iter().enumerate() {
+            dst[6 * r + c] += v;
         }
     }
 }

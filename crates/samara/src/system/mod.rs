@@ -13,7 +13,9 @@ pub mod redundancy;
 pub mod signals;
 
 pub use crate::core::{Coordinate, NodeState, State};
-pub use assembly::{Assembler, BlockOwner, Coefficients, Formulation, RateMaps};
+pub use assembly::{
+    Assembler, BlockOwner, Coefficients, Formulation, PARALLEL_MIN_ELEMENTS, RateMaps,
+};
 pub use matrices::SystemMatrices;
 pub use redundancy::ConstraintLoop;
 pub use signals::{SignalGraph, SignalValues};
