@@ -695,7 +695,7 @@ impl AeroStation {
         // ∂F/∂·, ∂M/∂· (rows F₁ F₂ F₃ M₁ M₂ M₃) over (q, z), (v, ż) and the signals.
         let mut jq = [[0.0; COLUMNS]; 6];
         let mut jv = [[0.0; COLUMNS]; 6];
-        let mut js = [[0.0; 3]; 6];
+        let mut js = [[0.0; COLUMNS]; 6];
         for (o, s) in r.force.iter().chain(&r.moment).enumerate() {
             self.columns(x.nodes, s, &mut jq[o], &mut jv[o], &mut js[o]);
         }
@@ -708,43 +708,60 @@ impl AeroStation {
                 out.r[3 * b + k] -= lf * rk;
             }
         }
+        // Per node: the force rows take wᵢ ∂F, the moment rows wᵢ (d̃ᵢ Rᵢᵀ ∂F + Rᵢᵀ ∂M)
+        // (load factor included): the 3×6 map [d̃ᵢ Rᵢᵀ | Rᵢᵀ] row-major.
+        let mut w = [0.0; MAX_NODES];
+        let mut map = [[[0.0; 6]; 3]; MAX_NODES];
         for (i, (&nd, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
-            let rot = x.nodes[nd].r();
-            let w = lf * at.weight;
-            let d = at.offset;
-            // Moment rows: dᵢ × Rᵢᵀ ∂F + Rᵢᵀ ∂M.
-            let a = d.cross_matrix() * rot.transpose();
-            let rt = rot.transpose();
-            let block = |jac: &[[f64; COLUMNS]; 6], mat: &mut nalgebra::DMatrix<f64>, cols| {
-                for col in 0..cols {
-                    let gf = Vector3::new(jac[0][col], jac[1][col], jac[2][col]);
-                    let gm = Vector3::new(jac[3][col], jac[4][col], jac[5][col]);
-                    let gmom = a * gf + rt * gm;
-                    for k in 0..3 {
-                        mat[(6 * i + k, col)] -= w * gf[k];
-                        mat[(6 * i + 3 + k, col)] -= w * gmom[k];
-                    }
-                }
-            };
-            block(&jq, &mut out.k, n);
-            block(&jv, &mut out.c, n);
-            for col in 0..ni {
-                let gf = Vector3::new(js[0][col], js[1][col], js[2][col]);
-                let gm = Vector3::new(js[3][col], js[4][col], js[5][col]);
-                let gmom = a * gf + rt * gm;
-                for k in 0..3 {
-                    out.ds[(6 * i + k, col)] -= w * gf[k];
-                    out.ds[(6 * i + 3 + k, col)] -= w * gmom[k];
+            let rt = x.nodes[nd].r().transpose();
+            let a = at.offset.cross_matrix() * rt;
+            w[i] = lf * at.weight;
+            for k in 0..3 {
+                for j in 0..3 {
+                    map[i][k][j] = w[i] * a[(k, j)];
+                    map[i][k][3 + j] = w[i] * rt[(k, j)];
                 }
             }
-            // The node's own rotation in Rᵢᵀ F, Rᵢᵀ M.
+        }
+        // Column by column (the local matrices are column-major): one column of ∂(F, M)
+        // spread over the 6 rows of every node.
+        let spread = |jac: &[[f64; COLUMNS]; 6], mat: &mut nalgebra::DMatrix<f64>, cols: usize| {
+            let nr = mat.nrows();
+            for (col, c) in mat
+                .as_mut_slice()
+                .chunks_exact_mut(nr)
+                .take(cols)
+                .enumerate()
+            {
+                let g: [f64; 6] = std::array::from_fn(|o| jac[o][col]);
+                for (i, rows) in c[..nq].chunks_exact_mut(6).enumerate() {
+                    let (wi, mi) = (w[i], &map[i]);
+                    for k in 0..3 {
+                        rows[k] -= wi * g[k];
+                        let mk = &mi[k];
+                        rows[3 + k] -= mk[0] * g[0]
+                            + mk[1] * g[1]
+                            + mk[2] * g[2]
+                            + mk[3] * g[3]
+                            + mk[4] * g[4]
+                            + mk[5] * g[5];
+                    }
+                }
+            }
+        };
+        spread(&jq, &mut out.k, n);
+        spread(&jv, &mut out.c, n);
+        spread(&js, &mut out.ds, ni);
+        // The node's own rotation in Rᵢᵀ F, Rᵢᵀ M: ∂(Rᵢᵀ y)/∂δθᵢ = (Rᵢᵀ y)~.
+        for (i, (&nd, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
+            let rt = x.nodes[nd].r().transpose();
             let ft = rt * Vector3::from(f);
             let mt = rt * Vector3::from(m);
             for j in 0..3 {
                 let e = Vector3::ith(j, 1.0);
-                let g = d.cross(&ft.cross(&e)) + mt.cross(&e);
+                let g = at.offset.cross(&ft.cross(&e)) + mt.cross(&e);
                 for k in 0..3 {
-                    out.k[(6 * i + 3 + k, 6 * i + 3 + j)] -= w * g[k];
+                    out.k[(6 * i + 3 + k, 6 * i + 3 + j)] -= w[i] * g[k];
                 }
             }
         }
