@@ -14,9 +14,11 @@
 //! nearest AeroDyn node is a cylinder (non-lifting) take DU40_A17, the innermost lifting
 //! section. Turbulent wind (TurbSim) is not implemented: the wind is steady.
 //!
-//! Measured on the shared 2-core machine (CPU times, load average ≈ 9):
-//! before the station chain rule (dual numbers over all 7 nodes of the element, 96
-//! directions), quasi-steady BEM: see docs/aerodynamics.md, "Performance".
+//! Measured on the shared 2-core machine (load average ≈ 9), CPU time, `-- 10`: 3.1 ms
+//! per step, 3.2× real time (before the stations were differentiated over their own
+//! kinematics: 9.4 ms, 1.06×); with `oye` 4.4 ms, 2.3×. One evaluation: structure
+//! 0.19 ms, stations 0.92 ms (6.2 µs each). The steps and the history are in
+//! docs/aerodynamics.md, "Performance".
 
 use samara::analysis::{History, run_analysis};
 use samara::core::{ElementInput, EvalContext, LocalTerms, Need};

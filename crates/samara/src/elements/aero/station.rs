@@ -777,8 +777,8 @@ impl AeroStation {
                 out.k[(ri, j)] += kq[j];
                 out.c[(ri, j)] += kv[j];
             }
-            for j in 0..ni {
-                out.ds[(ri, j)] += ks[j];
+            for (j, v) in ks.iter().enumerate().take(ni) {
+                out.ds[(ri, j)] += v;
             }
         }
     }
@@ -806,8 +806,8 @@ impl AeroStation {
                 out.k[(o, j)] = lf * kq[j];
                 out.c[(o, j)] = lf * kv[j];
             }
-            for j in 0..ni {
-                out.ds[(o, j)] = lf * ks[j];
+            for (j, v) in ks.iter().enumerate().take(ni) {
+                out.ds[(o, j)] = lf * v;
             }
         }
     }
