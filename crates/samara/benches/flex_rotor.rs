@@ -4,9 +4,21 @@
 //! interpolated to the 49 BeamDyn key points: chord and twist linear, airfoil of the
 //! nearest AeroDyn node), BEM with tip and hub loss, rated wind, `T` s at h = 0.01 s.
 //!
-//! `cargo bench -p samara --bench flex_rotor [-- T]` prints the wall time, the time per
-//! step, the real-time factor, and the split of one residual-and-tangent evaluation
-//! between the structure (beam elements) and the aerodynamics (the 147 stations).
+//! `cargo bench -p samara --bench flex_rotor [-- T] [oye]` prints the time per step, the
+//! real-time factor, and the split of one residual-and-tangent evaluation between the
+//! structure (beam elements, hub, joints) and the aerodynamics (the 147 stations), each as
+//! wall time and as CPU time of the process (summed over its threads from
+//! /proc/self/task/*/schedstat, Linux; less inflated than wall time on a shared machine).
+//! With `oye` the lines carry Øye's dynamic stall (`dynamic_stall = "oye"`, one state per
+//! station); Øye's model needs a lifting airfoil, so in that variant the stations whose
+//! nearest AeroDyn node is a cylinder (non-lifting) take DU40_A17, the innermost lifting
+//! section. Turbulent wind (TurbSim) is not implemented: the wind is steady.
+//!
+//! Measured on the shared 2-core machine (load average ≈ 9), CPU time, `-- 10`: 3.1 ms
+//! per step, 3.2× real time (before the stations were differentiated over their own
+//! kinematics: 9.4 ms, 1.06×); with `oye` 4.4 ms, 2.3×. One evaluation: structure
+//! 0.19 ms, stations 0.92 ms (6.2 µs each). The steps and the history are in
+//! docs/aerodynamics.md, "Performance".
 
 use samara::analysis::{History, run_analysis};
 use samara::core::{ElementInput, EvalContext, LocalTerms, Need};
@@ -17,7 +29,7 @@ use std::path::Path;
 use std::time::Instant;
 
 /// `[[aero_lines.stations]]` of the 49-station line.
-fn stations(reference: &Path) -> String {
+fn stations(reference: &Path, stall: bool) -> String {
     let numbers = |l: &str| -> Vec<f64> {
         l.split_whitespace()
             .map_while(|t| t.parse::<f64>().ok())
@@ -52,10 +64,11 @@ fn stations(reference: &Path) -> String {
         let (a, b) = (&rows[k - 1], &rows[k]);
         let t = (z - a[0]) / (b[0] - a[0]);
         let near = if t < 0.5 { a } else { b };
-        let af = reference.join(format!(
-            "aero/Airfoils/{}.dat",
-            airfoils[near[6] as usize - 1]
-        ));
+        let mut id = near[6] as usize - 1;
+        if stall && id < 2 {
+            id = 2;
+        }
+        let af = reference.join(format!("aero/Airfoils/{}.dat", airfoils[id]));
         s += &format!(
             "[[aero_lines.stations]]\nspan = {z}\nchord = {}\ntwist = {}\nairfoil = \"{}\"\n",
             a[5] + t * (b[5] - a[5]),
@@ -66,15 +79,33 @@ fn stations(reference: &Path) -> String {
     s
 }
 
+/// CPU time of this process so far [s] (all threads, from the scheduler's statistics),
+/// or `None` where /proc is not available.
+fn cpu_time() -> Option<f64> {
+    let mut ns = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let stat = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
+        ns += stat.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(ns as f64 * 1e-9)
+}
+
+/// Wall and CPU seconds of `f`, with its result.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, f64, Option<f64>) {
+    let (clock, cpu) = (Instant::now(), cpu_time());
+    let out = f();
+    let wall = clock.elapsed().as_secs_f64();
+    (out, wall, cpu.zip(cpu_time()).map(|(a, b)| b - a))
+}
+
 fn main() {
-    let t_end: f64 = std::env::args()
-        .skip(1)
-        .find_map(|a| a.parse().ok())
-        .unwrap_or(10.0);
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let t_end: f64 = args.iter().find_map(|a| a.parse().ok()).unwrap_or(10.0);
+    let stall = args.iter().any(|a| a == "oye");
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let example = root.join("examples/rotor/nrel5mw_flexible.toml");
     let reference = root.join("reference/nrel5mw");
-    let st = stations(&reference);
+    let st = stations(&reference, stall);
     let mut text = String::new();
     for l in std::fs::read_to_string(&example).unwrap().lines() {
         if l.starts_with("aerodyn = ") {
@@ -83,6 +114,9 @@ fn main() {
         text += l;
         text.push('\n');
         if l.starts_with("inflow = ") {
+            if stall {
+                text += "dynamic_stall = \"oye\"\n";
+            }
             text += &st;
         }
     }
@@ -100,7 +134,7 @@ fn main() {
         gravity: nalgebra::Vector3::zeros(),
         load_factor: 1.0,
     };
-    let time_of = |aero: bool| {
+    let time_of = |aero: bool, need: Need| {
         let els: Vec<_> = parts
             .elements
             .iter()
@@ -111,46 +145,59 @@ fn main() {
             .map(|e| LocalTerms::for_element(e.as_ref()))
             .collect();
         let reps = 100;
-        let clock = Instant::now();
-        for _ in 0..reps {
-            for (e, t) in els.iter().zip(&mut terms) {
-                t.clear(Need::ResidualAndTangents);
-                e.evaluate(
-                    &ctx,
-                    &ElementInput::nodes(&initial),
-                    Need::ResidualAndTangents,
-                    t,
-                );
+        let ((), wall, cpu) = timed(|| {
+            for _ in 0..reps {
+                for (e, t) in els.iter().zip(&mut terms) {
+                    t.clear(need);
+                    e.evaluate(&ctx, &ElementInput::nodes(&initial), need, t);
+                }
             }
-        }
-        (els.len(), clock.elapsed().as_secs_f64() / reps as f64)
+        });
+        let per = |s: f64| 1e6 * s / reps as f64;
+        (els.len(), per(wall), cpu.map(per))
     };
-    let (ns, ts) = time_of(false);
-    let (na, ta) = time_of(true);
+    let us = |c: Option<f64>| c.map_or("—".to_string(), |c| format!("{c:.1}"));
+    let (ns, ts, cs) = time_of(false, Need::ResidualAndTangents);
+    let (na, ta, ca) = time_of(true, Need::ResidualAndTangents);
+    let (_, tr, cr) = time_of(true, Need::Residual);
     println!(
-        "one evaluation: structure ({ns} elements, bodies, joints) {:.1} µs, aerodynamics ({na} stations) {:.1} µs ({:.0} % aerodynamics)",
-        1e6 * ts,
-        1e6 * ta,
-        100.0 * ta / (ts + ta)
+        "one residual-and-tangent evaluation, wall (CPU) µs: structure ({ns} elements, bodies, joints) {ts:.1} ({}), aerodynamics ({na} stations) {ta:.1} ({}), {:.1} ({}) per station, {:.0} % aerodynamics; aerodynamic residual only {tr:.1} ({})",
+        us(cs),
+        us(ca),
+        ta / na as f64,
+        us(ca.map(|c| c / na as f64)),
+        100.0 * ta / (ts + ta),
+        us(cr),
     );
     let sys = System::new(&m);
     let mut h = History::default();
-    let clock = Instant::now();
-    let s = run_analysis(
-        &sys,
-        &m.analyses[0],
-        sys.initial_state(),
-        &mut h,
-        &mut |_| {},
-    )
-    .unwrap();
-    let wall = clock.elapsed().as_secs_f64();
+    let (s, wall, cpu) = timed(|| {
+        run_analysis(
+            &sys,
+            &m.analyses[0],
+            sys.initial_state(),
+            &mut h,
+            &mut |_| {},
+        )
+        .unwrap()
+    });
     assert!(s.failure.is_none(), "{:?}", s.failure);
+    let steps = s.steps as f64;
     println!(
-        "{t_end} s simulated in {wall:.3} s: {} steps, {:.2} Newton iterations per step, {:.3} ms/step, {:.2}× real time",
+        "{t_end} s simulated{}: {} steps, {:.2} Newton iterations per step; wall {wall:.3} s, {:.3} ms/step, {:.2}× real time; CPU {}",
+        if stall {
+            " with Øye's dynamic stall"
+        } else {
+            ""
+        },
         s.steps,
-        s.newton_iterations as f64 / s.steps as f64,
-        1e3 * wall / s.steps as f64,
-        t_end / wall
+        s.newton_iterations as f64 / steps,
+        1e3 * wall / steps,
+        t_end / wall,
+        cpu.map_or("—".to_string(), |c| format!(
+            "{c:.3} s, {:.3} ms/step, {:.2}× real time",
+            1e3 * c / steps,
+            t_end / c
+        )),
     );
 }

@@ -12,7 +12,9 @@
 //! F_tip = (2/π) acos exp(−B(R − r)/(2 r |sin φ|)), F_hub = (2/π) acos exp(−B(r − R_hub)/(2 R_hub |sin φ|)).
 //! φ is bracketed and found by bisection–secant (always converges); its derivatives with
 //! respect to the inputs follow from the implicit-function theorem, one Newton step in
-//! dual numbers at the root: φ = φ* − R(φ*, p)/∂R/∂φ.
+//! dual numbers at the root: φ = φ* − R(φ*, p)/∂R/∂φ, the induction factors carried to
+//! that φ along their φ-derivatives (one kernel pass in the inputs' dual numbers, one in
+//! φ alone).
 
 use super::airfoil::Airfoil;
 use crate::math::dual::{Dual, Scalar};
@@ -165,14 +167,24 @@ impl BemRotor {
             chord: pv.chord,
             theta: Dual::<1>::cst(pv.theta),
         };
-        let dr = self.residual(Dual::<1>::var(phi, 0), &pd, airfoil).0.d[0];
-        let (r, _) = self.residual(S::cst(phi), p, airfoil);
-        let phi_s = if dr.abs() > 1e-300 {
-            S::cst(phi) - r / dr
-        } else {
-            S::cst(phi)
-        };
-        Some(self.residual(phi_s, p, airfoil).1)
+        let (r_phi, ind_phi) = self.residual(Dual::<1>::var(phi, 0), &pd, airfoil);
+        let dr = r_phi.d[0];
+        let (r, ind) = self.residual(S::cst(phi), p, airfoil);
+        if dr.abs() <= 1e-300 {
+            return Some(ind);
+        }
+        // φ = φ* + δφ, δφ = −R(φ*, p)/∂R/∂φ (the implicit-function step), and the
+        // induction carried to φ along its φ-derivative from the same one-direction
+        // pass: exact to first order, so exact derivatives, and values equal to those
+        // at φ* + δφ up to O(δφ²) (δφ is the root finder's residual, ≤ 1e-14 rad).
+        let dphi = -(r / dr);
+        let along = |v: S, dv: Dual<1>| v + dphi * dv.d[0];
+        Some(Induction {
+            phi: S::cst(phi) + dphi,
+            a: along(ind.a, ind_phi.a),
+            ap: along(ind.ap, ind_phi.ap),
+            loss: along(ind.loss, ind_phi.loss),
+        })
     }
 }
 

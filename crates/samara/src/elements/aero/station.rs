@@ -19,16 +19,22 @@
 //! frame (axis n, tangential t = n × r̂), V_x = U₀·n, V_y = −U₀·t, and
 //! U = V_x (1 − a) n − V_y (1 + a') t.
 //!
-//! Tangents: the kernel is written once over [`Scalar`]; with dual numbers seeded by the
-//! node increments (δx, δθ: Rᵢ ← Rᵢ(I + δθ̃)) and rates (v, Ω) it returns the exact
-//! ∂r/∂q and ∂r/∂v, including the BEM root through the implicit-function theorem.
+//! Tangents: the load kernel ([`AeroStation::loads`]) reads the nodes only through the
+//! station's kinematics y = (p, e_c, e_n, ṗ, ė_c), 15 numbers linear in the node
+//! quantities. It is written once over [`Scalar`]; with dual numbers seeded by y, the
+//! states, their rates and the input signals (≤ 28 directions, whatever the number of
+//! nodes) it returns the exact ∂(F, M, r_z)/∂y, including the BEM root through the
+//! implicit-function theorem. The chain to the node increments (δxᵢ, δθᵢ: Rᵢ ← Rᵢ(I + δθ̃ᵢ))
+//! and rates (vᵢ, Ωᵢ) is analytic ([`AeroStation::to_nodes`]): δ(Rᵢ bᵢ) = Rᵢ (δθᵢ × bᵢ)
+//! for each node-frame vector bᵢ (dᵢ, ĉᵢ, n̂ᵢ, Ωᵢ × dᵢ, Ωᵢ × ĉᵢ), and the moment rows
+//! add the node's own rotation in Rᵢᵀ: ∂(Rᵢᵀ y)/∂δθᵢ = (Rᵢᵀ y)~.
 //!
 //! **Unsteady airfoil** ([`super::unsteady`]): with Wagner's attached-flow states or Øye's
 //! dynamic stall the station takes the air velocity at the three-quarter-chord point,
 //! U₃/₄ = U − (c/2) ė_c (the point p + (c/2) e_c, p the aerodynamic centre at the
 //! quarter chord), and owns up to three states (Wagner z₁, z₂ [m/s], then Øye's
 //! separation f); their rows follow the node rows, their tangents come from the same
-//! dual pass (directions 6·nodes + j for z, the rate half for ż).
+//! dual pass.
 
 use super::airfoil::Airfoil;
 use super::bem::{BemRotor, StationFlow};
@@ -136,6 +142,20 @@ pub const MAX_NODES: usize = 8;
 /// The most states a station owns (Wagner's two, Øye's stall one, the dynamic wake two).
 pub const MAX_STATES: usize = 5;
 
+/// Number of kinematic quantities of a station the loads read, y = (p, e_c, e_n, ṗ, ė_c).
+const KINEMATICS: usize = 15;
+
+/// A station's kinematics (global): point p, chord and normal directions e_c, e_n, point
+/// velocity ṗ, and ė_c (read by an unsteady airfoil only).
+#[derive(Clone, Copy, Debug)]
+pub struct Kinematics<S> {
+    pub p: V3<S>,
+    pub ec: V3<S>,
+    pub en: V3<S>,
+    pub pd: V3<S>,
+    pub ecd: V3<S>,
+}
+
 /// What a station computes besides its loads.
 #[derive(Clone, Copy, Debug)]
 pub struct StationResult<S> {
@@ -223,7 +243,7 @@ impl AeroStation {
         let z = [0.0; MAX_STATES];
         let mut zr = [0.0; MAX_STATES];
         let ns = self.unsteady.states();
-        let r = self.compute::<f64>(t, nodes, &z[..ns], &z[..ns], &[], &mut rows, &mut zr);
+        let r = self.compute(t, nodes, &z[..ns], &z[..ns], &[], &mut rows, &mut zr);
         let mut out = [0.0; MAX_STATES];
         let nw = self.unsteady.wagner_states();
         if nw == 2 {
@@ -241,95 +261,81 @@ impl AeroStation {
         out
     }
 
-    /// R b for node i, as a function of the increment δθᵢ.
-    fn rot<S: Scalar>(i: usize, r: &Matrix3<f64>, b: &Vector3<f64>) -> V3<S> {
-        let v = r * b;
-        let mut out = cst3::<S>(&v);
-        for j in 0..3 {
-            let col = r * Vector3::ith(j, 1.0).cross(b);
-            for (k, o) in out.iter_mut().enumerate() {
-                o.add_deriv(6 * i + 3 + j, col[k]);
-            }
-        }
-        out
-    }
-
-    /// Rᵀ y for node i, y a function of the unknowns: Rᵀ dy − δθ × Rᵀy.
-    fn rot_t<S: Scalar>(i: usize, r: &Matrix3<f64>, y: &V3<S>) -> V3<S> {
-        let mut z: V3<S> =
-            std::array::from_fn(|k| y[0] * r[(0, k)] + y[1] * r[(1, k)] + y[2] * r[(2, k)]);
-        let zv = Vector3::new(z[0].re(), z[1].re(), z[2].re());
-        for j in 0..3 {
-            let c = Vector3::ith(j, 1.0).cross(&zv);
-            for (k, zk) in z.iter_mut().enumerate() {
-                zk.add_deriv(6 * i + 3 + j, -c[k]);
-            }
-        }
-        z
-    }
-
-    /// The station's kinematics, loads and node rows (force, moment per node).
-    /// (The node states, the element states and rates, and the input signals are the
-    /// kernel's inputs; the two row arrays its outputs.)
-    #[allow(clippy::too_many_arguments)]
-    pub fn compute<S: Scalar>(
-        &self,
-        t: f64,
-        nodes: &[NodeState],
-        z: &[S],
-        zd: &[S],
-        sig: &[S],
-        rows: &mut [V3<S>; 2 * MAX_NODES],
-        zrows: &mut [S; MAX_STATES],
-    ) -> StationResult<S> {
-        // Derivative directions: (δx, δθ) of node i at 6i…6i+5, (v, Ω) at vo + 6i…,
-        // vo half the directions of S (unused for f64).
-        let vo = S::DIRECTIONS / 2;
-        let zero = S::cst(0.0);
-        let mut p = [zero; 3];
-        let mut pd = [zero; 3];
-        let mut ec = [zero; 3];
-        let mut en = [zero; 3];
-        // ė_c = Σ wᵢ Rᵢ (Ωᵢ × ĉᵢ), for the three-quarter-chord velocity.
-        let mut ecd = [zero; 3];
-        let unsteady = self.unsteady.active();
-        for (i, (&n, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
+    /// The station's kinematics y from its nodes (f64): `p = Σ wᵢ (xᵢ + Rᵢ dᵢ)`,
+    /// `e_c = Σ wᵢ Rᵢ ĉᵢ`, `e_n = Σ wᵢ Rᵢ n̂ᵢ`, `ṗ = Σ wᵢ (vᵢ + Rᵢ (Ωᵢ × dᵢ))`,
+    /// `ė_c = Σ wᵢ Rᵢ (Ωᵢ × ĉᵢ)`.
+    fn kinematics(&self, nodes: &[NodeState]) -> Kinematics<f64> {
+        let mut k = Kinematics {
+            p: [0.0; 3],
+            ec: [0.0; 3],
+            en: [0.0; 3],
+            pd: [0.0; 3],
+            ecd: [0.0; 3],
+        };
+        for (&n, at) in self.nodes.iter().zip(&self.attach) {
             let ns = &nodes[n];
             let r = ns.r();
             let w = at.weight;
-            let mut x = cst3::<S>(&ns.x);
-            let mut v = cst3::<S>(&ns.v);
-            for k in 0..3 {
-                x[k].add_deriv(6 * i + k, 1.0);
-                v[k].add_deriv(vo + 6 * i + k, 1.0);
-            }
-            let rd = Self::rot::<S>(i, r, &at.offset);
-            // R (Ω × d): Ω enters linearly (direction 12 + 6i + 3 + j: R (e_j × d)).
-            let mut wd = Self::rot::<S>(i, r, &ns.w.cross(&at.offset));
-            for j in 0..3 {
-                let col = r * Vector3::ith(j, 1.0).cross(&at.offset);
-                for (k, o) in wd.iter_mut().enumerate() {
-                    o.add_deriv(vo + 6 * i + 3 + j, col[k]);
-                }
-            }
-            p = add(&p, &scale(&add(&x, &rd), S::cst(w)));
-            pd = add(&pd, &scale(&add(&v, &wd), S::cst(w)));
-            ec = add(&ec, &scale(&Self::rot::<S>(i, r, &at.chord_dir), S::cst(w)));
-            en = add(
-                &en,
-                &scale(&Self::rot::<S>(i, r, &at.normal_dir), S::cst(w)),
-            );
-            if unsteady {
-                let mut cd = Self::rot::<S>(i, r, &ns.w.cross(&at.chord_dir));
-                for j in 0..3 {
-                    let col = r * Vector3::ith(j, 1.0).cross(&at.chord_dir);
-                    for (k, o) in cd.iter_mut().enumerate() {
-                        o.add_deriv(vo + 6 * i + 3 + j, col[k]);
-                    }
-                }
-                ecd = add(&ecd, &scale(&cd, S::cst(w)));
+            let p = ns.x + r * at.offset;
+            let pd = ns.v + r * ns.w.cross(&at.offset);
+            let ec = r * at.chord_dir;
+            let en = r * at.normal_dir;
+            let ecd = r * ns.w.cross(&at.chord_dir);
+            for c in 0..3 {
+                k.p[c] += p[c] * w;
+                k.pd[c] += pd[c] * w;
+                k.ec[c] += ec[c] * w;
+                k.en[c] += en[c] * w;
+                k.ecd[c] += ecd[c] * w;
             }
         }
+        k
+    }
+
+    /// Dual directions of the station's kinematics: y = (p, e_c, e_n, ṗ) and, with an
+    /// unsteady airfoil (which reads ė_c), ė_c.
+    fn kinematic_directions(&self) -> usize {
+        if self.unsteady.active() {
+            KINEMATICS
+        } else {
+            KINEMATICS - 3
+        }
+    }
+
+    /// The kinematics as dual numbers: component c of block b (p, e_c, e_n, ṗ, ė_c) is
+    /// direction 3b + c (ė_c constant when `rates_of_chord` is false).
+    fn seeded<const M: usize>(k: &Kinematics<f64>, rates_of_chord: bool) -> Kinematics<Dual<M>> {
+        let var = |a: &V3<f64>, o: usize| -> V3<Dual<M>> {
+            std::array::from_fn(|c| Dual::var(a[c], o + c))
+        };
+        Kinematics {
+            p: var(&k.p, 0),
+            ec: var(&k.ec, 3),
+            en: var(&k.en, 6),
+            pd: var(&k.pd, 9),
+            ecd: if rates_of_chord {
+                var(&k.ecd, 12)
+            } else {
+                k.ecd.map(<Dual<M> as Scalar>::cst)
+            },
+        }
+    }
+
+    /// The loads of the station from its kinematics: force F = f Δs and moment M = m Δs
+    /// (global, at p), the state rows, and what the outputs report. (The kinematics,
+    /// the element states and rates, and the input signals are the kernel's inputs.)
+    pub fn loads<S: Scalar>(
+        &self,
+        t: f64,
+        kin: &Kinematics<S>,
+        z: &[S],
+        zd: &[S],
+        sig: &[S],
+        zrows: &mut [S; MAX_STATES],
+    ) -> StationResult<S> {
+        let zero = S::cst(0.0);
+        let (p, pd, ec, en, ecd) = (kin.p, kin.pd, kin.ec, kin.en, kin.ecd);
+        let unsteady = self.unsteady.active();
         let u0 = sub(&self.wind.velocity(&p, t), &pd);
         let mut res = StationResult {
             force: [zero; 3],
@@ -502,15 +508,6 @@ impl AeroStation {
         }
         let f = scale(&f, S::cst(ds));
         let m = scale(&m, S::cst(ds));
-        for (i, (&n, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
-            let r = nodes[n].r();
-            let w = S::cst(at.weight);
-            let ft = Self::rot_t(i, r, &f);
-            let mt = Self::rot_t(i, r, &m);
-            let arm = cst3::<S>(&at.offset);
-            rows[2 * i] = scale(&f, w);
-            rows[2 * i + 1] = scale(&add(&cross(&arm, &ft), &mt), w);
-        }
         if let Inflow::PittPeters { disc, .. } = &*self.inflow {
             let dt = -dot(&f, &cst3(&disc.axis));
             let (hs, hc) = disc.harmonics(&p);
@@ -520,12 +517,119 @@ impl AeroStation {
         res.moment = m;
         res
     }
+
+    /// Node i's share of the loads F, M at p: wᵢ F and the moment about node i,
+    /// wᵢ (dᵢ × Rᵢᵀ F + Rᵢᵀ M), in node components.
+    fn node_rows(
+        &self,
+        nodes: &[NodeState],
+        f: &V3<f64>,
+        m: &V3<f64>,
+        rows: &mut [V3<f64>; 2 * MAX_NODES],
+    ) {
+        for (i, (&n, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
+            let r = nodes[n].r();
+            let w = at.weight;
+            let ft = tr_mul(r, f);
+            let mt = tr_mul(r, m);
+            let arm = cst3::<f64>(&at.offset);
+            rows[2 * i] = scale(f, w);
+            rows[2 * i + 1] = scale(&add(&cross(&arm, &ft), &mt), w);
+        }
+    }
+
+    /// The station's kinematics, loads and node rows (force, moment per node), f64.
+    #[allow(clippy::too_many_arguments)]
+    pub fn compute(
+        &self,
+        t: f64,
+        nodes: &[NodeState],
+        z: &[f64],
+        zd: &[f64],
+        sig: &[f64],
+        rows: &mut [V3<f64>; 2 * MAX_NODES],
+        zrows: &mut [f64; MAX_STATES],
+    ) -> StationResult<f64> {
+        let kin = self.kinematics(nodes);
+        let r = self.loads::<f64>(t, &kin, z, zd, sig, zrows);
+        self.node_rows(nodes, &r.force, &r.moment, rows);
+        r
+    }
+
+    /// The chain rule from the station to its nodes: given g = ∂s/∂y of a scalar s over
+    /// the kinematic directions, writes ∂s/∂(δxᵢ, δθᵢ) to `kq` and ∂s/∂(vᵢ, Ωᵢ) to `kv`
+    /// (6 per node). With Rᵢ ← Rᵢ (I + δθ̃ᵢ) each term wᵢ Rᵢ bᵢ of y moves by
+    /// wᵢ Rᵢ (δθᵢ × bᵢ), so g·δy = wᵢ δθᵢ · (bᵢ × Rᵢᵀ g); Ωᵢ enters ṗ and ė_c the same
+    /// way through Rᵢ (Ωᵢ × dᵢ) and Rᵢ (Ωᵢ × ĉᵢ); xᵢ and vᵢ enter p and ṗ with weight wᵢ.
+    fn to_nodes(&self, nodes: &[NodeState], g: &[f64], kq: &mut [f64], kv: &mut [f64]) {
+        let block = |b: usize| {
+            if g.len() >= 3 * b + 3 {
+                Vector3::new(g[3 * b], g[3 * b + 1], g[3 * b + 2])
+            } else {
+                Vector3::zeros()
+            }
+        };
+        let (gp, gc, gn, gpd, gcd) = (block(0), block(1), block(2), block(3), block(4));
+        for (i, (&n, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
+            let ns = &nodes[n];
+            let r = ns.r();
+            let w = at.weight;
+            let (lp, lc, ln) = (r.tr_mul(&gp), r.tr_mul(&gc), r.tr_mul(&gn));
+            let (lpd, lcd) = (r.tr_mul(&gpd), r.tr_mul(&gcd));
+            let wd = ns.w.cross(&at.offset);
+            let wc = ns.w.cross(&at.chord_dir);
+            let th = at.offset.cross(&lp)
+                + at.chord_dir.cross(&lc)
+                + at.normal_dir.cross(&ln)
+                + wd.cross(&lpd)
+                + wc.cross(&lcd);
+            let om = at.offset.cross(&lpd) + at.chord_dir.cross(&lcd);
+            for k in 0..3 {
+                kq[6 * i + k] = w * gp[k];
+                kq[6 * i + 3 + k] = w * th[k];
+                kv[6 * i + k] = w * gpd[k];
+                kv[6 * i + 3 + k] = w * om[k];
+            }
+        }
+    }
+
+    /// The derivatives of one kernel output s over the element's columns: the nodes'
+    /// (δx, δθ) then z in `kq`, the nodes' (v, Ω) then ż in `kv`, the input signals in
+    /// `ks`.
+    fn columns<const M: usize>(
+        &self,
+        nodes: &[NodeState],
+        s: &Dual<M>,
+        kq: &mut [f64],
+        kv: &mut [f64],
+        ks: &mut [f64],
+    ) {
+        let ny = self.kinematic_directions();
+        let (nq, ns) = (6 * self.nodes.len(), self.unsteady.states());
+        self.to_nodes(nodes, &s.d[..ny], &mut kq[..nq], &mut kv[..nq]);
+        for j in 0..ns {
+            kq[nq + j] = s.d[ny + j];
+            kv[nq + j] = s.d[ny + ns + j];
+        }
+        for (k, o) in ks.iter_mut().take(self.inputs.len()).enumerate() {
+            *o = s.d[ny + 2 * ns + k];
+        }
+    }
 }
 
+/// Rᵀ y, summed in the order of the columns of R.
+fn tr_mul(r: &Matrix3<f64>, y: &V3<f64>) -> V3<f64> {
+    std::array::from_fn(|k| y[0] * r[(0, k)] + y[1] * r[(1, k)] + y[2] * r[(2, k)])
+}
+
+/// Columns of an element's stiffness (or damping) rows: the nodes' 6 each and the states.
+const COLUMNS: usize = 6 * MAX_NODES + MAX_STATES;
+
 impl AeroStation {
-    /// Local dual directions needed: nodes, states and input signals.
+    /// Local dual directions of the load kernel: the kinematics, the states and their
+    /// rates, the input signals (at most 15 + 2·5 + 3 = 28).
     fn directions(&self) -> usize {
-        6 * self.nodes.len() + self.unsteady.states() + self.inputs.len()
+        self.kinematic_directions() + 2 * self.unsteady.states() + self.inputs.len()
     }
 
     /// The states' values and rates (zero beyond the station's states).
@@ -547,77 +651,134 @@ impl AeroStation {
         s
     }
 
-    /// The station evaluated with M dual directions: nodes (δx, δθ) at 6i…, states at
-    /// 6·nodes + j, input signals after them, and the rate half (v, Ω, ż) from M/2.
+    /// The load kernel with M dual directions: the kinematics y at 0…ny, the states at
+    /// ny + j, their rates at ny + ns + j, the input signals at ny + 2 ns + k.
     fn dual_pass<const M: usize>(
         &self,
         ctx: &EvalContext,
         x: &ElementInput,
-        rows: &mut [V3<Dual<M>>; 2 * MAX_NODES],
         zrows: &mut [Dual<M>; MAX_STATES],
     ) -> StationResult<Dual<M>> {
-        let nn = self.nodes.len();
+        let ny = self.kinematic_directions();
         let ns = self.unsteady.states();
-        let vo = M / 2;
+        let ni = self.inputs.len();
+        let kin = Self::seeded::<M>(&self.kinematics(x.nodes), ny == KINEMATICS);
         let mut z = [Dual::<M>::cst(0.0); MAX_STATES];
         let mut zd = [Dual::<M>::cst(0.0); MAX_STATES];
         for (j, st) in x.states.iter().take(ns).enumerate() {
-            z[j] = Dual::var(st.z, 6 * nn + j);
-            zd[j] = Dual::var(st.zd, vo + 6 * nn + j);
+            z[j] = Dual::var(st.z, ny + j);
+            zd[j] = Dual::var(st.zd, ny + ns + j);
         }
-        let ni = self.inputs.len();
         let sv = self.signal_values(x);
         let sig: [Dual<M>; 3] = std::array::from_fn(|k| {
             if k < ni {
-                Dual::var(sv[k], 6 * nn + ns + k)
+                Dual::var(sv[k], ny + 2 * ns + k)
             } else {
                 Dual::cst(0.0)
             }
         });
-        self.compute::<Dual<M>>(
-            ctx.time,
-            x.nodes,
-            &z[..ns],
-            &zd[..ns],
-            &sig[..ni],
-            rows,
-            zrows,
-        )
+        self.loads::<Dual<M>>(ctx.time, &kin, &z[..ns], &zd[..ns], &sig[..ni], zrows)
     }
 
-    /// Residual and tangents with M dual directions (M/2 ≥ 6 × nodes + states + inputs).
+    /// Residual and tangents with M ≥ [`Self::directions`] dual directions: the loads'
+    /// derivatives over the station's kinematics, chained to the nodes
+    /// ([`Self::to_nodes`]), then distributed like the loads, with the node's own
+    /// rotation in Rᵢᵀ: ∂(Rᵢᵀ y)/∂δθᵢ = (Rᵢᵀ y)~.
     fn tangents<const M: usize>(&self, ctx: &EvalContext, x: &ElementInput, out: &mut LocalTerms) {
         let lf = ctx.load_factor;
         let nn = self.nodes.len();
         let ns = self.unsteady.states();
         let ni = self.inputs.len();
-        let mut rows = [[Dual::<M>::cst(0.0); 3]; 2 * MAX_NODES];
+        let (nq, n) = (6 * nn, 6 * nn + ns);
         let mut zrows = [Dual::<M>::cst(0.0); MAX_STATES];
-        let (n, vo) = (6 * nn + ns, M / 2);
-        self.dual_pass::<M>(ctx, x, &mut rows, &mut zrows);
+        let r = self.dual_pass::<M>(ctx, x, &mut zrows);
+        // ∂F/∂·, ∂M/∂· (rows F₁ F₂ F₃ M₁ M₂ M₃) over (q, z), (v, ż) and the signals.
+        let mut jq = [[0.0; COLUMNS]; 6];
+        let mut jv = [[0.0; COLUMNS]; 6];
+        let mut js = [[0.0; COLUMNS]; 6];
+        for (o, s) in r.force.iter().chain(&r.moment).enumerate() {
+            self.columns(x.nodes, s, &mut jq[o], &mut jv[o], &mut js[o]);
+        }
+        let f = r.force.map(|s| s.v);
+        let m = r.moment.map(|s| s.v);
+        let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
+        self.node_rows(x.nodes, &f, &m, &mut rows);
         for (b, row) in rows.iter().take(2 * nn).enumerate() {
             for (k, rk) in row.iter().enumerate() {
-                let ri = 3 * b + k;
-                out.r[ri] -= lf * rk.v;
-                for j in 0..n {
-                    out.k[(ri, j)] -= lf * rk.d[j];
-                    out.c[(ri, j)] -= lf * rk.d[vo + j];
+                out.r[3 * b + k] -= lf * rk;
+            }
+        }
+        // Per node: the force rows take wᵢ ∂F, the moment rows wᵢ (d̃ᵢ Rᵢᵀ ∂F + Rᵢᵀ ∂M)
+        // (load factor included): the 3×6 map [d̃ᵢ Rᵢᵀ | Rᵢᵀ] row-major.
+        let mut w = [0.0; MAX_NODES];
+        let mut map = [[[0.0; 6]; 3]; MAX_NODES];
+        for (i, (&nd, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
+            let rt = x.nodes[nd].r().transpose();
+            let a = at.offset.cross_matrix() * rt;
+            w[i] = lf * at.weight;
+            for k in 0..3 {
+                for j in 0..3 {
+                    map[i][k][j] = w[i] * a[(k, j)];
+                    map[i][k][3 + j] = w[i] * rt[(k, j)];
                 }
-                for j in 0..ni {
-                    out.ds[(ri, j)] -= lf * rk.d[n + j];
+            }
+        }
+        // Column by column (the local matrices are column-major): one column of ∂(F, M)
+        // spread over the 6 rows of every node.
+        let spread = |jac: &[[f64; COLUMNS]; 6], mat: &mut nalgebra::DMatrix<f64>, cols: usize| {
+            let nr = mat.nrows();
+            for (col, c) in mat
+                .as_mut_slice()
+                .chunks_exact_mut(nr)
+                .take(cols)
+                .enumerate()
+            {
+                let g: [f64; 6] = std::array::from_fn(|o| jac[o][col]);
+                for (i, rows) in c[..nq].chunks_exact_mut(6).enumerate() {
+                    let (wi, mi) = (w[i], &map[i]);
+                    for k in 0..3 {
+                        rows[k] -= wi * g[k];
+                        let mk = &mi[k];
+                        rows[3 + k] -= mk[0] * g[0]
+                            + mk[1] * g[1]
+                            + mk[2] * g[2]
+                            + mk[3] * g[3]
+                            + mk[4] * g[4]
+                            + mk[5] * g[5];
+                    }
+                }
+            }
+        };
+        spread(&jq, &mut out.k, n);
+        spread(&jv, &mut out.c, n);
+        spread(&js, &mut out.ds, ni);
+        // The node's own rotation in Rᵢᵀ F, Rᵢᵀ M: ∂(Rᵢᵀ y)/∂δθᵢ = (Rᵢᵀ y)~.
+        for (i, (&nd, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
+            let rt = x.nodes[nd].r().transpose();
+            let ft = rt * Vector3::from(f);
+            let mt = rt * Vector3::from(m);
+            for j in 0..3 {
+                let e = Vector3::ith(j, 1.0);
+                let g = at.offset.cross(&ft.cross(&e)) + mt.cross(&e);
+                for k in 0..3 {
+                    out.k[(6 * i + 3 + k, 6 * i + 3 + j)] -= w[i] * g[k];
                 }
             }
         }
         // State rows: not loads, not scaled by the load factor.
+        let mut kq = [0.0; COLUMNS];
+        let mut kv = [0.0; COLUMNS];
+        let mut ks = [0.0; 3];
         for (s, zr) in zrows.iter().take(ns).enumerate() {
-            let ri = 6 * nn + s;
+            let ri = nq + s;
             out.r[ri] += zr.v;
+            self.columns(x.nodes, zr, &mut kq, &mut kv, &mut ks);
             for j in 0..n {
-                out.k[(ri, j)] += zr.d[j];
-                out.c[(ri, j)] += zr.d[vo + j];
+                out.k[(ri, j)] += kq[j];
+                out.c[(ri, j)] += kv[j];
             }
-            for j in 0..ni {
-                out.ds[(ri, j)] += zr.d[n + j];
+            for (j, v) in ks.iter().enumerate().take(ni) {
+                out.ds[(ri, j)] += v;
             }
         }
     }
@@ -633,18 +794,20 @@ impl AeroStation {
         let lf = ctx.load_factor;
         let n = 6 * self.nodes.len() + self.unsteady.states();
         let ni = self.inputs.len();
-        let vo = M / 2;
-        let mut rows = [[Dual::<M>::cst(0.0); 3]; 2 * MAX_NODES];
         let mut zrows = [Dual::<M>::cst(0.0); MAX_STATES];
-        let r = self.dual_pass::<M>(ctx, x, &mut rows, &mut zrows);
+        let r = self.dual_pass::<M>(ctx, x, &mut zrows);
+        let mut kq = [0.0; COLUMNS];
+        let mut kv = [0.0; COLUMNS];
+        let mut ks = [0.0; 3];
         for (o, f) in r.rotor_forcing.iter().enumerate() {
             out.values[o] = lf * f.v;
+            self.columns(x.nodes, f, &mut kq, &mut kv, &mut ks);
             for j in 0..n {
-                out.k[(o, j)] = lf * f.d[j];
-                out.c[(o, j)] = lf * f.d[vo + j];
+                out.k[(o, j)] = lf * kq[j];
+                out.c[(o, j)] = lf * kv[j];
             }
-            for j in 0..ni {
-                out.ds[(o, j)] = lf * f.d[n + j];
+            for (j, v) in ks.iter().enumerate().take(ni) {
+                out.ds[(o, j)] = lf * v;
             }
         }
     }
@@ -657,7 +820,7 @@ impl AeroStation {
         let mut zrows = [0.0; MAX_STATES];
         let (z, zd) = self.state_values(x);
         let sv = self.signal_values(x);
-        self.compute::<f64>(
+        self.compute(
             ctx.time,
             x.nodes,
             &z[..ns],
@@ -714,14 +877,13 @@ impl Element for AeroStation {
             self.residual(ctx, x, out);
             return;
         }
-        // Dual directions: twice the local unknowns (nodes and states), rounded up to
-        // the sizes compiled.
+        // Dual directions: the station's kinematics, states, rates and signals (≤ 28),
+        // rounded up to the sizes compiled.
         match self.directions() {
-            0..=12 => self.tangents::<24>(ctx, x, out),
-            13..=16 => self.tangents::<32>(ctx, x, out),
-            17..=24 => self.tangents::<48>(ctx, x, out),
-            25..=48 => self.tangents::<96>(ctx, x, out),
-            _ => self.tangents::<112>(ctx, x, out),
+            0..=12 => self.tangents::<12>(ctx, x, out),
+            13..=16 => self.tangents::<16>(ctx, x, out),
+            17..=20 => self.tangents::<20>(ctx, x, out),
+            _ => self.tangents::<28>(ctx, x, out),
         }
     }
 
@@ -738,11 +900,10 @@ impl Element for AeroStation {
             return;
         }
         match self.directions() {
-            0..=12 => self.signal_terms::<24>(ctx, x, out),
-            13..=16 => self.signal_terms::<32>(ctx, x, out),
-            17..=24 => self.signal_terms::<48>(ctx, x, out),
-            25..=48 => self.signal_terms::<96>(ctx, x, out),
-            _ => self.signal_terms::<112>(ctx, x, out),
+            0..=12 => self.signal_terms::<12>(ctx, x, out),
+            13..=16 => self.signal_terms::<16>(ctx, x, out),
+            17..=20 => self.signal_terms::<20>(ctx, x, out),
+            _ => self.signal_terms::<28>(ctx, x, out),
         }
     }
 
@@ -752,7 +913,7 @@ impl Element for AeroStation {
         let (z, zd) = self.state_values(x);
         let ns = self.unsteady.states();
         let sv = self.signal_values(x);
-        self.compute::<f64>(
+        self.compute(
             ctx.time,
             x.nodes,
             &z[..ns],
@@ -787,7 +948,7 @@ impl Element for AeroStation {
         let (z, zd) = self.state_values(x);
         let ns = self.unsteady.states();
         let sv = self.signal_values(x);
-        let r = self.compute::<f64>(
+        let r = self.compute(
             ctx.time,
             x.nodes,
             &z[..ns],
