@@ -47,6 +47,9 @@ fn last_cycle(example: &str, period: f64) -> Vec<[f64; 3]> {
     out
 }
 
+/// A curve: points (x, y), colour, dashed.
+type Curve<'a> = (Vec<(f64, f64)>, &'a str, bool);
+
 /// One panel: curves (points, colour, dashed) in a box at (x0, y0) of size (w, h).
 #[allow(clippy::too_many_arguments)]
 fn panel(
@@ -55,7 +58,7 @@ fn panel(
     xr: (f64, f64),
     yr: (f64, f64),
     ylabel: &str,
-    curves: &[(Vec<(f64, f64)>, &str, bool)],
+    curves: &[Curve],
 ) {
     let px = |x: f64| x0 + (x - xr.0) / (xr.1 - xr.0) * w;
     let py = |y: f64| y0 + h - (y - yr.0) / (yr.1 - yr.0) * h;

@@ -140,6 +140,16 @@ pub struct Hgm {
     airfoil: Airfoil,
 }
 
+/// The flow a station gives the model: U and α_ac at the quarter chord, α₃/₄ at the
+/// three-quarter chord, ω the nose-up pitch rate.
+#[derive(Clone, Copy, Debug)]
+pub struct HgmFlow<S> {
+    pub speed: S,
+    pub alpha_ac: S,
+    pub alpha_34: S,
+    pub omega: S,
+}
+
 /// What the model gives at one instant.
 #[derive(Clone, Copy, Debug)]
 pub struct HgmOutput<S> {
@@ -208,19 +218,15 @@ impl Hgm {
         ]
     }
 
-    /// The state rows and the coefficients (module doc): `speed` U and `alpha_ac` at the
-    /// quarter chord, `alpha_34` at the three-quarter chord, `omega` the nose-up pitch
-    /// rate, `x`, `xd` the four states and rates, `chord` c.
-    pub fn eval<S: Scalar>(
-        &self,
-        chord: f64,
-        speed: S,
-        alpha_ac: S,
-        alpha_34: S,
-        omega: S,
-        x: &[S],
-        xd: &[S],
-    ) -> HgmOutput<S> {
+    /// The state rows and the coefficients (module doc) for the flow `u`, the four states
+    /// `x` and rates `xd`, chord c.
+    pub fn eval<S: Scalar>(&self, chord: f64, u: &HgmFlow<S>, x: &[S], xd: &[S]) -> HgmOutput<S> {
+        let HgmFlow {
+            speed,
+            alpha_ac,
+            alpha_34,
+            omega,
+        } = *u;
         let tu = Self::tu(chord, speed);
         let [a1, a2] = self.a;
         let [b1, b2] = self.b;

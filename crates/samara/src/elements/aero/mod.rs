@@ -12,7 +12,7 @@ pub mod wind;
 pub use airfoil::{Airfoil, AirfoilError, Coefficients};
 pub use bem::{BemRotor, Induction, StationFlow};
 pub use dynamic_inflow::{PittPeters, RotorDisc};
-pub use hgm::{Hgm, HgmCoefficients};
+pub use hgm::{Hgm, HgmCoefficients, HgmFlow};
 pub use station::{AeroStation, Attachment, Inflow, MAX_NODES, Section};
 pub use unsteady::{AttachedFlow, OyeStall};
 pub use wind::Wind;

@@ -33,7 +33,7 @@
 use super::airfoil::Airfoil;
 use super::bem::{BemRotor, StationFlow};
 use super::dynamic_inflow::{RotorDisc, inflow_signals, thrust_signals};
-use super::hgm::Hgm;
+use super::hgm::{Hgm, HgmFlow};
 use super::unsteady::{AttachedFlow, JONES_A, JONES_B, OyeStall};
 use super::wind::Wind;
 use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, NodeState, SignalTerms};
@@ -504,15 +504,13 @@ impl AeroStation {
                 let speed_ac = q2_ac.sqrt();
                 // Nose-up pitch rate: the leading edge (−e_c) turning toward e_n.
                 let omega = -dot(&ecd, &en);
-                let o = h.eval(
-                    ch,
-                    speed_ac,
-                    un_ac.atan2(uc_ac),
-                    alpha,
+                let flow = HgmFlow {
+                    speed: speed_ac,
+                    alpha_ac: un_ac.atan2(uc_ac),
+                    alpha_34: alpha,
                     omega,
-                    &z[..4],
-                    &zd[..4],
-                );
+                };
+                let o = h.eval(ch, &flow, &z[..4], &zd[..4]);
                 zrows[..4].copy_from_slice(&o.rows);
                 (cl, cd, cm) = (o.cl, o.cd, o.cm);
                 cl_out = cl.re();

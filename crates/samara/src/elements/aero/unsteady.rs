@@ -167,7 +167,7 @@ impl OyeStall {
                 (c.dcl * inv - c.cl * self.lift_slope) / (inv * inv),
             )
         };
-        if r >= 1.0 || r < 0.0 {
+        if !(0.0..1.0).contains(&r) {
             return StallCurves {
                 f: 1.0,
                 df: 0.0,
