@@ -43,3 +43,4 @@ cargo run --release --quiet -p samara --example nrel5mw_curves > "$tmp/curves.cs
 python3 docs/images/nrel5mw_curves.py "$tmp/curves.csv" docs/images/nrel5mw_curves.png
 $samara run examples/rotor/hingeless_blade_campbell.toml --out "$tmp/hingeless" --quiet > /dev/null
 $samara plot "$tmp/hingeless/campbell.nc" campbell --out docs/images/hingeless_blade_campbell.png
+cargo run --release --quiet -p samara --example dynamic_stall_loops -- docs/images/dynamic_stall_loops.svg

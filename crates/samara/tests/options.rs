@@ -581,6 +581,10 @@ step = 0.01
             "dynamic_stall = \"none\"",
         ),
         ("stall_time_constant = 4.0", "stall_time_constant = 2.0"),
+        (
+            "unsteady = \"wagner\"\ndynamic_stall = \"oye\"\nstall_time_constant = 4.0",
+            "dynamic_stall = \"hgm\"",
+        ),
     ] {
         assert!(base.contains(from), "{from}");
         let v = residual(&base.replacen(from, to, 1));
@@ -594,6 +598,18 @@ step = 0.01
     // Without stall (default A_τ when only the model is named): same as 4.0.
     let default_tau = residual(&base.replacen("stall_time_constant = 4.0", "", 1));
     assert_eq!(default_tau, reference);
+    // `dynamic_stall = "hgm"` (and its alias "beddoes_leishman"): four HGM states.
+    let hgm = base.replacen(
+        "unsteady = \"wagner\"\ndynamic_stall = \"oye\"\nstall_time_constant = 4.0",
+        "dynamic_stall = \"hgm\"",
+        1,
+    );
+    let r_hgm = residual(&hgm);
+    assert_eq!(r_hgm.len(), 6 + 4);
+    assert_eq!(
+        residual(&hgm.replace("\"hgm\"", "\"beddoes_leishman\"")),
+        r_hgm
+    );
 }
 
 /// Issue #16: every `[[controllers]]` key changes the signals or states it drives (the

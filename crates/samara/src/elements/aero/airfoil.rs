@@ -65,6 +65,9 @@ pub struct Airfoil {
     values: [Vec<f64>; 3],
     /// Their knot slopes.
     slopes: [Vec<f64>; 3],
+    /// The unsteady-aerodynamics block of an AeroDyn file (`InclUAdata = True`), read
+    /// for the Beddoes–Leishman (HGM) model; its error is reported only where it is used.
+    ua: Option<Result<super::hgm::HgmCoefficients, AirfoilError>>,
 }
 
 /// How far from ±180° a table end may be [deg] (printed tables round).
@@ -128,6 +131,7 @@ impl Airfoil {
             alpha,
             values,
             slopes,
+            ua: None,
         })
     }
 
@@ -233,7 +237,17 @@ impl Airfoil {
         } else {
             parse_aerodyn(text)?
         };
-        Self::from_rows(&rows)
+        let mut a = Self::from_rows(&rows)?;
+        if !csv {
+            a.ua = super::hgm::HgmCoefficients::from_aerodyn(text);
+        }
+        Ok(a)
+    }
+
+    /// The unsteady-aerodynamics coefficients of an AeroDyn file, if it has them (or
+    /// the error in them).
+    pub fn ua_coefficients(&self) -> Option<&Result<super::hgm::HgmCoefficients, AirfoilError>> {
+        self.ua.as_ref()
     }
 }
 

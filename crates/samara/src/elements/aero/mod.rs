@@ -4,6 +4,7 @@
 pub mod airfoil;
 pub mod bem;
 pub mod dynamic_inflow;
+pub mod hgm;
 pub mod station;
 pub mod unsteady;
 pub mod wind;
@@ -11,6 +12,7 @@ pub mod wind;
 pub use airfoil::{Airfoil, AirfoilError, Coefficients};
 pub use bem::{BemRotor, Induction, StationFlow};
 pub use dynamic_inflow::{PittPeters, RotorDisc};
+pub use hgm::{Hgm, HgmCoefficients, HgmFlow};
 pub use station::{AeroStation, Attachment, Inflow, MAX_NODES, Section};
 pub use unsteady::{AttachedFlow, OyeStall};
 pub use wind::Wind;

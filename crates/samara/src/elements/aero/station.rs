@@ -39,6 +39,7 @@
 use super::airfoil::Airfoil;
 use super::bem::{BemRotor, StationFlow};
 use super::dynamic_inflow::{RotorDisc, inflow_signals, thrust_signals};
+use super::hgm::{Hgm, HgmFlow};
 use super::unsteady::{AttachedFlow, JONES_A, JONES_B, OyeStall};
 use super::wind::Wind;
 use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, NodeState, SignalTerms};
@@ -95,6 +96,9 @@ pub struct Unsteady {
     pub stall: Option<(Arc<OyeStall>, f64)>,
     /// Øye's dynamic wake on the BEM axial induction (two filter states).
     pub dynamic_wake: bool,
+    /// Beddoes–Leishman dynamic stall in Hansen–Gaunaa–Madsen's four-state form
+    /// ([`super::hgm`]; its own circulatory lag: not with Wagner or Øye).
+    pub hgm: Option<Arc<Hgm>>,
 }
 
 impl Unsteady {
@@ -106,7 +110,9 @@ impl Unsteady {
     }
     /// Number of airfoil states (Wagner, Øye's stall).
     fn airfoil_states(&self) -> usize {
-        self.wagner_states() + usize::from(self.stall.is_some())
+        self.wagner_states()
+            + usize::from(self.stall.is_some())
+            + 4 * usize::from(self.hgm.is_some())
     }
     /// Number of states (airfoil states, then the dynamic wake's two).
     pub fn states(&self) -> usize {
@@ -139,8 +145,9 @@ const WAKE_MIN_SPEED: f64 = 0.1;
 
 /// The most nodes a station hangs on (a beam element of order ≤ 7).
 pub const MAX_NODES: usize = 8;
-/// The most states a station owns (Wagner's two, Øye's stall one, the dynamic wake two).
-pub const MAX_STATES: usize = 5;
+/// The most states a station owns (Wagner's two and Øye's stall one, or HGM's four;
+/// the dynamic wake two).
+pub const MAX_STATES: usize = 6;
 
 /// Number of kinematic quantities of a station the loads read, y = (p, e_c, e_n, ṗ, ė_c).
 const KINEMATICS: usize = 15;
@@ -252,6 +259,9 @@ impl AeroStation {
         }
         if let Some((stall, _)) = &self.unsteady.stall {
             out[nw] = stall.eval(r.un.atan2(r.uc)).f;
+        }
+        if let Some(h) = &self.unsteady.hgm {
+            out[..4].copy_from_slice(&h.steady_states(r.un.atan2(r.uc)));
         }
         if self.unsteady.dynamic_wake {
             let iw = self.unsteady.airfoil_states();
@@ -432,6 +442,7 @@ impl AeroStation {
             }
         };
         let (rho, ch, ds) = (self.density, self.section.chord, self.section.width);
+        let u_ac = u;
         let u = if unsteady {
             sub(&u, &scale(&ecd, S::cst(0.5 * ch)))
         } else {
@@ -467,7 +478,7 @@ impl AeroStation {
             alpha
         };
         let c = self.section.airfoil.eval(alpha_e.re());
-        let (mut cl, cd, cm) = (
+        let (mut cl, mut cd, mut cm) = (
             alpha_e.chain(c.cl, c.dcl),
             alpha_e.chain(c.cd, c.dcd),
             alpha_e.chain(c.cm, c.dcm),
@@ -486,6 +497,33 @@ impl AeroStation {
             cl = f * inv + (S::cst(1.0) - f) * fs;
             cl_out = cl.re();
         }
+        // HGM: coefficients from the states; loads about the quarter-chord flow.
+        let (uc, un, q2, speed, alpha_e) = match &self.unsteady.hgm {
+            Some(h) => {
+                let (uc_ac, un_ac) = (dot(&u_ac, &ec), dot(&u_ac, &en));
+                let q2_ac = uc_ac * uc_ac + un_ac * un_ac;
+                if q2_ac.re() < 1e-20 {
+                    // No flow at the quarter chord: the states hold, no load.
+                    zrows[..4].copy_from_slice(&zd[..4]);
+                    return res;
+                }
+                let speed_ac = q2_ac.sqrt();
+                // Nose-up pitch rate: the leading edge (−e_c) turning toward e_n.
+                let omega = -dot(&ecd, &en);
+                let flow = HgmFlow {
+                    speed: speed_ac,
+                    alpha_ac: un_ac.atan2(uc_ac),
+                    alpha_34: alpha,
+                    omega,
+                };
+                let o = h.eval(ch, &flow, &z[..4], &zd[..4]);
+                zrows[..4].copy_from_slice(&o.rows);
+                (cl, cd, cm) = (o.cl, o.cd, o.cm);
+                cl_out = cl.re();
+                (uc_ac, un_ac, q2_ac, speed_ac, o.alpha_e)
+            }
+            None => (uc, un, q2, speed, alpha_e),
+        };
         let qf = speed * (0.5 * rho * ch);
         let f_c = (cd * uc - cl * un) * qf;
         let f_n = (cd * un + cl * uc) * qf;
@@ -495,7 +533,11 @@ impl AeroStation {
         res.alpha = alpha.re();
         res.alpha_effective = alpha_e.re();
         res.speed = speed.re();
-        (res.cl, res.cd, res.cm) = (cl_out, c.cd, c.cm);
+        (res.cl, res.cd, res.cm) = if self.unsteady.hgm.is_some() {
+            (cl_out, cd.re(), cm.re())
+        } else {
+            (cl_out, c.cd, c.cm)
+        };
         match bem_frame {
             Some((n, tdir)) => {
                 res.normal = dot(&f, &n).re();
@@ -860,6 +902,9 @@ impl Element for AeroStation {
         if self.unsteady.stall.is_some() {
             v.push("separation".into());
         }
+        if self.unsteady.hgm.is_some() {
+            v.extend(["hgm_1", "hgm_2", "hgm_3", "hgm_4"].map(String::from));
+        }
         if self.unsteady.dynamic_wake {
             v.extend(["wake_1".to_string(), "wake_2".to_string()]);
         }
@@ -936,7 +981,7 @@ impl Element for AeroStation {
     fn output_names(&self) -> Vec<(String, &'static str)> {
         let mut v: Vec<(String, &'static str)> =
             OUTPUTS.iter().map(|(n, u)| (n.to_string(), *u)).collect();
-        if self.unsteady.wagner_states() == 2 {
+        if self.unsteady.wagner_states() == 2 || self.unsteady.hgm.is_some() {
             v.push(("effective_alpha".into(), "rad"));
         }
         v
@@ -957,7 +1002,7 @@ impl Element for AeroStation {
             &mut rows,
             &mut zrows,
         );
-        if self.unsteady.wagner_states() == 2 {
+        if self.unsteady.wagner_states() == 2 || self.unsteady.hgm.is_some() {
             out[OUTPUTS.len()] = r.alpha_effective;
         }
         let vals = [

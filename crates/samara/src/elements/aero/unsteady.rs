@@ -96,22 +96,30 @@ impl OyeStall {
             num += da * airfoil.eval(zero_lift + da).cl;
             den += da * da;
         }
-        let lift_slope = num / den;
-        if !(lift_slope > 0.0 && lift_slope.is_finite()) {
+        Self::with_attached(airfoil, zero_lift, num / den)
+    }
+
+    /// The separation curves for a given zero-lift angle α₀ [rad] and lift slope c_lα
+    /// [1/rad] (an AeroDyn file's `alpha0` and `C_nalpha`, as UnsteadyAero takes them);
+    /// `None` unless c_lα > 0. Where α₀ differs from the table's own zero crossing, the
+    /// thin band between them (cl and α − α₀ of opposite signs) counts as attached.
+    pub fn with_attached(airfoil: &Airfoil, zero_lift: f64, lift_slope: f64) -> Option<Self> {
+        if !(lift_slope > 0.0 && lift_slope.is_finite() && zero_lift.is_finite()) {
             return None;
         }
         // The attached range: from α₀ outward to where cl/cl_inv first falls to ¼
         // (f_st = 0), by scanning in 0.1° and bisecting.
         let ratio = |a: f64| airfoil.eval(a).cl / (lift_slope * (a - zero_lift));
+        let separated = |a: f64| (0.0..=0.25).contains(&ratio(a));
         let edge = |dir: f64| {
             let step = 0.1f64.to_radians() * dir;
             let mut a = zero_lift + step;
             while (a - zero_lift).abs() < std::f64::consts::FRAC_PI_2 {
-                if ratio(a) <= 0.25 {
+                if separated(a) {
                     let (mut lo, mut hi) = (a - step, a);
                     for _ in 0..60 {
                         let m = 0.5 * (lo + hi);
-                        if ratio(m) <= 0.25 { hi = m } else { lo = m }
+                        if separated(m) { hi = m } else { lo = m }
                     }
                     return hi;
                 }
@@ -159,7 +167,7 @@ impl OyeStall {
                 (c.dcl * inv - c.cl * self.lift_slope) / (inv * inv),
             )
         };
-        if r >= 1.0 {
+        if !(0.0..1.0).contains(&r) {
             return StallCurves {
                 f: 1.0,
                 df: 0.0,

@@ -9,8 +9,8 @@ use crate::core::NodeRef;
 use crate::elements::aero::RotorDisc;
 use crate::elements::aero::station::Unsteady;
 use crate::elements::aero::{
-    AeroStation, Airfoil, AttachedFlow, Attachment, BemRotor, Inflow, MAX_NODES, OyeStall, Section,
-    Wind,
+    AeroStation, Airfoil, AttachedFlow, Attachment, BemRotor, Hgm, HgmCoefficients, Inflow,
+    MAX_NODES, OyeStall, Section, Wind,
 };
 use crate::math::TimeFunction;
 use crate::model::input::TimeFunctionInput;
@@ -138,6 +138,9 @@ pub enum DynamicStallInput {
     None,
     /// Øye's separation lag, one state per station.
     Oye,
+    /// Beddoes–Leishman type, Hansen–Gaunaa–Madsen's four states (OpenFAST UAMod 4).
+    #[serde(alias = "beddoes_leishman")]
+    Hgm,
 }
 
 /// A lifting line on a beam or a node.
@@ -184,7 +187,7 @@ pub struct AeroLineInput {
     /// Attached-flow unsteady aerodynamics: `"quasi_steady"` (default) or `"wagner"`.
     #[serde(default)]
     pub unsteady: Option<UnsteadyInput>,
-    /// Dynamic stall: `"none"` (default) or `"oye"`.
+    /// Dynamic stall: `"none"` (default), `"oye"` or `"hgm"` (alias `"beddoes_leishman"`).
     #[serde(default)]
     pub dynamic_stall: Option<DynamicStallInput>,
     /// A_τ of Øye's time constant τ = A_τ c/V; default 4.
@@ -202,6 +205,8 @@ pub struct StationDef {
     pub airfoil: Arc<Airfoil>,
     /// Øye's separation curves of the airfoil (with `dynamic_stall = "oye"`).
     pub stall: Option<Arc<OyeStall>>,
+    /// The Beddoes–Leishman (HGM) model of the airfoil (with `dynamic_stall = "hgm"`).
+    pub hgm: Option<Arc<Hgm>>,
 }
 
 /// What carries a line.
@@ -628,6 +633,7 @@ impl ComponentKind for AeroLine {
                 ac_offset: ac,
                 airfoil,
                 stall: None,
+                hgm: None,
             });
         }
         // Unsteady airfoil and dynamic stall.
@@ -682,6 +688,65 @@ impl ComponentKind for AeroLine {
                     }
                 }
                 Some(a)
+            }
+            Some(DynamicStallInput::Hgm) => {
+                if li.stall_time_constant.is_some() {
+                    cx.error(
+                        format!("{what}: `stall_time_constant` is Øye's; the HGM model takes its time constants (T_f0, T_p) from the airfoil file's unsteady-aerodynamics block"),
+                        cx.key(&e, "stall_time_constant"),
+                        Some("remove `stall_time_constant`, or set T_f0 and T_p in the airfoil file".into()),
+                    );
+                    ok = false;
+                }
+                if unsteady == AttachedFlow::Wagner {
+                    cx.error(
+                        format!("{what}: `unsteady = \"wagner\"` with `dynamic_stall = \"hgm\"`: the HGM model has its own circulatory (Wagner) lag"),
+                        cx.key(&e, "unsteady"),
+                        Some("remove `unsteady` (HGM includes the attached-flow response)".into()),
+                    );
+                    ok = false;
+                }
+                let mut models: HashMap<*const Airfoil, Arc<Hgm>> = HashMap::new();
+                for d in &mut defs {
+                    let key = Arc::as_ptr(&d.airfoil);
+                    if let Some(h) = models.get(&key) {
+                        d.hgm = Some(h.clone());
+                        continue;
+                    }
+                    let coefficients = match d.airfoil.ua_coefficients() {
+                        None => HgmCoefficients::DEFAULT,
+                        Some(Ok(c)) => *c,
+                        Some(Err(err)) => {
+                            cx.error(
+                                format!(
+                                    "{what}: the airfoil file of the station at span {} m, {err}",
+                                    d.span
+                                ),
+                                cx.key(&e, "dynamic_stall"),
+                                err.hint.clone(),
+                            );
+                            ok = false;
+                            break;
+                        }
+                    };
+                    match Hgm::new(&d.airfoil, &coefficients) {
+                        Some(h) => {
+                            let h = Arc::new(h);
+                            models.insert(key, h.clone());
+                            d.hgm = Some(h);
+                        }
+                        None => {
+                            cx.error(
+                                format!("{what}: the airfoil of the station at span {} m has no attached-flow lift curve (no zero-lift angle with a positive slope within ±20°, or C_nalpha ≤ 0): the HGM model needs one", d.span),
+                                cx.key(&e, "dynamic_stall"),
+                                Some("use `dynamic_stall = \"none\"` for non-lifting sections (cylinders)".into()),
+                            );
+                            ok = false;
+                            break;
+                        }
+                    }
+                }
+                None
             }
         };
         // Wind.
@@ -886,6 +951,7 @@ impl ComponentKind for AeroLine {
                 attached: def.unsteady,
                 stall: s.stall.clone().zip(def.stall_time_constant),
                 dynamic_wake: def.dynamic_wake,
+                hgm: s.hgm.clone(),
             };
             let station = AeroStation::new(
                 format!("{}.{k}", def.name),
@@ -1048,6 +1114,7 @@ impl ComponentKind for AeroLine {
                         attached,
                         stall: with_stall.then(|| (stall.clone(), 4.0)),
                         dynamic_wake: false,
+                        hgm: None,
                     };
                     let ns = unsteady.states();
                     let e = AeroStation::new(
@@ -1073,6 +1140,41 @@ impl ComponentKind for AeroLine {
                         TangentCase::element(Box::new(e), nodes).with_states(states),
                     ));
                 }
+                // Beddoes–Leishman (HGM), four states, set a little off their steady
+                // values (rows of the size of the offsets: the finite differences resolve
+                // the small entries), x₄ inside 0 … 1 (clipped at its ends).
+                let hgm = Arc::new(
+                    Hgm::new(&section.airfoil, &HgmCoefficients::DEFAULT)
+                        .unwrap_or_else(|| unreachable!()),
+                );
+                let seed = 2000 + 100 * k as u64 + 20 * m as u64;
+                let nodes: Vec<_> = (0..nn).map(|i| node(seed + i as u64)).collect();
+                let w = 1.0 / nn as f64;
+                let unsteady = Unsteady {
+                    hgm: Some(hgm),
+                    ..Unsteady::default()
+                };
+                let e = AeroStation::new(
+                    "aero_hgm",
+                    (0..nn).collect(),
+                    (0..nn).map(|i| attach(i as f64 - 1.0, w)).collect(),
+                    section.clone(),
+                    1.2,
+                    wind.clone(),
+                    e1_inflow.clone(),
+                )
+                .with_unsteady(unsteady, 0.0, &nodes);
+                let mut z = [0.0; 4];
+                crate::core::Element::initial_states(&e, &mut z);
+                let states = vec![
+                    (z[0] + 0.01, 0.02),
+                    (z[1] - 0.01, -0.01),
+                    (z[2] + 0.05, 0.1),
+                    (0.7, 0.05),
+                ];
+                cases.push(with_inflow(
+                    TangentCase::element(Box::new(e), nodes).with_states(states),
+                ));
             }
         }
         // BEM with Øye's dynamic wake (two states), alone and with Wagner + Øye's stall,
@@ -1118,6 +1220,7 @@ impl ComponentKind for AeroLine {
                     },
                     stall: airfoil_states.then(|| (stall.clone(), 4.0)),
                     dynamic_wake: true,
+                    hgm: None,
                 };
                 let e = AeroStation::new(
                     "aero_wake",
