@@ -122,10 +122,8 @@ fn main() {
     let oye = last_cycle("examples/aero/pitching_airfoil.toml", period);
     let hgm = last_cycle("examples/aero/pitching_airfoil_hgm.toml", period);
     let af = Airfoil::parse(
-        &std::fs::read_to_string(
-            repo().join("../shared/reference/nrel5mw/aero/Airfoils/DU21_A17.dat"),
-        )
-        .unwrap(),
+        &std::fs::read_to_string(repo().join("reference/nrel5mw/aero/Airfoils/DU21_A17.dat"))
+            .unwrap(),
         false,
     )
     .unwrap();

@@ -206,9 +206,10 @@ fn scaling_keeps_the_condition_number_independent_of_the_step() {
 /// 5e-4 at h = 2e-4, which we must meet.
 #[test]
 fn heavy_top_matches_the_kynema_reference() {
-    let csv = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(
-        "../../reference/kynema_verification/heavy_top_kynema_material_0pt000002s.csv",
-    ));
+    let csv = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../reference/kynema_verification/heavy_top_kynema_material_0pt000002s.csv"),
+    );
     // The reference values, as printed in that file (kept here so the test runs without it).
     let reference: Vec<(f64, [f64; 7])> = vec![
         (

@@ -25,7 +25,7 @@ fn repo() -> PathBuf {
 }
 
 fn du21_path() -> PathBuf {
-    repo().join("../shared/reference/nrel5mw/aero/Airfoils/DU21_A17.dat")
+    repo().join("reference/nrel5mw/aero/Airfoils/DU21_A17.dat")
 }
 
 /// An AeroDyn airfoil file of the flat plate cl = π sin 2α (2πα for small α), cd = cm = 0,

@@ -922,13 +922,15 @@ impl Element for AeroStation {
             self.residual(ctx, x, out);
             return;
         }
-        // Dual directions: the station's kinematics, states, rates and signals (≤ 28),
+        // Dual directions: the station's kinematics, states, rates and signals (at most
+        // 15 + 2·6 + 3),
         // rounded up to the sizes compiled.
         match self.directions() {
             0..=12 => self.tangents::<12>(ctx, x, out),
             13..=16 => self.tangents::<16>(ctx, x, out),
             17..=20 => self.tangents::<20>(ctx, x, out),
-            _ => self.tangents::<28>(ctx, x, out),
+            21..=28 => self.tangents::<28>(ctx, x, out),
+            _ => self.tangents::<{ KINEMATICS + 2 * MAX_STATES + 3 }>(ctx, x, out),
         }
     }
 
@@ -948,7 +950,8 @@ impl Element for AeroStation {
             0..=12 => self.signal_terms::<12>(ctx, x, out),
             13..=16 => self.signal_terms::<16>(ctx, x, out),
             17..=20 => self.signal_terms::<20>(ctx, x, out),
-            _ => self.signal_terms::<28>(ctx, x, out),
+            21..=28 => self.signal_terms::<28>(ctx, x, out),
+            _ => self.signal_terms::<{ KINEMATICS + 2 * MAX_STATES + 3 }>(ctx, x, out),
         }
     }
 
