@@ -1,0 +1,207 @@
+//! Issue #16: sample-and-hold sensors (`[[sensors]] sample_rate` / `sample_period`): the
+//! measurement sampled at t_k = k T and held until t_(k+1) (zero-order hold).
+//!
+//! References: the exact staircase of a sampled closed-form signal, and the exact
+//! discrete-time recursion of a first-order plant under a zero-order hold
+//! (Franklin, Powell & Workman, *Digital Control of Dynamic Systems*, 3rd ed., §4.3.3):
+//! `x_(k+1) = a x_k + b u_k`, `a = e^(−T/τ)`, `b = (1 − a) K` for `τ ẋ + x = K u`.
+
+mod common;
+use common::{model, model_file, orders, run, with_step};
+use samara::model::{AnalysisKind, Model};
+use samara::system::System;
+
+fn staircase_model(step: f64, control: &str) -> String {
+    format!(
+        r#"
+[model]
+name = "staircase"
+gravity = [0.0, 0.0, 0.0]
+[[nodes]]
+name = "mass"
+position = [0.0, 0.0, 0.0]
+[[bodies]]
+name = "mass"
+node = "mass"
+mass = 1.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[signals]]
+name = "u"
+function = {{ type = "sine", amplitude = 1.0, frequency = 1.0 }}
+[[sensors]]
+name = "held"
+signal = "u"
+sample_rate = 20.0
+[[analyses]]
+name = "run"
+type = "dynamic"
+t_end = 1.0
+step = {step}
+{control}
+"#
+    )
+}
+
+/// The held value of a sampled sine is the staircase sin(2π t_k), t_k = ⌊t/T⌋ T, at every
+/// recorded time, and the steps land on every sample instant — with a fixed step that
+/// does not divide T (0.03 s against T = 0.05 s) and with adaptive steps. The signal is
+/// a closed form evaluated at t_k, so the only error is the rounding of t_k (1e-12).
+#[test]
+fn a_sampled_sine_is_its_exact_staircase() {
+    let period = 0.05;
+    for control in ["", "step_control = \"adaptive\"\nstep_max = 0.2"] {
+        let m: Model = model(&staircase_model(0.03, control));
+        let (_, h) = run(&m);
+        let sys = System::new(&m);
+        let id = sys.signals.names.iter().position(|n| n == "held").unwrap();
+        for f in &h.frames {
+            let k = (f.time / period + 1e-9).floor();
+            let exact = (2.0 * std::f64::consts::PI * k * period).sin();
+            assert!(
+                (f.state.held[0] - exact).abs() < 1e-12,
+                "{control}: t = {}: held {} vs {exact}",
+                f.time,
+                f.state.held[0]
+            );
+            // The signal the sensor gives its readers (and the results) is the held value.
+            let s = sys.signal_values(&sys.context(f.time, 1.0), &f.state);
+            assert_eq!(s[id], f.state.held[0]);
+        }
+        for k in 0..=20 {
+            let tk = k as f64 * period;
+            assert!(
+                h.frames.iter().any(|f| (f.time - tk).abs() < 1e-12),
+                "{control}: no step lands on t_{k} = {tk}"
+            );
+        }
+        println!("{control:?}: {} frames", h.frames.len());
+    }
+}
+
+/// The speeds of `examples/control/sampled_speed.toml` (a cart on a damper, m v̇ + c v =
+/// F, under a P controller F = kp (r − v_k) reading a 10 Hz sample-and-hold) at the
+/// sample instants against the exact ZOH recursion v_(k+1) = a v_k + (1 − a) F_k / c,
+/// a = e^(−cT/m). Between samples the force is constant, so the only error is the
+/// integrator's error within each sample: second order in the step (h = T/5, T/10, T/20;
+/// the step after each jump restarts from consistent accelerations, else it would be first
+/// order), and below 2e-5 of the final speed at h = T/10 = 10 ms ((h/τ)² = 4e-4 with
+/// τ = 0.5 s, times the generalized-α error constant ≈ 1/12, less the settling's decay;
+/// measured 1.0e-5).
+#[test]
+fn a_sampled_p_loop_follows_the_zoh_recursion() {
+    let (m_c, c, kp, r, period) = (2.0f64, 4.0f64, 5.0f64, 1.0f64, 0.1f64);
+    let a = (-c * period / m_c).exp();
+    let mut exact = vec![0.0f64];
+    for _ in 0..20 {
+        let v = *exact.last().unwrap();
+        exact.push(a * v + (1.0 - a) * kp * (r - v) / c);
+    }
+    let settled = kp * r / (c + kp);
+    // Closed-loop pole a − (1 − a) kp/c = 0.592: within 1e-4 of v∞ after 20 samples.
+    assert!((exact[20] - settled).abs() < 1e-4, "the recursion settles");
+    let mut errors = Vec::new();
+    for step in [0.02, 0.01, 0.005] {
+        let m = with_step(model_file("examples/control/sampled_speed.toml"), step);
+        let (_, h) = run(&m);
+        let mut worst = 0.0f64;
+        for (k, ek) in exact.iter().enumerate() {
+            let tk = k as f64 * period;
+            let f = h.at(tk).unwrap();
+            assert!((f.time - tk).abs() < 1e-12, "t_{k} not landed on");
+            worst = worst.max((f.state.nodes[0].v.x - ek).abs());
+            // The held value is the speed at the sample instant.
+            assert!((f.state.held[0] - f.state.nodes[0].v.x).abs() < 1e-12);
+        }
+        errors.push(worst / settled);
+    }
+    let o = orders(&errors);
+    println!("relative errors {errors:?}, orders {o:.2?}");
+    assert!(o.iter().all(|&p| p > 1.8), "{o:?}");
+    assert!(errors[1] < 2e-5, "{errors:?}");
+}
+
+/// In statics nothing is sampled: the hold passes the current value, and the loop is
+/// in equilibrium with the held value equal to the measurement. A spring-mass (k = 100
+/// N/m) under a P position loop F = kp (r − x_held) (a `sum`) settles at x = kp r / (k + kp).
+#[test]
+fn in_statics_the_hold_passes_the_current_value() {
+    let text = r#"
+[model]
+name = "static_hold"
+gravity = [0.0, 0.0, 0.0]
+[[nodes]]
+name = "mass"
+position = [0.0, 0.0, 0.0]
+[[bodies]]
+name = "mass"
+node = "mass"
+mass = 1.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[joints]]
+name = "rail"
+type = "prismatic"
+node_a = "ground"
+node_b = "mass"
+position = [0.0, 0.0, 0.0]
+axis = [1.0, 0.0, 0.0]
+[[springs]]
+name = "k"
+node_a = "ground"
+node_b = "mass"
+point_a = [-1.0, 0.0, 0.0]
+stiffness = 100.0
+[[signals]]
+name = "target"
+function = { type = "constant", value = 0.1 }
+[[sensors]]
+name = "x"
+node = "mass"
+quantity = "position"
+component = "x"
+sample_period = 0.05
+[[controllers]]
+name = "p"
+type = "sum"
+inputs = ["target", "x"]
+weights = [300.0, -300.0]
+[[forces]]
+name = "f"
+node = "mass"
+force = [1.0, 0.0, 0.0]
+signal = "p"
+[[analyses]]
+name = "equilibrium"
+type = "static"
+"#;
+    let m: Model = model(text);
+    let (_, h) = run(&m);
+    let x = h.last().unwrap().state.nodes[0].x.x;
+    let exact = 300.0 * 0.1 / (100.0 + 300.0);
+    println!("x = {x}, exact {exact}");
+    assert!((x - exact).abs() < 1e-10, "{x} vs {exact}");
+    assert!(h.last().unwrap().state.held.is_empty());
+}
+
+/// Bad sampling keys are located errors.
+#[test]
+fn bad_sampling_keys_are_located_errors() {
+    let base = staircase_model(0.01, "");
+    for (bad, expect) in [
+        ("sample_rate = 0.0", "`sample_rate` must be positive"),
+        ("sample_rate = -5.0", "`sample_rate` must be positive"),
+        ("sample_period = 0.0", "`sample_period` must be positive"),
+        ("sample_rate = 20.0\nsample_period = 0.05", "not both"),
+    ] {
+        let text = base.replace("sample_rate = 20.0", bad);
+        let err = match Model::from_toml_str(&text, "s.toml") {
+            Ok(_) => panic!("accepted {bad}"),
+            Err(e) => e.to_string(),
+        };
+        println!("{err}");
+        assert!(err.contains("s.toml:"), "{err}");
+        assert!(err.contains(expect), "{err}");
+    }
+    // The analysis settings are untouched by the sensor (sanity of the base model).
+    let m = model(&base);
+    assert!(matches!(m.analyses[0].kind, AnalysisKind::Dynamic(_)));
+}
