@@ -205,3 +205,39 @@ fn bad_sampling_keys_are_located_errors() {
     let m = model(&base);
     assert!(matches!(m.analyses[0].kind, AnalysisKind::Dynamic(_)));
 }
+
+/// A linearization takes a held value as a constant input: in `sampled_speed.toml` the
+/// cart's linearized damping is the damper's c = 4 N s/m alone (the loop through the hold
+/// is open), where the same sensor without sampling closes the loop, c + kp = 9 N s/m
+/// (the P force's −kp v). Both are exact sums of the model's coefficients (1e-12).
+#[test]
+fn a_linearization_holds_the_sample_constant() {
+    use samara::linear::linearize;
+    let damping_ux = |m: &Model| -> f64 {
+        let sys = System::new(m);
+        let lin = linearize(&sys, &sys.initial_state(), None);
+        let i = lin
+            .unknown_names
+            .iter()
+            .position(|n| n == "cart.ux")
+            .unwrap();
+        let r = lin.damping.as_ref();
+        r.row_idx_of_col_raw(i)
+            .iter()
+            .zip(r.val_of_col(i))
+            .filter(|(row, _)| **row == i)
+            .map(|(_, v)| *v)
+            .sum()
+    };
+    let sampled = model_file("examples/control/sampled_speed.toml");
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/control/sampled_speed.toml"),
+    )
+    .unwrap();
+    let continuous = model(&text.replace("sample_rate = 10.0", ""));
+    let (held, closed) = (damping_ux(&sampled), damping_ux(&continuous));
+    println!("linearized damping: held {held}, continuous {closed}");
+    assert!((held - 4.0).abs() < 1e-12, "{held}");
+    assert!((closed - 9.0).abs() < 1e-12, "{closed}");
+}
