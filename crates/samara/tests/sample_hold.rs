@@ -241,3 +241,60 @@ fn a_linearization_holds_the_sample_constant() {
     assert!((held - 4.0).abs() < 1e-12, "{held}");
     assert!((closed - 9.0).abs() < 1e-12, "{closed}");
 }
+
+/// The held value is written to the results file as the sensor's signal
+/// (`signal:speed`): read back, it is the staircase of the cart's speed — at every output
+/// time the speed at the last sample instant ⌊t/T⌋ T (exact copies, 1e-12). Stepping with
+/// `Simulation::step` lands on the sample instants too (a 0.03 s step across t_k is cut
+/// there: two sub-steps) and gives the same held values.
+#[test]
+fn the_held_value_is_written_and_stepping_lands_on_samples() {
+    use samara::analysis::{Simulation, run_analysis};
+    use samara::output::{ResultsFile, ResultsReader};
+    let m = model_file("examples/control/sampled_speed.toml");
+    let sys = System::new(&m);
+    let dir = tempfile::tempdir().unwrap();
+    let mut file = ResultsFile::create(dir.path(), &m, None, &sys, &m.analyses[0]).unwrap();
+    let summary = run_analysis(
+        &sys,
+        &m.analyses[0],
+        sys.initial_state(),
+        &mut file,
+        &mut |_| {},
+    )
+    .unwrap();
+    let path = file.finish(&summary).unwrap();
+    let mut r = ResultsReader::open(&path).unwrap();
+    let time = r.time().unwrap();
+    let held = r.channel("signal:speed").unwrap().values;
+    let speed = r.channel("velocity:cart:x").unwrap().values;
+    let period = 0.1;
+    let mut checked = 0;
+    for (i, &t) in time.iter().enumerate() {
+        let tk = (t / period + 1e-9).floor() * period;
+        let j = time.iter().position(|&s| (s - tk).abs() < 1e-9).unwrap();
+        assert!((held[i] - speed[j]).abs() < 1e-12, "t = {t}");
+        checked += 1;
+    }
+    assert_eq!(checked, 201);
+    let AnalysisKind::Dynamic(settings) = &m.analyses[0].kind else {
+        unreachable!()
+    };
+    let mut sim = Simulation::new(&sys, settings, sys.initial_state()).unwrap();
+    let mut cut = 0;
+    while sim.time() < 0.5 - 1e-12 {
+        let t = sim.time();
+        let report = sim.step(0.03f64.min(0.5 - t)).unwrap();
+        let crossed = ((t / period + 1e-9).floor() + 1.0) * period < sim.time() - 1e-9;
+        if crossed {
+            assert_eq!(report.sub_steps, 2, "t = {t}");
+            cut += 1;
+        }
+        let tk = (sim.time() / period + 1e-9).floor() * period;
+        let j = time.iter().position(|&s| (s - tk).abs() < 1e-9).unwrap();
+        // Different steps (0.03 s against 0.01 s): the held speeds agree to the
+        // integrators' errors (1e-5 of v∞ at these steps, tests above).
+        assert!((sim.state().held[0] - speed[j]).abs() < 1e-4, "t = {}", sim.time());
+    }
+    assert!(cut >= 3, "{cut}");
+}
