@@ -294,7 +294,11 @@ fn the_held_value_is_written_and_stepping_lands_on_samples() {
         let j = time.iter().position(|&s| (s - tk).abs() < 1e-9).unwrap();
         // Different steps (0.03 s against 0.01 s): the held speeds agree to the
         // integrators' errors (1e-5 of v∞ at these steps, tests above).
-        assert!((sim.state().held[0] - speed[j]).abs() < 1e-4, "t = {}", sim.time());
+        assert!(
+            (sim.state().held[0] - speed[j]).abs() < 1e-4,
+            "t = {}",
+            sim.time()
+        );
     }
     assert!(cut >= 3, "{cut}");
 }
