@@ -229,6 +229,19 @@ pub fn check_element_with(
     states: &[ElementState],
     signals: &[f64],
 ) -> ElementReport {
+    check_element_held(e, ctx, nodes, states, signals, &[])
+}
+
+/// [`check_element_with`] with the element's sample-and-hold values `held` (empty: none
+/// held, a hold passes its input through as in statics).
+pub fn check_element_held(
+    e: &dyn Element,
+    ctx: &EvalContext,
+    nodes: &[NodeState],
+    states: &[ElementState],
+    signals: &[f64],
+    held: &[f64],
+) -> ElementReport {
     let en = e.nodes().to_vec();
     let nz = e.n_states();
     let n_in = e.signal_inputs().len();
@@ -254,6 +267,7 @@ pub fn check_element_with(
             nodes,
             states,
             signals,
+            held,
         };
         e.evaluate(ctx, &x, Need::ResidualAndTangents, &mut t);
         st.clear();
@@ -270,6 +284,7 @@ pub fn check_element_with(
             nodes: work,
             states: wz,
             signals: ws,
+            held,
         };
         tp.clear(Need::Residual);
         e.evaluate(ctx, &x, Need::Residual, &mut tp);
@@ -556,6 +571,7 @@ pub enum TangentCase {
         nodes: Vec<NodeState>,
         states: Vec<ElementState>,
         signals: Vec<f64>,
+        held: Vec<f64>,
     },
     Constraint {
         constraint: Box<dyn Constraint>,
@@ -572,6 +588,7 @@ impl TangentCase {
             nodes,
             states: Vec::new(),
             signals: Vec::new(),
+            held: Vec::new(),
         }
     }
 
@@ -608,6 +625,14 @@ impl TangentCase {
         self
     }
 
+    /// Sample-and-hold values of the element (as in dynamics; none: as in statics).
+    pub fn with_held(mut self, values: Vec<f64>) -> Self {
+        if let Self::Element { held, .. } = &mut self {
+            *held = values;
+        }
+        self
+    }
+
     /// Name of the element or constraint.
     pub fn name(&self) -> &str {
         match self {
@@ -626,8 +651,10 @@ impl TangentCase {
                 nodes,
                 states,
                 signals,
+                held,
             } => CaseReport {
-                tangents: check_element_with(element.as_ref(), ctx, nodes, states, signals).worst(),
+                tangents: check_element_held(element.as_ref(), ctx, nodes, states, signals, held)
+                    .worst(),
                 rates: 0.0,
             },
             Self::Constraint {

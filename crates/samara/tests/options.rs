@@ -567,6 +567,7 @@ step = 0.01
             nodes: &initial,
             states: &states,
             signals: &[],
+            held: &[],
         };
         e.evaluate(&ctx, &x, Need::Residual, &mut out);
         out.r.iter().copied().collect()
@@ -1454,6 +1455,7 @@ step = 0.01
                 nodes: &initial,
                 states: &[],
                 signals: &sig,
+                held: &[],
             };
             let mut t = LocalTerms::for_element(e.as_ref());
             e.evaluate(&ctx, &x, Need::Residual, &mut t);
@@ -1471,6 +1473,7 @@ step = 0.01
                 nodes: &initial,
                 states: &states,
                 signals: &thrust,
+                held: &[],
             };
             let mut t = LocalTerms::for_element(r.as_ref());
             r.evaluate(&ctx, &x, Need::Residual, &mut t);
@@ -1570,5 +1573,61 @@ fn start_from_time_on_a_run_without_t_end_reports_only_the_missing_t_end() {
     assert!(
         !err.contains("NaN") && !err.contains("outside the run"),
         "{err}"
+    );
+}
+
+/// Issue #16: `[[sensors]] sample_rate` and `sample_period` (sample-and-hold) change the
+/// held signal: each rate gives its own staircase of a sine, `sample_period = 1/rate` gives
+/// the rate's, and without either the sensor follows the sine.
+#[test]
+fn sensor_sampling_keys_change_the_held_signal() {
+    const BASE: &str = r#"
+[model]
+name = "hold"
+gravity = [0.0, 0.0, 0.0]
+[[nodes]]
+name = "n"
+position = [0.0, 0.0, 0.0]
+[[bodies]]
+name = "b"
+node = "n"
+mass = 1.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+[[signals]]
+name = "r"
+function = { type = "sine", amplitude = 1.0, frequency = 1.0 }
+[[sensors]]
+name = "s"
+signal = "r"
+sample_rate = 20.0
+[[analyses]]
+name = "run"
+type = "dynamic"
+t_end = 0.5
+step = 0.01
+"#;
+    let outcome = |text: &str| -> Vec<f64> {
+        let (_, h) = attempt(text);
+        let m = model(text);
+        let sys = System::new(&m);
+        let id = sys.signals.names.iter().position(|n| n == "s").unwrap();
+        h.frames
+            .iter()
+            .filter(|f| ((f.time * 100.0).round() - f.time * 100.0).abs() < 1e-9)
+            .map(|f| sys.signal_values(&sys.context(f.time, 1.0), &f.state)[id])
+            .collect()
+    };
+    let base = outcome(BASE);
+    let differs = |a: &[f64], b: &[f64]| {
+        a.len() != b.len() || a.iter().zip(b).any(|(x, y)| (x - y).abs() > 1e-9)
+    };
+    for to in ["sample_rate = 30.0", "sample_period = 0.03", ""] {
+        let other = outcome(&BASE.replacen("sample_rate = 20.0", to, 1));
+        assert!(differs(&base, &other), "`{to}` changed nothing");
+    }
+    let same = outcome(&BASE.replacen("sample_rate = 20.0", "sample_period = 0.05", 1));
+    assert!(
+        !differs(&base, &same),
+        "sample_period = 1/sample_rate differs"
     );
 }

@@ -193,6 +193,17 @@ struct Integrator<'a> {
     /// hΔq and h of the last accepted step (h = 0: none yet).
     last_hdq: Vec<f64>,
     last_h: f64,
+    /// Workspace of the consistent accelerations after a sample-and-hold jump (made on
+    /// first use).
+    restart: Option<Box<RestartWork>>,
+}
+
+/// The index-3 problem of consistent accelerations, kept for restarts.
+struct RestartWork {
+    asm: Assembler,
+    lin: LinearSolver,
+    matrix: BlockMatrix,
+    residual: Vec<f64>,
 }
 
 impl Integrator<'_> {
@@ -364,6 +375,65 @@ impl Integrator<'_> {
         Ok(report)
     }
 
+    /// Takes the samples due at the current time; when a held value changed, the forcing
+    /// jumps, so the step restarts like the first one: consistent accelerations (and
+    /// multipliers) at the current state become the algorithmic accelerations. Without
+    /// the restart the stale a_n would make the next step's velocity update
+    /// `h (1 − γ) a_n` wrong by O(h), the whole run first order.
+    fn sample(&mut self) {
+        if self.sys.n_held == 0 || !self.sys.sample(&mut self.state, false) {
+            return;
+        }
+        let sys = self.sys;
+        let work = self.restart.get_or_insert_with(|| {
+            let asm = Assembler::new(sys, Formulation::Index3);
+            let lin = LinearSolver::new(asm.structure(), self.settings.solver.linear_solver);
+            let matrix = BlockMatrix::zeros(asm.structure().clone());
+            let residual = vec![0.0; asm.n_unknowns()];
+            Box::new(RestartWork {
+                asm,
+                lin,
+                matrix,
+                residual,
+            })
+        });
+        let ctx = sys.context(self.state.time, 1.0);
+        let saved = self.state.clone();
+        let ok = consistent_accelerations(
+            sys,
+            &mut self.state,
+            &ctx,
+            &mut work.asm,
+            &mut work.lin,
+            &mut work.matrix,
+            &mut work.residual,
+        )
+        .is_ok()
+            && self
+                .state
+                .nodes
+                .iter()
+                .all(|n| n.a.iter().chain(n.wd.iter()).all(|x| x.is_finite()));
+        if !ok {
+            // Keep the stepping as it was (first order across this jump).
+            self.state = saved;
+            return;
+        }
+        for (i, nd) in self.state.nodes.iter().enumerate() {
+            let v = [nd.a.x, nd.a.y, nd.a.z, nd.wd.x, nd.wd.y, nd.wd.z];
+            self.acc[6 * i..6 * i + 6].copy_from_slice(&v);
+        }
+        let n6 = 6 * sys.n_nodes();
+        for (j, c) in self.state.coords.iter().take(sys.n_coordinates).enumerate() {
+            self.acc[n6 + j] = c.a;
+        }
+        let z0 = n6 + sys.n_coordinates;
+        for (j, z) in self.state.states.iter().enumerate() {
+            self.acc[z0 + j] = z.zd;
+        }
+        self.mu.copy_from_slice(&self.state.lambda);
+    }
+
     /// Accepts the trial step: chooses the next predictor, updates the algorithmic
     /// accelerations and swaps states.
     /// Local error estimate of the step just solved (trial against state), relative to
@@ -495,6 +565,7 @@ fn start<'a>(
         extrapolated: vec![0.0; sys.n_config()],
         last_hdq: vec![0.0; sys.n_config()],
         last_h: 0.0,
+        restart: None,
     };
     let name = summary.name.clone();
     let fail = |summary: &mut AnalysisSummary, time: f64, reason: String, hint: Option<String>| {
@@ -525,6 +596,8 @@ fn start<'a>(
     ) {
         return Err(it.state);
     }
+    // Sample-and-hold values at the start (kept when continuing a dynamic analysis).
+    sys.sample(&mut it.state, false);
     sys.constraint_values(&ctx0, &it.state, &mut it.phi);
     let viol0 = it.phi.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let mut res0 = vec![0.0; init_asm.n_unknowns()];
@@ -704,8 +777,15 @@ pub fn run_dynamic(
         } else {
             t + h
         };
+        let nominal = target;
         if adaptive.is_some()
             && let Some(&b) = breakpoints.iter().find(|&&b| b > t + 1e-9 * h)
+            && b < target + 1e-9 * h
+        {
+            target = b;
+        }
+        // Fixed or adaptive, steps land on the sample instants of sample-and-hold values.
+        if let Some(b) = sys.next_sample(t)
             && b < target + 1e-9 * h
         {
             target = b;
@@ -752,9 +832,11 @@ pub fn run_dynamic(
                 step_index += 1;
                 summary.steps += 1;
                 summary.newton_iterations += report.iterations;
-                if on_grid && h == settings.step {
+                // A step shortened to a sample instant leaves the grid point ahead.
+                if on_grid && h == settings.step && (target - nominal).abs() <= 1e-9 * h {
                     grid_k += 1;
                 }
+                it.sample();
                 let ctx = sys.context(it.state.time, 1.0);
                 let p_ext1 =
                     sys.external_power(&ctx, &it.state) + sys.drive_power(&it.state, &it.mu);
@@ -959,11 +1041,17 @@ impl<'a> Simulation<'a> {
             if end > target || target - end < 1e-9 * hh {
                 end = target;
             }
+            if let Some(b) = it.sys.next_sample(t)
+                && b < end + 1e-9 * hh
+            {
+                end = b;
+            }
             let predictor = if hold { Predictor::Hold } else { it.predictor };
             match it.step(end - t, predictor) {
                 Ok(r) => {
                     it.accept();
                     it.state.time = end;
+                    it.sample();
                     hold = false;
                     report.sub_steps += 1;
                     report.newton_iterations += r.iterations;

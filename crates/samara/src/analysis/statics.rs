@@ -209,6 +209,8 @@ pub fn run_static(
     for z in &mut state.states {
         z.zd = 0.0;
     }
+    // Nothing is sampled in statics: a sample-and-hold passes its input through.
+    state.held = Box::default();
     state.time = settings.time;
     let mut asm = Assembler::new(sys, Formulation::Index3);
     let mut lin = LinearSolver::new(asm.structure(), settings.solver.linear_solver);

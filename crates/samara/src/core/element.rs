@@ -50,6 +50,9 @@ pub struct ElementInput<'a> {
     pub states: &'a [ElementState],
     /// Values of the signals the element reads, in [`Element::signal_inputs`] order.
     pub signals: &'a [f64],
+    /// The element's sample-and-hold values ([`Element::n_held`]), or empty when nothing
+    /// samples (statics): a hold then passes its input through.
+    pub held: &'a [f64],
 }
 
 impl<'a> ElementInput<'a> {
@@ -59,6 +62,7 @@ impl<'a> ElementInput<'a> {
             nodes,
             states: &[],
             signals: &[],
+            held: &[],
         }
     }
 }
@@ -226,6 +230,18 @@ pub trait Element: Send + Sync {
     fn outputs(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut [f64]) {}
     /// Times where the element's loads jump or kink (its time functions' breakpoints).
     fn breakpoints(&self, _out: &mut Vec<f64>) {}
+    /// Number of sample-and-hold values (discrete states) the element keeps: constant
+    /// between its sample instants `t_k = k T`, set by [`Element::sample`] at each.
+    fn n_held(&self) -> usize {
+        0
+    }
+    /// Sample period T [s] of the held values (`Some` when [`Element::n_held`] > 0).
+    fn sample_period(&self) -> Option<f64> {
+        None
+    }
+    /// The values to hold from now on, taken from the current state (called at the
+    /// start of a dynamic analysis and after the step that lands on each sample instant).
+    fn sample(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut [f64]) {}
     /// Whether the element has a discrete form for the energy-consistent integrators
     /// ([`Element::discrete_residual`]); `Err` says why not (its kind, or the option that
     /// has none).

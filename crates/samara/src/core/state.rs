@@ -60,4 +60,8 @@ pub struct State {
     pub states: Vec<ElementState>,
     /// Lagrange multipliers in physical units (force, moment), per constraint row.
     pub lambda: Vec<f64>,
+    /// Sample-and-hold values (discrete states that change only at sample instants),
+    /// element by element (`System::held_offsets`). Empty when nothing samples (statics):
+    /// every hold then passes its input through.
+    pub held: Box<[f64]>,
 }

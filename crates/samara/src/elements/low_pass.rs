@@ -11,6 +11,13 @@
 //! Without a filter (τ = 0) the sensor has no state: s = g u, with feedthrough (its
 //! output's derivatives are those of u).
 //!
+//! **Sample-and-hold** (zero-order hold, noise-free): with a sample period T the output
+//! is the filter's output (or g u) sampled at `t_k = k T` and held until `t_(k+1)`,
+//! `s(t) = y(t_k)` for `t_k ≤ t < t_(k+1)`. The held value is a discrete state of the
+//! system ([`Element::n_held`]) set after the step that lands on each `t_k`; within a step
+//! it is a constant (no derivatives). Where nothing is held (statics) the output is the
+//! current value, as without sampling.
+//!
 //! Measured quantities, global components: position x, velocity v, acceleration v̇,
 //! angular velocity ω = R Ω (∂ω/∂Ω = R, ∂ω/∂θ = −R Ω̃ for the material increment).
 
@@ -44,6 +51,8 @@ pub struct LowPassSensor {
     time_constant: f64,
     gain: f64,
     initial: f64,
+    /// Sample period T [s] of the zero-order hold, if any.
+    sample_period: Option<f64>,
 }
 
 impl LowPassSensor {
@@ -70,6 +79,22 @@ impl LowPassSensor {
             time_constant,
             gain,
             initial,
+            sample_period: None,
+        }
+    }
+
+    /// The same sensor sampled every `period` T > 0 and held in between (zero-order hold).
+    pub fn sampled(mut self, period: f64) -> Self {
+        self.sample_period = Some(period);
+        self
+    }
+
+    /// The output before the hold: the filter state z, or g u without a filter.
+    pub fn continuous_output(&self, x: &ElementInput) -> f64 {
+        if self.time_constant > 0.0 {
+            x.states[0].z
+        } else {
+            self.gain * self.measure(x)
         }
     }
 
@@ -119,10 +144,25 @@ impl Element for LowPassSensor {
         &self.outputs
     }
     fn feedthrough(&self) -> bool {
+        // A hold passes its input through where nothing is held (statics).
         self.time_constant == 0.0
+    }
+    fn n_held(&self) -> usize {
+        usize::from(self.sample_period.is_some())
+    }
+    fn sample_period(&self) -> Option<f64> {
+        self.sample_period
+    }
+    fn sample(&self, _ctx: &EvalContext, x: &ElementInput, out: &mut [f64]) {
+        out[0] = self.continuous_output(x);
     }
 
     fn signals(&self, _ctx: &EvalContext, x: &ElementInput, out: &mut SignalTerms) {
+        if let (Some(_), Some(&h)) = (self.sample_period, x.held.first()) {
+            // Held: a constant within the step.
+            out.values[0] = h;
+            return;
+        }
         if self.time_constant == 0.0 {
             // s = g u: the measurement's derivatives, scaled.
             let g = self.gain;

@@ -581,6 +581,7 @@ mod tests {
             nodes: &nodes,
             states: &states,
             signals: &[100.0],
+            held: &[],
         };
         let mut out = LocalTerms::for_element(&tire);
         tire.evaluate(&ctx, &x, Need::Residual, &mut out);

@@ -175,6 +175,17 @@ pub fn unknown_names(sys: &System) -> Vec<String> {
 /// they are), in the inertial frame or, with `rotation`, in the frame turning with it.
 /// For a steadily rotating state, impose its rates first with [`SteadyRotation::impose`].
 pub fn linearize(sys: &System, state: &State, rotation: Option<&SteadyRotation>) -> LinearSystem {
+    // A sample-and-hold is a constant input of the linearized equations: its value held
+    // at the operating point (taken there when the state holds none, after statics).
+    let sampled;
+    let state = if state.held.len() == sys.n_held {
+        state
+    } else {
+        let mut s = state.clone();
+        sys.sample(&mut s, true);
+        sampled = s;
+        &sampled
+    };
     let ctx = sys.context(state.time, 1.0);
     let mats = sys.matrices(&ctx, state);
     let n = mats.n;

@@ -1,9 +1,10 @@
-//! Rotation and small linear-algebra kernels, and scalar time functions.
+//! Rotation and small linear-algebra kernels, scalar time functions and tabulated terrain.
 //!
 //! Pure functions only; everything here is independent of the model and of the analyses.
 
 pub mod cayley;
 pub mod dual;
+pub mod height_field;
 pub mod so3;
 pub mod time_function;
 

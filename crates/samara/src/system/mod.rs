@@ -66,6 +66,11 @@ pub struct System {
     pub n_states: usize,
     /// `<element>.<state>` per element state.
     pub state_names: Vec<String>,
+    /// Offset of each element's sample-and-hold values in [`State::held`].
+    pub held_offsets: Vec<usize>,
+    pub n_held: usize,
+    /// The distinct sample periods of the elements that hold values.
+    pub sample_periods: Vec<f64>,
     /// Who produces and who reads each signal.
     pub signals: SignalGraph,
     /// First output of each element in the list of outputs (results only).
@@ -122,6 +127,7 @@ impl System {
             coords: vec![Coordinate::default(); self.n_coordinates + self.n_passive],
             states,
             lambda: vec![0.0; self.n_multipliers],
+            held: Box::default(),
         };
         self.measure_coordinates(&mut s);
         s
@@ -145,7 +151,82 @@ impl System {
             nodes: &state.nodes,
             states: &state.states[off..off + n],
             signals: scratch,
+            held: self.held_of(k, state),
         }
+    }
+
+    /// The sample-and-hold values of element `k` in `state` (empty when `state` holds
+    /// none: statics, where a hold passes its input through).
+    #[inline]
+    pub fn held_of<'a>(&self, k: usize, state: &'a State) -> &'a [f64] {
+        if state.held.len() != self.n_held {
+            return &[];
+        }
+        let o = self.held_offsets[k];
+        &state.held[o..o + self.elements[k].n_held()]
+    }
+
+    /// Whether `t` is a sample instant `k T` of the period `T`, to within 1e-9 T.
+    fn on_sample_instant(t: f64, period: f64) -> bool {
+        let k = (t / period).round();
+        (t - k * period).abs() <= 1e-9 * period
+    }
+
+    /// The first sample instant `k T` of any sampling element later than `t` by more
+    /// than 1e-9 T (None when nothing samples): time steppers land on it.
+    pub fn next_sample(&self, t: f64) -> Option<f64> {
+        self.sample_periods
+            .iter()
+            .map(|&p| {
+                let mut k = (t / p).floor() + 1.0;
+                if k * p - t <= 1e-9 * p {
+                    k += 1.0;
+                }
+                k * p
+            })
+            .min_by(f64::total_cmp)
+    }
+
+    /// Takes the samples due at `state.time` (all of them with `all`, at the start of a
+    /// dynamic analysis or when `state` holds none yet) into `state.held`: zero-order
+    /// hold, the measurement at `t_k` held until `t_(k+1)`. The values are taken with the
+    /// held values before the update (all holds sample at once). Returns whether a held
+    /// value changed (the forcing then jumps).
+    pub fn sample(&self, state: &mut State, all: bool) -> bool {
+        if self.n_held == 0 {
+            state.held = Box::default();
+            return false;
+        }
+        let all = all || state.held.len() != self.n_held;
+        let due = |e: &dyn Element| {
+            e.sample_period()
+                .is_some_and(|p| all || Self::on_sample_instant(state.time, p))
+        };
+        if !all
+            && !self
+                .sample_periods
+                .iter()
+                .any(|&p| Self::on_sample_instant(state.time, p))
+        {
+            return false;
+        }
+        let ctx = self.context(state.time, 1.0);
+        let mut next = state.held.to_vec();
+        next.resize(self.n_held, 0.0);
+        let signals = self.signal_values(&ctx, state);
+        let mut scratch = Vec::new();
+        for (k, e) in self.elements.iter().enumerate() {
+            let nh = e.n_held();
+            if nh == 0 || !due(e.as_ref()) {
+                continue;
+            }
+            let o = self.held_offsets[k];
+            let x = self.element_input(k, state, &signals, &mut scratch);
+            e.sample(&ctx, &x, &mut next[o..o + nh]);
+        }
+        let changed = *next != *state.held;
+        state.held = next.into_boxed_slice();
+        changed
     }
 
     /// Values of all signals at `state` (allocates; the assembler keeps its own scratch).
@@ -272,6 +353,18 @@ impl System {
             nz += e.n_states();
             state_names.extend(e.state_names().iter().map(|s| format!("{}.{s}", e.name())));
         }
+        let mut held_offsets = Vec::with_capacity(elements.len());
+        let mut n_held = 0;
+        let mut sample_periods: Vec<f64> = Vec::new();
+        for e in &elements {
+            held_offsets.push(n_held);
+            n_held += e.n_held();
+            if let Some(p) = e.sample_period().filter(|_| e.n_held() > 0)
+                && !sample_periods.contains(&p)
+            {
+                sample_periods.push(p);
+            }
+        }
         // Output quantities, element by element (results only).
         let mut output_offsets = Vec::with_capacity(elements.len());
         let (mut output_names, mut output_units) = (Vec::new(), Vec::new());
@@ -344,6 +437,9 @@ impl System {
             state_offsets,
             n_states: nz,
             state_names,
+            held_offsets,
+            n_held,
+            sample_periods,
             signals,
             output_offsets,
             output_names,

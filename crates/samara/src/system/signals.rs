@@ -77,6 +77,10 @@ pub struct SignalGraph {
     /// Signals read straight from one unknown of the configuration (a joint coordinate
     /// or an element state, [`DirectSource`]): (signal id, source).
     pub direct: Vec<(usize, DirectSource)>,
+    /// Offset of each element's sample-and-hold values in [`State::held`], and their
+    /// number.
+    held_offsets: Vec<usize>,
+    n_held: usize,
 }
 
 /// What a direct signal reads: a joint coordinate's value, rate or acceleration
@@ -151,6 +155,10 @@ impl SignalGraph {
         direct: DirectNames,
     ) -> Self {
         let mut g = SignalGraph::default();
+        for e in elements {
+            g.held_offsets.push(g.n_held);
+            g.n_held += e.n_held();
+        }
         let mut id = std::collections::HashMap::new();
         for (k, e) in elements.iter().enumerate() {
             let mut outs = Vec::new();
@@ -343,6 +351,12 @@ impl SignalGraph {
                 nodes: &state.nodes,
                 states: &state.states[off..off + e.n_states()],
                 signals: &out.inputs,
+                held: if state.held.len() == self.n_held && self.n_held > 0 {
+                    let o = self.held_offsets[k];
+                    &state.held[o..o + e.n_held()]
+                } else {
+                    &[]
+                },
             };
             e.signals(ctx, &x, t);
             for o in 0..t.values.len() {

@@ -17,6 +17,8 @@
 //! # initial = 0.0            # z(0) of the filter; default g·u(0) for node position,
 //! #                          # velocity and angular velocity (the sensor starts settled),
 //! #                          # 0 otherwise
+//! # sample_rate = 100.0      # zero-order hold: sampled at t_k = k/rate [Hz] and held
+//! # sample_period = 0.01     #   until the next sample (or give the period T [s])
 //! ```
 
 use super::{Build, ComponentKind};
@@ -87,6 +89,13 @@ pub struct SensorEntry {
     /// Initial output z(0); see the module documentation for the default.
     #[serde(default)]
     pub initial: Option<f64>,
+    /// Sample-and-hold rate [Hz]: the output is sampled at t_k = k/rate and held
+    /// (zero-order hold). Exclusive with `sample_period`.
+    #[serde(default)]
+    pub sample_rate: Option<f64>,
+    /// Sample-and-hold period T [s] (instead of `sample_rate`).
+    #[serde(default)]
+    pub sample_period: Option<f64>,
 }
 
 /// A validated sensor.
@@ -104,6 +113,8 @@ pub struct SensorDef {
     pub state: Option<(String, Option<std::ops::Range<usize>>)>,
     pub gain: f64,
     pub initial: f64,
+    /// Sample period T [s] of a zero-order hold, if any.
+    pub sample_period: Option<f64>,
 }
 
 pub struct Sensor;
@@ -142,6 +153,40 @@ impl ComponentKind for Sensor {
             ok = false;
         }
         let gain = si.gain.unwrap_or(1.0);
+        let sample_period = match (si.sample_rate, si.sample_period) {
+            (Some(_), Some(_)) => {
+                cx.error(
+                    format!("{what}: give `sample_rate` or `sample_period`, not both"),
+                    cx.key(&e, "sample_period"),
+                    Some("the period is 1/rate".into()),
+                );
+                ok = false;
+                None
+            }
+            (Some(r), None) if !(r.is_finite() && r > 0.0 && (1.0 / r).is_normal()) => {
+                cx.error(
+                    format!("{what}: `sample_rate` must be positive and finite (got {r})"),
+                    cx.key(&e, "sample_rate"),
+                    Some("samples per second [Hz]; leave it out for a continuous sensor".into()),
+                );
+                ok = false;
+                None
+            }
+            (None, Some(p)) if !(p.is_finite() && p > 0.0) => {
+                cx.error(
+                    format!("{what}: `sample_period` must be positive and finite (got {p})"),
+                    cx.key(&e, "sample_period"),
+                    Some(
+                        "the time T [s] between samples; leave it out for a continuous sensor"
+                            .into(),
+                    ),
+                );
+                ok = false;
+                None
+            }
+            (Some(r), None) => Some(1.0 / r),
+            (None, p) => p,
+        };
         let mut joint = None;
         let mut state = None;
         let joint_keys = si.joint.is_some() || si.coordinate.is_some();
@@ -285,6 +330,7 @@ impl ComponentKind for Sensor {
             state,
             gain,
             initial,
+            sample_period,
         })
     }
 
@@ -377,14 +423,18 @@ impl ComponentKind for Sensor {
     }
 
     fn build(def: &SensorDef, parts: &mut Build) {
-        parts.elements.push(Box::new(LowPassSensor::new(
+        let sensor = LowPassSensor::new(
             &def.name,
             &def.name,
             def.input.clone(),
             def.time_constant,
             def.gain,
             def.initial,
-        )));
+        );
+        parts.elements.push(Box::new(match def.sample_period {
+            Some(period) => sensor.sampled(period),
+            None => sensor,
+        }));
     }
 
     fn tangent_cases() -> Vec<TangentCase> {
@@ -434,6 +484,30 @@ impl ComponentKind for Sensor {
         }
         let e = LowPassSensor::new("s", "s", SensorInput::Signal("u".into()), 0.0, 2.0, 0.0);
         out.push(TangentCase::element(Box::new(e), Vec::new()).with_signals(vec![0.3]));
+        // Sampled: a held value is a constant within the step; with nothing held (statics)
+        // the hold passes the filter's output or the measurement through.
+        for (k, tau) in [0.0, 0.05].into_iter().enumerate() {
+            let q = NodeQuantity::Velocity(2);
+            let input = SensorInput::Node {
+                node: 0,
+                quantity: q,
+            };
+            let e = || LowPassSensor::new("s", "s", input.clone(), tau, 1.5, 0.0).sampled(0.01);
+            let states = if tau > 0.0 {
+                vec![(0.3, -1.1)]
+            } else {
+                Vec::new()
+            };
+            out.push(
+                TangentCase::element(Box::new(e()), vec![random_node(640 + k as u64)])
+                    .with_states(states.clone())
+                    .with_held(vec![0.42]),
+            );
+            out.push(
+                TangentCase::element(Box::new(e()), vec![random_node(650 + k as u64)])
+                    .with_states(states),
+            );
+        }
         let e = LowPassSensor::new("s", "s", SensorInput::Signal("u".into()), 0.2, -3.0, 0.0);
         out.push(
             TangentCase::element(Box::new(e), Vec::new())
