@@ -304,6 +304,38 @@ fn bad_hgm_input_is_a_located_error() {
         e.contains(&format!("bad.toml:{}:", line(&bad, "stall_time_constant"))),
         "{e}"
     );
+    // `hgm` coefficients in the model: a bad value at its key, A₁ + A₂ > 1 at the table,
+    // and the table without the HGM model at `hgm`.
+    let with = |table: &str| {
+        good.replace(
+            "dynamic_stall = \"hgm\"",
+            &format!("dynamic_stall = \"hgm\"\nhgm = {{ {table} }}"),
+        )
+    };
+    assert!(Model::from_toml_str(&with("t_p = 2.0, a1 = 0.2"), dir.path().join("ok.toml")).is_ok());
+    let bad = with("t_p = 0.0");
+    let e = model_error(dir.path(), &bad);
+    assert!(
+        e.contains("`t_p`")
+            && e.contains("> 0")
+            && e.contains(&format!("bad.toml:{}:", line(&bad, "hgm ="))),
+        "{e}"
+    );
+    let bad = with("a1 = 0.7, a2 = 0.6");
+    let e = model_error(dir.path(), &bad);
+    assert!(
+        e.contains("A₁ + A₂") && e.contains(&format!("bad.toml:{}:", line(&bad, "hgm ="))),
+        "{e}"
+    );
+    let bad = with("b1 = 0.1").replace("dynamic_stall = \"hgm\"\n", "");
+    let e = model_error(dir.path(), &bad);
+    assert!(
+        e.contains("without the HGM") && e.contains(&format!("bad.toml:{}:", line(&bad, "hgm ="))),
+        "{e}"
+    );
+    let bad = with("t_f = 3.0");
+    let e = model_error(dir.path(), &bad);
+    assert!(e.contains("t_f"), "{e}");
     // A table without a UA block (CSV) takes UnsteadyAero's defaults.
     let d = HgmCoefficients::DEFAULT;
     assert_eq!(

@@ -535,7 +535,7 @@ type = "dynamic"
 t_end = 0.01
 step = 0.01
 "#;
-    let residual = |text: &str| -> Vec<f64> {
+    let residual_with_rates = |text: &str, zd: f64, from_initial: bool| -> Vec<f64> {
         let m = Model::from_toml_str(text, dir.path().join("m.toml"))
             .unwrap_or_else(|e| panic!("{}", e.render_plain()))
             .model;
@@ -558,8 +558,8 @@ step = 0.01
         let states: Vec<ElementState> = z0
             .iter()
             .map(|&z| ElementState {
-                z: z + 0.05,
-                zd: 0.0,
+                z: if from_initial { z + 0.05 } else { 0.05 },
+                zd,
             })
             .collect();
         let mut out = LocalTerms::for_element(e.as_ref());
@@ -572,6 +572,7 @@ step = 0.01
         e.evaluate(&ctx, &x, Need::Residual, &mut out);
         out.r.iter().copied().collect()
     };
+    let residual = |text: &str| residual_with_rates(text, 0.0, true);
     let reference = residual(base);
     assert_eq!(reference.len(), 6 + 3);
     for (from, to) in [
@@ -611,6 +612,28 @@ step = 0.01
         residual(&hgm.replace("\"hgm\"", "\"beddoes_leishman\"")),
         r_hgm
     );
+    // Every `hgm` coefficient changes the state rows (at fixed states, since the initial
+    // states follow A₁, A₂, and with non-zero rates, so that the time constants show).
+    let r_rates = residual_with_rates(&hgm, 0.3, false);
+    for key in [
+        "a1 = 0.2",
+        "a2 = 0.5",
+        "b1 = 0.2",
+        "b2 = 0.4",
+        "t_f0 = 5.0",
+        "t_p = 1.0",
+    ] {
+        let v = residual_with_rates(
+            &hgm.replace(
+                "dynamic_stall = \"hgm\"",
+                &format!("dynamic_stall = \"hgm\"\nhgm = {{ {key} }}"),
+            ),
+            0.3,
+            false,
+        );
+        let diff: f64 = v.iter().zip(&r_rates).map(|(a, b)| (a - b).abs()).sum();
+        assert!(diff > 1e-9, "`{key}` changed nothing");
+    }
 }
 
 /// Issue #16: every `[[controllers]]` key changes the signals or states it drives (the

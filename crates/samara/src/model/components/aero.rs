@@ -193,6 +193,49 @@ pub struct AeroLineInput {
     /// A_τ of Øye's time constant τ = A_τ c/V; default 4.
     #[serde(default)]
     pub stall_time_constant: Option<f64>,
+    /// Coefficients of the HGM model that replace, for every station of the line, those of
+    /// the airfoil file's unsteady-aerodynamics block (or UnsteadyAero's defaults).
+    #[serde(default)]
+    pub hgm: Option<Located<HgmInput>>,
+}
+
+/// HGM (Beddoes–Leishman type) coefficients set in the model; each one optional.
+#[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct HgmInput {
+    /// A₁, A₂ of the circulatory response 1 − A₁e^{−b₁s} − A₂e^{−b₂s}: ≥ 0, A₁ + A₂ ≤ 1.
+    #[serde(default)]
+    pub a1: Option<f64>,
+    #[serde(default)]
+    pub a2: Option<f64>,
+    /// b₁, b₂ (per semichord of travel): > 0.
+    #[serde(default)]
+    pub b1: Option<f64>,
+    #[serde(default)]
+    pub b2: Option<f64>,
+    /// T_f0, T_p: separation and pressure time constants in units of T_u = c/2V: > 0.
+    #[serde(default)]
+    pub t_f0: Option<f64>,
+    #[serde(default)]
+    pub t_p: Option<f64>,
+}
+
+impl HgmInput {
+    /// `c` with the coefficients given here put in.
+    fn apply(&self, mut c: HgmCoefficients) -> HgmCoefficients {
+        let set = |v: &mut f64, x: Option<f64>| {
+            if let Some(x) = x {
+                *v = x;
+            }
+        };
+        set(&mut c.a[0], self.a1);
+        set(&mut c.a[1], self.a2);
+        set(&mut c.b[0], self.b1);
+        set(&mut c.b[1], self.b2);
+        set(&mut c.t_f0, self.t_f0);
+        set(&mut c.t_p, self.t_p);
+        c
+    }
 }
 
 /// A validated station.
@@ -641,6 +684,14 @@ impl ComponentKind for AeroLine {
             None | Some(UnsteadyInput::QuasiSteady) => AttachedFlow::QuasiSteady,
             Some(UnsteadyInput::Wagner) => AttachedFlow::Wagner,
         };
+        if li.hgm.is_some() && !matches!(li.dynamic_stall, Some(DynamicStallInput::Hgm)) {
+            cx.error(
+                format!("{what}: `hgm` coefficients without the HGM dynamic-stall model"),
+                cx.key(&e, "hgm"),
+                Some("add `dynamic_stall = \"hgm\"`, or remove `hgm`".into()),
+            );
+            ok = false;
+        }
         let stall_time_constant = match li.dynamic_stall {
             None | Some(DynamicStallInput::None) => {
                 if li.stall_time_constant.is_some() {
@@ -690,6 +741,33 @@ impl ComponentKind for AeroLine {
                 Some(a)
             }
             Some(DynamicStallInput::Hgm) => {
+                if let Some(h) = &li.hgm {
+                    let he = Entry {
+                        span: h.span.clone(),
+                    };
+                    let v = &h.value;
+                    for (key, x, lower) in [
+                        ("a1", v.a1, 0.0),
+                        ("a2", v.a2, 0.0),
+                        ("b1", v.b1, f64::MIN_POSITIVE),
+                        ("b2", v.b2, f64::MIN_POSITIVE),
+                        ("t_f0", v.t_f0, f64::MIN_POSITIVE),
+                        ("t_p", v.t_p, f64::MIN_POSITIVE),
+                    ] {
+                        let Some(x) = x else { continue };
+                        if !cx.finite(&he, key, &[x], &what) {
+                            ok = false;
+                        } else if x < lower {
+                            let bound = if lower == 0.0 { "≥ 0" } else { "> 0" };
+                            cx.error(
+                                format!("{what}: HGM `{key}` = {x} must be {bound}"),
+                                cx.key(&he, key),
+                                None,
+                            );
+                            ok = false;
+                        }
+                    }
+                }
                 if li.stall_time_constant.is_some() {
                     cx.error(
                         format!("{what}: `stall_time_constant` is Øye's; the HGM model takes its time constants (T_f0, T_p) from the airfoil file's unsteady-aerodynamics block"),
@@ -713,7 +791,7 @@ impl ComponentKind for AeroLine {
                         d.hgm = Some(h.clone());
                         continue;
                     }
-                    let coefficients = match d.airfoil.ua_coefficients() {
+                    let from_file = match d.airfoil.ua_coefficients() {
                         None => HgmCoefficients::DEFAULT,
                         Some(Ok(c)) => *c,
                         Some(Err(err)) => {
@@ -729,6 +807,23 @@ impl ComponentKind for AeroLine {
                             break;
                         }
                     };
+                    let coefficients = li
+                        .hgm
+                        .as_ref()
+                        .map_or(from_file, |h| h.value.apply(from_file));
+                    let sum = coefficients.a[0] + coefficients.a[1];
+                    if sum > 1.0 {
+                        cx.error(
+                            format!(
+                                "{what}: HGM A₁ + A₂ = {sum} for the station at span {} m: the circulatory response 1 − A₁e^(−b₁s) − A₂e^(−b₂s) must start at or above 0",
+                                d.span
+                            ),
+                            li.hgm.as_ref().map_or_else(|| cx.key(&e, "dynamic_stall"), |h| h.span.clone()),
+                            Some("A₁ + A₂ ≤ 1 (Jones' flat plate: 0.165 + 0.335)".into()),
+                        );
+                        ok = false;
+                        break;
+                    }
                     match Hgm::new(&d.airfoil, &coefficients) {
                         Some(h) => {
                             let h = Arc::new(h);
