@@ -372,17 +372,9 @@ fn bad_rotor_inputs_are_located_errors() {
     assert!(model_error(dir.path(), &bad).contains("differ in air density or wind"));
 }
 
-#[test]
-fn hover_rotor_example_thrust_and_coning_match_the_closed_forms() {
-    // examples/rotor/hover_rotor.toml: four rigid flapping blades (hinges on the shaft
-    // axis), Pitt–Peters inflow, collective 6° → 8° at t = 1 s. Before the step (t = 1 s)
-    // and at the end (t = 2 s) the rotor has settled (inflow τ ≈ 0.07 s, flap damping
-    // γ/16 = 0.27 of critical at 1/rev): its thrust and uniform inflow against the
-    // blade-element + momentum closed form (no cut-out), its coning against the flap
-    // equation's β₀ = γ(θ/8 − λ/6).
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/rotor/hover_rotor.toml");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let m = Model::from_toml_str(&text, path.clone())
+/// Parses `text` (as the file `path`) and runs its first analysis, which must succeed.
+fn run_model(text: &str, path: &Path) -> (Model, System, History) {
+    let m = Model::from_toml_str(text, path)
         .unwrap_or_else(|e| panic!("{}", e.render_plain()))
         .model;
     let sys = System::new(&m);
@@ -396,6 +388,20 @@ fn hover_rotor_example_thrust_and_coning_match_the_closed_forms() {
     )
     .unwrap();
     assert!(s.failure.is_none(), "{:?}", s.failure);
+    (m, sys, hist)
+}
+
+#[test]
+fn hover_rotor_example_thrust_and_coning_match_the_closed_forms() {
+    // examples/rotor/hover_rotor.toml: four rigid flapping blades (hinges on the shaft
+    // axis), Pitt–Peters inflow, collective 6° → 8° at t = 1 s. Before the step (t = 1 s)
+    // and at the end (t = 2 s) the rotor has settled (inflow τ ≈ 0.07 s, flap damping
+    // γ/16 = 0.27 of critical at 1/rev): its thrust and uniform inflow against the
+    // blade-element + momentum closed form (no cut-out), its coning against the flap
+    // equation's β₀ = γ(θ/8 − λ/6).
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/rotor/hover_rotor.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let (m, sys, hist) = run_model(&text, &path);
     let iv = sys.state_names.iter().position(|n| n == "main.v0").unwrap();
     let it = sys
         .output_names
@@ -546,20 +552,7 @@ fn hover_rotor_energy_balance_closes_at_second_order() {
         let t = text
             .replace("t_end = 2.0", "t_end = 0.9\nrho_inf = 1.0")
             .replace("step = 0.002", &format!("step = {step}"));
-        let m = Model::from_toml_str(&t, path.clone())
-            .unwrap_or_else(|e| panic!("{}", e.render_plain()))
-            .model;
-        let sys = System::new(&m);
-        let mut hist = History::default();
-        let s = run_analysis(
-            &sys,
-            &m.analyses[0],
-            sys.initial_state(),
-            &mut hist,
-            &mut |_| {},
-        )
-        .unwrap();
-        assert!(s.failure.is_none(), "{:?}", s.failure);
+        let (_, sys, hist) = run_model(&t, &path);
         let power =
             |f: &samara::analysis::Frame| sys.external_power(&sys.context(f.time, 1.0), &f.state);
         let mut w_aero = 0.0;

@@ -107,9 +107,10 @@ fn multipliers2(phi: &Matrix2<f64>) -> Vec<Complex<f64>> {
     v
 }
 
-/// samara's multipliers (all of them: the conjugates of the modes added back).
-fn samara_multipliers(delta: f64, eps: f64, c: f64, steps: usize) -> (Vec<Complex<f64>>, History) {
-    let m = model(&mathieu(delta, eps, c, steps, "n_modes = 2"));
+/// samara's multipliers of a Floquet model with `dim` states (all of them: the
+/// conjugates of the modes added back; modes beyond the system's are NaN and skipped).
+fn multipliers_of(text: &str, dim: usize) -> (Vec<Complex<f64>>, History) {
+    let m = model(text);
     let sys = System::new(&m);
     let mut h = History::default();
     let s = samara::analysis::run_analysis(
@@ -121,14 +122,15 @@ fn samara_multipliers(delta: f64, eps: f64, c: f64, steps: usize) -> (Vec<Comple
     )
     .unwrap();
     assert!(s.failure.is_none(), "{:?}", s.failure);
-    let rho = h
+    let rho = &h
         .arrays
         .iter()
         .find(|a| a.0.name == "floquet_multiplier")
-        .unwrap();
+        .unwrap()
+        .1;
     let mut v = Vec::new();
-    for k in 0..2 {
-        let z = Complex::new(rho.1[2 * k], rho.1[2 * k + 1]);
+    for k in 0..rho.len() / 2 {
+        let z = Complex::new(rho[2 * k], rho[2 * k + 1]);
         if z.re.is_nan() {
             continue;
         }
@@ -138,8 +140,13 @@ fn samara_multipliers(delta: f64, eps: f64, c: f64, steps: usize) -> (Vec<Comple
         }
     }
     v.sort_by(|a, b| b.norm().total_cmp(&a.norm()).then(b.im.total_cmp(&a.im)));
-    assert_eq!(v.len(), 2, "{v:?}");
+    assert_eq!(v.len(), dim, "{v:?}");
     (v, h)
+}
+
+/// The Mathieu model's two multipliers.
+fn samara_multipliers(delta: f64, eps: f64, c: f64, steps: usize) -> (Vec<Complex<f64>>, History) {
+    multipliers_of(&mathieu(delta, eps, c, steps, "n_modes = 2"), 2)
 }
 
 fn error(a: &[Complex<f64>], b: &[Complex<f64>]) -> f64 {
@@ -347,40 +354,8 @@ stiffness = {k2}
 damping = {c2}
 "#
                     );
-                let m = model(&text);
-                let sys = System::new(&m);
-                assert_eq!(sys.state_names.len(), 1);
-                let mut h = History::default();
-                let s = samara::analysis::run_analysis(
-                    &sys,
-                    &m.analyses[0],
-                    sys.initial_state(),
-                    &mut h,
-                    &mut |_| {},
-                )
-                .unwrap();
-                assert!(s.failure.is_none(), "{:?}", s.failure);
-                let rho = &h
-                    .arrays
-                    .iter()
-                    .find(|a| a.0.name == "floquet_multiplier")
-                    .unwrap()
-                    .1;
-                let mut v = Vec::new();
-                // Three modes at most (a pair and a real multiplier are two; the
-                // missing ones are NaN).
-                for k in 0..3 {
-                    let z = Complex::new(rho[2 * k], rho[2 * k + 1]);
-                    if z.re.is_nan() {
-                        continue;
-                    }
-                    v.push(z);
-                    if z.im != 0.0 {
-                        v.push(z.conj());
-                    }
-                }
-                v.sort_by(|a, b| b.norm().total_cmp(&a.norm()).then(b.im.total_cmp(&a.im)));
-                assert_eq!(v.len(), 3, "{v:?}");
+                // Three modes at most (a pair and a real multiplier are two).
+                let (v, _) = multipliers_of(&text, 3);
                 top = v[0].norm();
                 error(&v, &exact)
             })
