@@ -419,6 +419,17 @@ impl Integrator<'_> {
             self.state = saved;
             return;
         }
+        self.restart_accelerations();
+        self.mu.copy_from_slice(&self.state.lambda);
+    }
+
+    /// Restarts the scheme from the physical accelerations and state rates of the current
+    /// state: the algorithmic accelerations a_n become q̈_n, as at the first step. After a
+    /// kink of the forcing (a located event) or a jump (a new held value), the old a_n
+    /// carries a transient that decays only as (−α_m/(1 − α_m))ⁿ per step and, with
+    /// growing steps, makes an O(h ε) velocity error the local estimate does not see.
+    fn restart_accelerations(&mut self) {
+        let sys = self.sys;
         for (i, nd) in self.state.nodes.iter().enumerate() {
             let v = [nd.a.x, nd.a.y, nd.a.z, nd.wd.x, nd.wd.y, nd.wd.z];
             self.acc[6 * i..6 * i + 6].copy_from_slice(&v);
@@ -431,7 +442,6 @@ impl Integrator<'_> {
         for (j, z) in self.state.states.iter().enumerate() {
             self.acc[z0 + j] = z.zd;
         }
-        self.mu.copy_from_slice(&self.state.lambda);
     }
 
     /// Accepts the trial step: chooses the next predictor, updates the algorithmic
@@ -770,6 +780,18 @@ pub fn run_dynamic(
     };
     let mut previous_error: f64 = 1.0;
     let mut rejected_here: usize = 0;
+    // Event location (adaptive steps): the event functions at the start of the step and
+    // at the trial end, and the end of a step redone to land just past an event.
+    let locate = adaptive.is_some_and(|a| a.event_location) && sys.n_events > 0;
+    let mut ev = EventWork {
+        start: vec![(0.0, 0.0); if locate { sys.n_events } else { 0 }],
+        end: vec![(0.0, 0.0); if locate { sys.n_events } else { 0 }],
+        scratch: Vec::new(),
+    };
+    if locate {
+        sys.event_values(&it.state, &mut ev.start, &mut ev.scratch);
+    }
+    let mut event_target: Option<f64> = None;
     while it.state.time < settings.t_end {
         let t = it.state.time;
         let mut target = if on_grid && h == settings.step {
@@ -783,6 +805,11 @@ pub fn run_dynamic(
             && b < target + 1e-9 * h
         {
             target = b;
+        }
+        if let Some(e) = event_target
+            && e < target
+        {
+            target = e;
         }
         // Fixed or adaptive, steps land on the sample instants of sample-and-hold values.
         if let Some(b) = sys.next_sample(t)
@@ -824,9 +851,38 @@ pub fn run_dynamic(
                     }
                     // Retry with the step the error asks for (local error O(h³)).
                     h = (h_try * (0.9 * error.powf(-1.0 / 3.0)).max(0.2)).max(settings.min_step);
+                    event_target = None;
                     continue;
                 }
+                let mut first_crossing_found = false;
+                if locate {
+                    sys.event_values(&it.trial, &mut ev.end, &mut ev.scratch);
+                    // An event crossed more than the resolution before the end: redo the
+                    // step ending just past it (the law is smooth on each side).
+                    let resolution = (1e-3 * h).max(settings.min_step);
+                    let first = ev
+                        .start
+                        .iter()
+                        .zip(&ev.end)
+                        .filter_map(|(&g0, &g1)| super::events::first_crossing(g0, g1, h_try))
+                        .min_by(f64::total_cmp);
+                    if let Some(theta) = first
+                        && (1.0 - theta) * h_try > resolution
+                    {
+                        summary.rejected_steps += 1;
+                        rejected_here += 1;
+                        event_target =
+                            Some(t + (theta * h_try + 0.5 * resolution).max(settings.min_step));
+                        continue;
+                    }
+                    first_crossing_found = first.is_some();
+                    std::mem::swap(&mut ev.start, &mut ev.end);
+                }
+                event_target = None;
                 it.accept();
+                if first_crossing_found {
+                    it.restart_accelerations();
+                }
                 // The step was aimed at `target`; t + (target − t) may miss it by an ulp.
                 it.state.time = target;
                 step_index += 1;
@@ -943,6 +999,13 @@ pub fn run_dynamic(
     summary.final_state = it.state;
     summary.wall_time = clock.elapsed();
     Ok(summary)
+}
+
+/// Event functions at both ends of a step ([`super::events`]).
+struct EventWork {
+    start: Vec<(f64, f64)>,
+    end: Vec<(f64, f64)>,
+    scratch: Vec<f64>,
 }
 
 /// What one [`Simulation::step`] did.

@@ -8,6 +8,7 @@ pub mod chain;
 pub mod check;
 mod dynamic;
 pub mod energy_preserving;
+pub mod events;
 pub mod floquet;
 pub mod generalized_alpha;
 mod history;

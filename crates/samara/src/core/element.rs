@@ -230,6 +230,14 @@ pub trait Element: Send + Sync {
     fn outputs(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut [f64]) {}
     /// Times where the element's loads jump or kink (its time functions' breakpoints).
     fn breakpoints(&self, _out: &mut Vec<f64>) {}
+    /// Number of event functions: scalars g(q, v) whose zeros are kinks of the element's
+    /// law in the state (a contact closing or opening); adaptive steps land on them.
+    fn n_events(&self) -> usize {
+        0
+    }
+    /// Values and rates `(g, ġ)` of the event functions (ġ = NaN where the rate is not
+    /// known); the law is smooth where no g changes sign.
+    fn events(&self, _x: &ElementInput, _out: &mut [(f64, f64)]) {}
     /// Number of sample-and-hold values (discrete states) the element keeps: constant
     /// between its sample instants `t_k = k T`, set by [`Element::sample`] at each.
     fn n_held(&self) -> usize {

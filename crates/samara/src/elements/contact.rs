@@ -148,6 +148,28 @@ pub fn normal_force(law: &NormalLaw, delta: f64, delta_dot: f64) -> [f64; 4] {
     }
 }
 
+/// The event function of a normal law ([`Element::events`]): `g = min(δ, δ_f)` with
+/// `δ_f` the force before the no-pull clip in units of length — `δ + (c/k) δ̇` (linear) or
+/// `δ (1 + α δ̇)` (Hunt–Crossley) — so g > 0 exactly where the law pushes, and its zeros
+/// are the law's kinks (contact closing, and opening where the damping would pull). The
+/// rate is δ̇ where g = δ and unknown (NaN) on the other branch.
+pub fn normal_event(law: &NormalLaw, delta: f64, delta_dot: f64) -> (f64, f64) {
+    let force_side = match *law {
+        NormalLaw::HuntCrossley {
+            damping_factor: a, ..
+        } => delta * (1.0 + a * delta_dot),
+        NormalLaw::Linear {
+            stiffness: k,
+            damping: c,
+        } => delta + c / k * delta_dot,
+    };
+    if delta <= force_side {
+        (delta, delta_dot)
+    } else {
+        (force_side, f64::NAN)
+    }
+}
+
 /// Elastic energy of the normal law at penetration δ: `k δ^(e+1)/(e+1)` or `½ k δ²`.
 pub fn normal_potential(law: &NormalLaw, delta: f64) -> f64 {
     if delta <= 0.0 {
@@ -442,6 +464,15 @@ impl Element for Contact {
         let kin = self.kinematics(x);
         let (nf, ft) = self.forces(x, &kin);
         (self.plane.normal * nf[0] + ft).dot(&self.plane.velocity)
+    }
+
+    fn n_events(&self) -> usize {
+        1
+    }
+
+    fn events(&self, x: &ElementInput, out: &mut [(f64, f64)]) {
+        let kin = self.kinematics(x);
+        out[0] = normal_event(&self.law, kin.delta, kin.delta_dot);
     }
 
     fn output_names(&self) -> Vec<(String, &'static str)> {

@@ -11,7 +11,7 @@
 //! Tangents: the normal direction's derivative `∂n/∂d = (I − n nᵀ)/|d|` enters both the
 //! force direction and δ̇.
 
-use super::contact::{NormalLaw, normal_force, normal_potential};
+use super::contact::{NormalLaw, normal_event, normal_force, normal_potential};
 use super::{Element, EvalContext, LocalTerms, Need};
 use crate::core::ElementInput;
 use nalgebra::{Matrix3, Vector3};
@@ -103,6 +103,15 @@ impl Element for SpherePair {
         } else {
             0.0
         }
+    }
+
+    fn n_events(&self) -> usize {
+        1
+    }
+
+    fn events(&self, x: &ElementInput, out: &mut [(f64, f64)]) {
+        let (_, _, delta, delta_dot, _) = self.kinematics(x);
+        out[0] = normal_event(&self.law, delta, delta_dot);
     }
 
     fn output_names(&self) -> Vec<(String, &'static str)> {

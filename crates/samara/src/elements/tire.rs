@@ -498,6 +498,23 @@ impl Element for Tire {
         t.force.dot(&self.ground.velocity)
     }
 
+    /// `g = min(δ, δ + (c/k) δ̇_n)` (δ̇_n = −n·v, the rate the damper sees): positive
+    /// exactly where F_z > 0 ([`super::contact::normal_event`]).
+    fn n_events(&self) -> usize {
+        1
+    }
+
+    fn events(&self, x: &ElementInput, out: &mut [(f64, f64)]) {
+        let w = &x.nodes[self.nodes[0]];
+        let (delta, rate) = self.deflection(w);
+        let force_side = delta - self.p.damping / self.p.stiffness * self.ground.normal.dot(&w.v);
+        out[0] = if delta <= force_side {
+            (delta, rate)
+        } else {
+            (force_side, f64::NAN)
+        };
+    }
+
     fn output_names(&self) -> Vec<(String, &'static str)> {
         OUTPUTS.iter().map(|(n, u)| (n.to_string(), *u)).collect()
     }

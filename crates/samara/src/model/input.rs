@@ -266,6 +266,10 @@ pub struct AnalysisInput {
     /// dynamic, adaptive: largest step [s] (default t_end − t_start).
     #[serde(default)]
     pub step_max: Option<f64>,
+    /// dynamic, adaptive: land the steps on the zeros of the elements' event functions
+    /// (a contact closing or opening) instead of stepping across them (default true).
+    #[serde(default)]
+    pub event_location: Option<bool>,
     /// dynamic: write every n-th step (default 1).
     #[serde(default)]
     pub output_every: Option<usize>,

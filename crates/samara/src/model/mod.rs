@@ -114,6 +114,8 @@ pub struct AdaptiveSettings {
     pub tolerance_abs: f64,
     pub tolerance_rel: f64,
     pub step_max: f64,
+    /// Steps land on the zeros of the elements' event functions ([`crate::elements::Element::events`]).
+    pub event_location: bool,
 }
 
 impl DynamicSettings {

@@ -782,8 +782,9 @@ impl<'a> Checker<'a> {
             return None;
         }
         // `scaling` multiplies rows and multipliers by βh²: there is no step in statics.
-        let dynamic_keys: [(&str, bool); 13] = [
+        let dynamic_keys: [(&str, bool); 14] = [
             ("step_control", ai.step_control.is_some()),
+            ("event_location", ai.event_location.is_some()),
             ("tolerance_abs", ai.tolerance_abs.is_some()),
             ("tolerance_rel", ai.tolerance_rel.is_some()),
             ("step_max", ai.step_max.is_some()),
@@ -1133,6 +1134,7 @@ impl<'a> Checker<'a> {
                             ("tolerance_abs", ai.tolerance_abs.is_some()),
                             ("tolerance_rel", ai.tolerance_rel.is_some()),
                             ("step_max", ai.step_max.is_some()),
+                            ("event_location", ai.event_location.is_some()),
                         ] {
                             if given {
                                 self.error(
@@ -1185,6 +1187,7 @@ impl<'a> Checker<'a> {
                             tolerance_abs,
                             tolerance_rel,
                             step_max,
+                            event_location: ai.event_location.unwrap_or(true),
                         })
                     }
                 };

@@ -75,6 +75,9 @@ pub struct System {
     pub signals: SignalGraph,
     /// First output of each element in the list of outputs (results only).
     pub output_offsets: Vec<usize>,
+    /// `(element, first event)` of each element with event functions, and their total.
+    pub event_offsets: Vec<(usize, usize)>,
+    pub n_events: usize,
     /// `<element>.<output>`, with units.
     pub output_names: Vec<String>,
     pub output_units: Vec<String>,
@@ -365,6 +368,14 @@ impl System {
                 sample_periods.push(p);
             }
         }
+        let mut event_offsets = Vec::new();
+        let mut n_events = 0;
+        for (k, e) in elements.iter().enumerate() {
+            if e.n_events() > 0 {
+                event_offsets.push((k, n_events));
+                n_events += e.n_events();
+            }
+        }
         // Output quantities, element by element (results only).
         let mut output_offsets = Vec::with_capacity(elements.len());
         let (mut output_names, mut output_units) = (Vec::new(), Vec::new());
@@ -441,6 +452,8 @@ impl System {
             n_held,
             sample_periods,
             signals,
+            event_offsets,
+            n_events,
             output_offsets,
             output_names,
             output_units,
@@ -703,6 +716,21 @@ impl System {
         out.sort_by(f64::total_cmp);
         out.dedup();
         out
+    }
+
+    /// The event functions `(g, ġ)` of every element at `s` ([`Element::events`];
+    /// `out.len()` = [`System::n_events`]).
+    pub fn event_values(&self, s: &State, out: &mut [(f64, f64)], scratch: &mut Vec<f64>) {
+        if self.n_events == 0 {
+            return;
+        }
+        let ctx = self.context(s.time, 1.0);
+        let signals = self.signal_values(&ctx, s);
+        for &(k, off) in &self.event_offsets {
+            let n = self.elements[k].n_events();
+            let x = self.element_input(k, s, &signals, scratch);
+            self.elements[k].events(&x, &mut out[off..off + n]);
+        }
     }
 
     /// Values of every element's outputs at `s` (`out.len()` = number of outputs).
