@@ -1,8 +1,10 @@
 //! Øye's dynamic wake on the BEM induction (issue #15): after a step in wind speed the
 //! axial induction of each station relaxes from the old to the new quasi-steady BEM value
-//! through two first-order filters, τ₁ = 1.1/(1 − 1.3a) R/V₀ and
-//! τ₂ = (0.39 − 0.26 (r/R)²) τ₁ (Øye 1990; Snel & Schepers 1995; Hansen, "Aerodynamics of
-//! Wind Turbines", §10), against the closed form of the two filters in series.
+//! through two first-order filters, τ₁ = 1.1/(1 − 1.3a) R/V₀ (the first with the lead
+//! term k τ₁ ȧ_qs, k = 0.6) and τ₂ = (0.39 − 0.26 (r/R)²) τ₁ (Øye 1990; Snel & Schepers
+//! 1995; Hansen, "Aerodynamics of Wind Turbines", §10), against the closed form of the two
+//! filters in series: a(t) = a₁ + (a₀ − a₁)[c e^{−t/τ₁} + (1 − c) e^{−t/τ₂}],
+//! c = (1 − k) τ₁/(τ₁ − τ₂).
 
 use samara::analysis::{History, run_analysis};
 use samara::model::Model;
@@ -14,6 +16,8 @@ const RADIUS: f64 = 5.0;
 const HUB: f64 = 0.5;
 const OMEGA: f64 = 10.0;
 const STATIONS: usize = 10;
+/// Øye's lead factor (Snel & Schepers 1995; Hansen §10: k = 0.6).
+const K: f64 = 0.6;
 
 fn thin_csv() -> String {
     let mut s = String::from("alpha,cl,cd,cm\n");
@@ -165,7 +169,9 @@ fn oye_dynamic_wake_relaxes_the_induction_as_two_filters_after_a_wind_step() {
         let mut overshoot_free = true;
         for f in hist.frames.iter().filter(|f| f.time >= t_step) {
             let t = f.time - t_step;
-            let g = (tau1 * (-t / tau1).exp() - tau2 * (-t / tau2).exp()) / (tau1 - tau2);
+            // z₁ jumps by k(a₁ − a₀) (the lead term), then relaxes with τ₁; z₂ follows.
+            let c1 = (1.0 - K) * tau1 / (tau1 - tau2);
+            let g = c1 * (-t / tau1).exp() + (1.0 - c1) * (-t / tau2).exp();
             let a_ref = a1 + (a0 - a1) * g;
             let a = f.state.states[i2].z;
             worst = worst.max((a - a_ref).abs() / (a1 - a0).abs());
@@ -175,8 +181,10 @@ fn oye_dynamic_wake_relaxes_the_induction_as_two_filters_after_a_wind_step() {
             "{station} (r/R = {:.2}): a {a0:.5} → {a1:.5}, τ₁ = {tau1:.4} s, τ₂ = {tau2:.4} s: worst {worst:.2e} of the step",
             r / RADIUS
         );
-        // Generalized-α (second order) at h = τ₂/16 … τ₂/60: tolerance 5e-3 of the step.
-        assert!(worst < 5e-3, "{station}: {worst}");
+        // Generalized-α (second order; the step at 0.5 s is a breakpoint, landed on and
+        // restarted from there) at h = τ₂/29 … τ₂/71: observed 2.6e-6 … 1.9e-5 of the
+        // step; tolerance 1e-4 (an O(h) treatment of the jump gives 4e-3 … 6e-3).
+        assert!(worst < 1e-4, "{station}: {worst}");
         assert!(overshoot_free, "the induction lags monotonically");
     }
 }

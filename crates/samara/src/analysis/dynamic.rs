@@ -196,6 +196,8 @@ struct Integrator<'a> {
     /// Workspace of the consistent accelerations after a sample-and-hold jump (made on
     /// first use).
     restart: Option<Box<RestartWork>>,
+    /// Breakpoints of the model's time functions, sorted.
+    breakpoints: Vec<f64>,
 }
 
 /// The index-3 problem of consistent accelerations, kept for restarts.
@@ -337,6 +339,12 @@ impl Integrator<'_> {
             constraint_tolerance: self.settings.solver.tolerance,
             reuse_jacobian: self.settings.jacobian == JacobianUpdate::Modified,
         };
+        // A step ending on a breakpoint sees the forcing's left limit there.
+        let ctx_time = if self.on_breakpoint(t1) {
+            t1.next_down()
+        } else {
+            t1
+        };
         let mut problem = StepProblem {
             sys: self.sys,
             asm: &mut self.asm,
@@ -348,7 +356,7 @@ impl Integrator<'_> {
             t_ops: &mut self.t_ops,
             phi: &mut self.phi,
             change: &mut self.change,
-            ctx: self.sys.context(t1, 1.0),
+            ctx: self.sys.context(ctx_time, 1.0),
             coef,
             beta_p: coef.mass,
             gamma_p: coef.damping,
@@ -380,10 +388,27 @@ impl Integrator<'_> {
     /// multipliers) at the current state become the algorithmic accelerations. Without
     /// the restart the stale a_n would make the next step's velocity update
     /// `h (1 − γ) a_n` wrong by O(h), the whole run first order.
-    fn sample(&mut self) {
-        if self.sys.n_held == 0 || !self.sys.sample(&mut self.state, false) {
-            return;
+    ///
+    /// A step that lands on a breakpoint of the time functions restarts the same way
+    /// (the step itself saw the left limit of the forcing, the restart its right limit), so
+    /// a jump in a load, drive or wind is passed at second order.
+    fn settle(&mut self) {
+        let jumped = self.sys.n_held > 0 && self.sys.sample(&mut self.state, false);
+        if jumped || self.on_breakpoint(self.state.time) {
+            self.restart_consistent();
         }
+    }
+
+    /// Whether `t` is one of the time functions' breakpoints.
+    fn on_breakpoint(&self, t: f64) -> bool {
+        self.breakpoints
+            .binary_search_by(|b| b.total_cmp(&t))
+            .is_ok()
+    }
+
+    /// Consistent accelerations, multipliers and state rates at the current state and time
+    /// become the algorithmic ones ([`Integrator::restart_accelerations`]).
+    fn restart_consistent(&mut self) {
         let sys = self.sys;
         let work = self.restart.get_or_insert_with(|| {
             let asm = Assembler::new(sys, Formulation::Index3);
@@ -576,6 +601,7 @@ fn start<'a>(
         last_hdq: vec![0.0; sys.n_config()],
         last_h: 0.0,
         restart: None,
+        breakpoints: sys.breakpoints(),
     };
     let name = summary.name.clone();
     let fail = |summary: &mut AnalysisSummary, time: f64, reason: String, hint: Option<String>| {
@@ -773,11 +799,7 @@ pub fn run_dynamic(
     let mut hold_next = false;
     // Adaptive steps: breakpoints of the time functions to land on, the previous error
     // (PI controller) and the rejections since the last accepted step.
-    let breakpoints = if adaptive.is_some() {
-        sys.breakpoints()
-    } else {
-        Vec::new()
-    };
+    let breakpoints = it.breakpoints.clone();
     let mut previous_error: f64 = 1.0;
     let mut rejected_here: usize = 0;
     // Event location (adaptive steps): the event functions at the start of the step and
@@ -800,9 +822,10 @@ pub fn run_dynamic(
             t + h
         };
         let nominal = target;
-        if adaptive.is_some()
-            && let Some(&b) = breakpoints.iter().find(|&&b| b > t + 1e-9 * h)
-            && b < target + 1e-9 * h
+        // Adaptive steps land on every breakpoint; fixed steps only snap to those on
+        // their grid (to the last ulps), so that the restart there applies.
+        if let Some(&b) = breakpoints.iter().find(|&&b| b > t + 1e-9 * h)
+            && (b < target + 1e-9 * h && adaptive.is_some() || (b - target).abs() <= 1e-9 * h)
         {
             target = b;
         }
@@ -892,7 +915,7 @@ pub fn run_dynamic(
                 if on_grid && h == settings.step && (target - nominal).abs() <= 1e-9 * h {
                     grid_k += 1;
                 }
-                it.sample();
+                it.settle();
                 let ctx = sys.context(it.state.time, 1.0);
                 let p_ext1 =
                     sys.external_power(&ctx, &it.state) + sys.drive_power(&it.state, &it.mu);
@@ -1109,12 +1132,19 @@ impl<'a> Simulation<'a> {
             {
                 end = b;
             }
+            if let Some(&b) = it
+                .breakpoints
+                .iter()
+                .find(|&&b| (b - end).abs() <= 1e-9 * hh)
+            {
+                end = b;
+            }
             let predictor = if hold { Predictor::Hold } else { it.predictor };
             match it.step(end - t, predictor) {
                 Ok(r) => {
                     it.accept();
                     it.state.time = end;
-                    it.sample();
+                    it.settle();
                     hold = false;
                     report.sub_steps += 1;
                     report.newton_iterations += r.iterations;

@@ -140,6 +140,9 @@ pub struct AeroStation {
     outputs: Vec<String>,
 }
 
+/// Øye's lead factor k of the dynamic wake's first filter (Snel & Schepers 1995).
+const OYE_LEAD: f64 = 0.6;
+
 /// Floor of the free-stream speed in the dynamic wake's time constants [m/s].
 const WAKE_MIN_SPEED: f64 = 0.1;
 
@@ -265,7 +268,7 @@ impl AeroStation {
         }
         if self.unsteady.dynamic_wake {
             let iw = self.unsteady.airfoil_states();
-            out[iw] = r.a_quasi_steady;
+            out[iw] = (1.0 - OYE_LEAD) * r.a_quasi_steady;
             out[iw + 1] = r.a_quasi_steady;
         }
         out
@@ -394,7 +397,8 @@ impl AeroStation {
                 res.a_quasi_steady = a_qs.re();
                 // Øye's dynamic wake: the axial induction the station uses is the
                 // quasi-steady one through two first-order filters,
-                // τ₁ ż₁ + z₁ = a_qs, τ₂ ż₂ + z₂ = z₁, a = z₂ (rows in 1/s).
+                // τ₁ ż₁ + z₁ = a_qs + k τ₁ ȧ_qs, τ₂ ż₂ + z₂ = z₁, a = z₂ (rows in 1/s);
+                // the lead term through the state y = z₁ − k a_qs: τ₁ ẏ + y = (1 − k) a_qs.
                 let a = if self.unsteady.dynamic_wake {
                     let iw = self.unsteady.airfoil_states();
                     let v0 = dot(&self.wind.velocity(&p, t), &n);
@@ -407,8 +411,9 @@ impl AeroStation {
                     let tau1 = S::cst(1.1 * rotor.tip_radius) / ((S::cst(1.0) - ac * 1.3) * v0);
                     let x = rr / rotor.tip_radius;
                     let tau2 = tau1 * (S::cst(0.39) - x * x * 0.26);
-                    zrows[iw] = zd[iw] + (z[iw] - a_qs) / tau1;
-                    zrows[iw + 1] = zd[iw + 1] + (z[iw + 1] - z[iw]) / tau2;
+                    zrows[iw] = zd[iw] + (z[iw] - a_qs * (1.0 - OYE_LEAD)) / tau1;
+                    let z1 = z[iw] + a_qs * OYE_LEAD;
+                    zrows[iw + 1] = zd[iw + 1] + (z[iw + 1] - z1) / tau2;
                     Some(z[iw + 1])
                 } else {
                     ind.map(|i| i.a)
