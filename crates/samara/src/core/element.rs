@@ -230,6 +230,11 @@ pub trait Element: Send + Sync {
     fn outputs(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut [f64]) {}
     /// Times where the element's loads jump or kink (its time functions' breakpoints).
     fn breakpoints(&self, _out: &mut Vec<f64>) {}
+    /// Why the element's loads could not be evaluated (a wind sampled outside its box),
+    /// and a hint: the analysis reports it when it fails.
+    fn runtime_error(&self) -> Option<(String, String)> {
+        None
+    }
     /// Number of sample-and-hold values (discrete states) the element keeps: constant
     /// between its sample instants `t_k = k T`, set by [`Element::sample`] at each.
     fn n_held(&self) -> usize {
