@@ -1047,11 +1047,8 @@ impl Element for AeroStation {
     }
 
     fn runtime_error(&self) -> Option<(String, String)> {
-        self.wind.outside_sample().map(|w| {
-            (
-                format!("aerodynamic station '{}': {w}", self.name),
-                super::wind::OUTSIDE_HINT.to_string(),
-            )
-        })
+        self.wind
+            .outside_sample()
+            .map(|w| (w.to_string(), super::wind::OUTSIDE_HINT.to_string()))
     }
 }

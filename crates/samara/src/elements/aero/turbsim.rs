@@ -48,6 +48,8 @@ fn err(message: impl Into<String>, hint: &str) -> BtsError {
 
 /// The wind box of a TurbSim file.
 pub struct FullField {
+    /// Where the box was read from (for messages).
+    pub source: String,
     /// Whether the file is periodic in time (format id 8).
     pub periodic: bool,
     /// Grid points laterally and vertically, tower points, time steps.
@@ -236,6 +238,7 @@ impl FullField {
             }
         }
         Ok(Self {
+            source: String::new(),
             periodic,
             ny,
             nz,

@@ -99,7 +99,8 @@ impl Wind {
         let Some([u, v, w]) = field.sample(y, z, tau) else {
             if let Some(why) = field.outside(y.re(), z.re(), tau.re()) {
                 field.record_outside(format!(
-                    "at t = {t} s the wind was sampled outside the TurbSim box at ({:.4}, {:.4}, {:.4}) m: {why}",
+                    "at t = {t} s a station sampled the wind of TurbSim file '{}' outside its box, at ({:.4}, {:.4}, {:.4}) m: {why}",
+                    field.source,
                     p[0].re(),
                     p[1].re(),
                     p[2].re()

@@ -934,7 +934,10 @@ impl ComponentKind for AeroLine {
                                 None
                             }
                             Ok(bytes) => match FullField::parse(&bytes) {
-                                Ok(field) => Some(Arc::new(field)),
+                                Ok(mut field) => {
+                                    field.source = path.display().to_string();
+                                    Some(Arc::new(field))
+                                }
                                 Err(e) => {
                                     cx.error(
                                         format!("{what}: TurbSim file '{}': {}", path.display(), e.message),
@@ -1351,6 +1354,82 @@ impl ComponentKind for AeroLine {
                     TangentCase::element(Box::new(e), nodes).with_states(states),
                 ));
             }
+        }
+        // A turbulent box (TurbSim layout, 4 × 4 points 2 m apart, 4 steps of 0.5 s,
+        // u_hub 9 m/s) with a smooth non-linear field: the stations' points (≈ (0.05,
+        // 0.1, 2) within 0.5 m) and box times (≈ 0.6 s at t = 0.3 s) lie inside one cell,
+        // away from its faces, so the trilinear gradients are smooth there.
+        let mut b: Vec<u8> = Vec::new();
+        b.extend(7i16.to_le_bytes());
+        for n in [4i32, 4, 0, 4] {
+            b.extend(n.to_le_bytes());
+        }
+        for v in [2.0f32, 2.0, 0.5, 9.0, 2.0, -1.5, 1000.0, 0.0, 1000.0, 0.0, 1000.0, 0.0] {
+            b.extend(v.to_le_bytes());
+        }
+        b.extend(0i32.to_le_bytes());
+        for k in 0..64 {
+            let x = k as f64;
+            for v in [9.0 + (0.7 * x).sin(), 1.5 * (1.3 * x).cos(), 0.8 * (0.4 * x).sin()] {
+                b.extend(((v * 1000.0).round() as i16).to_le_bytes());
+            }
+        }
+        let field = Arc::new(FullField::parse(&b).unwrap_or_else(|_| unreachable!()));
+        let turbulent = Arc::new(Wind {
+            turbulence: Some(field),
+            ..Default::default()
+        });
+        let node = |seed: u64| {
+            let mut n = random_node(seed);
+            n.x = Vector3::new(0.05, 0.1, 2.0) + 0.02 * n.x;
+            n.v = Vector3::new(0.3, -12.0, 0.2) + 0.1 * n.v;
+            n.w *= 0.3;
+            n.rot = crate::math::Rotation::identity()
+                .compose_exp(&(0.1 * crate::math::Rotation::identity().relative_log(&n.rot)));
+            n
+        };
+        for (k, inflow) in [
+            Inflow::None,
+            Inflow::Bem {
+                rotor: BemRotor {
+                    blades: 3,
+                    hub_radius: 0.2,
+                    tip_radius: 4.0,
+                    tip_loss: true,
+                    hub_loss: true,
+                    tangential_induction: true,
+                },
+                centre: Vector3::zeros(),
+                axis: Vector3::x(),
+            },
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let inflow = Arc::new(inflow);
+            let e2 = AeroStation::new(
+                "aero_turbulent2",
+                vec![0, 1],
+                vec![attach(1.0, 0.3), attach(-1.0, 0.7)],
+                section.clone(),
+                1.2,
+                turbulent.clone(),
+                inflow.clone(),
+            );
+            cases.push(TangentCase::element(
+                Box::new(e2),
+                vec![node(3000 + k as u64), node(3010 + k as u64)],
+            ));
+            let e1 = AeroStation::new(
+                "aero_turbulent1",
+                vec![0],
+                vec![attach(0.5, 1.0)],
+                section.clone(),
+                1.2,
+                turbulent.clone(),
+                inflow,
+            );
+            cases.push(TangentCase::element(Box::new(e1), vec![node(3020 + k as u64)]));
         }
         // BEM with Øye's dynamic wake (two states), alone and with Wagner + Øye's stall,
         // on 1, 2 and 5 nodes.
