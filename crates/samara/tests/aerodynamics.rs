@@ -764,9 +764,11 @@ fn nrel5mw_rotor_outputs_sum_the_stations_and_match_the_reference_coefficients()
     }
     // 2. ROSCO's C_P, C_T surfaces of the same rotor (CCBlade: plain steady BEM with the
     //    same polars; with the 2.5° precone and 5° tilt of the full turbine, which this
-    //    example leaves out), at V = 11.4 m/s over λ = 5 … 10, pitch 0 … 4°.
-    let text = std::fs::read_to_string(reference().join("operating_points/Cp_Ct_Cq.NREL5MW.txt"))
-        .unwrap();
+    //    example leaves out: cos³ 5° alone is 1.1 % of power), at V = 11.4 m/s over
+    //    λ = 5 … 10, pitch 0 … 4°. Measured C_P +0.2 … +4.7 %, C_T +0.1 … +3.3 %:
+    //    tolerance 6 %.
+    let text =
+        std::fs::read_to_string(reference().join("operating_points/Cp_Ct_Cq.NREL5MW.txt")).unwrap();
     let cps = rosco_table(&text, "Power coefficient", 26);
     let cts = rosco_table(&text, "Thrust coefficient", 26);
     let mut worst: (f64, f64) = (0.0, 0.0);
@@ -787,6 +789,10 @@ fn nrel5mw_rotor_outputs_sum_the_stations_and_match_the_reference_coefficients()
             worst = (worst.0.max(ecp.abs()), worst.1.max(ect.abs()));
         }
     }
-    println!("ROSCO: worst |ΔC_P| {:.2} %, |ΔC_T| {:.2} %", 100.0 * worst.0, 100.0 * worst.1);
-    assert!(worst.0 < 0.05 && worst.1 < 0.05, "{worst:?}");
+    println!(
+        "ROSCO: worst |ΔC_P| {:.2} %, |ΔC_T| {:.2} %",
+        100.0 * worst.0,
+        100.0 * worst.1
+    );
+    assert!(worst.0 < 0.06 && worst.1 < 0.06, "{worst:?}");
 }

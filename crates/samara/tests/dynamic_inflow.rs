@@ -139,18 +139,6 @@ fn run(text: &str, dir: &Path) -> Vec<(f64, f64, f64)> {
         .iter()
         .position(|n| n == "main.thrust")
         .unwrap();
-    let output = |name: &str| {
-        sys.output_names
-            .iter()
-            .position(|n| n == &format!("main.performance.{name}"))
-            .unwrap()
-    };
-    let (i_thrust, i_ct, i_speed, i_power) = (
-        output("thrust"),
-        output("ct_tip"),
-        output("rotor_speed"),
-        output("power"),
-    );
     let mut out = vec![0.0; sys.output_names.len()];
     hist.frames
         .iter()
@@ -420,6 +408,18 @@ fn hover_rotor_example_thrust_and_coning_match_the_closed_forms() {
         .iter()
         .position(|n| n == "main.thrust")
         .unwrap();
+    let output = |name: &str| {
+        sys.output_names
+            .iter()
+            .position(|n| n == &format!("main.performance.{name}"))
+            .unwrap()
+    };
+    let (i_thrust, i_ct, i_speed, i_power) = (
+        output("thrust"),
+        output("ct_tip"),
+        output("rotor_speed"),
+        output("power"),
+    );
     let mut out = vec![0.0; sys.output_names.len()];
     let (r, c, b, m_b) = (5.0, 0.3, 4.0, 40.0);
     let area = PI * r * r;
@@ -479,7 +479,11 @@ fn hover_rotor_example_thrust_and_coning_match_the_closed_forms() {
             out[i_power]
         );
         assert!((t_out - thrust).abs() <= 1e-10 * thrust, "{t_out} {thrust}");
-        assert!((out[i_speed] - OMEGA).abs() < 1e-9 * OMEGA, "{}", out[i_speed]);
+        assert!(
+            (out[i_speed] - OMEGA).abs() < 1e-9 * OMEGA,
+            "{}",
+            out[i_speed]
+        );
         assert!((ct_out / ct - 1.0).abs() < 1e-2, "C_T");
         assert!(out[i_power] < 0.0);
     }

@@ -1671,7 +1671,9 @@ fn turbsim_wind_and_rotor_output_options_change_something() {
         for n in [17i32, 17, 0, 32] {
             b.extend(n.to_le_bytes());
         }
-        for v in [8.0f32, 8.0, 0.25, 11.5, 90.0, 26.0, 1000.0, 0.0, 1000.0, 0.0, 1000.0, 0.0] {
+        for v in [
+            8.0f32, 8.0, 0.25, 11.5, 90.0, 26.0, 1000.0, 0.0, 1000.0, 0.0, 1000.0, 0.0,
+        ] {
             b.extend(v.to_le_bytes());
         }
         b.extend(0i32.to_le_bytes());
@@ -1747,10 +1749,16 @@ fn turbsim_wind_and_rotor_output_options_change_something() {
         "direction = [1.0, 0.0, 0.0] }",
         "direction = [0.98, 0.2, 0.0] }",
     ));
-    assert!(differs(&loads, &turned.0), "`direction` with `turbsim` changed nothing");
+    assert!(
+        differs(&loads, &turned.0),
+        "`direction` with `turbsim` changed nothing"
+    );
     // `rotor` on two lines only: the third blade's loads leave the rotor's thrust.
     let two = evaluate(&example.replacen("rotor = \"rotor\"\n", "", 1));
-    assert!(differs(&outputs[..1], &two.1[..1]), "`rotor` changed nothing");
+    assert!(
+        differs(&outputs[..1], &two.1[..1]),
+        "`rotor` changed nothing"
+    );
     // `hub`: the rotor speed (output 3) is the named node's.
     let hub = evaluate(&example.replace("hub = \"hub\"", "hub = \"other\""));
     assert!((outputs[3] - 1.267109).abs() < 1e-9 && (hub.1[3] - 2.0).abs() < 1e-12);

@@ -110,7 +110,10 @@ fn stations_sample_the_box_of_an_analytic_field_within_the_int16_rounding() {
     let wind = &m.aero_lines[0].wind;
     let f = wind.turbulence.as_ref().expect("a turbulent wind");
     // The header as written.
-    assert_eq!((f.ny, f.nz, f.nt, f.n_tower, f.periodic), (17, 17, 32, 0, false));
+    assert_eq!(
+        (f.ny, f.nz, f.nt, f.n_tower, f.periodic),
+        (17, 17, 32, 0, false)
+    );
     assert_eq!((f.dy, f.dz, f.dt, f.mean_speed), (8.0, 8.0, 0.25, 11.5));
     assert_eq!((f.hub_height, f.grid_bottom), (90.0, 26.0));
     assert_eq!(f.description, "written by samara's tests");
@@ -131,11 +134,17 @@ fn stations_sample_the_box_of_an_analytic_field_within_the_int16_rounding() {
     let mut worst: f64 = 0.0;
     let mut seed = 12345u64;
     let mut rnd = || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (seed >> 11) as f64 / (1u64 << 53) as f64
     };
     for _ in 0..500 {
-        let p = Vector3::new(-5.0 + 10.0 * rnd(), -64.0 + 128.0 * rnd(), 26.0 + 128.0 * rnd());
+        let p = Vector3::new(
+            -5.0 + 10.0 * rnd(),
+            -64.0 + 128.0 * rnd(),
+            26.0 + 128.0 * rnd(),
+        );
         let t = 1.5 * rnd();
         let w = Vector3::from(wind.velocity(&[p.x, p.y, p.z], t));
         worst = worst.max((w - exact(p, t)).amax());
@@ -226,7 +235,8 @@ fn frozen_turbulence_advects_the_box_at_the_hub_speed() {
         let mut worst: f64 = 0.0;
         for (k, dx) in [0.0, 3.0, -7.5, 20.0].into_iter().enumerate() {
             for t in [0.2, 0.9, 1.3] {
-                let p0 = lat * (-40.0 + 9.0 * k as f64) + Vector3::new(0.0, 0.0, 40.0 + 23.0 * k as f64);
+                let p0 =
+                    lat * (-40.0 + 9.0 * k as f64) + Vector3::new(0.0, 0.0, 40.0 + 23.0 * k as f64);
                 let p = p0 + d * dx;
                 let a = Vector3::from(wind.velocity(&[p.x, p.y, p.z], t));
                 let b = Vector3::from(wind.velocity(&[p0.x, p0.y, p0.z], t - dx / 11.5));
@@ -263,7 +273,14 @@ fn frozen_turbulence_advects_the_box_at_the_hub_speed() {
 fn run(m: &Model) -> (samara::analysis::AnalysisSummary, History, System) {
     let sys = System::new(m);
     let mut hist = History::default();
-    let s = run_analysis(&sys, &m.analyses[0], sys.initial_state(), &mut hist, &mut |_| {}).unwrap();
+    let s = run_analysis(
+        &sys,
+        &m.analyses[0],
+        sys.initial_state(),
+        &mut hist,
+        &mut |_| {},
+    )
+    .unwrap();
     (s, hist, sys)
 }
 
@@ -274,15 +291,30 @@ fn nrel5mw_rotor_in_a_uniform_box_runs_as_in_the_steady_wind() {
     // (1e-9 of the hub's speed change over 0.4 s).
     let dir = tempfile::tempdir().unwrap();
     let b = rotor_box(false);
-    std::fs::write(dir.path().join("box.bts"), b.bytes(|_, _, _| [11.4, 0.0, 0.0])).unwrap();
-    let boxed = load(dir.path(), &rotor_model("wind = { turbsim = \"box.bts\" }", true, 0.4));
+    std::fs::write(
+        dir.path().join("box.bts"),
+        b.bytes(|_, _, _| [11.4, 0.0, 0.0]),
+    )
+    .unwrap();
+    let boxed = load(
+        dir.path(),
+        &rotor_model("wind = { turbsim = \"box.bts\" }", true, 0.4),
+    );
     let steady = load(
         dir.path(),
-        &rotor_model("wind = { speed = 11.4, direction = [1.0, 0.0, 0.0] }", true, 0.4),
+        &rotor_model(
+            "wind = { speed = 11.4, direction = [1.0, 0.0, 0.0] }",
+            true,
+            0.4,
+        ),
     );
     let (s1, h1, _) = run(&boxed);
     let (s2, h2, _) = run(&steady);
-    assert!(s1.failure.is_none() && s2.failure.is_none(), "{:?}", s1.failure);
+    assert!(
+        s1.failure.is_none() && s2.failure.is_none(),
+        "{:?}",
+        s1.failure
+    );
     let w = |h: &History| h.last().unwrap().state.nodes[0].w.x;
     let w0 = h1.frames[0].state.nodes[0].w.x;
     let (a, b2) = (w(&h1) - w0, w(&h2) - w0);
@@ -291,7 +323,10 @@ fn nrel5mw_rotor_in_a_uniform_box_runs_as_in_the_steady_wind() {
     assert!((a - b2).abs() < 1e-9 * a.abs(), "{a} {b2}");
     // And a turbulent (wavy) box runs end to end, its rotor spun up differently.
     std::fs::write(dir.path().join("wavy.bts"), b.bytes(wavy_field)).unwrap();
-    let wavy = load(dir.path(), &rotor_model("wind = { turbsim = \"wavy.bts\" }", true, 0.4));
+    let wavy = load(
+        dir.path(),
+        &rotor_model("wind = { turbsim = \"wavy.bts\" }", true, 0.4),
+    );
     let (s3, h3, _) = run(&wavy);
     assert!(s3.failure.is_none(), "{:?}", s3.failure);
     let c = w(&h3) - w0;
@@ -336,7 +371,10 @@ fn bad_turbsim_inputs_are_located_errors() {
     check(text("neg.bts", 1.0), "NT (time steps) = -3");
     check(text("none.bts", 1.0), "cannot read TurbSim file");
     // A grid narrower than the rotor (y = ±32 m): the blade tips at y = ±54.6 m.
-    let narrow = Box3 { ny: 9, ..good.clone() };
+    let narrow = Box3 {
+        ny: 9,
+        ..good.clone()
+    };
     std::fs::write(dir.path().join("narrow.bts"), narrow.bytes(linear_field)).unwrap();
     let t = text("narrow.bts", 1.0);
     let e = model_error(dir.path(), &t);
@@ -353,11 +391,18 @@ fn bad_turbsim_inputs_are_located_errors() {
         "{e}"
     );
     assert!(e.contains(&format!("bad.toml:{second}:")), "{e}");
-    assert!(!e.contains("'blade1'"), "blade 1 stands inside the grid: {e}");
+    assert!(
+        !e.contains("'blade1'"),
+        "blade 1 stands inside the grid: {e}"
+    );
     // A run longer than the box: τ = t + 64/11.5 must stay ≤ 7.75 s.
     check(text("box.bts", 2.5), "needs box times");
     // A periodic box has no end.
-    std::fs::write(dir.path().join("periodic.bts"), rotor_box(true).bytes(linear_field)).unwrap();
+    std::fs::write(
+        dir.path().join("periodic.bts"),
+        rotor_box(true).bytes(linear_field),
+    )
+    .unwrap();
     load(dir.path(), &text("periodic.bts", 50.0));
     // Keys the file replaces; a direction off the horizontal.
     let t = rotor_model("wind = { turbsim = \"box.bts\", speed = 11.4 }", false, 1.0);
@@ -383,13 +428,20 @@ fn a_station_leaving_the_box_is_a_clear_runtime_error() {
         ..rotor_box(false)
     };
     std::fs::write(dir.path().join("low.bts"), low.bytes(linear_field)).unwrap();
-    let m = load(dir.path(), &rotor_model("wind = { turbsim = \"low.bts\" }", true, 0.5));
+    let m = load(
+        dir.path(),
+        &rotor_model("wind = { turbsim = \"low.bts\" }", true, 0.5),
+    );
     let (s, _, _) = run(&m);
     let f = s.failure.expect("the run stops");
     println!("{} (hint: {:?}) at t = {}", f.reason, f.hint, f.time);
     assert!(f.reason.contains("outside its box"), "{}", f.reason);
     assert!(f.reason.contains("height z = "), "{}", f.reason);
-    assert!(f.reason.contains("TurbSim file '") && f.reason.contains("low.bts'"), "{}", f.reason);
+    assert!(
+        f.reason.contains("TurbSim file '") && f.reason.contains("low.bts'"),
+        "{}",
+        f.reason
+    );
     assert!(f.hint.unwrap().contains("covers the rotor's sweep"));
     assert!(f.time < 0.2, "{}", f.time);
 }

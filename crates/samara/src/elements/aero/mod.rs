@@ -17,6 +17,6 @@ pub use dynamic_inflow::{PittPeters, RotorDisc};
 pub use hgm::{Hgm, HgmCoefficients, HgmFlow};
 pub use rotor_performance::{Performance, RotorGeometry, RotorPerformance};
 pub use station::{AeroStation, Attachment, Inflow, MAX_NODES, Section};
-pub use unsteady::{AttachedFlow, OyeStall};
 pub use turbsim::{BtsError, FullField};
+pub use unsteady::{AttachedFlow, OyeStall};
 pub use wind::Wind;

@@ -144,11 +144,7 @@ impl RotorPerformance {
             inputs.extend(s.signal_inputs().iter().cloned());
             let states = s.state_names();
             for prefix in ["state", "state_rate"] {
-                inputs.extend(
-                    states
-                        .iter()
-                        .map(|z| format!("{prefix}:{}.{z}", s.name())),
-                );
+                inputs.extend(states.iter().map(|z| format!("{prefix}:{}.{z}", s.name())));
             }
         }
         Self {
@@ -195,8 +191,7 @@ impl Element for RotorPerformance {
         &self.inputs
     }
 
-    fn evaluate(&self, _ctx: &EvalContext, _x: &ElementInput, _need: Need, _out: &mut LocalTerms) {
-    }
+    fn evaluate(&self, _ctx: &EvalContext, _x: &ElementInput, _need: Need, _out: &mut LocalTerms) {}
 
     fn output_names(&self) -> Vec<(String, &'static str)> {
         OUTPUTS.iter().map(|(n, u)| (n.to_string(), *u)).collect()

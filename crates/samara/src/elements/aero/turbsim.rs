@@ -383,13 +383,21 @@ mod tests {
     use super::*;
 
     /// A file of the given header and samples (raw values), little-endian.
-    fn bts(id: i16, ny: i32, nz: i32, nt: i32, f: impl Fn(usize, usize, usize) -> [i16; 3]) -> Vec<u8> {
+    fn bts(
+        id: i16,
+        ny: i32,
+        nz: i32,
+        nt: i32,
+        f: impl Fn(usize, usize, usize) -> [i16; 3],
+    ) -> Vec<u8> {
         let mut b = Vec::new();
         b.extend(id.to_le_bytes());
         for n in [nz, ny, 0, nt] {
             b.extend(n.to_le_bytes());
         }
-        for v in [2.0f32, 3.0, 0.5, 10.0, 90.0, 87.0, 100.0, 0.0, 200.0, 0.0, 400.0, 0.0] {
+        for v in [
+            2.0f32, 3.0, 0.5, 10.0, 90.0, 87.0, 100.0, 0.0, 200.0, 0.0, 400.0, 0.0,
+        ] {
             b.extend(v.to_le_bytes());
         }
         b.extend(4i32.to_le_bytes());
@@ -432,7 +440,12 @@ mod tests {
         assert!(FullField::parse(&good).is_ok());
         let mut b = good.clone();
         b[0] = 9;
-        assert!(FullField::parse(&b).unwrap_err().message.contains("format id 9"));
+        assert!(
+            FullField::parse(&b)
+                .unwrap_err()
+                .message
+                .contains("format id 9")
+        );
         let e = FullField::parse(&good[..good.len() - 1]).unwrap_err();
         assert!(e.message.contains("bytes follow"), "{}", e.message);
         let e = FullField::parse(&good[..20]).unwrap_err();
@@ -444,6 +457,11 @@ mod tests {
         let mut b = good;
         b[2..6].copy_from_slice(&(1 << 23).to_le_bytes());
         b[6..10].copy_from_slice(&(1 << 23).to_le_bytes());
-        assert!(FullField::parse(&b).unwrap_err().message.contains("too large"));
+        assert!(
+            FullField::parse(&b)
+                .unwrap_err()
+                .message
+                .contains("too large")
+        );
     }
 }

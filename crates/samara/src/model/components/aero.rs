@@ -927,7 +927,10 @@ impl ComponentKind for AeroLine {
                         None => match std::fs::read(&path) {
                             Err(e) => {
                                 cx.error(
-                                    format!("{what}: cannot read TurbSim file '{}': {e}", path.display()),
+                                    format!(
+                                        "{what}: cannot read TurbSim file '{}': {e}",
+                                        path.display()
+                                    ),
                                     f.span.clone(),
                                     Some("paths are relative to the model file".into()),
                                 );
@@ -940,7 +943,11 @@ impl ComponentKind for AeroLine {
                                 }
                                 Err(e) => {
                                     cx.error(
-                                        format!("{what}: TurbSim file '{}': {}", path.display(), e.message),
+                                        format!(
+                                            "{what}: TurbSim file '{}': {}",
+                                            path.display(),
+                                            e.message
+                                        ),
                                         f.span.clone(),
                                         Some(e.hint),
                                     );
@@ -1364,13 +1371,19 @@ impl ComponentKind for AeroLine {
         for n in [4i32, 4, 0, 4] {
             b.extend(n.to_le_bytes());
         }
-        for v in [2.0f32, 2.0, 0.5, 9.0, 2.0, -1.5, 1000.0, 0.0, 1000.0, 0.0, 1000.0, 0.0] {
+        for v in [
+            2.0f32, 2.0, 0.5, 9.0, 2.0, -1.5, 1000.0, 0.0, 1000.0, 0.0, 1000.0, 0.0,
+        ] {
             b.extend(v.to_le_bytes());
         }
         b.extend(0i32.to_le_bytes());
         for k in 0..64 {
             let x = k as f64;
-            for v in [9.0 + (0.7 * x).sin(), 1.5 * (1.3 * x).cos(), 0.8 * (0.4 * x).sin()] {
+            for v in [
+                9.0 + (0.7 * x).sin(),
+                1.5 * (1.3 * x).cos(),
+                0.8 * (0.4 * x).sin(),
+            ] {
                 b.extend(((v * 1000.0).round() as i16).to_le_bytes());
             }
         }
@@ -1429,7 +1442,10 @@ impl ComponentKind for AeroLine {
                 turbulent.clone(),
                 inflow,
             );
-            cases.push(TangentCase::element(Box::new(e1), vec![node(3020 + k as u64)]));
+            cases.push(TangentCase::element(
+                Box::new(e1),
+                vec![node(3020 + k as u64)],
+            ));
         }
         // BEM with Øye's dynamic wake (two states), alone and with Wagner + Øye's stall,
         // on 1, 2 and 5 nodes.
@@ -1504,62 +1520,61 @@ impl ComponentKind for AeroLine {
 
 /// The stations of a line (elements `<line>.<k>`), at the initial configuration of `parts`.
 pub(crate) fn line_stations(def: &AeroLineDef, parts: &Build) -> Vec<AeroStation> {
-        let mut out = Vec::with_capacity(def.stations.len());
-        let wind = Arc::new(def.wind.clone());
-        let inflow = Arc::new(def.inflow.clone());
-        for (k, s) in def.stations.iter().enumerate() {
-            let (nodes, weights, point, tangent) = station_place(def, s.span, parts);
-            // Chord and normal at this station: made normal to the line, turned by the
-            // twist (+ pitch) about the span toward the normal.
-            let c0 =
-                (def.chord_direction - tangent * tangent.dot(&def.chord_direction)).normalize();
-            let n0 = {
-                let n = def.normal_direction - tangent * tangent.dot(&def.normal_direction);
-                (n - c0 * c0.dot(&n)).normalize()
-            };
-            let th = s.twist + def.pitch;
-            let c = c0 * th.cos() + n0 * th.sin();
-            let n = -c0 * th.sin() + n0 * th.cos();
-            let ac = point + c * s.ac_offset;
-            let attach = nodes
-                .iter()
-                .zip(&weights)
-                .map(|(&i, &w)| {
-                    let ns = &parts.initial[i];
-                    let rt: Matrix3<f64> = ns.r().transpose();
-                    Attachment {
-                        weight: w,
-                        offset: rt * (ac - ns.x),
-                        chord_dir: rt * c,
-                        normal_dir: rt * n,
-                    }
-                })
-                .collect();
-            let width = station_width(def, k);
-            let unsteady = Unsteady {
-                attached: def.unsteady,
-                stall: s.stall.clone().zip(def.stall_time_constant),
-                dynamic_wake: def.dynamic_wake,
-                hgm: s.hgm.clone(),
-            };
-            let station = AeroStation::new(
-                format!("{}.{k}", def.name),
-                nodes,
-                attach,
-                Section {
-                    chord: s.chord,
-                    width,
-                    airfoil: s.airfoil.clone(),
-                },
-                def.density,
-                wind.clone(),
-                inflow.clone(),
-            )
-            .with_unsteady(unsteady, 0.0, parts.initial);
-            out.push(station);
-        }
-        out
+    let mut out = Vec::with_capacity(def.stations.len());
+    let wind = Arc::new(def.wind.clone());
+    let inflow = Arc::new(def.inflow.clone());
+    for (k, s) in def.stations.iter().enumerate() {
+        let (nodes, weights, point, tangent) = station_place(def, s.span, parts);
+        // Chord and normal at this station: made normal to the line, turned by the
+        // twist (+ pitch) about the span toward the normal.
+        let c0 = (def.chord_direction - tangent * tangent.dot(&def.chord_direction)).normalize();
+        let n0 = {
+            let n = def.normal_direction - tangent * tangent.dot(&def.normal_direction);
+            (n - c0 * c0.dot(&n)).normalize()
+        };
+        let th = s.twist + def.pitch;
+        let c = c0 * th.cos() + n0 * th.sin();
+        let n = -c0 * th.sin() + n0 * th.cos();
+        let ac = point + c * s.ac_offset;
+        let attach = nodes
+            .iter()
+            .zip(&weights)
+            .map(|(&i, &w)| {
+                let ns = &parts.initial[i];
+                let rt: Matrix3<f64> = ns.r().transpose();
+                Attachment {
+                    weight: w,
+                    offset: rt * (ac - ns.x),
+                    chord_dir: rt * c,
+                    normal_dir: rt * n,
+                }
+            })
+            .collect();
+        let width = station_width(def, k);
+        let unsteady = Unsteady {
+            attached: def.unsteady,
+            stall: s.stall.clone().zip(def.stall_time_constant),
+            dynamic_wake: def.dynamic_wake,
+            hgm: s.hgm.clone(),
+        };
+        let station = AeroStation::new(
+            format!("{}.{k}", def.name),
+            nodes,
+            attach,
+            Section {
+                chord: s.chord,
+                width,
+                airfoil: s.airfoil.clone(),
+            },
+            def.density,
+            wind.clone(),
+            inflow.clone(),
+        )
+        .with_unsteady(unsteady, 0.0, parts.initial);
+        out.push(station);
     }
+    out
+}
 
 /// Every station of a line in a TurbSim wind starts inside the box's grid, and the box
 /// lasts every analysis (a normal file: the box times t + (x₀ − x)/u_hub of the stations'

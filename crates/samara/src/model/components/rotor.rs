@@ -10,8 +10,8 @@
 
 use super::aero::{AeroLineDef, line_stations};
 use super::{Build, ComponentKind};
-use crate::elements::aero::dynamic_inflow::{PittPeters, RotorDisc, inflow_signals};
 use crate::core::NodeRef;
+use crate::elements::aero::dynamic_inflow::{PittPeters, RotorDisc, inflow_signals};
 use crate::elements::aero::{Inflow, RotorGeometry, RotorPerformance, Wind};
 use crate::model::validate::{Checker, Entry};
 use crate::model::{Located, Model};
