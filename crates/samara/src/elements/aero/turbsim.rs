@@ -312,7 +312,8 @@ impl FullField {
             ));
         }
         let ft = tau / self.dt;
-        if !self.periodic && !(ft >= -GRID_TOL && ft <= (self.nt - 1) as f64 + GRID_TOL) {
+        let in_time = ft >= -GRID_TOL && ft <= (self.nt - 1) as f64 + GRID_TOL;
+        if !self.periodic && !in_time {
             return Some(format!(
                 "box time τ = {tau:.4} s is outside the file's 0 … {:.4} s",
                 self.span()
@@ -365,9 +366,9 @@ impl FullField {
         let wt = [one - xt, xt];
         let mut out = [S::cst(0.0); 3];
         for (kt, it) in [it0, it1].into_iter().enumerate() {
-            for kz in 0..2 {
-                for ky in 0..2 {
-                    let w = wt[kt] * wz[kz] * wy[ky];
+            for (kz, &wzk) in wz.iter().enumerate() {
+                for (ky, &wyk) in wy.iter().enumerate() {
+                    let w = wt[kt] * wzk * wyk;
                     for (c, o) in out.iter_mut().enumerate() {
                         *o += w * self.value(it, iz + kz, iy + ky, c);
                     }
@@ -455,8 +456,8 @@ mod tests {
         b[2..6].copy_from_slice(&(i32::MAX).to_le_bytes());
         assert!(FullField::parse(&b).is_err());
         let mut b = good;
-        b[2..6].copy_from_slice(&(1 << 23).to_le_bytes());
-        b[6..10].copy_from_slice(&(1 << 23).to_le_bytes());
+        b[2..6].copy_from_slice(&(1i32 << 23).to_le_bytes());
+        b[6..10].copy_from_slice(&(1i32 << 23).to_le_bytes());
         assert!(
             FullField::parse(&b)
                 .unwrap_err()
