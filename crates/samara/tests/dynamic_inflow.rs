@@ -408,6 +408,18 @@ fn hover_rotor_example_thrust_and_coning_match_the_closed_forms() {
         .iter()
         .position(|n| n == "main.thrust")
         .unwrap();
+    let output = |name: &str| {
+        sys.output_names
+            .iter()
+            .position(|n| n == &format!("main.performance.{name}"))
+            .unwrap()
+    };
+    let (i_thrust, i_ct, i_speed, i_power) = (
+        output("thrust"),
+        output("ct_tip"),
+        output("rotor_speed"),
+        output("power"),
+    );
     let mut out = vec![0.0; sys.output_names.len()];
     let (r, c, b, m_b) = (5.0, 0.3, 4.0, 40.0);
     let area = PI * r * r;
@@ -457,6 +469,23 @@ fn hover_rotor_example_thrust_and_coning_match_the_closed_forms() {
         // range, the midpoint rule with 20 stations (~3e-4); measured +0.26 %, +0.30 % (thrust), −0.06 %, +0.04 % (coning): tolerance 1 %.
         assert!((thrust / t_ref - 1.0).abs() < 1e-2, "thrust");
         assert!((beta / beta_ref - 1.0).abs() < 1e-2, "coning");
+        // The rotor outputs: the same stations' thrust (Pitt–Peters' forcing) to
+        // round-off, Ω of the hub, C_T = T/(ρA(ΩR)²) against the closed form (tolerance
+        // as the thrust's), and the power the air takes from the driven rotor (< 0).
+        let (t_out, ct_out) = (out[i_thrust], out[i_ct]);
+        println!(
+            "  rotor outputs: T = {t_out:.3} N, C_T = {ct_out:.6} vs {ct:.6} ({:+.2e}), P = {:.1} W",
+            ct_out / ct - 1.0,
+            out[i_power]
+        );
+        assert!((t_out - thrust).abs() <= 1e-10 * thrust, "{t_out} {thrust}");
+        assert!(
+            (out[i_speed] - OMEGA).abs() < 1e-9 * OMEGA,
+            "{}",
+            out[i_speed]
+        );
+        assert!((ct_out / ct - 1.0).abs() < 1e-2, "C_T");
+        assert!(out[i_power] < 0.0);
     }
 }
 

@@ -1654,3 +1654,121 @@ step = 0.01
         "sample_period = 1/sample_rate differs"
     );
 }
+
+/// Issue #15: `wind = { turbsim }` (and its `direction`), the line's `rotor` and the rotor's
+/// `hub` change something: the stations' loads in two different boxes and wind directions;
+/// the rotor outputs with a line left out of the rotor, and with another hub node (whose
+/// angular velocity is the rotor speed). The box layout: tests/turbulent_wind.rs.
+#[test]
+fn turbsim_wind_and_rotor_output_options_change_something() {
+    use samara::core::{ElementInput, EvalContext, LocalTerms, Need};
+    use samara::model::components::{Build, build_all, initial_nodes};
+    let dir = tempfile::tempdir().unwrap();
+    // A 17 × 17 box (y ±64 m, z 26 … 154 m), 32 steps of 0.25 s, u_hub 11.5 m/s.
+    let write_box = |name: &str, u0: f64| {
+        let mut b: Vec<u8> = Vec::new();
+        b.extend(7i16.to_le_bytes());
+        for n in [17i32, 17, 0, 32] {
+            b.extend(n.to_le_bytes());
+        }
+        for v in [
+            8.0f32, 8.0, 0.25, 11.5, 90.0, 26.0, 1000.0, 0.0, 1000.0, 0.0, 1000.0, 0.0,
+        ] {
+            b.extend(v.to_le_bytes());
+        }
+        b.extend(0i32.to_le_bytes());
+        for it in 0..32 {
+            for iz in 0..17 {
+                for iy in 0..17 {
+                    let u = u0 + 0.1 * ((it + iz + 2 * iy) as f64).sin();
+                    for v in [u, 0.3, -0.1] {
+                        b.extend(((v * 1000.0).round() as i16).to_le_bytes());
+                    }
+                }
+            }
+        }
+        std::fs::write(dir.path().join(name), b).unwrap();
+    };
+    write_box("a.bts", 11.0);
+    write_box("b.bts", 12.0);
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let ad = root.join("reference/nrel5mw/aero/NRELOffshrBsline5MW_Onshore_AeroDyn15.dat");
+    let example = std::fs::read_to_string(root.join("examples/rotor/nrel5mw_rotor.toml"))
+        .unwrap()
+        .replace(
+            "aerodyn = \"../../reference/nrel5mw/aero/NRELOffshrBsline5MW_Onshore_AeroDyn15.dat\"",
+            &format!("aerodyn = {:?}", ad.to_str().unwrap()),
+        )
+        .replace(
+            "wind = { speed = 11.4, direction = [1.0, 0.0, 0.0] }",
+            "wind = { turbsim = \"a.bts\", direction = [1.0, 0.0, 0.0] }",
+        )
+        // A second node turning with the hub at another speed (for `hub`).
+        .replace(
+            "[[bodies]]",
+            "[[nodes]]\nname = \"other\"\nposition = [0.0, 0.0, 90.0]\nangular_velocity = [2.0, 0.0, 0.0]\n\n[[bodies]]\nname = \"other\"\nnode = \"other\"\nmass = 1.0\ninertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]\n\n[[bodies]]",
+        );
+    // Station loads (sum of residuals) and the rotor outputs.
+    let evaluate = |text: &str| -> (Vec<f64>, Vec<f64>) {
+        let m = Model::from_toml_str(text, dir.path().join("m.toml"))
+            .unwrap_or_else(|e| panic!("{}", e.render_plain()))
+            .model;
+        let initial = initial_nodes(&m);
+        let mut parts = Build::new(&initial);
+        build_all(&m, &mut parts);
+        let ctx = EvalContext {
+            time: 0.3,
+            gravity: Vector3::zeros(),
+            load_factor: 1.0,
+        };
+        let x = ElementInput::nodes(&initial);
+        let mut loads = vec![0.0; 6];
+        let mut outputs = Vec::new();
+        for e in &parts.elements {
+            if e.name().starts_with("blade") {
+                let mut out = LocalTerms::for_element(e.as_ref());
+                e.evaluate(&ctx, &x, Need::Residual, &mut out);
+                for (k, t) in loads.iter_mut().enumerate() {
+                    *t += out.r[k];
+                }
+            } else if e.name() == "rotor.performance" {
+                outputs = vec![0.0; e.output_names().len()];
+                e.outputs(&ctx, &x, &mut outputs);
+            }
+        }
+        (loads, outputs)
+    };
+    let (loads, outputs) = evaluate(&example);
+    assert_eq!(outputs.len(), 10);
+    let differs = |a: &[f64], b: &[f64]| {
+        a.len() == b.len() && a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum::<f64>() > 1e-6
+    };
+    let other = evaluate(&example.replace("turbsim = \"a.bts\"", "turbsim = \"b.bts\""));
+    assert!(differs(&loads, &other.0), "`turbsim` changed nothing");
+    let turned = evaluate(&example.replace(
+        "direction = [1.0, 0.0, 0.0] }",
+        "direction = [0.98, 0.2, 0.0] }",
+    ));
+    assert!(
+        differs(&loads, &turned.0),
+        "`direction` with `turbsim` changed nothing"
+    );
+    // `rotor` on two lines only: the third blade's loads leave the rotor's thrust.
+    let two = evaluate(&example.replacen("rotor = \"rotor\"\n", "", 1));
+    assert!(
+        differs(&outputs[..1], &two.1[..1]),
+        "`rotor` changed nothing"
+    );
+    // `hub`: the rotor speed (output 3) is the named node's.
+    let hub = evaluate(&example.replace("hub = \"hub\"", "hub = \"other\""));
+    assert!((outputs[3] - 1.267109).abs() < 1e-9 && (hub.1[3] - 2.0).abs() < 1e-12);
+    // Without `hub` a rotor of BEM lines has nothing to do: a located error.
+    let e = match Model::from_toml_str(
+        &example.replace("hub = \"hub\"\n", ""),
+        dir.path().join("m.toml"),
+    ) {
+        Ok(_) => panic!("accepted"),
+        Err(e) => e.render_plain(),
+    };
+    assert!(e.contains("need `hub`") || e.contains("needs `hub`"), "{e}");
+}

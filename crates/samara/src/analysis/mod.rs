@@ -163,7 +163,16 @@ pub fn run_analysis(
     recorder: &mut dyn Recorder,
     progress: Progress,
 ) -> Result<AnalysisSummary, crate::Error> {
-    def.stage().run(sys, initial, recorder, progress)
+    let mut summary = def.stage().run(sys, initial, recorder, progress)?;
+    // An element whose loads could not be evaluated (a wind sampled outside its box)
+    // explains the failure better than the solver's symptom.
+    if let Some(f) = &mut summary.failure
+        && let Some((why, hint)) = sys.elements.iter().find_map(|e| e.runtime_error())
+    {
+        f.hint = Some(format!("{hint} (the solver reported: {})", f.reason));
+        f.reason = why;
+    }
+    Ok(summary)
 }
 
 /// Runs every analysis of a model in order, chaining `start_from` ([`Chain`]). `make_recorder` is

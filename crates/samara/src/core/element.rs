@@ -238,6 +238,11 @@ pub trait Element: Send + Sync {
     /// Values and rates `(g, ġ)` of the event functions (ġ = NaN where the rate is not
     /// known); the law is smooth where no g changes sign.
     fn events(&self, _x: &ElementInput, _out: &mut [(f64, f64)]) {}
+    /// Why the element's loads could not be evaluated (a wind sampled outside its box),
+    /// and a hint: the analysis reports it when it fails.
+    fn runtime_error(&self) -> Option<(String, String)> {
+        None
+    }
     /// Number of sample-and-hold values (discrete states) the element keeps: constant
     /// between its sample instants `t_k = k T`, set by [`Element::sample`] at each.
     fn n_held(&self) -> usize {

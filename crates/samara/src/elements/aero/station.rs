@@ -603,6 +603,26 @@ impl AeroStation {
         r
     }
 
+    /// Point p, force F and moment M (global, at p) of the station: the rotor outputs'
+    /// view of it ([`super::rotor_performance`]).
+    pub fn point_loads(
+        &self,
+        t: f64,
+        nodes: &[NodeState],
+        z: &[f64],
+        zd: &[f64],
+        sig: &[f64],
+    ) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
+        let kin = self.kinematics(nodes);
+        let mut zrows = [0.0; MAX_STATES];
+        let r = self.loads::<f64>(t, &kin, z, zd, sig, &mut zrows);
+        (
+            Vector3::from(kin.p),
+            Vector3::from(r.force),
+            Vector3::from(r.moment),
+        )
+    }
+
     /// The chain rule from the station to its nodes: given g = ∂s/∂y of a scalar s over
     /// the kinematic directions, writes ∂s/∂(δxᵢ, δθᵢ) to `kq` and ∂s/∂(vᵢ, Ωᵢ) to `kv`
     /// (6 per node). With Rᵢ ← Rᵢ (I + δθ̃ᵢ) each term wᵢ Rᵢ bᵢ of y moves by
@@ -1029,5 +1049,11 @@ impl Element for AeroStation {
 
     fn breakpoints(&self, out: &mut Vec<f64>) {
         out.extend(self.wind.function.breakpoints());
+    }
+
+    fn runtime_error(&self) -> Option<(String, String)> {
+        self.wind
+            .outside_sample()
+            .map(|w| (w.to_string(), super::wind::OUTSIDE_HINT.to_string()))
     }
 }

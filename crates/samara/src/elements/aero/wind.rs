@@ -5,10 +5,24 @@
 //!
 //! sampled where each aerodynamic station is. Below `h_min = 10⁻³ h_ref` the height is
 //! held at h_min (the power law is singular at the ground).
+//!
+//! Or a turbulent box ([`super::turbsim::FullField`]) advancing along ŵ (horizontal) at
+//! its mean hub speed (Taylor's frozen turbulence): with ŷ = ẑ_up × ŵ and the point's
+//! wind-frame coordinates x = p·ŵ, y = p·ŷ, z = p·ẑ_up − ground,
+//!
+//! `W(p, t) = u ŵ + v ŷ + w ẑ_up`,   (u, v, w) = box(y, z, t + (x₀ − x)/u_hub).
+//!
+//! A point outside the box gives NaN and is recorded; the analysis reports it
+//! ([`Wind::outside_sample`]).
 
+use super::turbsim::FullField;
 use crate::math::TimeFunction;
 use crate::math::dual::{Scalar, V3};
 use nalgebra::Vector3;
+use std::sync::Arc;
+
+/// What to do about a sample outside a TurbSim box.
+pub const OUTSIDE_HINT: &str = "generate a box that covers the rotor's sweep (grid width and height) and lasts the run plus the time the box takes to reach the rotor, or use a periodic file";
 
 #[derive(Clone, Debug)]
 pub struct Wind {
@@ -26,6 +40,8 @@ pub struct Wind {
     pub ground: f64,
     /// Multiplies the speed.
     pub function: TimeFunction,
+    /// A turbulent box replacing the analytic wind (speed, shear and function unused).
+    pub turbulence: Option<Arc<FullField>>,
 }
 
 impl Default for Wind {
@@ -38,6 +54,7 @@ impl Default for Wind {
             vertical: Vector3::z(),
             ground: 0.0,
             function: TimeFunction::Constant(1.0),
+            turbulence: None,
         }
     }
 }
@@ -45,6 +62,9 @@ impl Default for Wind {
 impl Wind {
     /// Wind velocity at point p, time t.
     pub fn velocity<S: Scalar>(&self, p: &V3<S>, t: f64) -> V3<S> {
+        if let Some(field) = &self.turbulence {
+            return self.turbulent(field, p, t);
+        }
         let u = self.speed * self.function.eval(t);
         let mut s = S::cst(u);
         if self.shear_exponent != 0.0 {
@@ -56,5 +76,45 @@ impl Wind {
         }
         let d = self.direction;
         [s * d[0], s * d[1], s * d[2]]
+    }
+
+    /// The wind-frame lateral direction ŷ = ẑ_up × ŵ.
+    pub fn lateral(&self) -> Vector3<f64> {
+        self.vertical.cross(&self.direction)
+    }
+
+    /// Wind-frame coordinates (x, y, z) of a point.
+    pub fn frame<S: Scalar>(&self, p: &V3<S>) -> [S; 3] {
+        let proj = |d: Vector3<f64>| p[0] * d[0] + p[1] * d[1] + p[2] * d[2];
+        [
+            proj(self.direction),
+            proj(self.lateral()),
+            proj(self.vertical) - self.ground,
+        ]
+    }
+
+    fn turbulent<S: Scalar>(&self, field: &FullField, p: &V3<S>, t: f64) -> V3<S> {
+        let [x, y, z] = self.frame(p);
+        let tau = field.box_time(x, t);
+        let Some([u, v, w]) = field.sample(y, z, tau) else {
+            if let Some(why) = field.outside(y.re(), z.re(), tau.re()) {
+                field.record_outside(format!(
+                    "at t = {t} s a station sampled the wind of TurbSim file '{}' outside its box, at ({:.4}, {:.4}, {:.4}) m: {why}",
+                    field.source,
+                    p[0].re(),
+                    p[1].re(),
+                    p[2].re()
+                ));
+            }
+            return [S::cst(f64::NAN); 3];
+        };
+        let (d, l, h) = (self.direction, self.lateral(), self.vertical);
+        let c = |k: usize| u * d[k] + v * l[k] + w * h[k];
+        [c(0), c(1), c(2)]
+    }
+
+    /// The first sample a turbulent wind took outside its box, if any.
+    pub fn outside_sample(&self) -> Option<&str> {
+        self.turbulence.as_ref().and_then(|f| f.outside_sample())
     }
 }

@@ -9,8 +9,8 @@ use crate::core::NodeRef;
 use crate::elements::aero::RotorDisc;
 use crate::elements::aero::station::Unsteady;
 use crate::elements::aero::{
-    AeroStation, Airfoil, AttachedFlow, Attachment, BemRotor, Hgm, HgmCoefficients, Inflow,
-    MAX_NODES, OyeStall, Section, Wind,
+    AeroStation, Airfoil, AttachedFlow, Attachment, BemRotor, FullField, Hgm, HgmCoefficients,
+    Inflow, MAX_NODES, OyeStall, Section, Wind,
 };
 use crate::math::TimeFunction;
 use crate::model::input::TimeFunctionInput;
@@ -50,8 +50,15 @@ pub struct StationInput {
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct WindInput {
-    /// Speed at the reference height [m/s].
-    pub speed: f64,
+    /// Speed at the reference height [m/s]; required unless `turbsim` is given.
+    #[serde(default)]
+    pub speed: Option<f64>,
+    /// A TurbSim binary full-field file (`.bts`, relative to the model file): a turbulent
+    /// box advancing along `direction` (horizontal) at the file's mean hub speed, its grid
+    /// centred on y = 0 of the wind frame (origin at the tower base on the ground);
+    /// replaces `speed`, `shear_exponent`, `reference_height` and `function`.
+    #[serde(default)]
+    pub turbsim: Option<Located<String>>,
     /// Direction the air moves to, global (normalized); default +x.
     #[serde(default)]
     pub direction: Option<[f64; 3]>,
@@ -184,6 +191,10 @@ pub struct AeroLineInput {
     /// Induced velocity; default none.
     #[serde(default)]
     pub inflow: Option<Located<InflowInput>>,
+    /// The `[[rotors]]` entry whose outputs (thrust, torque, power, C_T, C_P, λ) count
+    /// this line's loads (a Pitt–Peters line belongs to its inflow's rotor already).
+    #[serde(default)]
+    pub rotor: Option<Located<String>>,
     /// Attached-flow unsteady aerodynamics: `"quasi_steady"` (default) or `"wagner"`.
     #[serde(default)]
     pub unsteady: Option<UnsteadyInput>,
@@ -290,6 +301,11 @@ pub struct AeroLineDef {
     pub inflow_span: Option<std::ops::Range<usize>>,
     /// Øye's dynamic wake on the BEM induction.
     pub dynamic_wake: bool,
+    /// The TurbSim file of a turbulent wind and where its key is (the box's coverage of
+    /// the stations and the analyses' times are checked once the model is known).
+    pub turbsim: Option<(PathBuf, Option<std::ops::Range<usize>>)>,
+    /// The rotor the line's loads count in (`rotor` key), and where the key is.
+    pub rotor: Option<(String, Option<std::ops::Range<usize>>)>,
 }
 
 pub struct AeroLine;
@@ -845,6 +861,7 @@ impl ComponentKind for AeroLine {
             }
         };
         // Wind.
+        let mut turbsim = None;
         let wind = match &li.wind {
             None => Wind::default(),
             Some(w) => {
@@ -854,7 +871,6 @@ impl ComponentKind for AeroLine {
                 let wi = &w.value;
                 let dir = Vector3::from(wi.direction.unwrap_or([1.0, 0.0, 0.0]));
                 let up = Vector3::from(wi.vertical.unwrap_or([0.0, 0.0, 1.0]));
-                ok &= cx.finite(&we, "speed", &[wi.speed], &what);
                 ok &= cx.finite(&we, "direction", dir.as_slice(), &what);
                 ok &= cx.finite(&we, "vertical", up.as_slice(), &what);
                 if dir.norm() == 0.0 || up.norm() == 0.0 {
@@ -865,30 +881,114 @@ impl ComponentKind for AeroLine {
                     );
                     ok = false;
                 }
-                let alpha = wi.shear_exponent.unwrap_or(0.0);
-                let href = wi.reference_height.unwrap_or(0.0);
-                if alpha != 0.0 && !(href.is_finite() && href > 0.0) {
-                    cx.error(
-                        format!("{what}: a wind shear exponent needs `reference_height` > 0"),
-                        cx.key(&we, "shear_exponent"),
-                        Some("the hub height, typically".into()),
-                    );
-                    ok = false;
-                }
-                ok &= cx.finite(&we, "shear_exponent", &[alpha], &what);
-                let function = match &wi.function {
-                    Some(f) => cx.time_function(f, &what).unwrap_or_default(),
-                    None => TimeFunction::Constant(1.0),
+                let (dir, up) = (
+                    dir.try_normalize(0.0).unwrap_or_else(Vector3::x),
+                    up.try_normalize(0.0).unwrap_or_else(Vector3::z),
+                );
+                let mut wind = Wind {
+                    direction: dir,
+                    vertical: up,
+                    ..Default::default()
                 };
-                Wind {
-                    speed: wi.speed,
-                    direction: dir.normalize(),
-                    shear_exponent: alpha,
-                    reference_height: if href > 0.0 { href } else { 1.0 },
-                    vertical: up.normalize(),
-                    ground: 0.0,
-                    function,
+                if let Some(f) = &wi.turbsim {
+                    for (key, given) in [
+                        ("speed", wi.speed.is_some()),
+                        ("shear_exponent", wi.shear_exponent.is_some()),
+                        ("reference_height", wi.reference_height.is_some()),
+                        ("function", wi.function.is_some()),
+                    ] {
+                        if given {
+                            cx.error(
+                                format!("{what}: wind `{key}` with `turbsim`: the file gives the wind"),
+                                cx.key(&we, key),
+                                Some(format!("remove `{key}` (the box's mean hub speed, shear and time history are in the file)")),
+                            );
+                            ok = false;
+                        }
+                    }
+                    if dir.dot(&up).abs() > 1e-9 {
+                        cx.error(
+                            format!("{what}: a TurbSim box advances horizontally, but wind `direction` is not normal to `vertical`"),
+                            cx.key(&we, "direction"),
+                            Some("give a horizontal direction (the box's x axis)".into()),
+                        );
+                        ok = false;
+                    }
+                    let path = base.join(&f.value);
+                    // Lines sharing a file share its box.
+                    let shared = model.aero_lines.iter().find_map(|l| {
+                        l.turbsim
+                            .as_ref()
+                            .filter(|(p, _)| *p == path)
+                            .and(l.wind.turbulence.clone())
+                    });
+                    let field = match shared {
+                        Some(field) => Some(field),
+                        None => match std::fs::read(&path) {
+                            Err(e) => {
+                                cx.error(
+                                    format!(
+                                        "{what}: cannot read TurbSim file '{}': {e}",
+                                        path.display()
+                                    ),
+                                    f.span.clone(),
+                                    Some("paths are relative to the model file".into()),
+                                );
+                                None
+                            }
+                            Ok(bytes) => match FullField::parse(&bytes) {
+                                Ok(mut field) => {
+                                    field.source = path.display().to_string();
+                                    Some(Arc::new(field))
+                                }
+                                Err(e) => {
+                                    cx.error(
+                                        format!(
+                                            "{what}: TurbSim file '{}': {}",
+                                            path.display(),
+                                            e.message
+                                        ),
+                                        f.span.clone(),
+                                        Some(e.hint),
+                                    );
+                                    None
+                                }
+                            },
+                        },
+                    };
+                    ok &= field.is_some();
+                    wind.turbulence = field;
+                    turbsim = Some((path, f.span.clone()));
+                } else {
+                    let Some(speed) = wi.speed else {
+                        cx.error(
+                            format!("{what}: the wind needs `speed` (or a `turbsim` file)"),
+                            w.span.clone(),
+                            Some("e.g. wind = { speed = 11.4 }".into()),
+                        );
+                        return None;
+                    };
+                    ok &= cx.finite(&we, "speed", &[speed], &what);
+                    let alpha = wi.shear_exponent.unwrap_or(0.0);
+                    let href = wi.reference_height.unwrap_or(0.0);
+                    if alpha != 0.0 && !(href.is_finite() && href > 0.0) {
+                        cx.error(
+                            format!("{what}: a wind shear exponent needs `reference_height` > 0"),
+                            cx.key(&we, "shear_exponent"),
+                            Some("the hub height, typically".into()),
+                        );
+                        ok = false;
+                    }
+                    ok &= cx.finite(&we, "shear_exponent", &[alpha], &what);
+                    wind.function = match &wi.function {
+                        Some(f) => cx.time_function(f, &what).unwrap_or_default(),
+                        None => TimeFunction::Constant(1.0),
+                    };
+                    wind.speed = speed;
+                    wind.shear_exponent = alpha;
+                    wind.reference_height = if href > 0.0 { href } else { 1.0 };
                 }
+                wind
             }
         };
         let inflow = match li.inflow.as_ref().map(|i| &i.value) {
@@ -955,6 +1055,20 @@ impl ComponentKind for AeroLine {
                 },
             },
         };
+        if let (Some(r), Some(InflowInput::PittPeters { rotor })) =
+            (&li.rotor, li.inflow.as_ref().map(|i| &i.value))
+            && &r.value != rotor
+        {
+            cx.error(
+                format!(
+                    "{what}: `rotor = \"{}\"` but the Pitt–Peters inflow names rotor '{rotor}'",
+                    r.value
+                ),
+                r.span.clone(),
+                Some("a Pitt–Peters line belongs to its inflow's rotor: remove `rotor`".into()),
+            );
+            ok = false;
+        }
         (ok && !defs.is_empty()).then(|| AeroLineDef {
             name: li.name.value.clone(),
             carrier,
@@ -975,11 +1089,37 @@ impl ComponentKind for AeroLine {
                     ..
                 })
             ),
+            turbsim,
+            rotor: li.rotor.as_ref().map(|r| (r.value.clone(), r.span.clone())),
         })
     }
 
     /// Every Pitt–Peters line names a rotor that exists.
     fn finish(_input: &super::ModelInput, cx: &mut Checker, model: &Model) {
+        check_turbsim_boxes(cx, model);
+        for l in &model.aero_lines {
+            let Some((rotor, span)) = &l.rotor else {
+                continue;
+            };
+            if model.rotors.iter().any(|r| &r.name == rotor) {
+                continue;
+            }
+            let names: Vec<&str> = model.rotors.iter().map(|r| r.name.as_str()).collect();
+            let hint = match cx.suggest(rotor, names.iter().copied()) {
+                Some(b) => format!("did you mean '{b}'?"),
+                None => format!(
+                    "define the rotor: `[[rotors]]` with name = \"{rotor}\", centre, axis, radius and hub"
+                ),
+            };
+            cx.error(
+                format!(
+                    "aerodynamic line '{}': `rotor` names '{rotor}', which is not defined",
+                    l.name
+                ),
+                span.clone(),
+                Some(hint),
+            );
+        }
         for l in &model.aero_lines {
             let Inflow::PittPeters { rotor, .. } = &l.inflow else {
                 continue;
@@ -1011,57 +1151,7 @@ impl ComponentKind for AeroLine {
     }
 
     fn build(def: &AeroLineDef, parts: &mut Build) {
-        let wind = Arc::new(def.wind.clone());
-        let inflow = Arc::new(def.inflow.clone());
-        for (k, s) in def.stations.iter().enumerate() {
-            let (nodes, weights, point, tangent) = station_place(def, s.span, parts);
-            // Chord and normal at this station: made normal to the line, turned by the
-            // twist (+ pitch) about the span toward the normal.
-            let c0 =
-                (def.chord_direction - tangent * tangent.dot(&def.chord_direction)).normalize();
-            let n0 = {
-                let n = def.normal_direction - tangent * tangent.dot(&def.normal_direction);
-                (n - c0 * c0.dot(&n)).normalize()
-            };
-            let th = s.twist + def.pitch;
-            let c = c0 * th.cos() + n0 * th.sin();
-            let n = -c0 * th.sin() + n0 * th.cos();
-            let ac = point + c * s.ac_offset;
-            let attach = nodes
-                .iter()
-                .zip(&weights)
-                .map(|(&i, &w)| {
-                    let ns = &parts.initial[i];
-                    let rt: Matrix3<f64> = ns.r().transpose();
-                    Attachment {
-                        weight: w,
-                        offset: rt * (ac - ns.x),
-                        chord_dir: rt * c,
-                        normal_dir: rt * n,
-                    }
-                })
-                .collect();
-            let width = station_width(def, k);
-            let unsteady = Unsteady {
-                attached: def.unsteady,
-                stall: s.stall.clone().zip(def.stall_time_constant),
-                dynamic_wake: def.dynamic_wake,
-                hgm: s.hgm.clone(),
-            };
-            let station = AeroStation::new(
-                format!("{}.{k}", def.name),
-                nodes,
-                attach,
-                Section {
-                    chord: s.chord,
-                    width,
-                    airfoil: s.airfoil.clone(),
-                },
-                def.density,
-                wind.clone(),
-                inflow.clone(),
-            )
-            .with_unsteady(unsteady, 0.0, parts.initial);
+        for station in line_stations(def, parts) {
             parts.elements.push(Box::new(station));
         }
     }
@@ -1272,6 +1362,91 @@ impl ComponentKind for AeroLine {
                 ));
             }
         }
+        // A turbulent box (TurbSim layout, 4 × 4 points 2 m apart, 4 steps of 0.5 s,
+        // u_hub 9 m/s) with a smooth non-linear field: the stations' points (≈ (0.05,
+        // 0.1, 2) within 0.5 m) and box times (≈ 0.6 s at t = 0.3 s) lie inside one cell,
+        // away from its faces, so the trilinear gradients are smooth there.
+        let mut b: Vec<u8> = Vec::new();
+        b.extend(7i16.to_le_bytes());
+        for n in [4i32, 4, 0, 4] {
+            b.extend(n.to_le_bytes());
+        }
+        for v in [
+            2.0f32, 2.0, 0.5, 9.0, 2.0, -1.5, 1000.0, 0.0, 1000.0, 0.0, 1000.0, 0.0,
+        ] {
+            b.extend(v.to_le_bytes());
+        }
+        b.extend(0i32.to_le_bytes());
+        for k in 0..64 {
+            let x = k as f64;
+            for v in [
+                9.0 + (0.7 * x).sin(),
+                1.5 * (1.3 * x).cos(),
+                0.8 * (0.4 * x).sin(),
+            ] {
+                b.extend(((v * 1000.0).round() as i16).to_le_bytes());
+            }
+        }
+        let field = Arc::new(FullField::parse(&b).unwrap_or_else(|_| unreachable!()));
+        let turbulent = Arc::new(Wind {
+            turbulence: Some(field),
+            ..Default::default()
+        });
+        let node = |seed: u64| {
+            let mut n = random_node(seed);
+            n.x = Vector3::new(0.05, 0.1, 2.0) + 0.02 * n.x;
+            n.v = Vector3::new(0.3, -12.0, 0.2) + 0.1 * n.v;
+            n.w *= 0.3;
+            n.rot = crate::math::Rotation::identity()
+                .compose_exp(&(0.1 * crate::math::Rotation::identity().relative_log(&n.rot)));
+            n
+        };
+        for (k, inflow) in [
+            Inflow::None,
+            Inflow::Bem {
+                rotor: BemRotor {
+                    blades: 3,
+                    hub_radius: 0.2,
+                    tip_radius: 4.0,
+                    tip_loss: true,
+                    hub_loss: true,
+                    tangential_induction: true,
+                },
+                centre: Vector3::zeros(),
+                axis: Vector3::x(),
+            },
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let inflow = Arc::new(inflow);
+            let e2 = AeroStation::new(
+                "aero_turbulent2",
+                vec![0, 1],
+                vec![attach(1.0, 0.3), attach(-1.0, 0.7)],
+                section.clone(),
+                1.2,
+                turbulent.clone(),
+                inflow.clone(),
+            );
+            cases.push(TangentCase::element(
+                Box::new(e2),
+                vec![node(3000 + k as u64), node(3010 + k as u64)],
+            ));
+            let e1 = AeroStation::new(
+                "aero_turbulent1",
+                vec![0],
+                vec![attach(0.5, 1.0)],
+                section.clone(),
+                1.2,
+                turbulent.clone(),
+                inflow,
+            );
+            cases.push(TangentCase::element(
+                Box::new(e1),
+                vec![node(3020 + k as u64)],
+            ));
+        }
         // BEM with Øye's dynamic wake (two states), alone and with Wagner + Øye's stall,
         // on 1, 2 and 5 nodes.
         let bem = Arc::new(Inflow::Bem {
@@ -1340,6 +1515,123 @@ impl ComponentKind for AeroLine {
             }
         }
         cases
+    }
+}
+
+/// The stations of a line (elements `<line>.<k>`), at the initial configuration of `parts`.
+pub(crate) fn line_stations(def: &AeroLineDef, parts: &Build) -> Vec<AeroStation> {
+    let mut out = Vec::with_capacity(def.stations.len());
+    let wind = Arc::new(def.wind.clone());
+    let inflow = Arc::new(def.inflow.clone());
+    for (k, s) in def.stations.iter().enumerate() {
+        let (nodes, weights, point, tangent) = station_place(def, s.span, parts);
+        // Chord and normal at this station: made normal to the line, turned by the
+        // twist (+ pitch) about the span toward the normal.
+        let c0 = (def.chord_direction - tangent * tangent.dot(&def.chord_direction)).normalize();
+        let n0 = {
+            let n = def.normal_direction - tangent * tangent.dot(&def.normal_direction);
+            (n - c0 * c0.dot(&n)).normalize()
+        };
+        let th = s.twist + def.pitch;
+        let c = c0 * th.cos() + n0 * th.sin();
+        let n = -c0 * th.sin() + n0 * th.cos();
+        let ac = point + c * s.ac_offset;
+        let attach = nodes
+            .iter()
+            .zip(&weights)
+            .map(|(&i, &w)| {
+                let ns = &parts.initial[i];
+                let rt: Matrix3<f64> = ns.r().transpose();
+                Attachment {
+                    weight: w,
+                    offset: rt * (ac - ns.x),
+                    chord_dir: rt * c,
+                    normal_dir: rt * n,
+                }
+            })
+            .collect();
+        let width = station_width(def, k);
+        let unsteady = Unsteady {
+            attached: def.unsteady,
+            stall: s.stall.clone().zip(def.stall_time_constant),
+            dynamic_wake: def.dynamic_wake,
+            hgm: s.hgm.clone(),
+        };
+        let station = AeroStation::new(
+            format!("{}.{k}", def.name),
+            nodes,
+            attach,
+            Section {
+                chord: s.chord,
+                width,
+                airfoil: s.airfoil.clone(),
+            },
+            def.density,
+            wind.clone(),
+            inflow.clone(),
+        )
+        .with_unsteady(unsteady, 0.0, parts.initial);
+        out.push(station);
+    }
+    out
+}
+
+/// Every station of a line in a TurbSim wind starts inside the box's grid, and the box
+/// lasts every analysis (a normal file: the box times t + (x₀ − x)/u_hub of the stations'
+/// initial x over each analysis's time range lie in 0 … (NT−1)dt).
+fn check_turbsim_boxes(cx: &mut Checker, model: &Model) {
+    let initial = super::initial_nodes(model);
+    let parts = Build::new(&initial);
+    for def in &model.aero_lines {
+        let (Some(field), Some((path, span))) = (&def.wind.turbulence, &def.turbsim) else {
+            continue;
+        };
+        let what = format!("aerodynamic line '{}'", def.name);
+        let file = path.display();
+        let mut xs: Vec<f64> = Vec::new();
+        for s in &def.stations {
+            let (_, _, p, _) = station_place(def, s.span, &parts);
+            let [x, y, z] = def.wind.frame(&[p.x, p.y, p.z]);
+            if let Some(why) = field.outside(y, z, 0.0) {
+                cx.error(
+                    format!(
+                        "{what}: the station at span {} m, at ({:.3}, {:.3}, {:.3}) m, is outside the grid of TurbSim file '{file}': {why}",
+                        s.span, p.x, p.y, p.z
+                    ),
+                    span.clone(),
+                    Some("the grid is centred laterally on y = 0 of the wind frame (the tower axis through the global origin) and starts at the file's grid-bottom height: generate a box that covers the rotor".into()),
+                );
+                break;
+            }
+            xs.push(x);
+        }
+        if field.periodic || xs.len() < def.stations.len() {
+            continue;
+        }
+        let x_min = xs.iter().copied().fold(f64::INFINITY, f64::min);
+        let x_max = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        for a in &model.analyses {
+            let (t0, t1) = match &a.kind {
+                crate::model::AnalysisKind::Dynamic(d) => (d.t_start, d.t_end),
+                crate::model::AnalysisKind::Static(s) => (s.time, s.time),
+                _ => continue,
+            };
+            let (tau0, tau1) = (field.box_time(x_max, t0), field.box_time(x_min, t1));
+            if tau0 < -1e-9 * field.dt || tau1 > field.span() * (1.0 + 1e-9) {
+                cx.error(
+                    format!(
+                        "{what}: analysis '{}' (t = {t0} … {t1} s) needs box times {tau0:.4} … {tau1:.4} s of TurbSim file '{file}', which spans 0 … {:.4} s (a normal file's box reaches the origin {:.4} s after t = 0: it starts half its width, {:.4} m, upstream at {} m/s)",
+                        a.name,
+                        field.span(),
+                        field.start_x() / field.mean_speed,
+                        field.start_x(),
+                        field.mean_speed
+                    ),
+                    span.clone(),
+                    Some("shorten the analysis, generate a longer box (TurbSim's AnalysisTime / UsableTime), or use a periodic file".into()),
+                );
+            }
+        }
     }
 }
 

@@ -3,11 +3,16 @@
 //! The lifting lines of the rotor name it with `inflow = { type = "pitt_peters", rotor =
 //! "<name>" }`; the rotor's element owns the three inflow states, reads every station's
 //! thrust and produces the signals `<name>.v0`, `<name>.vs`, `<name>.vc` (m/s).
+//!
+//! Lines of any other inflow (BEM) join a rotor with `rotor = "<name>"`; a rotor with a
+//! `hub` node writes the rotor-level outputs of element `<name>.performance` (thrust,
+//! torque, power, C_T, C_P, tip-speed ratio: [`crate::elements::aero::rotor_performance`]).
 
-use super::aero::AeroLineDef;
+use super::aero::{AeroLineDef, line_stations};
 use super::{Build, ComponentKind};
+use crate::core::NodeRef;
 use crate::elements::aero::dynamic_inflow::{PittPeters, RotorDisc, inflow_signals};
-use crate::elements::aero::{Inflow, Wind};
+use crate::elements::aero::{Inflow, RotorGeometry, RotorPerformance, Wind};
 use crate::model::validate::{Checker, Entry};
 use crate::model::{Located, Model};
 use crate::tangent_check::TangentCase;
@@ -34,6 +39,11 @@ pub struct RotorInput {
     pub azimuth_reference: Option<[f64; 3]>,
     /// Tip radius R [m], > 0.
     pub radius: f64,
+    /// The node whose angular velocity about the axis is the rotor speed: with it, the
+    /// rotor writes thrust, torque, power, C_T, C_P and the tip-speed ratio (element
+    /// `<name>.performance`).
+    #[serde(default)]
+    pub hub: Option<Located<String>>,
 }
 
 /// A validated rotor.
@@ -43,8 +53,12 @@ pub struct RotorDef {
     pub disc: RotorDisc,
     pub density: f64,
     pub wind: Wind,
-    /// Element names of its stations.
+    /// Element names of its Pitt–Peters stations (empty: no inflow states).
     pub stations: Vec<String>,
+    /// Its hub node (rotor outputs).
+    pub hub: Option<usize>,
+    /// Every line of the rotor (Pitt–Peters or naming it), as validated.
+    pub lines: Vec<AeroLineDef>,
 }
 
 pub struct RotorKind;
@@ -52,6 +66,11 @@ pub struct RotorKind;
 /// Whether a line's inflow is the Pitt–Peters inflow of `rotor`.
 fn uses(l: &AeroLineDef, rotor: &str) -> bool {
     matches!(&l.inflow, Inflow::PittPeters { rotor: r, .. } if r == rotor)
+}
+
+/// Whether a line belongs to `rotor` (its Pitt–Peters inflow or its `rotor` key).
+fn member(l: &AeroLineDef, rotor: &str) -> bool {
+    uses(l, rotor) || l.rotor.as_ref().is_some_and(|(r, _)| r == rotor)
 }
 
 impl ComponentKind for RotorKind {
@@ -126,18 +145,46 @@ impl ComponentKind for RotorKind {
         }
         .normalize();
         let lines: Vec<usize> = (0..model.aero_lines.len())
-            .filter(|&k| uses(&model.aero_lines[k], name))
+            .filter(|&k| member(&model.aero_lines[k], name))
             .collect();
         let Some(&first) = lines.first() else {
             cx.error(
                 format!("{what}: no lifting line uses it"),
                 ri.name.span.clone(),
                 Some(format!(
-                    "give its blades' `[[aero_lines]]` `inflow = {{ type = \"pitt_peters\", rotor = \"{name}\" }}`"
+                    "give its blades' `[[aero_lines]]` `inflow = {{ type = \"pitt_peters\", rotor = \"{name}\" }}` or `rotor = \"{name}\"`"
                 )),
             );
             return None;
         };
+        let pitt_peters = lines.iter().any(|&k| uses(&model.aero_lines[k], name));
+        let hub = match &ri.hub {
+            None => None,
+            Some(h) => match cx.node_ref(h, &what) {
+                Some(NodeRef::Node(i)) => Some(i),
+                Some(NodeRef::Ground) => {
+                    cx.error(
+                        format!("{what}: the hub cannot be the ground"),
+                        h.span.clone(),
+                        Some("name the node the blades turn with".into()),
+                    );
+                    ok = false;
+                    None
+                }
+                None => {
+                    ok = false;
+                    None
+                }
+            },
+        };
+        if !pitt_peters && ri.hub.is_none() {
+            cx.error(
+                format!("{what}: a rotor without Pitt–Peters lines only writes rotor outputs, which need `hub`"),
+                ri.name.span.clone(),
+                Some("add `hub = \"<node>\"`: the node whose angular velocity about the axis is the rotor speed".into()),
+            );
+            ok = false;
+        }
         let density = model.aero_lines[first].density;
         let wind = model.aero_lines[first].wind.clone();
         for &k in &lines[1..] {
@@ -166,6 +213,9 @@ impl ComponentKind for RotorKind {
         let mut stations = Vec::new();
         for &k in &lines {
             let l = &mut model.aero_lines[k];
+            if !uses(l, name) {
+                continue;
+            }
             l.inflow = Inflow::PittPeters {
                 rotor: name.clone(),
                 disc: disc.clone(),
@@ -178,6 +228,8 @@ impl ComponentKind for RotorKind {
             density,
             wind,
             stations,
+            hub,
+            lines: lines.iter().map(|&k| model.aero_lines[k].clone()).collect(),
         })
     }
 
@@ -186,13 +238,36 @@ impl ComponentKind for RotorKind {
     }
 
     fn build(def: &RotorDef, parts: &mut Build) {
-        parts.elements.push(Box::new(PittPeters::new(
-            def.name.clone(),
-            def.disc.clone(),
-            def.density,
-            Arc::new(def.wind.clone()),
-            &def.stations,
-        )));
+        let wind = Arc::new(def.wind.clone());
+        if !def.stations.is_empty() {
+            parts.elements.push(Box::new(PittPeters::new(
+                def.name.clone(),
+                def.disc.clone(),
+                def.density,
+                wind.clone(),
+                &def.stations,
+            )));
+        }
+        if let Some(hub) = def.hub {
+            let stations = def
+                .lines
+                .iter()
+                .flat_map(|l| line_stations(l, parts))
+                .collect();
+            let geometry = RotorGeometry {
+                centre: def.disc.centre,
+                axis: def.disc.axis,
+                radius: def.disc.radius,
+                density: def.density,
+            };
+            parts.elements.push(Box::new(RotorPerformance::new(
+                format!("{}.performance", def.name),
+                geometry,
+                wind,
+                hub,
+                stations,
+            )));
+        }
     }
 
     fn tangent_cases() -> Vec<TangentCase> {
