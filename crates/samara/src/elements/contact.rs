@@ -34,14 +34,35 @@
 //! when the model is validated).
 //!
 //! The total force `F = N n + F_t` acts at `p`: node rows `−F` and `−Rᵀ(a × F)`.
+//! **Height-field ground** ([`Contact::on_height_field`]): a terrain z(x, y)
+//! ([`HeightField`]) instead of the plane. The sphere's centre (or the point) c is
+//! measured against the surface below it: with z, ∇z at (c_x, c_y), the local normal
+//! `n = (−∇z, 1)/√(1 + |∇z|²)` and the signed distance of c from the surface taken as the
+//! vertical gap times n_z, `d = (c_z − z) n_z` (exact on a plane; on a curved surface the
+//! first-order distance, its error O(d² κ) for curvature κ and, for a sphere, the normal
+//! taken below the centre instead of at the foot point — an error O(ρ κ |∇z|) in the
+//! normal's direction, small for a radius small against the terrain's radius of
+//! curvature). Then `δ = ρ − d`, the contact point `p = c − ρ n`, and the rest as on the
+//! plane with the local n and the tangent basis moving with it
+//! ([`crate::elements::terrain::tangents`]): the LuGre bristle deflection is kept in that
+//! moving basis. The ground does not move. Tangents are exact by forward-mode
+//! differentiation of the one kernel, including the turning of n through the Hessian.
+//! A converged state with c outside the table is an error
+//! ([`Element::range_violation`]).
+//!
 //! Energies: potential `∫N_el dδ` of the elastic part, dissipated power
 //! `(N − N_el) δ̇ − F_t·w` (the LuGre bristle's small elastic store counts as dissipated),
 //! external power `F·v_g` (the work of a moving surface).
 
+use super::node_dual::{omega, rot, rot_t, var3};
+use super::terrain::{normal, surface, tangents};
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
 use crate::core::ElementInput;
+use crate::math::dual::{Dual, Scalar, V3, add, cross, dot, scale, sub};
+use crate::math::height_field::HeightField;
 use crate::math::skew;
 use nalgebra::{Matrix3, SMatrix, Vector3};
+use std::sync::Arc;
 
 /// The contact geometry on the body.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -215,6 +236,30 @@ pub struct Contact {
     tangents: [Vector3<f64>; 2],
     law: NormalLaw,
     friction: Option<Friction>,
+    /// A height-field ground instead of the plane.
+    terrain: Option<Arc<HeightField>>,
+}
+
+/// Local unknowns of the height-field kernel: 6 node unknowns and 2 bristle states;
+/// their rates are directions `NL + k`.
+const NL: usize = 8;
+
+/// What the height-field kernel gives.
+struct TerrainTerms<S> {
+    /// The force F on the body (global) and its moment Rᵀ(a × F) (node frame).
+    rows: [V3<S>; 2],
+    /// The bristle rows (m/s).
+    state_rows: [S; 2],
+    delta: f64,
+    delta_dot: f64,
+    /// The normal law's `[N, ∂N/∂δ, ∂N/∂δ̇, N_el]`.
+    nf: [f64; 4],
+    friction: Vector3<f64>,
+    /// Slip velocity (t₁·u, t₂·u) and its vector t₁w₁ + t₂w₂.
+    w: [f64; 2],
+    slip: Vector3<f64>,
+    /// The point below which the terrain is measured.
+    centre: Vector3<f64>,
 }
 
 impl Contact {
@@ -244,6 +289,102 @@ impl Contact {
             tangents: [t1, t2],
             law,
             friction,
+            terrain: None,
+        }
+    }
+
+    /// A contact with the height-field ground `terrain` (fixed).
+    pub fn on_height_field(
+        name: impl Into<String>,
+        node: usize,
+        shape: ContactShape,
+        terrain: Arc<HeightField>,
+        law: NormalLaw,
+        friction: Option<Friction>,
+    ) -> Self {
+        let plane = GroundPlane {
+            point: Vector3::zeros(),
+            normal: Vector3::z(),
+            velocity: Vector3::zeros(),
+        };
+        let mut c = Self::new(name, node, shape, plane, law, friction);
+        c.terrain = Some(terrain);
+        c
+    }
+
+    /// The contact on the height field: one kernel for the value (`f64`) and the exact
+    /// tangents (`Dual`).
+    fn terrain_terms<S: Scalar>(&self, hf: &HeightField, x: &ElementInput) -> TerrainTerms<S> {
+        let nd = &x.nodes[self.node[0]];
+        let r = nd.r();
+        let xs = var3::<S>(&nd.x, 0);
+        let v = var3::<S>(&nd.v, NL);
+        let om = omega::<S>(0, r, &nd.w, NL);
+        let (rho, offset) = match self.shape {
+            ContactShape::Sphere { radius } => (radius, None),
+            ContactShape::Point { offset } => (0.0, Some(offset)),
+            ContactShape::OffsetSphere { radius, offset } => (radius, Some(offset)),
+        };
+        let c = match offset {
+            Some(o) => add(&xs, &rot::<S>(0, r, &o)),
+            None => xs,
+        };
+        let (h, g) = surface(hf, c[0], c[1]);
+        let (n, nz) = normal(&g);
+        let delta = -((c[2] - h) * nz) + rho;
+        let a = sub(&sub(&c, &xs), &scale(&n, S::cst(rho)));
+        let u = add(&v, &cross(&om, &a));
+        let delta_dot = -dot(&n, &u);
+        let t = tangents(&n);
+        let w = [dot(&t[0], &u), dot(&t[1], &u)];
+        let nf = normal_force(&self.law, delta.re(), delta_dot.re());
+        let nn = (delta - delta.re()) * nf[1] + (delta_dot - delta_dot.re()) * nf[2] + nf[0];
+        let zero = S::cst(0.0);
+        let (phi, state_rows) = match &self.friction {
+            None => ([zero; 2], [zero; 2]),
+            Some(f) => {
+                let z: [S; 2] = std::array::from_fn(|j| {
+                    let mut zj = S::cst(x.states[j].z);
+                    zj.add_deriv(6 + j, 1.0);
+                    zj
+                });
+                let zd: [S; 2] = std::array::from_fn(|j| {
+                    let mut zj = S::cst(x.states[j].zd);
+                    zj.add_deriv(NL + 6 + j, 1.0);
+                    zj
+                });
+                let phi: [S; 2] = std::array::from_fn(|i| {
+                    z[i] * f.bristle_stiffness + zd[i] * f.bristle_damping + w[i] * f.viscous
+                });
+                // ψ(|w|) = σ₀ |w|/g(|w|); |w| has no derivative at 0, where ψ' z = 0.
+                let s2 = w[0] * w[0] + w[1] * w[1];
+                let s = if s2.re() > 0.0 { s2.sqrt() } else { zero };
+                let (ms, md, vs) = (
+                    f.static_coefficient,
+                    f.dynamic_coefficient,
+                    f.stribeck_velocity,
+                );
+                let q = s / vs;
+                let gs = (-(q * q)).exp() * (ms - md) + md;
+                let psi = s * f.bristle_stiffness / gs;
+                (phi, std::array::from_fn(|i| zd[i] - w[i] + psi * z[i]))
+            }
+        };
+        let ft = scale(&add(&scale(&t[0], phi[0]), &scale(&t[1], phi[1])), -nn);
+        let force = add(&scale(&n, nn), &ft);
+        let moment = rot_t(0, r, &cross(&a, &force));
+        let re3 = |y: &V3<S>| Vector3::new(y[0].re(), y[1].re(), y[2].re());
+        let wv = [w[0].re(), w[1].re()];
+        TerrainTerms {
+            rows: [force, moment],
+            state_rows,
+            delta: delta.re(),
+            delta_dot: delta_dot.re(),
+            nf,
+            friction: re3(&ft),
+            w: wv,
+            slip: re3(&t[0]) * wv[0] + re3(&t[1]) * wv[1],
+            centre: re3(&c),
         }
     }
 
@@ -328,6 +469,38 @@ impl Element for Contact {
     }
 
     fn evaluate(&self, _ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+        if let Some(hf) = &self.terrain {
+            let n = 6 + self.n_states();
+            if need == Need::Residual {
+                let t = self.terrain_terms::<f64>(hf, x);
+                for (b, row) in t.rows.iter().enumerate() {
+                    for (k, y) in row.iter().enumerate() {
+                        out.r[3 * b + k] -= y;
+                    }
+                }
+                for j in 6..n {
+                    out.r[j] += t.state_rows[j - 6];
+                }
+                return;
+            }
+            let t = self.terrain_terms::<Dual<{ 2 * NL }>>(hf, x);
+            let mut put = |ri: usize, y: &Dual<{ 2 * NL }>, sign: f64| {
+                out.r[ri] += sign * y.v;
+                for j in 0..n {
+                    out.k[(ri, j)] += sign * y.d[j];
+                    out.c[(ri, j)] += sign * y.d[NL + j];
+                }
+            };
+            for (b, row) in t.rows.iter().enumerate() {
+                for (k, y) in row.iter().enumerate() {
+                    put(3 * b + k, y, -1.0);
+                }
+            }
+            for j in 6..n {
+                put(j, &t.state_rows[j - 6], 1.0);
+            }
+            return;
+        }
         let kin = self.kinematics(x);
         let n = self.plane.normal;
         let (nf, ft) = self.forces(x, &kin);
@@ -428,10 +601,17 @@ impl Element for Contact {
     }
 
     fn potential_energy(&self, _ctx: &EvalContext, x: &ElementInput) -> f64 {
+        if let Some(hf) = &self.terrain {
+            return normal_potential(&self.law, self.terrain_terms::<f64>(hf, x).delta);
+        }
         normal_potential(&self.law, self.kinematics(x).delta)
     }
 
     fn dissipated_power(&self, x: &ElementInput) -> f64 {
+        if let Some(hf) = &self.terrain {
+            let t = self.terrain_terms::<f64>(hf, x);
+            return (t.nf[0] - t.nf[3]) * t.delta_dot - t.friction.dot(&t.slip);
+        }
         let kin = self.kinematics(x);
         let (nf, ft) = self.forces(x, &kin);
         let ut = self.tangents[0] * kin.w[0] + self.tangents[1] * kin.w[1];
@@ -439,6 +619,9 @@ impl Element for Contact {
     }
 
     fn external_power(&self, _ctx: &EvalContext, x: &ElementInput) -> f64 {
+        if self.terrain.is_some() {
+            return 0.0;
+        }
         let kin = self.kinematics(x);
         let (nf, ft) = self.forces(x, &kin);
         (self.plane.normal * nf[0] + ft).dot(&self.plane.velocity)
@@ -455,18 +638,39 @@ impl Element for Contact {
     }
 
     fn outputs(&self, _ctx: &EvalContext, x: &ElementInput, out: &mut [f64]) {
-        let kin = self.kinematics(x);
-        let (nf, ft) = self.forces(x, &kin);
-        let slip = (kin.w[0].powi(2) + kin.w[1].powi(2)).sqrt();
+        let (nf, ft, delta, w) = match &self.terrain {
+            Some(hf) => {
+                let t = self.terrain_terms::<f64>(hf, x);
+                (t.nf, t.friction, t.delta, t.w)
+            }
+            None => {
+                let kin = self.kinematics(x);
+                let (nf, ft) = self.forces(x, &kin);
+                (nf, ft, kin.delta, kin.w)
+            }
+        };
+        let slip = (w[0].powi(2) + w[1].powi(2)).sqrt();
         out[0] = nf[0];
         out[1] = ft.norm();
-        out[2] = kin.delta;
+        out[2] = delta;
         out[3] = slip;
         // Sticking: in contact and slipping slower than a tenth of the Stribeck speed.
         let stick = self
             .friction
             .is_some_and(|f| nf[0] > 0.0 && slip < 0.1 * f.stribeck_velocity);
         out[4] = if stick { 1.0 } else { 0.0 };
+    }
+
+    fn range_violation(&self, x: &ElementInput) -> Option<String> {
+        let hf = self.terrain.as_ref()?;
+        let c = self.terrain_terms::<f64>(hf, x).centre;
+        (!hf.contains(c.x, c.y)).then(|| {
+            let ([x0, x1], [y0, y1]) = hf.bounds();
+            format!(
+                "the point it measures from, ({:.6}, {:.6}), left the height field's table x ∈ [{x0}, {x1}], y ∈ [{y0}, {y1}]",
+                c.x, c.y
+            )
+        })
     }
 }
 
