@@ -656,7 +656,7 @@ impl ComponentKind for TireKind {
                 params
             };
             let e = Tire::new(
-                "tire",
+                "tire_on_terrain",
                 0,
                 (k == 0).then_some(1),
                 axis,
