@@ -36,19 +36,21 @@
 //! The total force `F = N n + F_t` acts at `p`: node rows `−F` and `−Rᵀ(a × F)`.
 //! **Height-field ground** ([`Contact::on_height_field`]): a terrain z(x, y)
 //! ([`HeightField`]) instead of the plane. The sphere's centre (or the point) c is
-//! measured against the surface below it: with z, ∇z at (c_x, c_y), the local normal
-//! `n = (−∇z, 1)/√(1 + |∇z|²)` and the signed distance of c from the surface taken as the
-//! vertical gap times n_z, `d = (c_z − z) n_z` (exact on a plane; on a curved surface the
-//! first-order distance, its error O(d² κ) for curvature κ and, for a sphere, the normal
-//! taken below the centre instead of at the foot point — an error O(ρ κ |∇z|) in the
-//! normal's direction, small for a radius small against the terrain's radius of
-//! curvature). Then `δ = ρ − d`, the contact point `p = c − ρ n`, and the rest as on the
-//! plane with the local n and the tangent basis moving with it
-//! ([`crate::elements::terrain::tangents`]): the LuGre bristle deflection is kept in that
-//! moving basis. The ground does not move. Tangents are exact by forward-mode
-//! differentiation of the one kernel, including the turning of n through the Hessian.
-//! A converged state with c outside the table is an error
-//! ([`Element::range_violation`]).
+//! measured from its foot point q = (u, v, z(u, v)), the nearest point of the surface
+//! (Newton on the closest-point conditions, [`foot_point`]): with the normal there,
+//! `n = (−∇z, 1)/√(1 + |∇z|²)`, the signed distance `d = (c − q)·n`, `δ = ρ − d` and the
+//! contact point `p = c − ρ n`. Since ∂d/∂c = n at the foot point, the normal force N n
+//! is the gradient of the contact potential (energy is conserved by the elastic part)
+//! and passes through the centre; on a plane the foot point is found in one iteration and
+//! everything is the plane's. Where no unique foot point exists (a centre farther from a
+//! concave surface than its radius of curvature — far out of contact) the surface below
+//! the centre is taken instead. The rest is as on the plane with the local n and the
+//! tangent basis moving with it ([`crate::elements::terrain::tangents`]): the LuGre
+//! bristle deflection is kept in that moving basis. The ground does not move. Tangents
+//! are exact by forward-mode differentiation of the one kernel, the foot point's through
+//! the implicit function theorem (one dual Newton step at the converged point), including
+//! the turning of n through the Hessian. A converged state whose foot point is outside the
+//! table is an error ([`Element::range_violation`]).
 //!
 //! Energies: potential `∫N_el dδ` of the elastic part, dissipated power
 //! `(N − N_el) δ̇ − F_t·w` (the LuGre bristle's small elastic store counts as dissipated),
@@ -59,7 +61,7 @@ use super::terrain::{normal, surface, tangents};
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
 use crate::core::ElementInput;
 use crate::math::dual::{Dual, Scalar, V3, add, cross, dot, scale, sub};
-use crate::math::height_field::HeightField;
+use crate::math::height_field::{Height, HeightField};
 use crate::math::skew;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use std::sync::Arc;
@@ -226,6 +228,43 @@ struct Kinematics {
     r: Matrix3<f64>,
 }
 
+/// The Jacobian `J = I + ∇z ∇zᵀ + (z − c_z) H` of the closest-point conditions
+/// `g = (u − c_x + (z − c_z) z_u, v − c_y + (z − c_z) z_v) = 0` at height gap `e = z − c_z`.
+fn closest_point_jacobian(h: &Height, e: f64) -> [[f64; 2]; 2] {
+    let (g, hs) = (h.gradient, h.hessian);
+    [
+        [1.0 + g[0] * g[0] + e * hs[0][0], g[0] * g[1] + e * hs[0][1]],
+        [g[0] * g[1] + e * hs[1][0], 1.0 + g[1] * g[1] + e * hs[1][1]],
+    ]
+}
+
+/// The foot point (u, v) of `c` on the surface z(x, y): the nearest surface point, where
+/// `c − (u, v, z)` is along the normal, by Newton from (c_x, c_y) on the conditions of
+/// [`closest_point_jacobian`] (one iteration on a plane; J positive definite while the
+/// distance is below the radius of curvature). None when it does not converge in 30
+/// iterations or J is not positive definite (no unique nearest point).
+fn foot_point(hf: &HeightField, c: [f64; 3]) -> Option<(f64, f64)> {
+    let (mut u, mut v) = (c[0], c[1]);
+    for _ in 0..30 {
+        let h = hf.eval_extended(u, v);
+        let e = h.z - c[2];
+        let g = [u - c[0] + e * h.gradient[0], v - c[1] + e * h.gradient[1]];
+        let j = closest_point_jacobian(&h, e);
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if !(det > 0.0 && j[0][0] > 0.0) {
+            return None;
+        }
+        let du = (j[1][1] * g[0] - j[0][1] * g[1]) / det;
+        let dv = (j[0][0] * g[1] - j[1][0] * g[0]) / det;
+        u -= du;
+        v -= dv;
+        if du.abs() + dv.abs() <= 1e-13 * (1.0 + u.abs() + v.abs()) {
+            return Some((u, v));
+        }
+    }
+    None
+}
+
 /// A body–ground contact.
 #[derive(Clone, Debug)]
 pub struct Contact {
@@ -258,8 +297,8 @@ struct TerrainTerms<S> {
     /// Slip velocity (t₁·u, t₂·u) and its vector t₁w₁ + t₂w₂.
     w: [f64; 2],
     slip: Vector3<f64>,
-    /// The point below which the terrain is measured.
-    centre: Vector3<f64>,
+    /// The foot point of the centre on the terrain.
+    foot: Vector3<f64>,
 }
 
 impl Contact {
@@ -329,9 +368,28 @@ impl Contact {
             Some(o) => add(&xs, &rot::<S>(0, r, &o)),
             None => xs,
         };
-        let (h, g) = surface(hf, c[0], c[1]);
-        let (n, nz) = normal(&g);
-        let delta = -((c[2] - h) * nz) + rho;
+        let (q, n) = match foot_point(hf, [c[0].re(), c[1].re(), c[2].re()]) {
+            Some((u0, v0)) => {
+                // One Newton step on dual numbers from the converged foot point: its value
+                // stays, its derivatives are the implicit function's, −J⁻¹ ∂g/∂c.
+                let h = hf.eval_extended(u0, v0);
+                let (zu, zv) = (h.gradient[0], h.gradient[1]);
+                let e = -c[2] + h.z;
+                let g = [-c[0] + u0 + e * zu, -c[1] + v0 + e * zv];
+                let j = closest_point_jacobian(&h, e.re());
+                let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+                let u = -((g[0] * j[1][1] - g[1] * j[0][1]) / det) + u0;
+                let v = -((g[1] * j[0][0] - g[0] * j[1][0]) / det) + v0;
+                let (z, grad) = surface(hf, u, v);
+                ([u, v, z], normal(&grad).0)
+            }
+            None => {
+                // No foot point (far from a strongly curved surface): below the centre.
+                let (z, grad) = surface(hf, c[0], c[1]);
+                ([c[0], c[1], z], normal(&grad).0)
+            }
+        };
+        let delta = -dot(&sub(&c, &q), &n) + rho;
         let a = sub(&sub(&c, &xs), &scale(&n, S::cst(rho)));
         let u = add(&v, &cross(&om, &a));
         let delta_dot = -dot(&n, &u);
@@ -384,7 +442,7 @@ impl Contact {
             friction: re3(&ft),
             w: wv,
             slip: re3(&t[0]) * wv[0] + re3(&t[1]) * wv[1],
-            centre: re3(&c),
+            foot: re3(&q),
         }
     }
 
@@ -663,11 +721,11 @@ impl Element for Contact {
 
     fn range_violation(&self, x: &ElementInput) -> Option<String> {
         let hf = self.terrain.as_ref()?;
-        let c = self.terrain_terms::<f64>(hf, x).centre;
+        let c = self.terrain_terms::<f64>(hf, x).foot;
         (!hf.contains(c.x, c.y)).then(|| {
             let ([x0, x1], [y0, y1]) = hf.bounds();
             format!(
-                "the point it measures from, ({:.6}, {:.6}), left the height field's table x ∈ [{x0}, {x1}], y ∈ [{y0}, {y1}]",
+                "its foot point on the terrain, ({:.6}, {:.6}), left the height field's table x ∈ [{x0}, {x1}], y ∈ [{y0}, {y1}]",
                 c.x, c.y
             )
         })

@@ -68,7 +68,12 @@ mod tests {
         for k in 0..3 {
             assert!((n[k].v - want[k]).abs() < 1e-14);
         }
-        for (a, b, v) in [(&t1, &t1, 1.0), (&t2, &t2, 1.0), (&t1, &t2, 0.0), (&t1, &n, 0.0)] {
+        for (a, b, v) in [
+            (&t1, &t1, 1.0),
+            (&t2, &t2, 1.0),
+            (&t1, &t2, 0.0),
+            (&t1, &n, 0.0),
+        ] {
             assert!((dot(a, b).v - v).abs() < 1e-14);
         }
         assert!((dot(&cross(&t1, &t2), &n).v - 1.0).abs() < 1e-14);

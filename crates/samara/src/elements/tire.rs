@@ -62,14 +62,14 @@
 //! Tangents are exact by forward-mode differentiation of the one kernel
 //! ([`crate::math::dual`]).
 
-use super::{Element, EvalContext, LocalTerms, Need};
-use crate::core::{ElementInput, ElementState, NodeState};
 use super::node_dual::{rot, rot_t, var3};
 use super::terrain::{normal, surface};
-use crate::math::height_field::HeightField;
-use std::sync::Arc;
+use super::{Element, EvalContext, LocalTerms, Need};
+use crate::core::{ElementInput, ElementState, NodeState};
 use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
+use crate::math::height_field::HeightField;
 use nalgebra::Vector3;
+use std::sync::Arc;
 
 /// Magic Formula coefficients of one characteristic: stiffness factor B, shape factor C,
 /// peak D (per unit normal load μ for forces, a length for the trail) and curvature E.
@@ -396,8 +396,14 @@ impl Tire {
             // δ = R₀ cos γ − h along the motion: x' = v, s' = ω × s.
             let s0 = w.r() * self.axis;
             let sd = w.omega_global().cross(&s0);
-            let x: V3<Dual<1>> = std::array::from_fn(|k| Dual { v: w.x[k], d: [w.v[k]] });
-            let s: V3<Dual<1>> = std::array::from_fn(|k| Dual { v: s0[k], d: [sd[k]] });
+            let x: V3<Dual<1>> = std::array::from_fn(|k| Dual {
+                v: w.x[k],
+                d: [w.v[k]],
+            });
+            let s: V3<Dual<1>> = std::array::from_fn(|k| Dual {
+                v: s0[k],
+                d: [sd[k]],
+            });
             let (n, h) = self.local_ground(&x);
             let ns = dot(&n, &s);
             let cv = sub(&n, &scale(&s, ns));

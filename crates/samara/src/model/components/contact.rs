@@ -34,10 +34,9 @@
 
 use super::ground::{GroundInput, height_field};
 use super::{Build, ComponentKind, ModelInput};
-use crate::math::height_field::HeightField;
-use std::sync::Arc;
 use crate::core::NodeRef;
 use crate::elements::{Contact, ContactShape, Friction, GroundPlane, NormalLaw, SpherePair};
+use crate::math::height_field::HeightField;
 use crate::model::input::AnalysisType;
 use crate::model::validate::{Checker, Entry};
 use crate::model::{Located, Model};
@@ -45,6 +44,7 @@ use crate::tangent_check::{TangentCase, random_node};
 use nalgebra::Vector3;
 use schemars::JsonSchema;
 use serde::Deserialize;
+use std::sync::Arc;
 
 /// Contact geometry on the body.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]

@@ -80,9 +80,8 @@ fn parse_file(text: &str) -> Result<FileTable, String> {
         .map(|(k, l)| (k, l.split(',').map(str::trim).collect()))
         .collect();
     let num = |line: usize, col: usize, s: &str| -> Result<f64, String> {
-        s.parse::<f64>().map_err(|_| {
-            format!("line {line}, column {col}: expected a number, got '{s}'")
-        })
+        s.parse::<f64>()
+            .map_err(|_| format!("line {line}, column {col}: expected a number, got '{s}'"))
     };
     let Some((first_line, first)) = rows.first() else {
         return Err("the file has no data lines".into());
@@ -189,7 +188,10 @@ pub fn height_field(
         .find(|k| k.1)
         {
             cx.error(
-                format!("{what}: the ground's `{}` and `file` both give the table", key.0),
+                format!(
+                    "{what}: the ground's `{}` and `file` both give the table",
+                    key.0
+                ),
                 at(cx, key.0),
                 Some("keep either the file or the inline `x`, `y`, `z`".into()),
             );
@@ -201,7 +203,10 @@ pub fn height_field(
             Ok(t) => t,
             Err(err) => {
                 cx.error(
-                    format!("{what}: cannot read terrain file '{}': {err}", path.display()),
+                    format!(
+                        "{what}: cannot read terrain file '{}': {err}",
+                        path.display()
+                    ),
                     at(cx, "file"),
                     Some("paths are relative to the model file".into()),
                 );
@@ -267,7 +272,8 @@ pub fn height_field(
         Ok(h) => Some(Arc::new(h)),
         Err(err) => {
             let key = match &err {
-                HeightFieldError::TooFew { axis, .. } | HeightFieldError::NotIncreasing { axis, .. } => axis,
+                HeightFieldError::TooFew { axis, .. }
+                | HeightFieldError::NotIncreasing { axis, .. } => axis,
                 _ => "z",
             };
             cx.error(format!("{what}: {err}"), at(cx, key), Some(hint.into()));

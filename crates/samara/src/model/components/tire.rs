@@ -29,16 +29,16 @@
 
 use super::ground::{GroundInput, height_field};
 use super::{Build, ComponentKind};
-use crate::math::height_field::HeightField;
-use std::sync::Arc;
 use crate::core::NodeRef;
 use crate::elements::{MagicFormula, Tire, TireGround, TireParameters};
+use crate::math::height_field::HeightField;
 use crate::model::validate::{Checker, Entry};
 use crate::model::{JointType, Located, Model};
 use crate::tangent_check::{TangentCase, random_node};
 use nalgebra::Vector3;
 use schemars::JsonSchema;
 use serde::Deserialize;
+use std::sync::Arc;
 
 /// One set of Magic Formula coefficients (Pacejka, *Tire and Vehicle Dynamics*, §4.3.2):
 /// `Y = D sin(C arctan(B x − E (B x − arctan(B x))))`.
