@@ -1772,3 +1772,49 @@ fn turbsim_wind_and_rotor_output_options_change_something() {
     };
     assert!(e.contains("need `hub`") || e.contains("needs `hub`"), "{e}");
 }
+
+/// Issue #16: `ground = { type = "height_field", … }` on `[[contacts]]` and `[[tires]]`
+/// replaces the ground plane: a terrain that is not the plane changes the motion (the
+/// incline at 25° instead of 30°, the sled's road 1 mm higher). Its keys `x`, `y`, `z`
+/// and `file` and the located errors: tests/terrain.rs.
+#[test]
+fn the_height_field_ground_changes_the_motion() {
+    let read = |rel: &str| {
+        std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../..")
+                .join(rel),
+        )
+        .unwrap()
+    };
+    let t = 25f64.to_radians().tan();
+    let incline = read("examples/contact/incline.toml").replace("t_end = 1.0", "t_end = 0.2");
+    let plane = "ground_point = [0.0, 0.0, 0.0]\nground_normal = [0.5, 0.0, 0.8660254037844386]   # (sin 30°, 0, cos 30°)";
+    let sled = read("examples/contact/tire_braking.toml").replace("t_end = 1.5", "t_end = 0.2");
+    let cases = [
+        (
+            incline.clone(),
+            incline.replace(
+                plane,
+                &format!(
+                    "ground = {{ type = \"height_field\", x = [-1.0, 5.0], z = [{:?}, {:?}] }}",
+                    t,
+                    -5.0 * t
+                ),
+            ),
+        ),
+        (
+            sled.clone(),
+            sled.replace(
+                "brake = \"brake\"\n",
+                "brake = \"brake\"\nground = { type = \"height_field\", x = [-5.0, 20.0], z = [0.001, 0.001] }\n",
+            ),
+        ),
+    ];
+    for (base, with) in cases {
+        assert_ne!(base, with);
+        let (a, b) = (last_node(&attempt(&base).1), last_node(&attempt(&with).1));
+        println!("plane {a:?}, height field {b:?}");
+        assert!((a - b).norm() > 1e-6, "the height field changed nothing");
+    }
+}

@@ -302,3 +302,82 @@ fn the_held_value_is_written_and_stepping_lands_on_samples() {
     }
     assert!(cut >= 3, "{cut}");
 }
+
+/// The held values are part of the state a continued run starts from (`start_from`): the
+/// loop of `examples/control/sampled_speed.toml` run to 0.47 s (between the samples of 0.4
+/// and 0.5 s) or to 0.5 s (on one), then continued to 2 s from that final state. At the
+/// start of the continuation the held value is still the sample of 0.4 s (not the speed at
+/// 0.47 s: nothing is re-sampled between instants), and on an instant it is that
+/// instant's sample, taken once. Split on the instant, the two runs end where the single
+/// run ends to 1e-12 (the step after a sample restarts from consistent accelerations in
+/// both); split between instants, the continuation restarts the integrator's
+/// acceleration off an instant, so the speeds at the later sample instants follow the
+/// exact ZOH recursion to the same 2e-5 of the final speed as the single run (h = 10 ms,
+/// test above), not to round-off.
+#[test]
+fn a_run_split_in_two_carries_the_held_values() {
+    let (m_c, c, kp, r, period) = (2.0f64, 4.0f64, 5.0f64, 1.0f64, 0.1f64);
+    let a = (-c * period / m_c).exp();
+    let mut exact = vec![0.0f64];
+    for _ in 0..20 {
+        let v = *exact.last().unwrap();
+        exact.push(a * v + (1.0 - a) * kp * (r - v) / c);
+    }
+    let settled = kp * r / (c + kp);
+    let base = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/control/sampled_speed.toml"),
+    )
+    .unwrap();
+    let single = {
+        let m = model(&base);
+        run(&m).1
+    };
+    let v_end = single.last().unwrap().state.nodes[0].v.x;
+    for split in [0.47, 0.5] {
+        let text = base.replace("t_end = 2.0", &format!("t_end = {split:?}"))
+            + &format!(
+                "\n[[analyses]]\nname = \"more\"\ntype = \"dynamic\"\nstart_from = \"run\"\nt_start = {split:?}\nt_end = 2.0\nstep = 0.01\nrho_inf = 0.8\n"
+            );
+        let m = model(&text);
+        let sys = System::new(&m);
+        let out = samara::analysis::run_all(
+            &m,
+            &sys,
+            |_| Ok(samara::analysis::History::default()),
+            |_, _| {},
+        )
+        .unwrap();
+        assert!(out.iter().all(|(s, _)| s.failure.is_none()));
+        let (first, second) = (&out[0].1, &out[1].1);
+        let start = &second.frames[0];
+        assert!((start.time - split).abs() < 1e-12);
+        // The held value the continuation starts with: the last sample of the first run.
+        let last_instant = (split / period + 1e-9).floor() * period;
+        let sampled = first.at(last_instant).unwrap().state.nodes[0].v.x;
+        println!(
+            "split at {split}: held {:.12} at the start, v({last_instant:.1}) = {sampled:.12}, v({split}) = {:.12}",
+            start.state.held[0], start.state.nodes[0].v.x
+        );
+        assert_eq!(start.state.held[0], sampled);
+        let mut worst = 0.0f64;
+        for (k, ek) in exact.iter().enumerate() {
+            let tk = k as f64 * period;
+            if tk <= split {
+                continue;
+            }
+            let f = second.at(tk).unwrap();
+            assert!((f.time - tk).abs() < 1e-9, "t_{k} not landed on");
+            worst = worst.max((f.state.nodes[0].v.x - ek).abs());
+        }
+        let v2 = second.last().unwrap().state.nodes[0].v.x;
+        println!(
+            "  after the split: ZOH recursion within {:.2e} of v∞; final speed {v2:.12} vs single run {v_end:.12}",
+            worst / settled
+        );
+        assert!(worst / settled < 2e-5, "{worst}");
+        if split == 0.5 {
+            assert!((v2 - v_end).abs() < 1e-12, "{v2} {v_end}");
+        }
+    }
+}

@@ -779,8 +779,14 @@ pub fn run_dynamic(
         error_estimate: f64::NAN,
         rejected: 0,
     });
-    if let Some(what) = super::first_non_finite(sys, &it.state, &energy) {
-        summary.failure = Some(super::non_finite_failure(name, t0, what));
+    let bad = super::first_non_finite(sys, &it.state, &energy)
+        .map(|what| super::non_finite_failure(name, t0, what))
+        .or_else(|| {
+            sys.range_violation(&it.state)
+                .map(|what| super::range_failure(name, t0, what))
+        });
+    if let Some(f) = bad {
+        summary.failure = Some(f);
         summary.final_state = it.state.clone();
         summary.wall_time = clock.elapsed();
         return Ok(summary);
@@ -935,6 +941,10 @@ pub fn run_dynamic(
                 }
                 if let Some(what) = super::first_non_finite(sys, &it.state, &energy) {
                     summary.failure = Some(super::non_finite_failure(name, it.state.time, what));
+                    break;
+                }
+                if let Some(what) = sys.range_violation(&it.state) {
+                    summary.failure = Some(super::range_failure(name, it.state.time, what));
                     break;
                 }
                 if output {

@@ -656,6 +656,10 @@ pub(super) fn run_energy_consistent(
                             Some(super::non_finite_failure(name, it.state.time, what));
                         break;
                     }
+                    if let Some(what) = sys.range_violation(&it.state) {
+                        summary.failure = Some(super::range_failure(name, it.state.time, what));
+                        break;
+                    }
                     record(&it, energy, recorder)?;
                 }
                 progress(((it.state.time - t0) / span).clamp(0.0, 1.0));

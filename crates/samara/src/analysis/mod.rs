@@ -318,6 +318,17 @@ pub(crate) fn first_non_finite(sys: &System, state: &State, energy: &Energy) -> 
         .map(|(what, x)| format!("the {what} ({x})"))
 }
 
+/// The failure of an analysis whose state left an element's range
+/// ([`System::range_violation`]).
+pub(crate) fn range_failure(analysis: &str, time: f64, what: String) -> SolverFailure {
+    SolverFailure {
+        analysis: analysis.to_string(),
+        time,
+        reason: what,
+        hint: Some("extend the table to cover the motion (or shorten `t_end`)".into()),
+    }
+}
+
 /// The failure of an analysis whose state stopped being finite.
 pub(crate) fn non_finite_failure(analysis: &str, time: f64, what: String) -> SolverFailure {
     SolverFailure {

@@ -228,6 +228,12 @@ pub trait Element: Send + Sync {
     }
     /// Values of the outputs, in the order of [`Element::output_names`].
     fn outputs(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut [f64]) {}
+    /// Why the converged state `x` is outside what the element is defined for (a body
+    /// that left a height field's table), or None; an analysis stops with this message at
+    /// the time of the first such state.
+    fn range_violation(&self, _x: &ElementInput) -> Option<String> {
+        None
+    }
     /// Times where the element's loads jump or kink (its time functions' breakpoints).
     fn breakpoints(&self, _out: &mut Vec<f64>) {}
     /// Number of event functions: scalars g(q, v) whose zeros are kinks of the element's

@@ -34,14 +34,37 @@
 //! when the model is validated).
 //!
 //! The total force `F = N n + F_t` acts at `p`: node rows `−F` and `−Rᵀ(a × F)`.
+//! **Height-field ground** ([`Contact::on_height_field`]): a terrain z(x, y)
+//! ([`HeightField`]) instead of the plane. The sphere's centre (or the point) c is
+//! measured from its foot point q = (u, v, z(u, v)), the nearest point of the surface
+//! (Newton on the closest-point conditions, [`foot_point`]): with the normal there,
+//! `n = (−∇z, 1)/√(1 + |∇z|²)`, the signed distance `d = (c − q)·n`, `δ = ρ − d` and the
+//! contact point `p = c − ρ n`. Since ∂d/∂c = n at the foot point, the normal force N n
+//! is the gradient of the contact potential (energy is conserved by the elastic part)
+//! and passes through the centre; on a plane the foot point is found in one iteration and
+//! everything is the plane's. Where no unique foot point exists (a centre farther from a
+//! concave surface than its radius of curvature — far out of contact) the surface below
+//! the centre is taken instead. The rest is as on the plane with the local n and the
+//! tangent basis moving with it ([`crate::elements::terrain::tangents`]): the LuGre
+//! bristle deflection is kept in that moving basis. The ground does not move. Tangents
+//! are exact by forward-mode differentiation of the one kernel, the foot point's through
+//! the implicit function theorem (one dual Newton step at the converged point), including
+//! the turning of n through the Hessian. A converged state whose foot point is outside the
+//! table is an error ([`Element::range_violation`]).
+//!
 //! Energies: potential `∫N_el dδ` of the elastic part, dissipated power
 //! `(N − N_el) δ̇ − F_t·w` (the LuGre bristle's small elastic store counts as dissipated),
 //! external power `F·v_g` (the work of a moving surface).
 
+use super::node_dual::{omega, rot, rot_t, var3};
+use super::terrain::{normal, surface, tangents};
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
 use crate::core::ElementInput;
+use crate::math::dual::{Dual, Scalar, V3, add, cross, dot, scale, sub};
+use crate::math::height_field::{Height, HeightField};
 use crate::math::skew;
 use nalgebra::{Matrix3, SMatrix, Vector3};
+use std::sync::Arc;
 
 /// The contact geometry on the body.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -227,6 +250,43 @@ struct Kinematics {
     r: Matrix3<f64>,
 }
 
+/// The Jacobian `J = I + ∇z ∇zᵀ + (z − c_z) H` of the closest-point conditions
+/// `g = (u − c_x + (z − c_z) z_u, v − c_y + (z − c_z) z_v) = 0` at height gap `e = z − c_z`.
+fn closest_point_jacobian(h: &Height, e: f64) -> [[f64; 2]; 2] {
+    let (g, hs) = (h.gradient, h.hessian);
+    [
+        [1.0 + g[0] * g[0] + e * hs[0][0], g[0] * g[1] + e * hs[0][1]],
+        [g[0] * g[1] + e * hs[1][0], 1.0 + g[1] * g[1] + e * hs[1][1]],
+    ]
+}
+
+/// The foot point (u, v) of `c` on the surface z(x, y): the nearest surface point, where
+/// `c − (u, v, z)` is along the normal, by Newton from (c_x, c_y) on the conditions of
+/// [`closest_point_jacobian`] (one iteration on a plane; J positive definite while the
+/// distance is below the radius of curvature). None when it does not converge in 30
+/// iterations or J is not positive definite (no unique nearest point).
+fn foot_point(hf: &HeightField, c: [f64; 3]) -> Option<(f64, f64)> {
+    let (mut u, mut v) = (c[0], c[1]);
+    for _ in 0..30 {
+        let h = hf.eval_extended(u, v);
+        let e = h.z - c[2];
+        let g = [u - c[0] + e * h.gradient[0], v - c[1] + e * h.gradient[1]];
+        let j = closest_point_jacobian(&h, e);
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if !(det > 0.0 && j[0][0] > 0.0) {
+            return None;
+        }
+        let du = (j[1][1] * g[0] - j[0][1] * g[1]) / det;
+        let dv = (j[0][0] * g[1] - j[1][0] * g[0]) / det;
+        u -= du;
+        v -= dv;
+        if du.abs() + dv.abs() <= 1e-13 * (1.0 + u.abs() + v.abs()) {
+            return Some((u, v));
+        }
+    }
+    None
+}
+
 /// A body–ground contact.
 #[derive(Clone, Debug)]
 pub struct Contact {
@@ -237,6 +297,30 @@ pub struct Contact {
     tangents: [Vector3<f64>; 2],
     law: NormalLaw,
     friction: Option<Friction>,
+    /// A height-field ground instead of the plane.
+    terrain: Option<Arc<HeightField>>,
+}
+
+/// Local unknowns of the height-field kernel: 6 node unknowns and 2 bristle states;
+/// their rates are directions `NL + k`.
+const NL: usize = 8;
+
+/// What the height-field kernel gives.
+struct TerrainTerms<S> {
+    /// The force F on the body (global) and its moment Rᵀ(a × F) (node frame).
+    rows: [V3<S>; 2],
+    /// The bristle rows (m/s).
+    state_rows: [S; 2],
+    delta: f64,
+    delta_dot: f64,
+    /// The normal law's `[N, ∂N/∂δ, ∂N/∂δ̇, N_el]`.
+    nf: [f64; 4],
+    friction: Vector3<f64>,
+    /// Slip velocity (t₁·u, t₂·u) and its vector t₁w₁ + t₂w₂.
+    w: [f64; 2],
+    slip: Vector3<f64>,
+    /// The foot point of the centre on the terrain.
+    foot: Vector3<f64>,
 }
 
 impl Contact {
@@ -266,6 +350,121 @@ impl Contact {
             tangents: [t1, t2],
             law,
             friction,
+            terrain: None,
+        }
+    }
+
+    /// A contact with the height-field ground `terrain` (fixed).
+    pub fn on_height_field(
+        name: impl Into<String>,
+        node: usize,
+        shape: ContactShape,
+        terrain: Arc<HeightField>,
+        law: NormalLaw,
+        friction: Option<Friction>,
+    ) -> Self {
+        let plane = GroundPlane {
+            point: Vector3::zeros(),
+            normal: Vector3::z(),
+            velocity: Vector3::zeros(),
+        };
+        let mut c = Self::new(name, node, shape, plane, law, friction);
+        c.terrain = Some(terrain);
+        c
+    }
+
+    /// The contact on the height field: one kernel for the value (`f64`) and the exact
+    /// tangents (`Dual`).
+    fn terrain_terms<S: Scalar>(&self, hf: &HeightField, x: &ElementInput) -> TerrainTerms<S> {
+        let nd = &x.nodes[self.node[0]];
+        let r = nd.r();
+        let xs = var3::<S>(&nd.x, 0);
+        let v = var3::<S>(&nd.v, NL);
+        let om = omega::<S>(0, r, &nd.w, NL);
+        let (rho, offset) = match self.shape {
+            ContactShape::Sphere { radius } => (radius, None),
+            ContactShape::Point { offset } => (0.0, Some(offset)),
+            ContactShape::OffsetSphere { radius, offset } => (radius, Some(offset)),
+        };
+        let c = match offset {
+            Some(o) => add(&xs, &rot::<S>(0, r, &o)),
+            None => xs,
+        };
+        let (q, n) = match foot_point(hf, [c[0].re(), c[1].re(), c[2].re()]) {
+            Some((u0, v0)) => {
+                // One Newton step on dual numbers from the converged foot point: its value
+                // stays, its derivatives are the implicit function's, −J⁻¹ ∂g/∂c.
+                let h = hf.eval_extended(u0, v0);
+                let (zu, zv) = (h.gradient[0], h.gradient[1]);
+                let e = -c[2] + h.z;
+                let g = [-c[0] + u0 + e * zu, -c[1] + v0 + e * zv];
+                let j = closest_point_jacobian(&h, e.re());
+                let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+                let u = -((g[0] * j[1][1] - g[1] * j[0][1]) / det) + u0;
+                let v = -((g[1] * j[0][0] - g[0] * j[1][0]) / det) + v0;
+                let (z, grad) = surface(hf, u, v);
+                ([u, v, z], normal(&grad).0)
+            }
+            None => {
+                // No foot point (far from a strongly curved surface): below the centre.
+                let (z, grad) = surface(hf, c[0], c[1]);
+                ([c[0], c[1], z], normal(&grad).0)
+            }
+        };
+        let delta = -dot(&sub(&c, &q), &n) + rho;
+        let a = sub(&sub(&c, &xs), &scale(&n, S::cst(rho)));
+        let u = add(&v, &cross(&om, &a));
+        let delta_dot = -dot(&n, &u);
+        let t = tangents(&n);
+        let w = [dot(&t[0], &u), dot(&t[1], &u)];
+        let nf = normal_force(&self.law, delta.re(), delta_dot.re());
+        let nn = (delta - delta.re()) * nf[1] + (delta_dot - delta_dot.re()) * nf[2] + nf[0];
+        let zero = S::cst(0.0);
+        let (phi, state_rows) = match &self.friction {
+            None => ([zero; 2], [zero; 2]),
+            Some(f) => {
+                let z: [S; 2] = std::array::from_fn(|j| {
+                    let mut zj = S::cst(x.states[j].z);
+                    zj.add_deriv(6 + j, 1.0);
+                    zj
+                });
+                let zd: [S; 2] = std::array::from_fn(|j| {
+                    let mut zj = S::cst(x.states[j].zd);
+                    zj.add_deriv(NL + 6 + j, 1.0);
+                    zj
+                });
+                let phi: [S; 2] = std::array::from_fn(|i| {
+                    z[i] * f.bristle_stiffness + zd[i] * f.bristle_damping + w[i] * f.viscous
+                });
+                // ψ(|w|) = σ₀ |w|/g(|w|); |w| has no derivative at 0, where ψ' z = 0.
+                let s2 = w[0] * w[0] + w[1] * w[1];
+                let s = if s2.re() > 0.0 { s2.sqrt() } else { zero };
+                let (ms, md, vs) = (
+                    f.static_coefficient,
+                    f.dynamic_coefficient,
+                    f.stribeck_velocity,
+                );
+                let q = s / vs;
+                let gs = (-(q * q)).exp() * (ms - md) + md;
+                let psi = s * f.bristle_stiffness / gs;
+                (phi, std::array::from_fn(|i| zd[i] - w[i] + psi * z[i]))
+            }
+        };
+        let ft = scale(&add(&scale(&t[0], phi[0]), &scale(&t[1], phi[1])), -nn);
+        let force = add(&scale(&n, nn), &ft);
+        let moment = rot_t(0, r, &cross(&a, &force));
+        let re3 = |y: &V3<S>| Vector3::new(y[0].re(), y[1].re(), y[2].re());
+        let wv = [w[0].re(), w[1].re()];
+        TerrainTerms {
+            rows: [force, moment],
+            state_rows,
+            delta: delta.re(),
+            delta_dot: delta_dot.re(),
+            nf,
+            friction: re3(&ft),
+            w: wv,
+            slip: re3(&t[0]) * wv[0] + re3(&t[1]) * wv[1],
+            foot: re3(&q),
         }
     }
 
@@ -350,6 +549,38 @@ impl Element for Contact {
     }
 
     fn evaluate(&self, _ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+        if let Some(hf) = &self.terrain {
+            let n = 6 + self.n_states();
+            if need == Need::Residual {
+                let t = self.terrain_terms::<f64>(hf, x);
+                for (b, row) in t.rows.iter().enumerate() {
+                    for (k, y) in row.iter().enumerate() {
+                        out.r[3 * b + k] -= y;
+                    }
+                }
+                for j in 6..n {
+                    out.r[j] += t.state_rows[j - 6];
+                }
+                return;
+            }
+            let t = self.terrain_terms::<Dual<{ 2 * NL }>>(hf, x);
+            let mut put = |ri: usize, y: &Dual<{ 2 * NL }>, sign: f64| {
+                out.r[ri] += sign * y.v;
+                for j in 0..n {
+                    out.k[(ri, j)] += sign * y.d[j];
+                    out.c[(ri, j)] += sign * y.d[NL + j];
+                }
+            };
+            for (b, row) in t.rows.iter().enumerate() {
+                for (k, y) in row.iter().enumerate() {
+                    put(3 * b + k, y, -1.0);
+                }
+            }
+            for j in 6..n {
+                put(j, &t.state_rows[j - 6], 1.0);
+            }
+            return;
+        }
         let kin = self.kinematics(x);
         let n = self.plane.normal;
         let (nf, ft) = self.forces(x, &kin);
@@ -450,10 +681,17 @@ impl Element for Contact {
     }
 
     fn potential_energy(&self, _ctx: &EvalContext, x: &ElementInput) -> f64 {
+        if let Some(hf) = &self.terrain {
+            return normal_potential(&self.law, self.terrain_terms::<f64>(hf, x).delta);
+        }
         normal_potential(&self.law, self.kinematics(x).delta)
     }
 
     fn dissipated_power(&self, x: &ElementInput) -> f64 {
+        if let Some(hf) = &self.terrain {
+            let t = self.terrain_terms::<f64>(hf, x);
+            return (t.nf[0] - t.nf[3]) * t.delta_dot - t.friction.dot(&t.slip);
+        }
         let kin = self.kinematics(x);
         let (nf, ft) = self.forces(x, &kin);
         let ut = self.tangents[0] * kin.w[0] + self.tangents[1] * kin.w[1];
@@ -461,6 +699,9 @@ impl Element for Contact {
     }
 
     fn external_power(&self, _ctx: &EvalContext, x: &ElementInput) -> f64 {
+        if self.terrain.is_some() {
+            return 0.0;
+        }
         let kin = self.kinematics(x);
         let (nf, ft) = self.forces(x, &kin);
         (self.plane.normal * nf[0] + ft).dot(&self.plane.velocity)
@@ -486,18 +727,39 @@ impl Element for Contact {
     }
 
     fn outputs(&self, _ctx: &EvalContext, x: &ElementInput, out: &mut [f64]) {
-        let kin = self.kinematics(x);
-        let (nf, ft) = self.forces(x, &kin);
-        let slip = (kin.w[0].powi(2) + kin.w[1].powi(2)).sqrt();
+        let (nf, ft, delta, w) = match &self.terrain {
+            Some(hf) => {
+                let t = self.terrain_terms::<f64>(hf, x);
+                (t.nf, t.friction, t.delta, t.w)
+            }
+            None => {
+                let kin = self.kinematics(x);
+                let (nf, ft) = self.forces(x, &kin);
+                (nf, ft, kin.delta, kin.w)
+            }
+        };
+        let slip = (w[0].powi(2) + w[1].powi(2)).sqrt();
         out[0] = nf[0];
         out[1] = ft.norm();
-        out[2] = kin.delta;
+        out[2] = delta;
         out[3] = slip;
         // Sticking: in contact and slipping slower than a tenth of the Stribeck speed.
         let stick = self
             .friction
             .is_some_and(|f| nf[0] > 0.0 && slip < 0.1 * f.stribeck_velocity);
         out[4] = if stick { 1.0 } else { 0.0 };
+    }
+
+    fn range_violation(&self, x: &ElementInput) -> Option<String> {
+        let hf = self.terrain.as_ref()?;
+        let c = self.terrain_terms::<f64>(hf, x).foot;
+        (!hf.contains(c.x, c.y)).then(|| {
+            let ([x0, x1], [y0, y1]) = hf.bounds();
+            format!(
+                "its foot point on the terrain, ({:.6}, {:.6}), left the height field's table x ∈ [{x0}, {x1}], y ∈ [{y0}, {y1}]",
+                c.x, c.y
+            )
+        })
     }
 }
 

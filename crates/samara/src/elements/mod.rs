@@ -10,9 +10,11 @@ mod hydraulic;
 pub mod line_of_action;
 mod low_pass;
 mod maxwell;
+mod node_dual;
 mod rigid_body;
 mod sphere_pair;
 mod spring_damper;
+pub mod terrain;
 mod time_signal;
 mod tire;
 

@@ -49,13 +49,27 @@
 //! `ω_rel = s·(ω_W − ω_A)` the spin relative to the carrier, which takes `+T_b tanh(·) s`
 //! (T_b = max(0, brake signal); v_ε a small regularization speed).
 //!
+//! **Height-field ground** ([`Tire::with_height_field`]): a terrain z(x, y) instead of the
+//! plane, taken as its tangent plane below the hub — the single-point-contact ("point
+//! follower") road model (Pacejka 2012, §10.1): with z, ∇z at the hub's (x, y), the
+//! normal `n = (−∇z, 1)/√(1 + |∇z|²)` and the hub height `h = (x_z − z) n_z` (the
+//! distance from that tangent plane; exact on a plane), then everything as above with this
+//! n, which turns as the hub moves (its derivatives through the Hessian are in the
+//! tangents). A point follower feels an obstacle shorter than the contact patch too
+//! sharply (no enveloping). The ground does not move; a converged state with the hub
+//! outside the table is an error ([`Element::range_violation`]).
+//!
 //! Tangents are exact by forward-mode differentiation of the one kernel
 //! ([`crate::math::dual`]).
 
+use super::node_dual::{rot, rot_t, var3};
+use super::terrain::{normal, surface};
 use super::{Element, EvalContext, LocalTerms, Need};
 use crate::core::{ElementInput, ElementState, NodeState};
 use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
-use nalgebra::{Matrix3, Vector3};
+use crate::math::height_field::HeightField;
+use nalgebra::Vector3;
+use std::sync::Arc;
 
 /// Magic Formula coefficients of one characteristic: stiffness factor B, shape factor C,
 /// peak D (per unit normal load μ for forces, a length for the trail) and curvature E.
@@ -187,6 +201,8 @@ pub struct Tire {
     p: TireParameters,
     /// The brake-torque signal, if any.
     inputs: Vec<String>,
+    /// A height-field ground instead of the plane.
+    terrain: Option<Arc<HeightField>>,
 }
 
 impl Tire {
@@ -213,46 +229,32 @@ impl Tire {
             ground,
             p: parameters,
             inputs: brake.into_iter().collect(),
+            terrain: None,
         }
     }
 
-    /// A node-vector variable: value `v` with derivative 1 in directions `dir + k`.
-    fn var3<S: Scalar>(v: &Vector3<f64>, dir: usize) -> V3<S> {
-        let mut out = cst3::<S>(v);
-        for (k, o) in out.iter_mut().enumerate() {
-            o.add_deriv(dir + k, 1.0);
-        }
-        out
+    /// The same tire on the height-field ground `terrain` (fixed) instead of its plane.
+    pub fn with_height_field(mut self, terrain: Arc<HeightField>) -> Self {
+        self.ground.velocity = Vector3::zeros();
+        self.terrain = Some(terrain);
+        self
     }
 
-    /// `R b` for node i with b fixed in the node: derivative `R (e_j × b)` along δθ_j.
-    fn rot<S: Scalar>(i: usize, r: &Matrix3<f64>, b: &Vector3<f64>) -> V3<S> {
-        let mut out = cst3::<S>(&(r * b));
-        if S::DIRECTIONS > 0 {
-            for j in 0..3 {
-                let col = r * Vector3::ith(j, 1.0).cross(b);
-                for (k, o) in out.iter_mut().enumerate() {
-                    o.add_deriv(6 * i + 3 + j, col[k]);
-                }
+    /// The ground's normal and the hub's height above it at hub position `x`: the plane,
+    /// or the tangent plane of the height field below the hub.
+    fn local_ground<S: Scalar>(&self, x: &V3<S>) -> (V3<S>, S) {
+        match &self.terrain {
+            None => {
+                let n = cst3::<S>(&self.ground.normal);
+                let h = dot(&n, &sub(x, &cst3(&self.ground.point)));
+                (n, h)
+            }
+            Some(hf) => {
+                let (z, g) = surface(hf, x[0], x[1]);
+                let (n, nz) = normal(&g);
+                (n, (x[2] - z) * nz)
             }
         }
-        out
-    }
-
-    /// `Rᵀ y` for node i, y a function of the unknowns: `Rᵀ dy − δθ × Rᵀ y`.
-    fn rot_t<S: Scalar>(i: usize, r: &Matrix3<f64>, y: &V3<S>) -> V3<S> {
-        let mut z: V3<S> =
-            std::array::from_fn(|k| y[0] * r[(0, k)] + y[1] * r[(1, k)] + y[2] * r[(2, k)]);
-        if S::DIRECTIONS > 0 {
-            let zv = Vector3::new(z[0].re(), z[1].re(), z[2].re());
-            for j in 0..3 {
-                let c = Vector3::ith(j, 1.0).cross(&zv);
-                for (k, zk) in z.iter_mut().enumerate() {
-                    zk.add_deriv(6 * i + 3 + j, -c[k]);
-                }
-            }
-        }
-        z
     }
 
     fn compute<S: Scalar>(
@@ -265,17 +267,16 @@ impl Tire {
         let w = &nodes[self.nodes[0]];
         let rw = w.r();
         let nn = self.nodes.len();
-        let x = Self::var3::<S>(&w.x, 0);
-        let v = sub(&Self::var3::<S>(&w.v, NV), &cst3(&self.ground.velocity));
-        let s = Self::rot::<S>(0, rw, &self.axis);
-        let n = cst3::<S>(&self.ground.normal);
+        let x = var3::<S>(&w.x, 0);
+        let v = sub(&var3::<S>(&w.v, NV), &cst3(&self.ground.velocity));
+        let s = rot::<S>(0, rw, &self.axis);
+        let (n, h) = self.local_ground(&x);
         let ns = dot(&n, &s);
         let cv = sub(&n, &scale(&s, ns));
         let cg = dot(&cv, &cv).sqrt();
         let ex = scale(&cross(&s, &n), S::cst(1.0) / cg);
         let ey = cross(&n, &ex);
         let rhat = scale(&cv, -(S::cst(1.0) / cg));
-        let h = dot(&n, &sub(&x, &cst3(&self.ground.point)));
         let delta = cg * p.radius - h;
         let delta_dot = -dot(&n, &v);
         let zero = S::cst(0.0);
@@ -343,7 +344,7 @@ impl Tire {
                 let a = &nodes[self.nodes[1]];
                 let ra = a.r();
                 // s·(R_A Ω_A): δθ_A and Ω_A derivatives, plus δθ_W through s.
-                let wa = Self::rot::<S>(1, ra, &a.w);
+                let wa = rot::<S>(1, ra, &a.w);
                 let mut wa = wa;
                 if S::DIRECTIONS > 0 {
                     for j in 0..3 {
@@ -363,9 +364,9 @@ impl Tire {
             &scale(&s, rolling + brake),
         );
         let m_a = scale(&s, -brake);
-        let rows = [force, Self::rot_t(0, rw, &m_w), [zero; 3], {
+        let rows = [force, rot_t(0, rw, &m_w), [zero; 3], {
             if nn == 2 {
-                Self::rot_t(1, nodes[self.nodes[1]].r(), &m_a)
+                rot_t(1, nodes[self.nodes[1]].r(), &m_a)
             } else {
                 [zero; 3]
             }
@@ -391,6 +392,24 @@ impl Tire {
 
     /// Deflection δ and its exact rate (with the camber rate).
     fn deflection(&self, w: &NodeState) -> (f64, f64) {
+        if self.terrain.is_some() {
+            // δ = R₀ cos γ − h along the motion: x' = v, s' = ω × s.
+            let s0 = w.r() * self.axis;
+            let sd = w.omega_global().cross(&s0);
+            let x: V3<Dual<1>> = std::array::from_fn(|k| Dual {
+                v: w.x[k],
+                d: [w.v[k]],
+            });
+            let s: V3<Dual<1>> = std::array::from_fn(|k| Dual {
+                v: s0[k],
+                d: [sd[k]],
+            });
+            let (n, h) = self.local_ground(&x);
+            let ns = dot(&n, &s);
+            let cv = sub(&n, &scale(&s, ns));
+            let delta = dot(&cv, &cv).sqrt() * self.p.radius - h;
+            return (delta.v, delta.d[0]);
+        }
         let n = self.ground.normal;
         let s = w.r() * self.axis;
         let ns = n.dot(&s);
@@ -525,6 +544,18 @@ impl Element for Tire {
             t.fz, t.fx, t.fy, t.mz, t.rolling, t.brake, t.kappa, t.alpha, t.delta,
         ];
         out[..vals.len()].copy_from_slice(&vals);
+    }
+
+    fn range_violation(&self, x: &ElementInput) -> Option<String> {
+        let hf = self.terrain.as_ref()?;
+        let c = x.nodes[self.nodes[0]].x;
+        (!hf.contains(c.x, c.y)).then(|| {
+            let ([x0, x1], [y0, y1]) = hf.bounds();
+            format!(
+                "the hub at ({:.6}, {:.6}) left the height field's table x ∈ [{x0}, {x1}], y ∈ [{y0}, {y1}]",
+                c.x, c.y
+            )
+        })
     }
 }
 

@@ -253,6 +253,38 @@ impl HeightField {
     }
 }
 
+impl HeightField {
+    /// Whether (x, y) lies in the table's rectangle ([`HeightField::bounds`]).
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        let ([x0, x1], [y0, y1]) = self.bounds();
+        x >= x0 && x <= x1 && y >= y0 && y <= y1
+    }
+
+    /// [`HeightField::eval`] inside the table; outside, the tangent plane at the nearest
+    /// point c of the table, `z(c) + ∇z(c)·(p − c)`, with zero Hessian: a continuous
+    /// continuation for Newton iterates that stray out (an element reports a converged
+    /// state outside as an error). NaN coordinates give a NaN height.
+    pub fn eval_extended(&self, x: f64, y: f64) -> Height {
+        if let Some(h) = self.eval(x, y) {
+            return h;
+        }
+        let ([x0, x1], [y0, y1]) = self.bounds();
+        let (cx, cy) = (x.clamp(x0, x1), y.clamp(y0, y1));
+        match self.eval(cx, cy) {
+            Some(h) => Height {
+                z: h.z + h.gradient[0] * (x - cx) + h.gradient[1] * (y - cy),
+                gradient: h.gradient,
+                hessian: [[0.0; 2]; 2],
+            },
+            None => Height {
+                z: f64::NAN,
+                gradient: [f64::NAN; 2],
+                hessian: [[f64::NAN; 2]; 2],
+            },
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -672,6 +672,23 @@ impl System {
             .sum()
     }
 
+    /// The first element whose state in `s` is outside its range
+    /// ([`Element::range_violation`], which sees nodes and states, no signals), named
+    /// with its message.
+    pub fn range_violation(&self, s: &State) -> Option<String> {
+        self.elements.iter().enumerate().find_map(|(k, e)| {
+            let off = self.state_offsets[k];
+            let x = ElementInput {
+                nodes: &s.nodes,
+                states: &s.states[off..off + e.n_states()],
+                signals: &[],
+                held: &[],
+            };
+            e.range_violation(&x)
+                .map(|m| format!("element '{}': {m}", e.name()))
+        })
+    }
+
     pub fn kinetic_energy(&self, s: &State) -> f64 {
         // Elements see their input signals in every evaluation (kinetic energy
         // included), so the signals are evaluated at the state's time.

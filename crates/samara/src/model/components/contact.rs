@@ -32,9 +32,11 @@
 //! Body–body: `other_node` and `other_radius` put a second sphere on another node instead
 //! of the ground plane (frictionless; kernel [`crate::elements::SpherePair`]).
 
+use super::ground::{GroundInput, height_field};
 use super::{Build, ComponentKind, ModelInput};
 use crate::core::NodeRef;
 use crate::elements::{Contact, ContactShape, Friction, GroundPlane, NormalLaw, SpherePair};
+use crate::math::height_field::HeightField;
 use crate::model::input::AnalysisType;
 use crate::model::validate::{Checker, Entry};
 use crate::model::{Located, Model};
@@ -42,6 +44,7 @@ use crate::tangent_check::{TangentCase, random_node};
 use nalgebra::Vector3;
 use schemars::JsonSchema;
 use serde::Deserialize;
+use std::sync::Arc;
 
 /// Contact geometry on the body.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
@@ -94,6 +97,10 @@ pub struct ContactInput {
     /// Velocity of the ground surface in its plane [m/s] (a belt); default zero.
     #[serde(default)]
     pub ground_velocity: Option<[f64; 3]>,
+    /// A terrain instead of the plane: `{ type = "height_field", x, y, z }` or
+    /// `{ type = "height_field", file }` (docs/multi-field.md).
+    #[serde(default)]
+    pub ground: Option<Located<GroundInput>>,
     /// Normal-force law.
     pub normal: NormalInput,
     /// Contact stiffness k, positive [N/m^e].
@@ -153,6 +160,8 @@ pub struct ContactDef {
     pub shape: ContactShape,
     pub point: Vector3<f64>,
     pub plane: GroundPlane,
+    /// A height-field ground instead of the plane.
+    pub terrain: Option<Arc<HeightField>>,
     pub law: NormalLaw,
     pub friction: Option<Friction>,
     /// Body–body: the second sphere's node and radius.
@@ -162,6 +171,35 @@ pub struct ContactDef {
 }
 
 pub struct ContactKind;
+
+/// The contact element of `def` with this name and shape, on its plane or height field.
+fn contact(def: &ContactDef, name: String, shape: ContactShape) -> Contact {
+    match &def.terrain {
+        Some(hf) => {
+            Contact::on_height_field(name, def.node, shape, hf.clone(), def.law, def.friction)
+        }
+        None => Contact::new(name, def.node, shape, def.plane, def.law, def.friction),
+    }
+}
+
+/// A curved terrain for tangent checks, z = 0.3 sin(1.1 x) cos(0.8 y) + 0.1 x y + 0.2 x
+/// on a 0.4-m grid over [−3, 3]², shifted so that `c` is at the distance `d` above it
+/// (vertical gap times n_z).
+pub(crate) fn curved_terrain_through(c: Vector3<f64>, d: f64) -> Arc<HeightField> {
+    let g: Vec<f64> = (0..16).map(|i| -3.0 + 0.4 * i as f64).collect();
+    let f = |x: f64, y: f64| 0.3 * (1.1 * x).sin() * (0.8 * y).cos() + 0.1 * x * y + 0.2 * x;
+    let table = |off: f64| -> Vec<Vec<f64>> {
+        g.iter()
+            .map(|&y| g.iter().map(|&x| f(x, y) + off).collect())
+            .collect()
+    };
+    let h0 = HeightField::new(g.clone(), g.clone(), &table(0.0)).expect("a valid table");
+    let h = h0.eval(c.x, c.y).expect("inside");
+    let nz = 1.0 / (1.0 + h.gradient[0].powi(2) + h.gradient[1].powi(2)).sqrt();
+    let off = c.z - h.z - d / nz;
+    let z = table(off);
+    Arc::new(HeightField::new(g.clone(), g, &z).expect("a valid table"))
+}
 
 /// A finite number satisfying `ok`, or an error at `key`.
 fn check(
@@ -372,6 +410,26 @@ impl ComponentKind for ContactKind {
                 );
                 ok = false;
             }
+        }
+        let mut terrain = None;
+        if let Some(g) = &ci.ground {
+            for (key, given) in [
+                ("ground_point", ci.ground_point.is_some()),
+                ("ground_normal", ci.ground_normal.is_some()),
+                ("ground_velocity", ci.ground_velocity.is_some()),
+                ("other_node", ci.other_node.is_some()),
+            ] {
+                ok &= unused(
+                    cx,
+                    &e,
+                    &what,
+                    key,
+                    given,
+                    "`ground` gives the terrain as a height field; the plane keys (and a second body) do not go with it",
+                );
+            }
+            terrain = height_field(cx, g, &what);
+            ok &= terrain.is_some();
         }
         let velocity = Vector3::from(ci.ground_velocity.unwrap_or([0.0; 3]));
         if let Some(n) = normal
@@ -698,6 +756,7 @@ impl ComponentKind for ContactKind {
                 normal,
                 velocity,
             },
+            terrain: terrain.clone(),
             law,
             friction,
             other: other.zip(ci.other_radius),
@@ -750,13 +809,10 @@ impl ComponentKind for ContactKind {
                 let offset = parts
                     .local_offset(NodeRef::Node(def.node), p)
                     .map_or(Vector3::zeros(), |(_, s)| s);
-                parts.elements.push(Box::new(Contact::new(
+                parts.elements.push(Box::new(contact(
+                    def,
                     format!("{}.{end}", def.name),
-                    def.node,
                     ContactShape::OffsetSphere { radius, offset },
-                    def.plane,
-                    def.law,
-                    def.friction,
                 )));
             }
             return;
@@ -769,14 +825,9 @@ impl ComponentKind for ContactKind {
             },
             s => s,
         };
-        parts.elements.push(Box::new(Contact::new(
-            &def.name,
-            def.node,
-            shape,
-            def.plane,
-            def.law,
-            def.friction,
-        )));
+        parts
+            .elements
+            .push(Box::new(contact(def, def.name.clone(), shape)));
     }
 
     fn tangent_cases() -> Vec<TangentCase> {
@@ -852,6 +903,49 @@ impl ComponentKind for ContactKind {
             let case = TangentCase::element(Box::new(e), vec![node]);
             out.push(if k == 0 {
                 case.with_states(vec![(0.003, 0.2), (-0.001, -0.4)])
+            } else {
+                case
+            });
+        }
+        // Height-field ground (a curved grid): sphere, point and capsule end, with and
+        // without friction, each 0.1 into the surface below its centre.
+        for k in 0..4u64 {
+            let node = random_node(960 + k);
+            let (shape, rho) = match k {
+                0 | 3 => (ContactShape::Sphere { radius: 0.3 }, 0.3),
+                1 => (
+                    ContactShape::Point {
+                        offset: Vector3::new(0.1, -0.2, 0.15),
+                    },
+                    0.0,
+                ),
+                _ => (
+                    ContactShape::OffsetSphere {
+                        radius: 0.2,
+                        offset: Vector3::new(0.3, -0.1, 0.2),
+                    },
+                    0.2,
+                ),
+            };
+            let c = match shape {
+                ContactShape::Point { offset } | ContactShape::OffsetSphere { offset, .. } => {
+                    node.x + node.r() * offset
+                }
+                ContactShape::Sphere { .. } => node.x,
+            };
+            let hf = curved_terrain_through(c, rho - 0.1);
+            let with_friction = k != 3;
+            let e = Contact::on_height_field(
+                "terrain",
+                0,
+                shape,
+                hf,
+                if k % 2 == 0 { hc } else { lin },
+                with_friction.then_some(friction),
+            );
+            let case = TangentCase::element(Box::new(e), vec![node]);
+            out.push(if with_friction {
+                case.with_states(vec![(0.004, -0.3), (-0.002, 0.5)])
             } else {
                 case
             });

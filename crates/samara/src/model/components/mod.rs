@@ -17,6 +17,7 @@ pub mod body;
 pub mod contact;
 pub mod controller;
 pub mod force;
+pub mod ground;
 pub mod hydraulic;
 pub mod joint;
 pub mod motor;

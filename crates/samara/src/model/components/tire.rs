@@ -27,15 +27,18 @@
 //! # ground_velocity = [0.0, 0.0, 0.0] # a flat-track rig's belt, in the ground plane
 //! ```
 
+use super::ground::{GroundInput, height_field};
 use super::{Build, ComponentKind};
 use crate::core::NodeRef;
 use crate::elements::{MagicFormula, Tire, TireGround, TireParameters};
+use crate::math::height_field::HeightField;
 use crate::model::validate::{Checker, Entry};
 use crate::model::{JointType, Located, Model};
 use crate::tangent_check::{TangentCase, random_node};
 use nalgebra::Vector3;
 use schemars::JsonSchema;
 use serde::Deserialize;
+use std::sync::Arc;
 
 /// One set of Magic Formula coefficients (Pacejka, *Tire and Vehicle Dynamics*, §4.3.2):
 /// `Y = D sin(C arctan(B x − E (B x − arctan(B x))))`.
@@ -126,6 +129,10 @@ pub struct TireInput {
     /// Velocity of the ground surface in its plane [m/s] (a flat-track rig); default 0.
     #[serde(default)]
     pub ground_velocity: Option<[f64; 3]>,
+    /// A terrain instead of the plane: `{ type = "height_field", x, y, z }` or
+    /// `{ type = "height_field", file }` (docs/multi-field.md).
+    #[serde(default)]
+    pub ground: Option<Located<GroundInput>>,
 }
 
 /// A validated tire.
@@ -137,6 +144,8 @@ pub struct TireDef {
     /// Spin axis, global, initial configuration.
     pub axis: Vector3<f64>,
     pub ground: TireGround,
+    /// A height-field ground instead of the plane.
+    pub terrain: Option<Arc<HeightField>>,
     pub parameters: TireParameters,
     pub brake: Option<String>,
 }
@@ -414,6 +423,25 @@ impl ComponentKind for TireKind {
                 ok = false;
             }
         }
+        let mut terrain = None;
+        if let Some(g) = &ti.ground {
+            for (key, given) in [
+                ("ground_point", ti.ground_point.is_some()),
+                ("ground_normal", ti.ground_normal.is_some()),
+                ("ground_velocity", ti.ground_velocity.is_some()),
+            ] {
+                if given {
+                    cx.error(
+                        format!("{what}: `{key}` does not apply here"),
+                        cx.key(&e, key),
+                        Some("`ground` gives the terrain as a height field; the plane keys do not go with it".into()),
+                    );
+                    ok = false;
+                }
+            }
+            terrain = height_field(cx, g, &what);
+            ok &= terrain.is_some();
+        }
         let velocity = Vector3::from(ti.ground_velocity.unwrap_or([0.0; 3]));
         if let Some(n) = normal
             && n.dot(&velocity).abs() > 1e-9 * velocity.norm().max(1.0)
@@ -468,6 +496,7 @@ impl ComponentKind for TireKind {
                 normal,
                 velocity,
             },
+            terrain: terrain.clone(),
             parameters: TireParameters {
                 radius: ti.radius,
                 rolling_radius: re,
@@ -497,7 +526,7 @@ impl ComponentKind for TireKind {
 
     fn build(def: &TireDef, parts: &mut Build) {
         let axis = parts.initial[def.wheel].r().transpose() * def.axis;
-        parts.elements.push(Box::new(Tire::new(
+        let tire = Tire::new(
             &def.name,
             def.wheel,
             def.carrier.index(),
@@ -505,7 +534,11 @@ impl ComponentKind for TireKind {
             def.ground,
             def.parameters,
             def.brake.clone(),
-        )));
+        );
+        parts.elements.push(Box::new(match &def.terrain {
+            Some(hf) => tire.with_height_field(hf.clone()),
+            None => tire,
+        }));
     }
 
     fn tangent_cases() -> Vec<TangentCase> {
@@ -596,6 +629,52 @@ impl ComponentKind for TireKind {
             } else {
                 case
             });
+        }
+        // Height-field ground (curved): 0.05 of deflection, with and without carrier.
+        for k in 0..2u64 {
+            let wheel = random_node(1120 + k);
+            let carrier = random_node(1130 + k);
+            let axis = Vector3::new(0.2, 0.9, -0.3).normalize();
+            let probe = super::contact::curved_terrain_through(wheel.x, 0.0);
+            let hh = probe.eval(wheel.x.x, wheel.x.y).expect("inside");
+            let n = Vector3::new(-hh.gradient[0], -hh.gradient[1], 1.0).normalize();
+            let s = wheel.r() * axis;
+            let cg = (n - s * n.dot(&s)).norm();
+            let hf = super::contact::curved_terrain_through(wheel.x, 0.5 * cg - 0.05);
+            let ground = TireGround {
+                point: Vector3::zeros(),
+                normal: Vector3::z(),
+                velocity: Vector3::zeros(),
+            };
+            let p = if k == 0 {
+                TireParameters {
+                    low_speed_damping: 0.4,
+                    low_speed: 30.0,
+                    ..params
+                }
+            } else {
+                params
+            };
+            let e = Tire::new(
+                "tire_on_terrain",
+                0,
+                (k == 0).then_some(1),
+                axis,
+                ground,
+                p,
+                Some("brake".to_string()),
+            )
+            .with_height_field(hf);
+            let nodes = if k == 0 {
+                vec![wheel, carrier]
+            } else {
+                vec![wheel]
+            };
+            out.push(
+                TangentCase::element(Box::new(e), nodes)
+                    .with_states(vec![(-0.08, 0.7), (0.15, -0.4)])
+                    .with_signals(vec![300.0]),
+            );
         }
         out
     }
