@@ -526,7 +526,14 @@ impl Element for Tire {
     fn events(&self, x: &ElementInput, out: &mut [(f64, f64)]) {
         let w = &x.nodes[self.nodes[0]];
         let (delta, rate) = self.deflection(w);
-        let force_side = delta - self.p.damping / self.p.stiffness * self.ground.normal.dot(&w.v);
+        // On a height field the damper's rate is taken as the deflection's (it differs
+        // by the camber and slope rates, which only move the event, not the kink, a little).
+        let rate_n = if self.terrain.is_some() {
+            rate
+        } else {
+            -self.ground.normal.dot(&w.v)
+        };
+        let force_side = delta + self.p.damping / self.p.stiffness * rate_n;
         out[0] = if delta <= force_side {
             (delta, rate)
         } else {
