@@ -37,6 +37,7 @@
 //! block O(1) as h → 0; off, all are 1.
 
 use super::{SignalValues, State, System};
+use crate::core::RowTerms;
 use crate::elements::{EvalContext, LocalTerms, Need};
 use crate::joints::CoordinateTangents;
 use crate::solve::{BlockKind, BlockMatrix, BlockStructure};
@@ -123,6 +124,8 @@ struct ConstraintWork {
     phi: Vec<f64>,
     mu: Vec<f64>,
     phi_t: Vec<f64>,
+    /// `Bᵀμ` over the local columns.
+    force: Vec<f64>,
     /// B (material rotation columns, then coordinates).
     b: DMatrix<f64>,
     /// B T.
@@ -483,6 +486,7 @@ impl Assembler {
                     phi: vec![0.0; m],
                     mu: vec![0.0; m],
                     phi_t: vec![0.0; m],
+                    force: vec![0.0; nl],
                     b: DMatrix::zeros(m, nl),
                     bt: DMatrix::zeros(m, nl),
                     k: DMatrix::zeros(nl, nl),
@@ -790,14 +794,28 @@ impl Assembler {
             let (m, nc) = (w.m, w.nc);
             let off = sys.multiplier_offsets[k];
             let coords = sys.coords_of(k, state);
-            c.evaluate(ctx, &state.nodes, coords, &mut w.phi, Some(&mut w.b));
+            // One evaluation of the rows: Φ, μ, Bᵀμ and, for the matrix, B and
+            // ∂(Bᵀμ)/∂q (a constraint without unknowns left has no block to add them to).
+            let with_tangent = matrix.is_some() && w.place.block.is_some();
+            c.evaluate_rows(
+                ctx,
+                &state.nodes,
+                coords,
+                &state.lambda[off..off + m],
+                coef.penalty,
+                RowTerms {
+                    phi: &mut w.phi,
+                    mu: &mut w.mu,
+                    force: &mut w.force,
+                    b: &mut w.b,
+                    want_b: stabilized,
+                    tangent: with_tangent.then_some(&mut w.k),
+                },
+            );
             let cn = c.nodes();
             let n = cn.len();
             let nq = 6 * n;
             let nl = nq + nc;
-            for i in 0..m {
-                w.mu[i] = state.lambda[off + i] + coef.penalty * w.phi[i];
-            }
             local_velocities(&mut w.vel, cn, state, coords);
             let p = &w.place;
             if stabilized {
@@ -817,17 +835,21 @@ impl Assembler {
                 }
             }
             // Configuration rows: s_r Bᵀ μ; coordinate rows also s_r f_ν.
-            for j in 0..nl {
-                let mut acc = 0.0;
-                for r in 0..m {
-                    acc += w.b[(r, j)] * w.mu[r];
+            for (a, &na) in cn.iter().enumerate() {
+                for (r, f) in residual[6 * na..6 * na + 6]
+                    .iter_mut()
+                    .zip(&w.force[6 * a..6 * a + 6])
+                {
+                    *r += sr * f;
                 }
-                let row = if j < nq {
-                    6 * cn[j / 6] + j % 6
-                } else {
-                    p.coord + j - nq
-                };
-                residual[row] += sr * acc;
+            }
+            if nc > 0 {
+                for (r, f) in residual[p.coord..p.coord + nc]
+                    .iter_mut()
+                    .zip(&w.force[nq..nl])
+                {
+                    *r += sr * f;
+                }
             }
             let n_in = sys.signals.constraint_inputs[k].len();
             if nc > 0 {
@@ -861,8 +883,6 @@ impl Assembler {
                 continue;
             }
             let size = m + nc;
-            w.k.fill(0.0);
-            c.reaction_tangent(ctx, &state.nodes, coords, &w.mu, &mut w.k);
             if coef.penalty != 0.0 {
                 w.k.gemm_tr(coef.penalty, &w.b, &w.b, 1.0);
             }
