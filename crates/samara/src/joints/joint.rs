@@ -346,6 +346,9 @@ impl Joint {
     ) {
         let nq = 6 * self.nodes.len();
         let mut k12 = Mat12::zeros();
+        // The displacement rows together: one tangent along Σ μ_r e_r.
+        let mut along = Vector3::zeros();
+        let mut any_displacement = false;
         for (i, &r) in self.active.iter().enumerate() {
             let mu_r = mu[i];
             if mu_r == 0.0 {
@@ -353,7 +356,8 @@ impl Joint {
             }
             match &self.rows[r] {
                 Row::Displacement { axis, .. } => {
-                    displacement::force_tangent(f, *axis, mu_r, &mut k12);
+                    along += f.axes[0].column(*axis) * mu_r;
+                    any_displacement = true;
                 }
                 Row::Angle { row, coord } => {
                     let nu = coord.map_or(0.0, |c| coords[c].q);
@@ -370,6 +374,9 @@ impl Joint {
                 }
                 Row::Drive { .. } => {}
             }
+        }
+        if any_displacement {
+            displacement::force_tangent_along(f, &along, &mut k12);
         }
         for (x, sx) in self.sides.iter().enumerate() {
             if sx.node.is_none() {
@@ -458,10 +465,12 @@ impl Constraint for Joint {
                 continue;
             }
             match &self.rows[r] {
-                Row::Displacement { axis, .. } => g12 += displacement::jacobian(&f, *axis) * mu_r,
+                Row::Displacement { axis, .. } => {
+                    axpy12(&mut g12, mu_r, &displacement::jacobian(&f, *axis));
+                }
                 Row::Angle { row, coord } => {
                     let nu = coord.map_or(0.0, |c| coords[c].q);
-                    g12 += row.jacobian(&f, nu, 0) * mu_r;
+                    axpy12(&mut g12, mu_r, &row.jacobian(&f, nu, 0));
                 }
                 Row::Drive { .. } => {}
             }
@@ -504,7 +513,7 @@ impl Constraint for Joint {
             let mu_r = lambda[i] + penalty * v.phi;
             mu[i] = mu_r;
             if mu_r != 0.0 {
-                g12 += v.b * mu_r;
+                axpy12(&mut g12, mu_r, &v.b);
             }
             if let Some((c, d)) = v.dnu {
                 force[nq + c] += d * mu_r;
@@ -519,7 +528,7 @@ impl Constraint for Joint {
         }
         self.to_local(&g12, &rots, |c, x| force[c] = x);
         if let Some(k) = tangent {
-            k.fill(0.0);
+            k.as_mut_slice().fill(0.0);
             self.add_reaction_tangent(&f, &rots, coords, mu, &g12, k);
         }
     }
@@ -777,5 +786,13 @@ impl Constraint for Joint {
         self.rows
             .iter()
             .position(|r| matches!(r, Row::Drive { coord, .. } if *coord == c))
+    }
+}
+
+/// `g += μ b` for 12-entry rows (the sum of the row forces).
+#[inline]
+fn axpy12(g: &mut Row12, mu: f64, b: &Row12) {
+    for (g, b) in g.as_mut_slice().iter_mut().zip(b.as_slice()) {
+        *g += b * mu;
     }
 }
