@@ -459,11 +459,11 @@ impl BlockLu {
         for sc in &sym.scatter {
             let src = &av[sc.src..sc.src + sc.len];
             let dst = &mut vals[sc.dst..sc.dst + sc.len];
-            dst.copy_from_slice(src);
-            // Same value as a fold of `f64::max` (NaN entries are skipped either way), in a
-            // form the compiler vectorizes.
+            // Copy and column maximum in one pass. Same value as a fold of `f64::max` (NaN
+            // entries are skipped either way), in a form the compiler vectorizes.
             let mut m = 0.0f64;
-            for &x in src {
+            for (d, &x) in dst.iter_mut().zip(src) {
+                *d = x;
                 let a = x.abs();
                 if a > m {
                     m = a;
