@@ -31,7 +31,7 @@
 
 use crate::core::{
     Constraint, Coordinate, CoordinateTangents, Element, ElementInput, ElementState, EvalContext,
-    LocalTerms, Need, NodeState, SignalTerms,
+    LocalTerms, Need, NodeState, RowTerms, SignalTerms,
 };
 use nalgebra::{DMatrix, Vector3};
 use std::ops::Range;
@@ -357,6 +357,10 @@ pub struct ConstraintReport {
     pub coordinate_damping: Mismatch,
     /// ∂r/∂s of the input ports.
     pub coordinate_signals: Mismatch,
+    /// Largest difference, relative to each term's largest entry, between the one
+    /// evaluation of [`Constraint::evaluate_rows`] and the separate `evaluate`,
+    /// `reaction_tangent` and `Bᵀμ` (round-off).
+    pub combined: f64,
 }
 
 impl ConstraintReport {
@@ -369,6 +373,7 @@ impl ConstraintReport {
             self.coordinate_stiffness.relative,
             self.coordinate_damping.relative,
             self.coordinate_signals.relative,
+            self.combined,
         ])
     }
 }
@@ -388,11 +393,45 @@ pub fn check_constraint(
     let nc = c.n_coordinates();
     let nq = 6 * cn.len();
     let n = nq + nc;
+    // The analytic terms from the one evaluation the assembler makes (λ = μ, ρ = 0), and
+    // the same from the separate calls, which must agree with it to round-off.
     let mut phi = vec![0.0; m];
     let mut b = DMatrix::zeros(m, n);
-    c.evaluate(ctx, nodes, coords, &mut phi, Some(&mut b));
     let mut k = DMatrix::zeros(n, n);
-    c.reaction_tangent(ctx, nodes, coords, mu, &mut k);
+    let mut mu_out = vec![0.0; m];
+    let mut force = vec![0.0; n];
+    c.evaluate_rows(
+        ctx,
+        nodes,
+        coords,
+        mu,
+        0.0,
+        RowTerms {
+            phi: &mut phi,
+            mu: &mut mu_out,
+            force: &mut force,
+            b: &mut b,
+            want_b: false,
+            tangent: Some(&mut k),
+        },
+    );
+    let mut phi_s = vec![0.0; m];
+    let mut b_s = DMatrix::zeros(m, n);
+    c.evaluate(ctx, nodes, coords, &mut phi_s, Some(&mut b_s));
+    let mut k_s = DMatrix::zeros(n, n);
+    c.reaction_tangent(ctx, nodes, coords, mu, &mut k_s);
+    let force_s = b_s.transpose() * nalgebra::DVector::from_column_slice(mu);
+    let rel = |a: &[f64], s: &[f64]| {
+        let scale = s.iter().fold(1e-300f64, |x, v| x.max(v.abs()));
+        a.iter()
+            .zip(s)
+            .fold(0.0f64, |x, (p, q)| x.max((p - q).abs() / scale))
+    };
+    let combined = rel(&phi, &phi_s)
+        .max(rel(&mu_out, mu))
+        .max(rel(&force, force_s.as_slice()))
+        .max(rel(b.as_slice(), b_s.as_slice()))
+        .max(rel(k.as_slice(), k_s.as_slice()));
 
     let mut work = nodes.to_vec();
     let mut wc = coords.to_vec();
@@ -560,6 +599,7 @@ pub fn check_constraint(
             &scalars,
             &groups(0, n_in.max(1)),
         ),
+        combined,
     }
 }
 

@@ -30,6 +30,22 @@ pub struct CoordinateTangents<'a> {
     pub signals: &'a mut [f64],
 }
 
+/// What one evaluation of a constraint's rows returns (see [`Constraint::evaluate_rows`]).
+pub struct RowTerms<'a> {
+    /// `Φ` (length `n_equations`).
+    pub phi: &'a mut [f64],
+    /// The augmented multipliers `μ = λ + ρ Φ`.
+    pub mu: &'a mut [f64],
+    /// The generalized constraint force `Bᵀμ` over the local columns (overwritten).
+    pub force: &'a mut [f64],
+    /// `B` (`n_equations × (6·nodes + n_coordinates)`): written when `want_b` is set or
+    /// `tangent` is given, left as it was otherwise (the residual alone needs only `Bᵀμ`).
+    pub b: &'a mut DMatrix<f64>,
+    pub want_b: bool,
+    /// `∂(Bᵀμ)/∂(q, ν)` at fixed `μ` (square, overwritten), when the matrix is wanted.
+    pub tangent: Option<&'a mut DMatrix<f64>>,
+}
+
 /// A constraint on a few nodes and its own joint coordinates.
 pub trait Constraint: Send + Sync {
     fn name(&self) -> &str;
@@ -59,6 +75,32 @@ pub trait Constraint: Send + Sync {
         mu: &[f64],
         k: &mut DMatrix<f64>,
     );
+    /// One evaluation of the rows for the Newton iteration: `Φ`, `μ = λ + ρΦ` (`lambda`
+    /// in physical units, `penalty` = ρ), `Bᵀμ` and, if asked, `B` and `∂(Bᵀμ)/∂(q, ν)`
+    /// at that μ — what [`Constraint::evaluate`] and [`Constraint::reaction_tangent`] give
+    /// together, without evaluating the rows twice. The default calls those two.
+    fn evaluate_rows(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        lambda: &[f64],
+        penalty: f64,
+        out: RowTerms,
+    ) {
+        self.evaluate(ctx, nodes, coords, out.phi, Some(out.b));
+        for ((m, l), p) in out.mu.iter_mut().zip(lambda).zip(out.phi.iter()) {
+            *m = l + penalty * p;
+        }
+        let b = &*out.b;
+        for (j, f) in out.force.iter_mut().enumerate() {
+            *f = (0..b.nrows()).map(|r| b[(r, j)] * out.mu[r]).sum();
+        }
+        if let Some(k) = out.tangent {
+            k.fill(0.0);
+            self.reaction_tangent(ctx, nodes, coords, out.mu, k);
+        }
+    }
     /// `Φ̈ − B (v̇, ν̈)`: the part of the constraint acceleration without accelerations
     /// (convective terms and `∂²Φ/∂t²`).
     fn acceleration_term(

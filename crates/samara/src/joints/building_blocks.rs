@@ -99,7 +99,13 @@ pub mod displacement {
     /// `μ ∂(bᵀ)/∂q` (spatial).
     pub fn force_tangent(f: &FramePair, i: usize, mu: f64, k: &mut Mat12) {
         let e: Vector3<f64> = f.axes[0].column(i).into();
-        let et = skew(&e) * mu;
+        force_tangent_along(f, &(e * mu), k);
+    }
+
+    /// `Σ_i μ_i ∂(b_iᵀ)/∂q` of several axes at once, with `m = Σ_i μ_i e_iᴬ`: every term
+    /// of [`force_tangent`] is linear in `μ ẽ`, and `w`, `r_B` are the same for all axes.
+    pub fn force_tangent_along(f: &FramePair, m: &Vector3<f64>, k: &mut Mat12) {
+        let et = skew(m);
         let w = f.origin(1) - f.x[0];
         let wt = skew(&w);
         let rbt = skew(&f.arm[1]);

@@ -18,6 +18,7 @@ use super::{Constraint, CoordinateTangents};
 use crate::core::EvalContext;
 use crate::core::NodeRef;
 use crate::core::RowRole;
+use crate::core::RowTerms;
 use crate::core::{Coordinate, NodeState};
 use crate::math::TimeFunction;
 use crate::math::skew;
@@ -329,6 +330,82 @@ impl Joint {
             }
         }
     }
+
+    /// Adds `∂(Bᵀμ)/∂(q, ν)` at fixed `μ` into `k`, with `g12 = Σ μ_r b_r` (spatial) of
+    /// the active rows already summed: the row force tangents `μ_r ∂(b_rᵀ)/∂q` (spatial,
+    /// then to the material increments) plus the term of the rotation of the material
+    /// columns themselves, `skew(Rᵀ m)` with `m` the moment part of `g12`.
+    fn add_reaction_tangent(
+        &self,
+        f: &FramePair,
+        rots: &[Matrix3<f64>; 2],
+        coords: &[Coordinate],
+        mu: &[f64],
+        g12: &Row12,
+        k: &mut DMatrix<f64>,
+    ) {
+        let nq = 6 * self.nodes.len();
+        let mut k12 = Mat12::zeros();
+        // The displacement rows together: one tangent along Σ μ_r e_r.
+        let mut along = Vector3::zeros();
+        let mut any_displacement = false;
+        for (i, &r) in self.active.iter().enumerate() {
+            let mu_r = mu[i];
+            if mu_r == 0.0 {
+                continue;
+            }
+            match &self.rows[r] {
+                Row::Displacement { axis, .. } => {
+                    along += f.axes[0].column(*axis) * mu_r;
+                    any_displacement = true;
+                }
+                Row::Angle { row, coord } => {
+                    let nu = coord.map_or(0.0, |c| coords[c].q);
+                    row.force_tangent(f, nu, mu_r, &mut k12);
+                    if let Some(c) = *coord {
+                        // ∂(b_qᵀμ)/∂ν and ∂(b_ν μ)/∂q: the same vector μ Σ a_t' b_t.
+                        let v = row.jacobian(f, nu, 1) * mu_r;
+                        self.to_local(&v, rots, |j, x| {
+                            k[(j, nq + c)] += x;
+                            k[(nq + c, j)] += x;
+                        });
+                        k[(nq + c, nq + c)] += mu_r * row.value(f, nu)[2];
+                    }
+                }
+                Row::Drive { .. } => {}
+            }
+        }
+        if any_displacement {
+            displacement::force_tangent_along(f, &along, &mut k12);
+        }
+        for (x, sx) in self.sides.iter().enumerate() {
+            if sx.node.is_none() {
+                continue;
+            }
+            let rx = 6 * sx.local;
+            for (y, sy) in self.sides.iter().enumerate() {
+                if sy.node.is_none() {
+                    continue;
+                }
+                let cy = 6 * sy.local;
+                let blk = |r: usize, c: usize| -> Matrix3<f64> {
+                    k12.fixed_view::<3, 3>(6 * x + r, 6 * y + c).into_owned()
+                };
+                let tt = blk(0, 0);
+                let tr = blk(0, 3) * rots[y];
+                let rt = rots[x].transpose() * blk(3, 0);
+                let mut rr = rots[x].transpose() * blk(3, 3) * rots[y];
+                if x == y {
+                    let m_sp = Vector3::new(g12[6 * x + 3], g12[6 * x + 4], g12[6 * x + 5]);
+                    rr += skew(&(rots[x].transpose() * m_sp));
+                }
+                crate::core::add_block(k, rx, cy, &tt);
+                crate::core::add_block(k, rx, cy + 3, &tr);
+                crate::core::add_block(k, rx + 3, cy, &rt);
+                crate::core::add_block(k, rx + 3, cy + 3, &rr);
+            }
+        }
+    }
 }
 
 impl Constraint for Joint {
@@ -381,8 +458,6 @@ impl Constraint for Joint {
     ) {
         let f = self.frames(nodes);
         let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
-        let nq = 6 * self.nodes.len();
-        let mut k12 = Mat12::zeros();
         let mut g12 = Row12::zeros();
         for (i, &r) in self.active.iter().enumerate() {
             let mu_r = mu[i];
@@ -391,52 +466,70 @@ impl Constraint for Joint {
             }
             match &self.rows[r] {
                 Row::Displacement { axis, .. } => {
-                    g12 += displacement::jacobian(&f, *axis) * mu_r;
-                    displacement::force_tangent(&f, *axis, mu_r, &mut k12);
+                    axpy12(&mut g12, mu_r, &displacement::jacobian(&f, *axis));
                 }
                 Row::Angle { row, coord } => {
                     let nu = coord.map_or(0.0, |c| coords[c].q);
-                    g12 += row.jacobian(&f, nu, 0) * mu_r;
-                    row.force_tangent(&f, nu, mu_r, &mut k12);
-                    if let Some(c) = *coord {
-                        // ∂(b_qᵀμ)/∂ν and ∂(b_ν μ)/∂q: the same vector μ Σ a_t' b_t.
-                        let v = row.jacobian(&f, nu, 1) * mu_r;
-                        self.to_local(&v, &rots, |j, x| {
-                            k[(j, nq + c)] += x;
-                            k[(nq + c, j)] += x;
-                        });
-                        k[(nq + c, nq + c)] += mu_r * row.value(&f, nu)[2];
-                    }
+                    axpy12(&mut g12, mu_r, &row.jacobian(&f, nu, 0));
                 }
                 Row::Drive { .. } => {}
             }
         }
-        for (x, sx) in self.sides.iter().enumerate() {
-            if sx.node.is_none() {
-                continue;
+        self.add_reaction_tangent(&f, &rots, coords, mu, &g12, k);
+    }
+
+    fn evaluate_rows(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        lambda: &[f64],
+        penalty: f64,
+        out: RowTerms,
+    ) {
+        let RowTerms {
+            phi,
+            mu,
+            force,
+            b,
+            want_b,
+            tangent,
+        } = out;
+        let f = self.frames(nodes);
+        let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
+        let nq = 6 * self.nodes.len();
+        let m = b.nrows();
+        let mut bs = (want_b || tangent.is_some()).then(|| {
+            let bs = b.as_mut_slice();
+            bs.fill(0.0);
+            bs
+        });
+        force.fill(0.0);
+        // Σ μ_r b_r in spatial components: converted to the local columns once.
+        let mut g12 = Row12::zeros();
+        for (i, &r) in self.active.iter().enumerate() {
+            let v = self.row_value(&f, coords, ctx.time, &self.rows[r]);
+            phi[i] = v.phi;
+            let mu_r = lambda[i] + penalty * v.phi;
+            mu[i] = mu_r;
+            if mu_r != 0.0 {
+                axpy12(&mut g12, mu_r, &v.b);
             }
-            let rx = 6 * sx.local;
-            for (y, sy) in self.sides.iter().enumerate() {
-                if sy.node.is_none() {
-                    continue;
-                }
-                let cy = 6 * sy.local;
-                let blk = |r: usize, c: usize| -> Matrix3<f64> {
-                    k12.fixed_view::<3, 3>(6 * x + r, 6 * y + c).into_owned()
-                };
-                let tt = blk(0, 0);
-                let tr = blk(0, 3) * rots[y];
-                let rt = rots[x].transpose() * blk(3, 0);
-                let mut rr = rots[x].transpose() * blk(3, 3) * rots[y];
-                if x == y {
-                    let m_sp = Vector3::new(g12[6 * x + 3], g12[6 * x + 4], g12[6 * x + 5]);
-                    rr += skew(&(rots[x].transpose() * m_sp));
-                }
-                crate::core::add_block(k, rx, cy, &tt);
-                crate::core::add_block(k, rx, cy + 3, &tr);
-                crate::core::add_block(k, rx + 3, cy, &rt);
-                crate::core::add_block(k, rx + 3, cy + 3, &rr);
+            if let Some((c, d)) = v.dnu {
+                force[nq + c] += d * mu_r;
             }
+            if let Some(bs) = bs.as_deref_mut() {
+                // Column-major: entry (i, c) at c·m + i.
+                self.to_local(&v.b, &rots, |c, x| bs[c * m + i] = x);
+                if let Some((c, d)) = v.dnu {
+                    bs[(nq + c) * m + i] = d;
+                }
+            }
+        }
+        self.to_local(&g12, &rots, |c, x| force[c] = x);
+        if let Some(k) = tangent {
+            k.as_mut_slice().fill(0.0);
+            self.add_reaction_tangent(&f, &rots, coords, mu, &g12, k);
         }
     }
 
@@ -693,5 +786,13 @@ impl Constraint for Joint {
         self.rows
             .iter()
             .position(|r| matches!(r, Row::Drive { coord, .. } if *coord == c))
+    }
+}
+
+/// `g += μ b` for 12-entry rows (the sum of the row forces).
+#[inline]
+fn axpy12(g: &mut Row12, mu: f64, b: &Row12) {
+    for (g, b) in g.as_mut_slice().iter_mut().zip(b.as_slice()) {
+        *g += b * mu;
     }
 }

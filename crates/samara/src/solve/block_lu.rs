@@ -459,11 +459,11 @@ impl BlockLu {
         for sc in &sym.scatter {
             let src = &av[sc.src..sc.src + sc.len];
             let dst = &mut vals[sc.dst..sc.dst + sc.len];
-            dst.copy_from_slice(src);
-            // Same value as a fold of `f64::max` (NaN entries are skipped either way), in a
-            // form the compiler vectorizes.
+            // Copy and column maximum in one pass. Same value as a fold of `f64::max` (NaN
+            // entries are skipped either way), in a form the compiler vectorizes.
             let mut m = 0.0f64;
-            for &x in src {
+            for (d, &x) in dst.iter_mut().zip(src) {
+                *d = x;
                 let a = x.abs();
                 if a > m {
                     m = a;
@@ -842,36 +842,50 @@ fn as_rows<const K: usize>(s: &[f64]) -> &[[f64; K]] {
     rows
 }
 
-/// `y += alpha M x`, `M: m x n` row-major.
+/// `y += alpha M x`, `M: m x n` row-major. Both sizes are dispatched to compile-time
+/// constants up to 6 (node and joint blocks), so the loops unroll completely.
 #[inline]
 fn matvec_acc(mat: &[f64], x: &[f64], y: &mut [f64], m: usize, n: usize, alpha: f64) {
     #[inline(always)]
-    fn fixed<const N: usize>(mat: &[f64], x: &[f64], y: &mut [f64], m: usize, alpha: f64) {
-        let xv: [f64; N] = x[..N].try_into().unwrap();
-        for (yr, row) in y[..m].iter_mut().zip(as_rows::<N>(&mat[..m * N])) {
+    fn fixed<const M: usize, const N: usize>(mat: &[f64], x: &[f64], y: &mut [f64], alpha: f64) {
+        let xv: &[f64; N] = x[..N].try_into().unwrap();
+        let yv: &mut [f64; M] = (&mut y[..M]).try_into().unwrap();
+        let rows = as_rows::<N>(&mat[..M * N]);
+        for r in 0..M {
             let mut acc = 0.0;
             for q in 0..N {
-                acc += row[q] * xv[q];
+                acc += rows[r][q] * xv[q];
+            }
+            yv[r] += alpha * acc;
+        }
+    }
+    macro_rules! dispatch {
+        ($($mm:literal),*; $ns:tt) => {
+            match m {
+                $( $mm => dispatch!(@n $mm $ns), )*
+                _ => dynamic(mat, x, y, m, n, alpha),
+            }
+        };
+        (@n $mm:literal [$($nn:literal),*]) => {
+            match n {
+                $( $nn => fixed::<$mm, $nn>(mat, x, y, alpha), )*
+                _ => dynamic(mat, x, y, m, n, alpha),
+            }
+        };
+    }
+    #[inline(never)]
+    fn dynamic(mat: &[f64], x: &[f64], y: &mut [f64], m: usize, n: usize, alpha: f64) {
+        let x = &x[..n];
+        for (r, yr) in y[..m].iter_mut().enumerate() {
+            let row = &mat[r * n..r * n + n];
+            let mut acc = 0.0;
+            for (a, b) in row.iter().zip(x) {
+                acc += a * b;
             }
             *yr += alpha * acc;
         }
     }
-    match n {
-        6 => fixed::<6>(mat, x, y, m, alpha),
-        5 => fixed::<5>(mat, x, y, m, alpha),
-        3 => fixed::<3>(mat, x, y, m, alpha),
-        _ => {
-            let x = &x[..n];
-            for (r, yr) in y[..m].iter_mut().enumerate() {
-                let row = &mat[r * n..r * n + n];
-                let mut acc = 0.0;
-                for (a, b) in row.iter().zip(x) {
-                    acc += a * b;
-                }
-                *yr += alpha * acc;
-            }
-        }
-    }
+    dispatch!(1, 2, 3, 4, 5, 6; [1, 2, 3, 4, 5, 6])
 }
 
 /// `y += alpha Mᵀ x`, `M: m x n` row-major (`x` has length m, `y` length n).

@@ -37,6 +37,7 @@
 //! block O(1) as h → 0; off, all are 1.
 
 use super::{SignalValues, State, System};
+use crate::core::RowTerms;
 use crate::elements::{EvalContext, LocalTerms, Need};
 use crate::joints::CoordinateTangents;
 use crate::solve::{BlockKind, BlockMatrix, BlockStructure};
@@ -123,6 +124,8 @@ struct ConstraintWork {
     phi: Vec<f64>,
     mu: Vec<f64>,
     phi_t: Vec<f64>,
+    /// `Bᵀμ` over the local columns.
+    force: Vec<f64>,
     /// B (material rotation columns, then coordinates).
     b: DMatrix<f64>,
     /// B T.
@@ -483,6 +486,7 @@ impl Assembler {
                     phi: vec![0.0; m],
                     mu: vec![0.0; m],
                     phi_t: vec![0.0; m],
+                    force: vec![0.0; nl],
                     b: DMatrix::zeros(m, nl),
                     bt: DMatrix::zeros(m, nl),
                     k: DMatrix::zeros(nl, nl),
@@ -790,14 +794,28 @@ impl Assembler {
             let (m, nc) = (w.m, w.nc);
             let off = sys.multiplier_offsets[k];
             let coords = sys.coords_of(k, state);
-            c.evaluate(ctx, &state.nodes, coords, &mut w.phi, Some(&mut w.b));
+            // One evaluation of the rows: Φ, μ, Bᵀμ and, for the matrix, B and
+            // ∂(Bᵀμ)/∂q (a constraint without unknowns left has no block to add them to).
+            let with_tangent = matrix.is_some() && w.place.block.is_some();
+            c.evaluate_rows(
+                ctx,
+                &state.nodes,
+                coords,
+                &state.lambda[off..off + m],
+                coef.penalty,
+                RowTerms {
+                    phi: &mut w.phi,
+                    mu: &mut w.mu,
+                    force: &mut w.force,
+                    b: &mut w.b,
+                    want_b: stabilized,
+                    tangent: with_tangent.then_some(&mut w.k),
+                },
+            );
             let cn = c.nodes();
             let n = cn.len();
             let nq = 6 * n;
             let nl = nq + nc;
-            for i in 0..m {
-                w.mu[i] = state.lambda[off + i] + coef.penalty * w.phi[i];
-            }
             local_velocities(&mut w.vel, cn, state, coords);
             let p = &w.place;
             if stabilized {
@@ -817,17 +835,21 @@ impl Assembler {
                 }
             }
             // Configuration rows: s_r Bᵀ μ; coordinate rows also s_r f_ν.
-            for j in 0..nl {
-                let mut acc = 0.0;
-                for r in 0..m {
-                    acc += w.b[(r, j)] * w.mu[r];
+            for (a, &na) in cn.iter().enumerate() {
+                for (r, f) in residual[6 * na..6 * na + 6]
+                    .iter_mut()
+                    .zip(&w.force[6 * a..6 * a + 6])
+                {
+                    *r += sr * f;
                 }
-                let row = if j < nq {
-                    6 * cn[j / 6] + j % 6
-                } else {
-                    p.coord + j - nq
-                };
-                residual[row] += sr * acc;
+            }
+            if nc > 0 {
+                for (r, f) in residual[p.coord..p.coord + nc]
+                    .iter_mut()
+                    .zip(&w.force[nq..nl])
+                {
+                    *r += sr * f;
+                }
             }
             let n_in = sys.signals.constraint_inputs[k].len();
             if nc > 0 {
@@ -861,27 +883,29 @@ impl Assembler {
                 continue;
             }
             let size = m + nc;
-            w.k.fill(0.0);
-            c.reaction_tangent(ctx, &state.nodes, coords, &w.mu, &mut w.k);
             if coef.penalty != 0.0 {
                 w.k.gemm_tr(coef.penalty, &w.b, &w.b, 1.0);
             }
-            apply_tangent_ops(&mut w.k, cn, tangent_ops);
-            w.bt.copy_from(&w.b);
-            apply_tangent_ops(&mut w.bt, cn, tangent_ops);
+            // T is applied to the node columns as they are added (no scaled copies).
+            let t_of = |a: usize| tangent_ops.get(cn[a]);
+            if stabilized {
+                w.bt.copy_from(&w.b);
+                apply_tangent_ops(&mut w.bt, cn, tangent_ops);
+            }
             let skk = sr * coef.stiffness;
             // (config, config): s_r c_K (K_c + ρ BᵀB) T, plus the coordinate elements.
             for a in 0..n {
                 for b in 0..n {
                     let o = w.node_slots[a * n + b];
-                    add_sub(
+                    add_node_columns(
                         &mut mat.values[o..o + 36],
                         6,
                         (0, 0),
                         w.k.as_slice(),
                         nl,
                         (6 * a, 6 * b),
-                        (6, 6),
+                        6,
+                        t_of(b),
                         skk,
                     );
                 }
@@ -899,14 +923,15 @@ impl Assembler {
                         (6, nc),
                         skk,
                     );
-                    add_sub(
+                    add_node_columns(
                         &mut mat.values[or..or + size * 6],
                         6,
                         (m, 0),
                         w.k.as_slice(),
                         nl,
                         (nq, 6 * a),
-                        (nc, 6),
+                        nc,
+                        t_of(a),
                         skk,
                     );
                 }
@@ -966,18 +991,20 @@ impl Assembler {
                 }
                 apply_tangent_ops(&mut w.dbv, cn, tangent_ops);
             }
-            // (λ, config): B T (index 3) or s_v (γ' B + ∂(Bv)/∂q T) (stabilized).
-            let mut lam_rows = |src: &DMatrix<f64>, scale: f64| {
+            // (λ, config): B T (index 3) or s_v (γ' B + ∂(Bv)/∂q T) (stabilized); `with_t`:
+            // apply T to the node columns of `src` on the way.
+            let mut lam_rows = |src: &DMatrix<f64>, scale: f64, with_t: bool| {
                 for a in 0..n {
                     let o = w.lam_row[a];
-                    add_sub(
+                    add_node_columns(
                         &mut mat.values[o..o + size * 6],
                         6,
                         (0, 0),
                         src.as_slice(),
                         m,
                         (0, 6 * a),
-                        (m, 6),
+                        m,
+                        if with_t { t_of(a) } else { None },
                         scale,
                     );
                 }
@@ -987,10 +1014,10 @@ impl Assembler {
                 }
             };
             if stabilized {
-                lam_rows(&w.b, coef.velocity_scale * coef.damping);
-                lam_rows(&w.dbv, coef.velocity_scale);
+                lam_rows(&w.b, coef.velocity_scale * coef.damping, false);
+                lam_rows(&w.dbv, coef.velocity_scale, false);
             } else {
-                lam_rows(&w.bt, 1.0);
+                lam_rows(&w.b, 1.0, true);
             }
             if stabilized && p.projection.is_some() {
                 // (η, config): B T; (η, η): B T Bᵀ.
@@ -1391,6 +1418,49 @@ fn add_sub(
         let col = &src[(sc0 + c) * nr + sr0..(sc0 + c) * nr + sr0 + rows];
         for (r, v) in col.iter().enumerate() {
             dst[(r0 + r) * stride + c0 + c] += scale * v;
+        }
+    }
+}
+
+/// [`add_sub`] of a `rows × 6` block of node columns (δx, then δθ) of `src`, the
+/// rotation columns right-multiplied by the node's tangent operator `t` on the way (`None`:
+/// identity) — the same sums as [`apply_tangent_ops`] then [`add_sub`].
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn add_node_columns(
+    dst: &mut [f64],
+    stride: usize,
+    (r0, c0): (usize, usize),
+    src: &[f64],
+    nr: usize,
+    (sr0, sc0): (usize, usize),
+    rows: usize,
+    t: Option<&Matrix3<f64>>,
+    scale: f64,
+) {
+    let col = |c: usize| &src[(sc0 + c) * nr + sr0..(sc0 + c) * nr + sr0 + rows];
+    for c in 0..3 {
+        for (r, v) in col(c).iter().enumerate() {
+            dst[(r0 + r) * stride + c0 + c] += scale * v;
+        }
+    }
+    let (x, y, z) = (col(3), col(4), col(5));
+    match t {
+        None => {
+            for (c, v3) in [x, y, z].into_iter().enumerate() {
+                for (r, v) in v3.iter().enumerate() {
+                    dst[(r0 + r) * stride + c0 + 3 + c] += scale * v;
+                }
+            }
+        }
+        Some(t) => {
+            for r in 0..rows {
+                let row = [x[r], y[r], z[r]];
+                for j in 0..3 {
+                    let v = row[0] * t[(0, j)] + row[1] * t[(1, j)] + row[2] * t[(2, j)];
+                    dst[(r0 + r) * stride + c0 + 3 + j] += scale * v;
+                }
+            }
         }
     }
 }
