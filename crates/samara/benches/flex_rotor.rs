@@ -102,6 +102,7 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let t_end: f64 = args.iter().find_map(|a| a.parse().ok()).unwrap_or(10.0);
     let stall = args.iter().any(|a| a == "oye");
+    let modified = args.iter().any(|a| a == "modified");
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let example = root.join("examples/rotor/nrel5mw_flexible.toml");
     let reference = root.join("reference/nrel5mw");
@@ -120,7 +121,10 @@ fn main() {
             text += &st;
         }
     }
-    let text = text.replace("t_end = 0.5", &format!("t_end = {t_end}"));
+    let mut text = text.replace("t_end = 0.5", &format!("t_end = {t_end}"));
+    if modified {
+        text = text.replace("step = 0.01", "step = 0.01\njacobian = \"modified\"");
+    }
     let m = match Model::from_toml_str(&text, &example) {
         Ok(l) => l.model,
         Err(e) => panic!("{}", e.render_plain()),
@@ -184,14 +188,16 @@ fn main() {
     assert!(s.failure.is_none(), "{:?}", s.failure);
     let steps = s.steps as f64;
     println!(
-        "{t_end} s simulated{}: {} steps, {:.2} Newton iterations per step; wall {wall:.3} s, {:.3} ms/step, {:.2}× real time; CPU {}",
+        "{t_end} s simulated{}{}: {} steps, {:.2} Newton iterations and {:.2} factorizations per step; wall {wall:.3} s, {:.3} ms/step, {:.2}× real time; CPU {}",
         if stall {
             " with Øye's dynamic stall"
         } else {
             ""
         },
+        if modified { ", modified Newton" } else { "" },
         s.steps,
         s.newton_iterations as f64 / steps,
+        s.factorizations as f64 / steps,
         1e3 * wall / steps,
         t_end / wall,
         cpu.map_or("—".to_string(), |c| format!(

@@ -46,6 +46,32 @@ use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, NodeStat
 use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
 use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// The station's last BEM root φ (f64 bits; NaN: none yet), the warm start of its next
+/// solve ([`BemRotor::solve_near`]). Every solve converges to rounding from any start, so
+/// the results do not depend on it beyond rounding (nor on the order in which stations
+/// are evaluated); a fresh or cloned station starts from its copy or bracketing.
+#[derive(Debug)]
+struct RootHint(AtomicU64);
+
+impl RootHint {
+    fn new() -> Self {
+        Self(AtomicU64::new(f64::NAN.to_bits()))
+    }
+    fn get(&self) -> Option<f64> {
+        Some(f64::from_bits(self.0.load(Ordering::Relaxed))).filter(|x| x.is_finite())
+    }
+    fn set(&self, phi: f64) {
+        self.0.store(phi.to_bits(), Ordering::Relaxed);
+    }
+}
+
+impl Clone for RootHint {
+    fn clone(&self) -> Self {
+        Self(AtomicU64::new(self.0.load(Ordering::Relaxed)))
+    }
+}
 
 /// The induced velocity model of a line.
 #[derive(Clone, Debug, Default)]
@@ -138,6 +164,8 @@ pub struct AeroStation {
     /// Signals read (the rotor's inflow states) and produced (the thrust), Pitt–Peters.
     inputs: Vec<String>,
     outputs: Vec<String>,
+    /// Warm start of the BEM root.
+    root_hint: RootHint,
 }
 
 /// Floor of the free-stream speed in the dynamic wake's time constants [m/s].
@@ -232,6 +260,7 @@ impl AeroStation {
             initial: [0.0; MAX_STATES],
             inputs,
             outputs,
+            root_hint: RootHint::new(),
         }
     }
 
@@ -389,7 +418,10 @@ impl AeroStation {
                     chord: self.section.chord,
                     theta,
                 };
-                let ind = rotor.solve(&flow, &self.section.airfoil);
+                let ind = rotor.solve_near(&flow, &self.section.airfoil, self.root_hint.get());
+                if let Some(i) = &ind {
+                    self.root_hint.set(i.phi.re());
+                }
                 let a_qs = ind.map_or(zero, |i| i.a);
                 res.a_quasi_steady = a_qs.re();
                 // Øye's dynamic wake: the axial induction the station uses is the
