@@ -966,6 +966,10 @@ impl Element for AeroStation {
         }
     }
 
+    fn accumulates(&self) -> bool {
+        true
+    }
+
     fn signal_inputs(&self) -> &[String] {
         &self.inputs
     }
