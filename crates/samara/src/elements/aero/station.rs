@@ -797,35 +797,67 @@ impl AeroStation {
                 }
             }
         }
-        // Column by column (the local matrices are column-major): one column of ∂(F, M)
-        // spread over the 6 rows of every node.
-        let spread = |jac: &[[f64; COLUMNS]; 6], mat: &mut nalgebra::DMatrix<f64>, cols: usize| {
+        // One column g of ∂(F, M) spread over the 6 rows of every node.
+        let spread_column = |g: &[f64; 6], c: &mut [f64]| {
+            for (i, rows) in c[..nq].chunks_exact_mut(6).enumerate() {
+                let (wi, mi) = (w[i], &map[i]);
+                for k in 0..3 {
+                    rows[k] -= wi * g[k];
+                    let mk = &mi[k];
+                    rows[3 + k] -= mk[0] * g[0]
+                        + mk[1] * g[1]
+                        + mk[2] * g[2]
+                        + mk[3] * g[3]
+                        + mk[4] * g[4]
+                        + mk[5] * g[5];
+                }
+            }
+        };
+        // The translation columns of node j are the station's ∂(F, M)/∂p (∂/∂ṗ in C)
+        // times its weight ([`Self::to_nodes`]): spread once, then scaled per node.
+        let base = |first: usize| -> [[f64; 6]; 3] {
+            std::array::from_fn(|k| {
+                std::array::from_fn(|o| {
+                    if o < 3 {
+                        r.force[o].d[first + k]
+                    } else {
+                        r.moment[o - 3].d[first + k]
+                    }
+                })
+            })
+        };
+        // Column by column (the local matrices are column-major).
+        let spread = |jac: &[[f64; COLUMNS]; 6],
+                      translation: Option<[[f64; 6]; 3]>,
+                      mat: &mut nalgebra::DMatrix<f64>,
+                      cols: usize| {
             let nr = mat.nrows();
+            let mut spread_base = [[0.0; 6 * MAX_NODES]; 3];
+            if let Some(b) = &translation {
+                for (g, c) in b.iter().zip(&mut spread_base) {
+                    spread_column(g, c);
+                }
+            }
             for (col, c) in mat
                 .as_mut_slice()
                 .chunks_exact_mut(nr)
                 .take(cols)
                 .enumerate()
             {
-                let g: [f64; 6] = std::array::from_fn(|o| jac[o][col]);
-                for (i, rows) in c[..nq].chunks_exact_mut(6).enumerate() {
-                    let (wi, mi) = (w[i], &map[i]);
-                    for k in 0..3 {
-                        rows[k] -= wi * g[k];
-                        let mk = &mi[k];
-                        rows[3 + k] -= mk[0] * g[0]
-                            + mk[1] * g[1]
-                            + mk[2] * g[2]
-                            + mk[3] * g[3]
-                            + mk[4] * g[4]
-                            + mk[5] * g[5];
+                if translation.is_some() && col < nq && col % 6 < 3 {
+                    let wj = self.attach[col / 6].weight;
+                    for (x, b) in c[..nq].iter_mut().zip(&spread_base[col % 6][..nq]) {
+                        *x += wj * b;
                     }
+                } else {
+                    let g: [f64; 6] = std::array::from_fn(|o| jac[o][col]);
+                    spread_column(&g, c);
                 }
             }
         };
-        spread(&jq, &mut out.k, n);
-        spread(&jv, &mut out.c, n);
-        spread(&js, &mut out.ds, ni);
+        spread(&jq, Some(base(0)), &mut out.k, n);
+        spread(&jv, Some(base(9)), &mut out.c, n);
+        spread(&js, None, &mut out.ds, ni);
         // The node's own rotation in Rᵢᵀ F, Rᵢᵀ M: ∂(Rᵢᵀ y)/∂δθᵢ = (Rᵢᵀ y)~.
         for (i, (&nd, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
             let rt = x.nodes[nd].r().transpose();
