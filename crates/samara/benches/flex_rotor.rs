@@ -4,21 +4,24 @@
 //! interpolated to the 49 BeamDyn key points: chord and twist linear, airfoil of the
 //! nearest AeroDyn node), BEM with tip and hub loss, rated wind, `T` s at h = 0.01 s.
 //!
-//! `cargo bench -p samara --bench flex_rotor [-- T] [oye]` prints the time per step, the
-//! real-time factor, and the split of one residual-and-tangent evaluation between the
-//! structure (beam elements, hub, joints) and the aerodynamics (the 147 stations), each as
-//! wall time and as CPU time of the process (summed over its threads from
+//! `cargo bench -p samara --bench flex_rotor [-- T] [oye] [modified]` prints the time per
+//! step, the Newton iterations and factorizations per step, the real-time factor, and the
+//! split of one residual-and-tangent evaluation between the structure (beam elements,
+//! hub, joints) and the aerodynamics (the 147 stations, each with its own local block),
+//! each as wall time and as CPU time of the process (summed over its threads from
 //! /proc/self/task/*/schedstat, Linux; less inflated than wall time on a shared machine).
 //! With `oye` the lines carry Øye's dynamic stall (`dynamic_stall = "oye"`, one state per
 //! station); Øye's model needs a lifting airfoil, so in that variant the stations whose
 //! nearest AeroDyn node is a cylinder (non-lifting) take DU40_A17, the innermost lifting
 //! section. Turbulent wind (TurbSim) is not implemented: the wind is steady.
 //!
-//! Measured on the shared 2-core machine (load average ≈ 9), CPU time, `-- 10`: 3.1 ms
-//! per step, 3.2× real time (before the stations were differentiated over their own
-//! kinematics: 9.4 ms, 1.06×); with `oye` 4.4 ms, 2.3×. One evaluation: structure
-//! 0.19 ms, stations 0.92 ms (6.2 µs each). The steps and the history are in
-//! docs/aerodynamics.md, "Performance".
+//! With `modified` the analysis uses modified Newton (`jacobian = "modified"`).
+//!
+//! Measured on the shared 2-core machine (load average ≈ 10), CPU time, `-- 10`: 1.96 ms
+//! per step, 5.1× real time (3.1 ms before the BEM warm start and the batched stations;
+//! 9.4 ms before the stations were differentiated over their own kinematics); with
+//! `modified` 0.75 ms, 13×; with `oye` 3.73 ms, 2.7× (`oye modified` 1.28 ms, 7.8×). The
+//! steps and the history are in docs/aerodynamics.md, "Performance".
 
 use samara::analysis::{History, run_analysis};
 use samara::core::{ElementInput, EvalContext, LocalTerms, Need};
@@ -102,6 +105,7 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let t_end: f64 = args.iter().find_map(|a| a.parse().ok()).unwrap_or(10.0);
     let stall = args.iter().any(|a| a == "oye");
+    let modified = args.iter().any(|a| a == "modified");
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let example = root.join("examples/rotor/nrel5mw_flexible.toml");
     let reference = root.join("reference/nrel5mw");
@@ -120,7 +124,10 @@ fn main() {
             text += &st;
         }
     }
-    let text = text.replace("t_end = 0.5", &format!("t_end = {t_end}"));
+    let mut text = text.replace("t_end = 0.5", &format!("t_end = {t_end}"));
+    if modified {
+        text = text.replace("step = 0.01", "step = 0.01\njacobian = \"modified\"");
+    }
     let m = match Model::from_toml_str(&text, &example) {
         Ok(l) => l.model,
         Err(e) => panic!("{}", e.render_plain()),
@@ -184,14 +191,16 @@ fn main() {
     assert!(s.failure.is_none(), "{:?}", s.failure);
     let steps = s.steps as f64;
     println!(
-        "{t_end} s simulated{}: {} steps, {:.2} Newton iterations per step; wall {wall:.3} s, {:.3} ms/step, {:.2}× real time; CPU {}",
+        "{t_end} s simulated{}{}: {} steps, {:.2} Newton iterations and {:.2} factorizations per step; wall {wall:.3} s, {:.3} ms/step, {:.2}× real time; CPU {}",
         if stall {
             " with Øye's dynamic stall"
         } else {
             ""
         },
+        if modified { ", modified Newton" } else { "" },
         s.steps,
         s.newton_iterations as f64 / steps,
+        s.factorizations as f64 / steps,
         1e3 * wall / steps,
         t_end / wall,
         cpu.map_or("—".to_string(), |c| format!(

@@ -204,6 +204,13 @@ pub trait Element: Send + Sync {
     fn signals(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut SignalTerms) {}
     /// Residual and (if asked) tangents; `out` is cleared by the caller.
     fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms);
+    /// Whether [`Element::evaluate`] only adds into `out` (never overwrites or reads it):
+    /// then consecutive such elements on the same nodes, without states or input signals,
+    /// are evaluated into one local block and assembled once (the stations of a lifting
+    /// line on one beam element).
+    fn accumulates(&self) -> bool {
+        false
+    }
     /// Kinetic energy.
     fn kinetic_energy(&self, _x: &ElementInput) -> f64 {
         0.0

@@ -194,6 +194,11 @@ pub struct Assembler {
     terms: Vec<LocalTerms>,
     /// Index into `terms` of each element.
     term_of: Vec<usize>,
+    /// Per element k: one past the last element of the batch k starts (consecutive
+    /// accumulating elements on the same nodes without states or input signals, see
+    /// [`crate::core::Element::accumulates`]), evaluated into one local block; k + 1 for
+    /// an element alone (sequential path only).
+    batch_end: Vec<usize>,
     /// Models of [`PARALLEL_MIN_ELEMENTS`] elements or more: the terms and input-signal
     /// scratch of each element, for the parallel evaluation (empty otherwise).
     element_terms: Vec<LocalTerms>,
@@ -532,6 +537,7 @@ impl Assembler {
             .iter()
             .map(|s| vec![0.0; s.len()])
             .collect();
+        let batch_end = batches(sys);
         let parallel = sys.elements.len() >= PARALLEL_MIN_ELEMENTS;
         let element_terms = if parallel {
             sys.elements
@@ -554,6 +560,7 @@ impl Assembler {
             structure,
             terms,
             term_of,
+            batch_end,
             element_terms,
             element_inputs,
             element_blocks,
@@ -754,12 +761,15 @@ impl Assembler {
             rate_maps: &self.rate_maps,
         });
         if self.element_terms.is_empty() {
-            // Evaluate and scatter element by element through the shared scratch.
-            for k in 0..sys.elements.len() {
+            // Evaluate and scatter batch by batch (mostly one element) through the shared
+            // scratch.
+            let mut k = 0;
+            while k < sys.elements.len() {
+                let end = self.batch_end[k];
                 let t = &mut self.terms[self.term_of[k]];
                 element_terms(
                     sys,
-                    k,
+                    k..end,
                     state,
                     ctx,
                     &self.signal_values.values,
@@ -769,6 +779,7 @@ impl Assembler {
                 );
                 let t = &self.terms[self.term_of[k]];
                 self.scatter_element(sys, k, t, coef, residual, matrix.as_deref_mut());
+                k = end;
             }
         } else {
             // Large models: every element into its own storage in parallel, then the same
@@ -782,7 +793,16 @@ impl Assembler {
                 .enumerate()
                 .with_min_len(PARALLEL_CHUNK)
                 .for_each(|(k, (t, inputs))| {
-                    element_terms(sys, k, state, ctx, values, tangents.as_ref(), t, inputs);
+                    element_terms(
+                        sys,
+                        k..k + 1,
+                        state,
+                        ctx,
+                        values,
+                        tangents.as_ref(),
+                        t,
+                        inputs,
+                    );
                 });
             for (k, t) in self.element_terms.iter().enumerate() {
                 self.scatter_element(sys, k, t, coef, residual, matrix.as_deref_mut());
@@ -1298,14 +1318,40 @@ struct TangentInputs<'a> {
     rate_maps: &'a [RateMaps],
 }
 
-/// Element k's residual and, with `tangents`, its combined iteration-matrix block in
-/// `t.k`: `s_r (c_M M + c_C C + c_K K T)` on node rows (`T` the tangent operators, plus
+/// Per element, one past the last element of its batch: a run of consecutive elements
+/// that accumulate ([`crate::core::Element::accumulates`]), touch the same nodes and have
+/// no states and no input signals shares one local block (their terms add up, and the
+/// tangent operators and coefficients act linearly on the sum).
+fn batches(sys: &System) -> Vec<usize> {
+    let n = sys.elements.len();
+    let alone = |k: usize| {
+        let e = &sys.elements[k];
+        !e.accumulates() || e.n_states() > 0 || !sys.signals.element_inputs[k].is_empty()
+    };
+    let mut end = (1..=n).collect::<Vec<_>>();
+    let mut k = 0;
+    while k < n {
+        let mut j = k + 1;
+        if !alone(k) {
+            while j < n && !alone(j) && sys.elements[j].nodes() == sys.elements[k].nodes() {
+                j += 1;
+            }
+        }
+        end[k] = j;
+        k = j;
+    }
+    end
+}
+
+/// The residual of the elements `ks` (one element, or a batch on the same nodes, see
+/// [`batches`]) and, with `tangents`, their combined iteration-matrix block in `t.k`:
+/// `s_r (c_M M + c_C C + c_K K T)` on node rows (`T` the tangent operators, plus
 /// `C A_v + M A₀` with rate maps), `s_z (c_K ∂r/∂z + (∂ż/∂Δz) ∂r/∂ż)` on state rows and
 /// columns. Pure: touches nothing but `t` and the input scratch.
 #[allow(clippy::too_many_arguments)]
 fn element_terms(
     sys: &System,
-    k: usize,
+    ks: Range<usize>,
     state: &State,
     ctx: &EvalContext,
     signals: &[f64],
@@ -1313,15 +1359,17 @@ fn element_terms(
     t: &mut LocalTerms,
     inputs: &mut Vec<f64>,
 ) {
-    let e = &sys.elements[k];
     let need = if tangents.is_some() {
         Need::ResidualAndTangents
     } else {
         Need::Residual
     };
     t.clear(need);
-    let x = sys.element_input(k, state, signals, inputs);
-    e.evaluate(ctx, &x, need, t);
+    let e = &sys.elements[ks.start];
+    for k in ks {
+        let x = sys.element_input(k, state, signals, inputs);
+        sys.elements[k].evaluate(ctx, &x, need, t);
+    }
     let Some(tg) = tangents else {
         return;
     };

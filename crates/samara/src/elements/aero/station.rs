@@ -46,6 +46,32 @@ use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, NodeStat
 use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
 use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// The station's last BEM root φ (f64 bits; NaN: none yet), the warm start of its next
+/// solve ([`BemRotor::solve_near`]). Every solve converges to rounding from any start, so
+/// the results do not depend on it beyond rounding (nor on the order in which stations
+/// are evaluated); a fresh or cloned station starts from its copy or bracketing.
+#[derive(Debug)]
+struct RootHint(AtomicU64);
+
+impl RootHint {
+    fn new() -> Self {
+        Self(AtomicU64::new(f64::NAN.to_bits()))
+    }
+    fn get(&self) -> Option<f64> {
+        Some(f64::from_bits(self.0.load(Ordering::Relaxed))).filter(|x| x.is_finite())
+    }
+    fn set(&self, phi: f64) {
+        self.0.store(phi.to_bits(), Ordering::Relaxed);
+    }
+}
+
+impl Clone for RootHint {
+    fn clone(&self) -> Self {
+        Self(AtomicU64::new(self.0.load(Ordering::Relaxed)))
+    }
+}
 
 /// The induced velocity model of a line.
 #[derive(Clone, Debug, Default)]
@@ -138,6 +164,8 @@ pub struct AeroStation {
     /// Signals read (the rotor's inflow states) and produced (the thrust), Pitt–Peters.
     inputs: Vec<String>,
     outputs: Vec<String>,
+    /// Warm start of the BEM root.
+    root_hint: RootHint,
 }
 
 /// Øye's lead factor k of the dynamic wake's first filter (Snel & Schepers 1995).
@@ -235,6 +263,7 @@ impl AeroStation {
             initial: [0.0; MAX_STATES],
             inputs,
             outputs,
+            root_hint: RootHint::new(),
         }
     }
 
@@ -392,7 +421,10 @@ impl AeroStation {
                     chord: self.section.chord,
                     theta,
                 };
-                let ind = rotor.solve(&flow, &self.section.airfoil);
+                let ind = rotor.solve_near(&flow, &self.section.airfoil, self.root_hint.get());
+                if let Some(i) = &ind {
+                    self.root_hint.set(i.phi.re());
+                }
                 let a_qs = ind.map_or(zero, |i| i.a);
                 res.a_quasi_steady = a_qs.re();
                 // Øye's dynamic wake: the axial induction the station uses is the
@@ -790,35 +822,67 @@ impl AeroStation {
                 }
             }
         }
-        // Column by column (the local matrices are column-major): one column of ∂(F, M)
-        // spread over the 6 rows of every node.
-        let spread = |jac: &[[f64; COLUMNS]; 6], mat: &mut nalgebra::DMatrix<f64>, cols: usize| {
+        // One column g of ∂(F, M) spread over the 6 rows of every node.
+        let spread_column = |g: &[f64; 6], c: &mut [f64]| {
+            for (i, rows) in c[..nq].chunks_exact_mut(6).enumerate() {
+                let (wi, mi) = (w[i], &map[i]);
+                for k in 0..3 {
+                    rows[k] -= wi * g[k];
+                    let mk = &mi[k];
+                    rows[3 + k] -= mk[0] * g[0]
+                        + mk[1] * g[1]
+                        + mk[2] * g[2]
+                        + mk[3] * g[3]
+                        + mk[4] * g[4]
+                        + mk[5] * g[5];
+                }
+            }
+        };
+        // The translation columns of node j are the station's ∂(F, M)/∂p (∂/∂ṗ in C)
+        // times its weight ([`Self::to_nodes`]): spread once, then scaled per node.
+        let base = |first: usize| -> [[f64; 6]; 3] {
+            std::array::from_fn(|k| {
+                std::array::from_fn(|o| {
+                    if o < 3 {
+                        r.force[o].d[first + k]
+                    } else {
+                        r.moment[o - 3].d[first + k]
+                    }
+                })
+            })
+        };
+        // Column by column (the local matrices are column-major).
+        let spread = |jac: &[[f64; COLUMNS]; 6],
+                      translation: Option<[[f64; 6]; 3]>,
+                      mat: &mut nalgebra::DMatrix<f64>,
+                      cols: usize| {
             let nr = mat.nrows();
+            let mut spread_base = [[0.0; 6 * MAX_NODES]; 3];
+            if let Some(b) = &translation {
+                for (g, c) in b.iter().zip(&mut spread_base) {
+                    spread_column(g, c);
+                }
+            }
             for (col, c) in mat
                 .as_mut_slice()
                 .chunks_exact_mut(nr)
                 .take(cols)
                 .enumerate()
             {
-                let g: [f64; 6] = std::array::from_fn(|o| jac[o][col]);
-                for (i, rows) in c[..nq].chunks_exact_mut(6).enumerate() {
-                    let (wi, mi) = (w[i], &map[i]);
-                    for k in 0..3 {
-                        rows[k] -= wi * g[k];
-                        let mk = &mi[k];
-                        rows[3 + k] -= mk[0] * g[0]
-                            + mk[1] * g[1]
-                            + mk[2] * g[2]
-                            + mk[3] * g[3]
-                            + mk[4] * g[4]
-                            + mk[5] * g[5];
+                if translation.is_some() && col < nq && col % 6 < 3 {
+                    let wj = self.attach[col / 6].weight;
+                    for (x, b) in c[..nq].iter_mut().zip(&spread_base[col % 6][..nq]) {
+                        *x += wj * b;
                     }
+                } else {
+                    let g: [f64; 6] = std::array::from_fn(|o| jac[o][col]);
+                    spread_column(&g, c);
                 }
             }
         };
-        spread(&jq, &mut out.k, n);
-        spread(&jv, &mut out.c, n);
-        spread(&js, &mut out.ds, ni);
+        spread(&jq, Some(base(0)), &mut out.k, n);
+        spread(&jv, Some(base(9)), &mut out.c, n);
+        spread(&js, None, &mut out.ds, ni);
         // The node's own rotation in Rᵢᵀ F, Rᵢᵀ M: ∂(Rᵢᵀ y)/∂δθᵢ = (Rᵢᵀ y)~.
         for (i, (&nd, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
             let rt = x.nodes[nd].r().transpose();
@@ -957,6 +1021,10 @@ impl Element for AeroStation {
             21..=28 => self.tangents::<28>(ctx, x, out),
             _ => self.tangents::<{ KINEMATICS + 2 * MAX_STATES + 3 }>(ctx, x, out),
         }
+    }
+
+    fn accumulates(&self) -> bool {
+        true
     }
 
     fn signal_inputs(&self) -> &[String] {
