@@ -11,6 +11,7 @@ pub mod line_of_action;
 mod low_pass;
 mod maxwell;
 mod rigid_body;
+mod granular;
 mod sphere_pair;
 mod spring_damper;
 mod time_signal;
@@ -29,7 +30,8 @@ pub use hydraulic::{
 pub use low_pass::{LowPassSensor, NodeQuantity, SensorInput};
 pub use maxwell::Maxwell;
 pub use rigid_body::RigidBody;
-pub use sphere_pair::SpherePair;
+pub use granular::GranularSet;
+pub use sphere_pair::{PairFriction, SpherePair};
 pub use spring_damper::SpringDamper;
 pub use time_signal::TimeSignal;
 pub use tire::{MagicFormula, Tire, TireGround, TireParameters};

@@ -15,6 +15,7 @@ pub mod aero;
 pub mod beam;
 pub mod body;
 pub mod contact;
+pub mod granular;
 pub mod controller;
 pub mod force;
 pub mod hydraulic;
@@ -48,6 +49,8 @@ pub struct Build<'a> {
     pub bodies: Vec<RigidBody>,
     /// The beams' elements grouped per beam (for sectional output).
     pub beams: Vec<Beam>,
+    /// Granular contact sets (pairs found during the run).
+    pub granular: Vec<crate::elements::GranularSet>,
 }
 
 impl<'a> Build<'a> {
@@ -58,6 +61,7 @@ impl<'a> Build<'a> {
             constraints: Vec::new(),
             bodies: Vec::new(),
             beams: Vec::new(),
+            granular: Vec::new(),
         }
     }
 
@@ -272,6 +276,9 @@ registry! {
     /// Contacts of bodies with a ground plane (Hunt–Crossley or linear normal force,
     /// LuGre friction with bristle states).
     contacts: contact::ContactKind,
+    /// Granular contact sets: many spheres mutually in contact and with a ground plane,
+    /// pairs found by a broad phase during the run (docs/multi-field.md).
+    granular: granular::GranularKind,
     /// Hydraulic circuits: volumes with pressure states, reservoirs, orifices, check
     /// valves and a double-acting actuator.
     hydraulics: hydraulic::Hydraulic,
