@@ -3,8 +3,9 @@
 //!
 //! 1. **Stick (rolling) and slip** of a solid sphere B (mass m, radius ρ, I = 2/5 m ρ²)
 //!    resting under gravity on a sphere A clamped to the ground, pulled by a horizontal
-//!    force F at its centre. A is large (ρ_A = 50 m) so the contact stays on top of it
-//!    over the run (tilt < 1e-5 rad). Rigid-body mechanics with Coulomb friction:
+//!    force F at its centre. A is large (ρ_A = 1000 m) so that over the 0.05 s run the
+//!    contact stays on top of it: the tilt x/ρ_A < 3e-5 rad and the centripetal loss of
+//!    normal force v²/(ρ_A g) < 1e-4. Rigid-body mechanics with Coulomb friction:
 //!    - F < (1 + m ρ²/I) μ_s m g = 3.5 μ_s m g: B rolls without slipping, friction
 //!      f = F/(1 + m ρ²/I) = 2F/7, acceleration a = F/(m + I/ρ²) = 5F/(7m), spin
 //!      acceleration α = a/ρ;
@@ -13,9 +14,10 @@
 //!    The rolling case checks the moment of friction on B (ω × a_B in the slip velocity
 //!    and a_B × F_t in B's moment rows). Tolerance 2e-3 relative on the accelerations,
 //!    measured from the velocity change over the second half of the run: the LuGre
-//!    bristle (σ₀ = 1e5 /m) holds stick with a deflection of f/(σ₀ N) ≈ 3 µm whose
-//!    transient has died out by then (σ₁ damping), and in slip g(s) = μ_d to 1e-40 at
-//!    s ≫ v_s; the contact's normal compliance changes N by less than 1e-6 m g.
+//!    bristle (σ₀ = 1e5 /m, σ₁ about critical) holds stick with a deflection of
+//!    f/(σ₀ N) ≈ 3 µm whose transient (≈ 1 ms) has died out by then, in slip
+//!    g(s) = μ_d to e^(−(s/v_s)²) < 1e-40 after the first millisecond; the geometric
+//!    effects above stay below 1e-4.
 //! 2. **Oblique collision of two free spinning spheres** with friction, no gravity: the
 //!    pair's forces are equal and opposite and act at one point (the middle of the
 //!    overlap), so linear momentum is conserved to the Newton tolerance (the
@@ -37,7 +39,7 @@ gravity = [0.0, 0.0, -9.81]
 
 [[nodes]]
 name = "a"
-position = [0.0, 0.0, -50.0]
+position = [0.0, 0.0, -1000.0]
 
 [[nodes]]
 name = "b"
@@ -70,7 +72,7 @@ force = [{force}, 0.0, 0.0]
 name = "touch"
 node = "a"
 shape = "sphere"
-radius = 50.0
+radius = 1000.0
 other_node = "b"
 other_radius = 0.1
 normal = "linear"
@@ -80,7 +82,7 @@ static_friction = 0.5
 dynamic_friction = 0.3
 stribeck_velocity = 1e-3
 bristle_stiffness = 1e5
-bristle_damping = 600.0
+bristle_damping = 200.0
 
 [[analyses]]
 name = "pull"
@@ -95,7 +97,7 @@ rho_inf = 0.6
 
 /// (a, α) from the velocity change over the second half of the run.
 fn accelerations(force: f64) -> (f64, f64) {
-    let t_end = 0.2;
+    let t_end = 0.05;
     let (s, h) = run(&model(&pulled_sphere(force, t_end)));
     assert!(s.failure.is_none(), "{:?}", s.failure);
     let k = h.frames.len() / 2;
@@ -128,7 +130,10 @@ fn a_pulled_sphere_rolls_below_the_friction_limit_and_slides_above_it() {
     let alpha_ref = 2.5 * md * g / rho;
     println!("sliding: F = {f:.3} N, a = {a:.6} ({a_ref:.6}), α = {alpha:.5} ({alpha_ref:.5})");
     assert!((a - a_ref).abs() < 2e-3 * a_ref, "{a} vs {a_ref}");
-    assert!((alpha - alpha_ref).abs() < 2e-3 * alpha_ref, "{alpha} vs {alpha_ref}");
+    assert!(
+        (alpha - alpha_ref).abs() < 2e-3 * alpha_ref,
+        "{alpha} vs {alpha_ref}"
+    );
 }
 
 /// Two spinning spheres meeting off-centre, with friction, no gravity.

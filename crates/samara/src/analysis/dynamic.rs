@@ -488,8 +488,11 @@ impl Integrator<'_> {
         self.contacts.most = self.contacts.most.max(self.contacts.pairs.len());
         self.contacts.factorizations += self.lin.stats.factorizations;
         self.contacts.fallbacks += self.lin.stats.fallbacks;
-        self.asm =
-            Assembler::with_pairs(self.sys, self.asm.formulation(), self.contacts.elements(self.sys));
+        self.asm = Assembler::with_pairs(
+            self.sys,
+            self.asm.formulation(),
+            self.contacts.elements(self.sys),
+        );
         self.lin = LinearSolver::new(self.asm.structure(), self.settings.solver.linear_solver);
         self.matrix = BlockMatrix::zeros(self.asm.structure().clone());
         self.factored_h = f64::NAN;
@@ -509,8 +512,7 @@ impl Integrator<'_> {
             return true;
         }
         let moved = sys.granular.iter().enumerate().any(|(g, set)| {
-            set.max_displacement(&self.trial.nodes, &self.contacts.reference[g])
-                > 0.5 * set.margin
+            set.max_displacement(&self.trial.nodes, &self.contacts.reference[g]) > 0.5 * set.margin
         });
         if !moved {
             return true;

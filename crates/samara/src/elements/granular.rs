@@ -65,12 +65,10 @@ impl GranularSet {
         }
         let rmax = self.radii.iter().copied().fold(0.0, f64::max);
         let h = 2.0 * rmax + margin;
-        let cell = |x: &Vector3<f64>| -> [i64; 3] {
-            std::array::from_fn(|k| (x[k] / h).floor() as i64)
-        };
-        let mut keys: Vec<([i64; 3], usize)> = (0..n)
-            .map(|i| (cell(&nodes[self.nodes[i]].x), i))
-            .collect();
+        let cell =
+            |x: &Vector3<f64>| -> [i64; 3] { std::array::from_fn(|k| (x[k] / h).floor() as i64) };
+        let mut keys: Vec<([i64; 3], usize)> =
+            (0..n).map(|i| (cell(&nodes[self.nodes[i]].x), i)).collect();
         keys.sort_unstable();
         for i in 0..n {
             let c = cell(&nodes[self.nodes[i]].x);
@@ -119,7 +117,11 @@ impl GranularSet {
     }
 
     /// Σ over the touching pairs of `f(pair element)`.
-    fn sum_touching(&self, nodes: &[NodeState], f: impl Fn(&SpherePair, &ElementInput) -> f64) -> f64 {
+    fn sum_touching(
+        &self,
+        nodes: &[NodeState],
+        f: impl Fn(&SpherePair, &ElementInput) -> f64,
+    ) -> f64 {
         let mut pairs = Vec::new();
         self.candidate_pairs(nodes, 0.0, &mut pairs);
         let x = ElementInput::nodes(nodes);

@@ -6,12 +6,12 @@ pub mod beam;
 mod contact;
 mod controller;
 mod dc_motor;
+mod granular;
 mod hydraulic;
 pub mod line_of_action;
 mod low_pass;
 mod maxwell;
 mod rigid_body;
-mod granular;
 mod sphere_pair;
 mod spring_damper;
 mod time_signal;
@@ -23,6 +23,7 @@ pub use contact::{
 };
 pub use controller::{Block as ControllerBlock, Controller, Pid, lookup as controller_lookup};
 pub use dc_motor::DcMotor;
+pub use granular::GranularSet;
 pub use hydraulic::{
     GasCharge, HydraulicCircuit, Multiplier as OrificeMultiplier, Orifice as HydraulicOrifice,
     OrificeLaw, Port, Volume as HydraulicVolume, actuator as hydraulic_actuator,
@@ -30,7 +31,6 @@ pub use hydraulic::{
 pub use low_pass::{LowPassSensor, NodeQuantity, SensorInput};
 pub use maxwell::Maxwell;
 pub use rigid_body::RigidBody;
-pub use granular::GranularSet;
 pub use sphere_pair::{PairFriction, SpherePair};
 pub use spring_damper::SpringDamper;
 pub use time_signal::TimeSignal;

@@ -251,12 +251,7 @@ impl SpherePair {
         let m_b = cross(&arm_b, &ft);
         let m_a = cross(&arm_a, &scale(&ft, S::cst(-1.0)));
         PairResult {
-            rows: [
-                f_a,
-                rot_t(0, na.r(), &m_a),
-                f_b,
-                rot_t(1, nb.r(), &m_b),
-            ],
+            rows: [f_a, rot_t(0, na.r(), &m_a), f_b, rot_t(1, nb.r(), &m_b)],
             state_rows,
             normal: nf.re(),
             elastic,

@@ -213,241 +213,227 @@ pub fn validate_law(
 ) -> (Option<NormalLaw>, Option<Friction>, bool) {
     let mut ok = true;
     let e = e.clone();
-        // Normal law.
-        ok &= check(
-            cx,
-            &e,
-            what,
-            ("stiffness", k.stiffness),
-            |v| v > 0.0,
-            "positive",
-            "the contact stiffness k [N/m^e]",
-        );
-        let law = match k.normal {
-            NormalInput::HuntCrossley => {
-                ok &= unused(
+    // Normal law.
+    ok &= check(
+        cx,
+        &e,
+        what,
+        ("stiffness", k.stiffness),
+        |v| v > 0.0,
+        "positive",
+        "the contact stiffness k [N/m^e]",
+    );
+    let law = match k.normal {
+        NormalInput::HuntCrossley => {
+            ok &= unused(
+                cx,
+                &e,
+                what,
+                "damping",
+                k.damping.is_some(),
+                "Hunt–Crossley damping is `damping_factor` α [s/m] or `restitution` with `impact_velocity`",
+            );
+            let exponent = k.exponent.unwrap_or(1.5);
+            ok &= check(
+                cx,
+                &e,
+                what,
+                ("exponent", exponent),
+                |v| v >= 1.0,
+                "at least 1",
+                "1.5 is Hertz's sphere; 1 a linear spring",
+            );
+            let alpha = match (k.damping_factor, k.restitution, k.impact_velocity) {
+                (Some(a), None, None) => check(
                     cx,
                     &e,
                     what,
-                    "damping",
-                    k.damping.is_some(),
-                    "Hunt–Crossley damping is `damping_factor` α [s/m] or `restitution` with `impact_velocity`",
-                );
-                let exponent = k.exponent.unwrap_or(1.5);
-                ok &= check(
-                    cx,
-                    &e,
-                    what,
-                    ("exponent", exponent),
-                    |v| v >= 1.0,
-                    "at least 1",
-                    "1.5 is Hertz's sphere; 1 a linear spring",
-                );
-                let alpha = match (k.damping_factor, k.restitution, k.impact_velocity) {
-                    (Some(a), None, None) => check(
+                    ("damping_factor", a),
+                    |v| v >= 0.0,
+                    "non-negative",
+                    "α [s/m]; 0 is an elastic contact",
+                )
+                .then_some(a),
+                (None, Some(r), Some(v)) => {
+                    let r_ok = check(
                         cx,
                         &e,
                         what,
-                        ("damping_factor", a),
-                        |v| v >= 0.0,
-                        "non-negative",
-                        "α [s/m]; 0 is an elastic contact",
-                    )
-                    .then_some(a),
-                    (None, Some(r), Some(v)) => {
-                        let r_ok = check(
-                            cx,
-                            &e,
-                            what,
-                            ("restitution", r),
-                            |x| x > 0.0 && x <= 1.0,
-                            "in (0, 1]",
-                            "a restitution of 0 needs infinite Hunt–Crossley damping; use a small positive value",
-                        );
-                        let v_ok = check(
-                            cx,
-                            &e,
-                            what,
-                            ("impact_velocity", v),
-                            |x| x > 0.0,
-                            "positive",
-                            "the impact speed [m/s] at which `restitution` holds",
-                        );
-                        (r_ok && v_ok).then(|| crate::elements::hunt_crossley_damping(r, v))
-                    }
-                    _ => {
-                        cx.error(
+                        ("restitution", r),
+                        |x| x > 0.0 && x <= 1.0,
+                        "in (0, 1]",
+                        "a restitution of 0 needs infinite Hunt–Crossley damping; use a small positive value",
+                    );
+                    let v_ok = check(
+                        cx,
+                        &e,
+                        what,
+                        ("impact_velocity", v),
+                        |x| x > 0.0,
+                        "positive",
+                        "the impact speed [m/s] at which `restitution` holds",
+                    );
+                    (r_ok && v_ok).then(|| crate::elements::hunt_crossley_damping(r, v))
+                }
+                _ => {
+                    cx.error(
                             format!("{what}: give either `damping_factor` or both `restitution` and `impact_velocity`"),
                             e.span.clone(),
                             Some("Hunt–Crossley damping: α [s/m], or the restitution ε at an impact speed".into()),
                         );
-                        None
-                    }
+                    None
+                }
+            };
+            alpha.map(|a| NormalLaw::HuntCrossley {
+                stiffness: k.stiffness,
+                exponent,
+                damping_factor: a,
+            })
+        }
+        NormalInput::Linear => {
+            for key in [
+                "exponent",
+                "damping_factor",
+                "restitution",
+                "impact_velocity",
+            ] {
+                let given = match key {
+                    "exponent" => k.exponent.is_some(),
+                    "damping_factor" => k.damping_factor.is_some(),
+                    "restitution" => k.restitution.is_some(),
+                    _ => k.impact_velocity.is_some(),
                 };
-                alpha.map(|a| NormalLaw::HuntCrossley {
-                    stiffness: k.stiffness,
-                    exponent,
-                    damping_factor: a,
-                })
-            }
-            NormalInput::Linear => {
-                for key in [
-                    "exponent",
-                    "damping_factor",
-                    "restitution",
-                    "impact_velocity",
-                ] {
-                    let given = match key {
-                        "exponent" => k.exponent.is_some(),
-                        "damping_factor" => k.damping_factor.is_some(),
-                        "restitution" => k.restitution.is_some(),
-                        _ => k.impact_velocity.is_some(),
-                    };
-                    ok &= unused(
-                        cx,
-                        &e,
-                        what,
-                        key,
-                        given,
-                        "this key belongs to normal = \"hunt_crossley\"; the linear law takes `stiffness` and `damping`",
-                    );
-                }
-                let c = k.damping.unwrap_or(0.0);
-                check(
+                ok &= unused(
                     cx,
                     &e,
                     what,
-                    ("damping", c),
-                    |v| v >= 0.0,
-                    "non-negative",
-                    "c [N s/m]",
-                )
-                .then_some(NormalLaw::Linear {
-                    stiffness: k.stiffness,
-                    damping: c,
-                })
-            }
-        };
-        // Friction.
-        let friction = match k.static_friction {
-            None => {
-                for (key, given) in [
-                    ("dynamic_friction", k.dynamic_friction.is_some()),
-                    ("stribeck_velocity", k.stribeck_velocity.is_some()),
-                    ("bristle_stiffness", k.bristle_stiffness.is_some()),
-                    ("bristle_damping", k.bristle_damping.is_some()),
-                    ("viscous_friction", k.viscous_friction.is_some()),
-                ] {
-                    ok &= unused(
-                        cx,
-                        &e,
-                        what,
-                        key,
-                        given,
-                        "friction is on only with `static_friction` (μ_s)",
-                    );
-                }
-                None
-            }
-            Some(ms) => {
-                let hint = "LuGre friction takes static_friction, dynamic_friction, stribeck_velocity, bristle_stiffness and bristle_damping";
-                let md = required(cx, &e, what, "dynamic_friction", k.dynamic_friction, hint);
-                let vs = required(
-                    cx,
-                    &e,
-                    what,
-                    "stribeck_velocity",
-                    k.stribeck_velocity,
-                    hint,
+                    key,
+                    given,
+                    "this key belongs to normal = \"hunt_crossley\"; the linear law takes `stiffness` and `damping`",
                 );
-                let s0 = required(
+            }
+            let c = k.damping.unwrap_or(0.0);
+            check(
+                cx,
+                &e,
+                what,
+                ("damping", c),
+                |v| v >= 0.0,
+                "non-negative",
+                "c [N s/m]",
+            )
+            .then_some(NormalLaw::Linear {
+                stiffness: k.stiffness,
+                damping: c,
+            })
+        }
+    };
+    // Friction.
+    let friction = match k.static_friction {
+        None => {
+            for (key, given) in [
+                ("dynamic_friction", k.dynamic_friction.is_some()),
+                ("stribeck_velocity", k.stribeck_velocity.is_some()),
+                ("bristle_stiffness", k.bristle_stiffness.is_some()),
+                ("bristle_damping", k.bristle_damping.is_some()),
+                ("viscous_friction", k.viscous_friction.is_some()),
+            ] {
+                ok &= unused(
                     cx,
                     &e,
                     what,
-                    "bristle_stiffness",
-                    k.bristle_stiffness,
-                    hint,
+                    key,
+                    given,
+                    "friction is on only with `static_friction` (μ_s)",
                 );
-                let s1 = required(cx, &e, what, "bristle_damping", k.bristle_damping, hint);
-                let s2 = k.viscous_friction.unwrap_or(0.0);
-                let mut f_ok = check(
-                    cx,
-                    &e,
-                    what,
-                    ("static_friction", ms),
-                    |v| v > 0.0,
-                    "positive",
-                    "μ_s; without friction leave out the friction keys",
-                );
-                if let Some(md) = md {
-                    f_ok &= check(
-                        cx,
-                        &e,
-                        what,
-                        ("dynamic_friction", md),
-                        |v| v > 0.0 && v <= ms.max(0.0),
-                        "positive and at most `static_friction`",
-                        "μ_d ≤ μ_s: sliding friction does not exceed stiction",
-                    );
-                }
-                if let Some(vs) = vs {
-                    f_ok &= check(
-                        cx,
-                        &e,
-                        what,
-                        ("stribeck_velocity", vs),
-                        |v| v > 0.0,
-                        "positive",
-                        "v_s [m/s], the speed over which friction falls from μ_s to μ_d",
-                    );
-                }
-                if let Some(s0) = s0 {
-                    f_ok &= check(
-                        cx,
-                        &e,
-                        what,
-                        ("bristle_stiffness", s0),
-                        |v| v > 0.0,
-                        "positive",
-                        "σ₀ [1/m]: stiction holds the body within about μ_s/σ₀",
-                    );
-                }
-                if let Some(s1) = s1 {
-                    f_ok &= check(
-                        cx,
-                        &e,
-                        what,
-                        ("bristle_damping", s1),
-                        |v| v >= 0.0,
-                        "non-negative",
-                        "σ₁ [s/m]; about 2√(σ₀/g) damps the stuck body critically",
-                    );
-                }
+            }
+            None
+        }
+        Some(ms) => {
+            let hint = "LuGre friction takes static_friction, dynamic_friction, stribeck_velocity, bristle_stiffness and bristle_damping";
+            let md = required(cx, &e, what, "dynamic_friction", k.dynamic_friction, hint);
+            let vs = required(cx, &e, what, "stribeck_velocity", k.stribeck_velocity, hint);
+            let s0 = required(cx, &e, what, "bristle_stiffness", k.bristle_stiffness, hint);
+            let s1 = required(cx, &e, what, "bristle_damping", k.bristle_damping, hint);
+            let s2 = k.viscous_friction.unwrap_or(0.0);
+            let mut f_ok = check(
+                cx,
+                &e,
+                what,
+                ("static_friction", ms),
+                |v| v > 0.0,
+                "positive",
+                "μ_s; without friction leave out the friction keys",
+            );
+            if let Some(md) = md {
                 f_ok &= check(
                     cx,
                     &e,
                     what,
-                    ("viscous_friction", s2),
+                    ("dynamic_friction", md),
+                    |v| v > 0.0 && v <= ms.max(0.0),
+                    "positive and at most `static_friction`",
+                    "μ_d ≤ μ_s: sliding friction does not exceed stiction",
+                );
+            }
+            if let Some(vs) = vs {
+                f_ok &= check(
+                    cx,
+                    &e,
+                    what,
+                    ("stribeck_velocity", vs),
+                    |v| v > 0.0,
+                    "positive",
+                    "v_s [m/s], the speed over which friction falls from μ_s to μ_d",
+                );
+            }
+            if let Some(s0) = s0 {
+                f_ok &= check(
+                    cx,
+                    &e,
+                    what,
+                    ("bristle_stiffness", s0),
+                    |v| v > 0.0,
+                    "positive",
+                    "σ₀ [1/m]: stiction holds the body within about μ_s/σ₀",
+                );
+            }
+            if let Some(s1) = s1 {
+                f_ok &= check(
+                    cx,
+                    &e,
+                    what,
+                    ("bristle_damping", s1),
                     |v| v >= 0.0,
                     "non-negative",
-                    "σ₂ [s/m]",
+                    "σ₁ [s/m]; about 2√(σ₀/g) damps the stuck body critically",
                 );
-                match (md, vs, s0, s1) {
-                    (Some(md), Some(vs), Some(s0), Some(s1)) if f_ok => Some(Friction {
-                        static_coefficient: ms,
-                        dynamic_coefficient: md,
-                        stribeck_velocity: vs,
-                        bristle_stiffness: s0,
-                        bristle_damping: s1,
-                        viscous: s2,
-                    }),
-                    _ => {
-                        ok = false;
-                        None
-                    }
+            }
+            f_ok &= check(
+                cx,
+                &e,
+                what,
+                ("viscous_friction", s2),
+                |v| v >= 0.0,
+                "non-negative",
+                "σ₂ [s/m]",
+            );
+            match (md, vs, s0, s1) {
+                (Some(md), Some(vs), Some(s0), Some(s1)) if f_ok => Some(Friction {
+                    static_coefficient: ms,
+                    dynamic_coefficient: md,
+                    stribeck_velocity: vs,
+                    bristle_stiffness: s0,
+                    bristle_damping: s1,
+                    viscous: s2,
+                }),
+                _ => {
+                    ok = false;
+                    None
                 }
             }
-        };
+        }
+    };
     (law, friction, ok)
 }
 
@@ -793,13 +779,10 @@ impl ComponentKind for ContactKind {
 
     fn build(def: &ContactDef, parts: &mut Build) {
         if let (Some((j, rb)), ContactShape::Sphere { radius }) = (def.other, def.shape) {
-            parts.elements.push(Box::new(SpherePair::new(
-                &def.name,
-                [def.node, j],
-                [radius, rb],
-                def.law,
-            )
-            .with_friction(def.friction.map(PairFriction::LuGre))));
+            parts.elements.push(Box::new(
+                SpherePair::new(&def.name, [def.node, j], [radius, rb], def.law)
+                    .with_friction(def.friction.map(PairFriction::LuGre)),
+            ));
             return;
         }
         if let (Some(seg), ContactShape::Sphere { radius }) = (def.segment, def.shape) {

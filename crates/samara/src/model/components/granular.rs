@@ -14,6 +14,7 @@
 //! margin = 0.01                  # Verlet margin [m]: pairs closer than this are candidates
 //! ground_point = [0.0, 0.0, 0.0] # the ground plane (default the origin, normal +z)
 //! ground_normal = [0.0, 0.0, 1.0]
+//! walls = [{ point = [0.2, 0.0, 0.0], normal = [-1.0, 0.0, 0.0] }] # frictionless (a box)
 //! normal = "hunt_crossley"       # the normal law, as [[contacts]]
 //! stiffness = 1e6
 //! restitution = 0.5
@@ -30,8 +31,7 @@ use super::contact::{LawKeys, NormalInput, validate_law};
 use super::{Build, ComponentKind, ModelInput};
 use crate::core::NodeRef;
 use crate::elements::{
-    Contact, ContactShape, Friction, GranularSet, GroundPlane, NormalLaw, PairFriction,
-    SpherePair,
+    Contact, ContactShape, Friction, GranularSet, GroundPlane, NormalLaw, PairFriction, SpherePair,
 };
 use crate::model::input::AnalysisType;
 use crate::model::validate::{Checker, Entry};
@@ -69,6 +69,9 @@ pub struct GranularInput {
     /// Normal of the ground plane, out of the ground; default [0, 0, 1].
     #[serde(default)]
     pub ground_normal: Option<[f64; 3]>,
+    /// Frictionless confining planes (a box): contacts `<name>.wall<k>.<node>`, k = 1, 2, …
+    #[serde(default)]
+    pub walls: Option<Vec<WallInput>>,
     /// Normal-force law (as `[[contacts]]`).
     pub normal: NormalInput,
     /// Contact stiffness k, positive [N/m^e].
@@ -113,6 +116,16 @@ pub struct GranularInput {
     pub regularization_velocity: Option<f64>,
 }
 
+/// A frictionless confining plane of a granular set.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct WallInput {
+    /// A point of the plane [m].
+    pub point: [f64; 3],
+    /// Its normal, pointing into the box.
+    pub normal: [f64; 3],
+}
+
 /// A validated granular set.
 #[derive(Clone, Debug)]
 pub struct GranularDef {
@@ -123,6 +136,8 @@ pub struct GranularDef {
     pub radii: Vec<f64>,
     pub margin: f64,
     pub plane: GroundPlane,
+    /// Frictionless walls.
+    pub walls: Vec<GroundPlane>,
     pub law: NormalLaw,
     pub friction: Option<Friction>,
     pub regularization_velocity: f64,
@@ -199,7 +214,10 @@ impl ComponentKind for GranularKind {
                     .collect();
                 if p.value.matches('*').count() > 1 {
                     cx.error(
-                        format!("{what}: `nodes_matching` takes at most one `*` (got '{}')", p.value),
+                        format!(
+                            "{what}: `nodes_matching` takes at most one `*` (got '{}')",
+                            p.value
+                        ),
                         p.span.clone(),
                         Some("e.g. nodes_matching = \"ball_*\"".into()),
                     );
@@ -209,7 +227,10 @@ impl ComponentKind for GranularKind {
                     cx.error(
                         format!("{what}: no node matches '{}'", p.value),
                         p.span.clone(),
-                        Some("`*` stands for any characters: \"ball_*\" matches ball_1, ball_2, …".into()),
+                        Some(
+                            "`*` stands for any characters: \"ball_*\" matches ball_1, ball_2, …"
+                                .into(),
+                        ),
                     );
                     ok = false;
                 }
@@ -259,7 +280,11 @@ impl ComponentKind for GranularKind {
             }
         };
         if let Some(r) = radii.iter().find(|r| !(r.is_finite() && **r > 0.0)) {
-            let key = if gi.radius.is_some() { "radius" } else { "radii" };
+            let key = if gi.radius.is_some() {
+                "radius"
+            } else {
+                "radii"
+            };
             cx.error(
                 format!("{what}: `{key}` must be positive (got {r})"),
                 cx.key(&e, key),
@@ -288,6 +313,29 @@ impl ComponentKind for GranularKind {
                 Some("three finite numbers [x, y, z]".into()),
             );
             ok = false;
+        }
+        let mut walls = Vec::new();
+        for w in gi.walls.iter().flatten() {
+            let n = cx.unit_axis(w.normal, &e, "walls", &what);
+            if w.point.iter().any(|x| !x.is_finite()) {
+                cx.error(
+                    format!(
+                        "{what}: a wall's `point` must be finite (got {:?})",
+                        w.point
+                    ),
+                    cx.key(&e, "walls"),
+                    Some("walls = [{ point = [x, y, z], normal = [nx, ny, nz] }, …]".into()),
+                );
+                ok = false;
+            }
+            match n {
+                Some(normal) => walls.push(GroundPlane {
+                    point: Vector3::from(w.point),
+                    normal,
+                    velocity: Vector3::zeros(),
+                }),
+                None => ok = false,
+            }
         }
         let keys = LawKeys {
             normal: gi.normal,
@@ -349,6 +397,7 @@ impl ComponentKind for GranularKind {
                 normal,
                 velocity: Vector3::zeros(),
             },
+            walls,
             law,
             friction,
             regularization_velocity: vr,
@@ -389,6 +438,16 @@ impl ComponentKind for GranularKind {
                 def.law,
                 def.friction,
             )));
+            for (k, wall) in def.walls.iter().enumerate() {
+                parts.elements.push(Box::new(Contact::new(
+                    format!("{}.wall{}.{node_name}", def.name, k + 1),
+                    node,
+                    ContactShape::Sphere { radius },
+                    *wall,
+                    def.law,
+                    None,
+                )));
+            }
         }
         parts.granular.push(GranularSet {
             name: def.name.clone(),
