@@ -1665,7 +1665,7 @@ fn every_granular_key_changes_the_pile() {
         .join("../../examples/contact/granular_column.toml");
     let base = std::fs::read_to_string(path)
         .unwrap()
-        .replace("t_end = 1.5", "t_end = 0.15");
+        .replace("t_end = 3.0", "t_end = 0.15");
     let run = |text: &str| -> (AnalysisSummary, Vec<Vector3<f64>>) {
         let (s, h) = attempt(text);
         assert!(s.failure.is_none(), "{:?}", s.failure);
