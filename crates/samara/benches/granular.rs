@@ -161,13 +161,14 @@ fn main() {
                 let off = |i: usize, c: usize| {
                     ((12.9898 * i as f64 + 78.233 * c as f64).sin() * 43758.5453).fract() * 0.004
                 };
-                let mut s = NodeState::default();
-                s.x = nalgebra::Vector3::new(
-                    (k % 5) as f64 * 0.105 + off(k, 1),
-                    ((k / 5) % 5) as f64 * 0.105 + off(k, 2),
-                    (k / 25) as f64 * 0.105,
-                );
-                s
+                NodeState {
+                    x: nalgebra::Vector3::new(
+                        (k % 5) as f64 * 0.105 + off(k, 1),
+                        ((k / 5) % 5) as f64 * 0.105 + off(k, 2),
+                        (k / 25) as f64 * 0.105,
+                    ),
+                    ..NodeState::default()
+                }
             })
             .collect();
         let set = GranularSet {
