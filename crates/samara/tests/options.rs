@@ -1818,3 +1818,160 @@ fn the_height_field_ground_changes_the_motion() {
         assert!((a - b).norm() > 1e-6, "the height field changed nothing");
     }
 }
+
+/// Issue #16: the keys of `[[granular]]` (examples/contact/granular_column.toml, 0.15 s):
+/// each changes the motion — except `margin`, which changes only the candidate pairs
+/// (more pairs, no more pattern rebuilds) and must leave the motion as it is to the Newton
+/// tolerance.
+#[test]
+fn every_granular_key_changes_the_pile() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/contact/granular_column.toml");
+    let base = std::fs::read_to_string(path)
+        .unwrap()
+        .replace("t_end = 3.0", "t_end = 0.15");
+    let run = |text: &str| -> (AnalysisSummary, Vec<Vector3<f64>>) {
+        let (s, h) = attempt(text);
+        assert!(s.failure.is_none(), "{:?}", s.failure);
+        let x = h.last().unwrap().state.nodes.iter().map(|n| n.x).collect();
+        (s, x)
+    };
+    let diff = |a: &[Vector3<f64>], b: &[Vector3<f64>]| {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| (p - q).norm())
+            .fold(0.0, f64::max)
+    };
+    let (s0, x0) = run(&base);
+    let names: Vec<String> = (0..27).map(|k| format!("\"s{k}\"")).collect();
+    let changed = [
+        // The same spheres listed by name: the same pile.
+        (
+            "nodes",
+            base.replace(
+                "nodes_matching = \"s*\"",
+                &format!("nodes = [{}]", names.join(", ")),
+            ),
+            false,
+        ),
+        // Only the spheres s1, s10–s19: the others fall through each other.
+        (
+            "nodes_matching",
+            base.replace("nodes_matching = \"s*\"", "nodes_matching = \"s1*\""),
+            true,
+        ),
+        (
+            "radius",
+            base.replace("radius = 0.05", "radius = 0.051"),
+            true,
+        ),
+        (
+            "radii",
+            base.replace(
+                "nodes_matching = \"s*\"\nradius = 0.05",
+                &format!(
+                    "nodes = [{}]\nradii = [{}0.045]",
+                    names.join(", "),
+                    "0.05, ".repeat(26)
+                ),
+            ),
+            true,
+        ),
+        (
+            "ground_point",
+            base.replace(
+                "margin = 0.01 ",
+                "ground_point = [0.0, 0.0, -0.01]\nmargin = 0.01 ",
+            ),
+            true,
+        ),
+        (
+            "ground_normal",
+            base.replace(
+                "margin = 0.01 ",
+                "ground_normal = [0.05, 0.0, 1.0]\nmargin = 0.01 ",
+            ),
+            true,
+        ),
+        (
+            "walls",
+            base.replace("point = [0.165, 0.0, 0.0]", "point = [0.15, 0.0, 0.0]"),
+            true,
+        ),
+        (
+            "stiffness",
+            base.replace("stiffness = 1e6", "stiffness = 2e6"),
+            true,
+        ),
+        (
+            "static_friction",
+            base.replace("static_friction = 0.5", "static_friction = 0.45"),
+            true,
+        ),
+        (
+            "regularization_velocity",
+            base.replace(
+                "regularization_velocity = 1e-3 ",
+                "regularization_velocity = 1e-1 ",
+            ),
+            true,
+        ),
+    ];
+    for (key, text, moves) in &changed {
+        let (_, x) = run(text);
+        let d = diff(&x, &x0);
+        println!("{key}: largest change of a sphere's position {d:.3e} m");
+        if *moves {
+            assert!(d > 1e-6, "{key} changed nothing");
+        } else {
+            assert!(d < 1e-12, "{key}: {d}");
+        }
+    }
+    // The margin: other candidate sets and rebuilds, the same motion.
+    // 5 cm takes in the lattice's diagonal neighbours (gap 4.8 cm).
+    let (s1, x1) = run(&base.replace("margin = 0.01 ", "margin = 0.05 "));
+    let d = diff(&x1, &x0);
+    println!(
+        "margin 0.01 → 0.05: candidate pairs ≤ {} → ≤ {}, rebuilds {} → {}, position change {d:.2e} m",
+        s0.max_candidate_pairs, s1.max_candidate_pairs, s0.pattern_rebuilds, s1.pattern_rebuilds
+    );
+    assert!(s1.max_candidate_pairs > s0.max_candidate_pairs);
+    assert!(s1.pattern_rebuilds <= s0.pattern_rebuilds);
+    assert!(d < 1e-6, "{d}");
+}
+
+/// Issue #16: the friction keys on a body–body contact (examples/contact/sphere_collision.toml
+/// made oblique): with `static_friction` and the LuGre keys the spheres spin up.
+#[test]
+fn body_body_friction_keys_spin_the_spheres() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/contact/sphere_collision.toml");
+    let base = std::fs::read_to_string(path).unwrap().replace(
+        "position = [0.15, 0.0, 0.0]",
+        "position = [0.15, 0.08, 0.0]",
+    );
+    let spin = |text: &str| -> f64 {
+        let (s, h) = attempt(text);
+        assert!(s.failure.is_none(), "{:?}", s.failure);
+        h.last()
+            .unwrap()
+            .state
+            .nodes
+            .iter()
+            .map(|n| n.w.norm())
+            .sum()
+    };
+    let friction = "impact_velocity = 2.0 \nstatic_friction = 0.5\ndynamic_friction = 0.4\nstribeck_velocity = 0.01\nbristle_stiffness = 1e4\nbristle_damping = 30.0\n";
+    let frictionless = spin(&base);
+    let with = spin(&base.replacen("impact_velocity = 2.0 ", friction, 1));
+    let rougher = spin(
+        &base
+            .replacen("impact_velocity = 2.0 ", friction, 1)
+            .replace("dynamic_friction = 0.4", "dynamic_friction = 0.2"),
+    );
+    println!(
+        "spin after the collision: {frictionless:.3e} (no friction), {with:.4} (μ_d 0.4), {rougher:.4} (μ_d 0.2) rad/s"
+    );
+    assert_eq!(frictionless, 0.0);
+    assert!(with > 1.0 && (with - rougher).abs() > 1e-3);
+}

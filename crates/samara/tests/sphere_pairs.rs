@@ -67,8 +67,8 @@ fn bad_body_body_contacts_are_rejected_where_they_are_written() {
         ),
         (
             "impact_velocity = 2.0 ",
-            "impact_velocity = 2.0\nstatic_friction = 0.5 ",
-            "`static_friction` does not apply here",
+            "impact_velocity = 2.0\nbristle_damping = 5.0 ",
+            "`bristle_damping` does not apply here",
         ),
         (
             "impact_velocity = 2.0 ",

@@ -198,6 +198,52 @@ struct Integrator<'a> {
     restart: Option<Box<RestartWork>>,
     /// Breakpoints of the model's time functions, sorted.
     breakpoints: Vec<f64>,
+    /// The granular sets' candidate pairs and where they were found.
+    contacts: ContactPairs,
+}
+
+/// Candidate pairs of the granular sets (a Verlet list, [`crate::elements::GranularSet`]):
+/// `(set, i, j)`, sorted, and the spheres' positions at the detection.
+#[derive(Default)]
+struct ContactPairs {
+    pairs: Vec<(usize, usize, usize)>,
+    reference: Vec<Vec<Vector3<f64>>>,
+    scratch: Vec<(usize, usize)>,
+    /// Times the pattern was rebuilt, largest number of pairs, and the factorizations
+    /// and fallbacks of the linear solvers replaced.
+    rebuilds: usize,
+    most: usize,
+    factorizations: usize,
+    fallbacks: usize,
+}
+
+impl ContactPairs {
+    /// Detects the candidate pairs of every set at `state` (broad phase, each set's margin).
+    fn detect(&mut self, sys: &System, state: &State) -> Vec<(usize, usize, usize)> {
+        let mut out = Vec::new();
+        for (g, set) in sys.granular.iter().enumerate() {
+            set.candidate_pairs(&state.nodes, set.margin, &mut self.scratch);
+            out.extend(self.scratch.iter().map(|&(i, j)| (g, i, j)));
+        }
+        out
+    }
+
+    /// Takes `state` as the reference of the Verlet criterion.
+    fn set_reference(&mut self, sys: &System, state: &State) {
+        self.reference = sys
+            .granular
+            .iter()
+            .map(|set| set.nodes.iter().map(|&i| state.nodes[i].x).collect())
+            .collect();
+    }
+
+    /// The contact elements of the pairs.
+    fn elements(&self, sys: &System) -> Vec<crate::elements::SpherePair> {
+        self.pairs
+            .iter()
+            .map(|&(g, i, j)| sys.granular[g].pair(i, j))
+            .collect()
+    }
 }
 
 /// The index-3 problem of consistent accelerations, kept for restarts.
@@ -410,8 +456,9 @@ impl Integrator<'_> {
     /// become the algorithmic ones ([`Integrator::restart_accelerations`]).
     fn restart_consistent(&mut self) {
         let sys = self.sys;
+        let pairs = self.contacts.elements(sys);
         let work = self.restart.get_or_insert_with(|| {
-            let asm = Assembler::new(sys, Formulation::Index3);
+            let asm = Assembler::with_pairs(sys, Formulation::Index3, pairs);
             let lin = LinearSolver::new(asm.structure(), self.settings.solver.linear_solver);
             let matrix = BlockMatrix::zeros(asm.structure().clone());
             let residual = vec![0.0; asm.n_unknowns()];
@@ -467,6 +514,64 @@ impl Integrator<'_> {
         for (j, z) in self.state.states.iter().enumerate() {
             self.acc[z0 + j] = z.zd;
         }
+    }
+
+    /// Assembler, linear solver (symbolic analysis) and matrix for the current candidate
+    /// pairs.
+    fn rebuild_pattern(&mut self) {
+        self.contacts.rebuilds += 1;
+        self.contacts.most = self.contacts.most.max(self.contacts.pairs.len());
+        self.contacts.factorizations += self.lin.stats.factorizations;
+        self.contacts.fallbacks += self.lin.stats.fallbacks;
+        self.asm = Assembler::with_pairs(
+            self.sys,
+            self.asm.formulation(),
+            self.contacts.elements(self.sys),
+        );
+        self.lin = LinearSolver::new(self.asm.structure(), self.settings.solver.linear_solver);
+        self.matrix = BlockMatrix::zeros(self.asm.structure().clone());
+        self.factored_h = f64::NAN;
+        self.restart = None;
+    }
+
+    /// After a converged step, before it is accepted: checks the granular sets' Verlet
+    /// lists at the trial state. While no sphere has moved more than half its set's margin
+    /// since the detection the candidate pairs are still valid (true returned: keep the
+    /// step). Otherwise the pairs are detected again at the trial state; if a pair that
+    /// was not a candidate is in contact there, the step missed its force: the pattern
+    /// is rebuilt with the old and new pairs and false is returned (redo the step).
+    /// Else the new pairs are kept for the next steps (pattern rebuilt if they changed).
+    fn check_contacts(&mut self) -> bool {
+        let sys = self.sys;
+        if sys.granular.is_empty() {
+            return true;
+        }
+        let moved = sys.granular.iter().enumerate().any(|(g, set)| {
+            set.max_displacement(&self.trial.nodes, &self.contacts.reference[g]) > 0.5 * set.margin
+        });
+        if !moved {
+            return true;
+        }
+        let found = self.contacts.detect(sys, &self.trial);
+        let missed = found.iter().any(|&(g, i, j)| {
+            self.contacts.pairs.binary_search(&(g, i, j)).is_err()
+                && sys.granular[g].gap(&self.trial.nodes, i, j) < 0.0
+        });
+        if missed {
+            let mut union = found;
+            union.extend_from_slice(&self.contacts.pairs);
+            union.sort_unstable();
+            union.dedup();
+            self.contacts.pairs = union;
+            self.rebuild_pattern();
+            return false;
+        }
+        self.contacts.set_reference(sys, &self.trial);
+        if found != self.contacts.pairs {
+            self.contacts.pairs = found;
+            self.rebuild_pattern();
+        }
+        true
     }
 
     /// Accepts the trial step: chooses the next predictor, updates the algorithmic
@@ -602,7 +707,16 @@ fn start<'a>(
         last_h: 0.0,
         restart: None,
         breakpoints: sys.breakpoints(),
+        contacts: ContactPairs::default(),
     };
+    // Granular sets: the candidate pairs at the start, in the pattern from the first
+    // assembly on.
+    if !sys.granular.is_empty() {
+        let found = it.contacts.detect(sys, &it.state);
+        it.contacts.pairs = found;
+        it.contacts.set_reference(sys, &it.state);
+        it.rebuild_pattern();
+    }
     let name = summary.name.clone();
     let fail = |summary: &mut AnalysisSummary, time: f64, reason: String, hint: Option<String>| {
         summary.failure = Some(SolverFailure {
@@ -616,7 +730,7 @@ fn start<'a>(
     // Consistent initial conditions: assembly onto the constraints, then accelerations.
     let ctx0 = sys.context(t0, 1.0);
     // The initial problems have the index-3 layout in either formulation.
-    let mut init_asm = Assembler::new(sys, Formulation::Index3);
+    let mut init_asm = Assembler::with_pairs(sys, Formulation::Index3, it.contacts.elements(sys));
     let mut init_lin = LinearSolver::new(init_asm.structure(), settings.solver.linear_solver);
     let mut init_matrix = BlockMatrix::zeros(init_asm.structure().clone());
     if !super::assemble_start(
@@ -856,6 +970,12 @@ pub fn run_dynamic(
             it.predictor
         };
         match it.step(h_try, predictor) {
+            Ok(_) if !it.check_contacts() => {
+                // A granular pair came into contact outside the candidate set: redo the
+                // step with it.
+                summary.contact_redos += 1;
+                continue;
+            }
             Ok(report) => {
                 hold_next = false;
                 let error = match &adaptive {
@@ -1027,8 +1147,10 @@ pub fn run_dynamic(
             }
         }
     }
-    summary.factorizations += it.lin.stats.factorizations;
-    summary.fallbacks = it.lin.stats.fallbacks;
+    summary.factorizations += it.lin.stats.factorizations + it.contacts.factorizations;
+    summary.fallbacks = it.lin.stats.fallbacks + it.contacts.fallbacks;
+    summary.pattern_rebuilds = it.contacts.rebuilds;
+    summary.max_candidate_pairs = it.contacts.most;
     summary.final_state = it.state;
     summary.wall_time = clock.elapsed();
     Ok(summary)
@@ -1151,6 +1273,7 @@ impl<'a> Simulation<'a> {
             }
             let predictor = if hold { Predictor::Hold } else { it.predictor };
             match it.step(end - t, predictor) {
+                Ok(_) if !it.check_contacts() => continue,
                 Ok(r) => {
                     it.accept();
                     it.state.time = end;

@@ -129,6 +129,12 @@ pub struct AnalysisSummary {
     pub warnings: Vec<String>,
     /// Set when the analysis stopped before its end.
     pub failure: Option<SolverFailure>,
+    /// Granular sets: steps redone because a pair came into contact outside the
+    /// candidate set, times the candidate set changed (pattern and symbolic
+    /// factorization rebuilt), and the largest number of candidate pairs.
+    pub contact_redos: usize,
+    pub pattern_rebuilds: usize,
+    pub max_candidate_pairs: usize,
 }
 
 impl AnalysisSummary {
@@ -148,6 +154,9 @@ impl AnalysisSummary {
             assembly: None,
             warnings: Vec::new(),
             failure: None,
+            contact_redos: 0,
+            pattern_rebuilds: 0,
+            max_candidate_pairs: 0,
         }
     }
 }

@@ -6,6 +6,7 @@ pub mod beam;
 mod contact;
 mod controller;
 mod dc_motor;
+mod granular;
 mod hydraulic;
 pub mod line_of_action;
 mod low_pass;
@@ -24,6 +25,7 @@ pub use contact::{
 };
 pub use controller::{Block as ControllerBlock, Controller, Pid, lookup as controller_lookup};
 pub use dc_motor::DcMotor;
+pub use granular::GranularSet;
 pub use hydraulic::{
     GasCharge, HydraulicCircuit, Multiplier as OrificeMultiplier, Orifice as HydraulicOrifice,
     OrificeLaw, Port, Volume as HydraulicVolume, actuator as hydraulic_actuator,
@@ -31,7 +33,7 @@ pub use hydraulic::{
 pub use low_pass::{LowPassSensor, NodeQuantity, SensorInput};
 pub use maxwell::Maxwell;
 pub use rigid_body::RigidBody;
-pub use sphere_pair::SpherePair;
+pub use sphere_pair::{PairFriction, SpherePair};
 pub use spring_damper::SpringDamper;
 pub use time_signal::TimeSignal;
 pub use tire::{MagicFormula, Tire, TireGround, TireParameters};

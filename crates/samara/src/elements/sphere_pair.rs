@@ -1,28 +1,150 @@
-//! Contact between two spheres centred at two nodes (body–body), frictionless, with the
-//! normal laws of [`super::contact`].
+//! Contact between two spheres centred at two nodes (body–body), with the normal laws of
+//! [`super::contact`] and, optionally, friction.
 //!
-//! With `d = x_B − x_A`, the unit normal `n = d/|d|` (from A to B), the penetration
-//! `δ = ρ_A + ρ_B − |d|` and its rate `δ̇ = −n·(v_B − v_A)`, the normal force N(δ, δ̇)
-//! (Hunt–Crossley or linear, zero out of contact and never pulling) pushes B along +n
-//! and A along −n through the centres: no moments, and the pair's momentum is conserved.
-//! Hunt–Crossley's restitution relation holds for the relative motion with the reduced
-//! mass (it does not depend on the mass).
+//! **Normal.** With `d = x_B − x_A`, the unit normal `n = d/|d|` (from A to B), the
+//! penetration `δ = ρ_A + ρ_B − |d|` and its rate `δ̇ = −n·(v_B − v_A)`, the normal force
+//! N(δ, δ̇) (Hunt–Crossley or linear, zero out of contact and never pulling) pushes B
+//! along +n and A along −n through the centres. Hunt–Crossley's restitution relation
+//! holds for the relative motion with the reduced mass.
 //!
-//! Tangents: the normal direction's derivative `∂n/∂d = (I − n nᵀ)/|d|` enters both the
-//! force direction and δ̇.
+//! **Slip.** The contact point is the middle of the overlap,
+//! `p = x_A + a_A = x_B + a_B` with the lever arms `a_A = (ρ_A − δ/2) n` and
+//! `a_B = −(ρ_B − δ/2) n`; the velocity of B's material point at p relative to A's is
+//! `u = v_B + ω_B × a_B − v_A − ω_A × a_A` (ω = R Ω) and the slip is its part in the
+//! tangent plane, `w = (I − n nᵀ) u`.
+//!
+//! **Friction** (force F_t on B, −F_t on A, both at p: moments `a_B × F_t` on B and
+//! `a_A × (−F_t)` on A, so friction spins both bodies; one point for both, so the pair's
+//! forces have no net moment and the pair conserves angular momentum — with the two
+//! surface points `x_A + ρ_A n`, `x_B − ρ_B n` instead it would gain `−δ n × F_t`):
+//! - LuGre ([`PairFriction::LuGre`], as the ground contact's, Canudas de Wit et al. 1995)
+//!   with the bristle deflection z ∈ R³ in global components (three states; only its
+//!   tangential part `P z` acts, P = I − n nᵀ, so no tangent basis is needed and no
+//!   direction of n is singular): `r_z = ż − w + σ₀ |w| z / g(|w|) = 0`,
+//!   `F_t = −N (σ₀ P z + σ₁ P ż + σ₂ w)`. Sticks below μ_s N, slides at μ_d N.
+//! - regularized Coulomb–Stribeck ([`PairFriction::Regularized`], no states):
+//!   `F_t = −N (g(|w|) w / √(|w|² + v_r²) + σ₂ w)`, `g(s) = μ_d + (μ_s − μ_d) e^(−(s/v_s)²)`:
+//!   |F_t| → g N when |w| ≫ v_r; below v_r it is a viscous law (creep at speed
+//!   ≈ v_r F_t/(μ N) under a load below μ_s N, no true stick).
+//!
+//! Tangents: exact, by forward-mode differentiation of the one kernel
+//! ([`crate::math::dual`]): directions 0..12 the nodes' (δx, δθ), 12..15 the states, then
+//! the same for the rates.
 
-use super::contact::{NormalLaw, normal_event, normal_force, normal_potential};
+use super::contact::{Friction, NormalLaw, normal_event, normal_potential};
 use super::{Element, EvalContext, LocalTerms, Need};
-use crate::core::ElementInput;
+use crate::core::{ElementInput, ElementState, NodeState};
+use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
 use nalgebra::{Matrix3, Vector3};
 
-/// A frictionless sphere–sphere contact.
+/// Friction of a sphere pair.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PairFriction {
+    /// LuGre with bristle states (three, global components).
+    LuGre(Friction),
+    /// Regularized Coulomb–Stribeck without states; `regularization_velocity` v_r > 0.
+    Regularized {
+        friction: Friction,
+        regularization_velocity: f64,
+    },
+}
+
+/// Derivative directions: node unknowns and states at 0..NV (K), their rates at NV.. (C).
+const NV: usize = 15;
+const ND: usize = 2 * NV;
+
+/// What the kernel gives.
+struct PairResult<S> {
+    /// Node rows: force on A, moment on A (node frame), force on B, moment on B; the
+    /// residual is minus these.
+    rows: [V3<S>; 4],
+    /// Bristle state rows (LuGre only).
+    state_rows: [S; 3],
+    normal: f64,
+    elastic: f64,
+    delta: f64,
+    delta_dot: f64,
+    friction: Vector3<f64>,
+    slip: Vector3<f64>,
+}
+
+/// A sphere–sphere contact.
 #[derive(Clone, Debug)]
 pub struct SpherePair {
     name: String,
     nodes: [usize; 2],
     radii: [f64; 2],
     law: NormalLaw,
+    friction: Option<PairFriction>,
+}
+
+/// `[N, N_el]` of a normal law over any scalar (zero out of contact and when it would
+/// pull).
+fn normal_law<S: Scalar>(law: &NormalLaw, delta: S, delta_dot: S) -> (S, f64) {
+    let zero = S::cst(0.0);
+    if delta.re() <= 0.0 {
+        return (zero, 0.0);
+    }
+    let (n, el) = match *law {
+        NormalLaw::HuntCrossley {
+            stiffness: k,
+            exponent: e,
+            damping_factor: a,
+        } => {
+            let de = delta.powf(e) * k;
+            (de * (delta_dot * a + 1.0), de.re())
+        }
+        NormalLaw::Linear {
+            stiffness: k,
+            damping: c,
+        } => (delta * k + delta_dot * c, k * delta.re()),
+    };
+    if n.re() <= 0.0 { (zero, el) } else { (n, el) }
+}
+
+/// A node-vector variable: value `v`, derivative 1 in directions `dir + k`.
+fn var3<S: Scalar>(v: &Vector3<f64>, dir: usize) -> V3<S> {
+    let mut out = cst3::<S>(v);
+    for (k, o) in out.iter_mut().enumerate() {
+        o.add_deriv(dir + k, 1.0);
+    }
+    out
+}
+
+/// `ω = R Ω` of local node i: `R (e_j × Ω)` along δθ_j, `R e_j` along Ω_j.
+fn omega<S: Scalar>(i: usize, n: &NodeState) -> V3<S> {
+    let r = n.r();
+    let mut out = cst3::<S>(&(r * n.w));
+    if S::DIRECTIONS > 0 {
+        for j in 0..3 {
+            let col = r * Vector3::ith(j, 1.0).cross(&n.w);
+            for (k, o) in out.iter_mut().enumerate() {
+                o.add_deriv(6 * i + 3 + j, col[k]);
+                o.add_deriv(NV + 6 * i + 3 + j, r[(k, j)]);
+            }
+        }
+    }
+    out
+}
+
+/// `Rᵀ y` for local node i: `Rᵀ dy − δθ × Rᵀ y`.
+fn rot_t<S: Scalar>(i: usize, r: &Matrix3<f64>, y: &V3<S>) -> V3<S> {
+    let mut z: V3<S> =
+        std::array::from_fn(|k| y[0] * r[(0, k)] + y[1] * r[(1, k)] + y[2] * r[(2, k)]);
+    if S::DIRECTIONS > 0 {
+        let zv = Vector3::new(z[0].re(), z[1].re(), z[2].re());
+        for j in 0..3 {
+            let c = Vector3::ith(j, 1.0).cross(&zv);
+            for (k, zk) in z.iter_mut().enumerate() {
+                zk.add_deriv(6 * i + 3 + j, -c[k]);
+            }
+        }
+    }
+    z
+}
+
+fn re3<S: Scalar>(y: &V3<S>) -> Vector3<f64> {
+    Vector3::new(y[0].re(), y[1].re(), y[2].re())
 }
 
 impl SpherePair {
@@ -37,18 +159,115 @@ impl SpherePair {
             nodes,
             radii,
             law,
+            friction: None,
         }
     }
 
-    /// `(n, |d|, δ, δ̇, relative velocity)`.
-    fn kinematics(&self, x: &ElementInput) -> (Vector3<f64>, f64, f64, f64, Vector3<f64>) {
-        let (a, b) = (&x.nodes[self.nodes[0]], &x.nodes[self.nodes[1]]);
-        let d = b.x - a.x;
-        let dist = d.norm();
-        let n = if dist > 0.0 { d / dist } else { Vector3::z() };
-        let u = b.v - a.v;
-        (n, dist, self.radii[0] + self.radii[1] - dist, -n.dot(&u), u)
+    /// The pair with friction.
+    pub fn with_friction(mut self, friction: Option<PairFriction>) -> Self {
+        self.friction = friction;
+        self
     }
+
+    fn lugre(&self) -> Option<&Friction> {
+        match &self.friction {
+            Some(PairFriction::LuGre(f)) => Some(f),
+            _ => None,
+        }
+    }
+
+    fn compute<S: Scalar>(&self, nodes: &[NodeState], states: &[ElementState]) -> PairResult<S> {
+        let (na, nb) = (&nodes[self.nodes[0]], &nodes[self.nodes[1]]);
+        let [ra, rb] = self.radii;
+        let zero = S::cst(0.0);
+        let d = sub(&var3::<S>(&nb.x, 6), &var3::<S>(&na.x, 0));
+        let dist2 = dot(&d, &d);
+        let (n, dist) = if dist2.re() > 0.0 {
+            let dist = dist2.sqrt();
+            (scale(&d, S::cst(1.0) / dist), dist)
+        } else {
+            ([zero, zero, S::cst(1.0)], zero)
+        };
+        let (va, vb) = (var3::<S>(&na.v, NV), var3::<S>(&nb.v, NV + 6));
+        let (wa, wb) = (omega::<S>(0, na), omega::<S>(1, nb));
+        let delta = -dist + (ra + rb);
+        let vrel = sub(&vb, &va);
+        let delta_dot = -dot(&n, &vrel);
+        let (nf, elastic) = normal_law(&self.law, delta, delta_dot);
+        // The contact point, mid-overlap: lever arms a_A = (ρ_A − δ/2) n, a_B = −(ρ_B − δ/2) n
+        // (one point for both bodies, so the friction pair has no net moment).
+        let arm_a = scale(&n, -(delta * 0.5) + ra);
+        let arm_b = scale(&n, (delta * 0.5) - rb);
+        // Relative velocity of the bodies' material points there, and its tangential part.
+        let u = sub(&add(&vrel, &cross(&wb, &arm_b)), &cross(&wa, &arm_a));
+        let w = sub(&u, &scale(&n, dot(&n, &u)));
+        let s2 = dot(&w, &w);
+        let mut ft = [zero; 3];
+        let mut state_rows = [zero; 3];
+        match &self.friction {
+            None => {}
+            Some(PairFriction::LuGre(f)) => {
+                let z: V3<S> = std::array::from_fn(|j| {
+                    let mut x = S::cst(states[j].z);
+                    x.add_deriv(12 + j, 1.0);
+                    x
+                });
+                let zd: V3<S> = std::array::from_fn(|j| {
+                    let mut x = S::cst(states[j].zd);
+                    x.add_deriv(NV + 12 + j, 1.0);
+                    x
+                });
+                // ψ(s) = σ₀ s / g(s); |w| is not differentiable at 0, where ψ z = 0.
+                let psi = if s2.re() > 0.0 {
+                    let s = s2.sqrt();
+                    s * f.bristle_stiffness / stribeck(f, s2)
+                } else {
+                    zero
+                };
+                for j in 0..3 {
+                    state_rows[j] = zd[j] - w[j] + psi * z[j];
+                }
+                let pz = sub(&z, &scale(&n, dot(&n, &z)));
+                let pzd = sub(&zd, &scale(&n, dot(&n, &zd)));
+                let phi = add(
+                    &add(
+                        &scale(&pz, S::cst(f.bristle_stiffness)),
+                        &scale(&pzd, S::cst(f.bristle_damping)),
+                    ),
+                    &scale(&w, S::cst(f.viscous)),
+                );
+                ft = scale(&phi, -nf);
+            }
+            Some(PairFriction::Regularized {
+                friction: f,
+                regularization_velocity: vr,
+            }) => {
+                let coef = stribeck(f, s2) / (s2 + vr * vr).sqrt() + f.viscous;
+                ft = scale(&w, -(nf * coef));
+            }
+        }
+        let f_b = add(&scale(&n, nf), &ft);
+        let f_a = scale(&f_b, S::cst(-1.0));
+        let m_b = cross(&arm_b, &ft);
+        let m_a = cross(&arm_a, &scale(&ft, S::cst(-1.0)));
+        PairResult {
+            rows: [f_a, rot_t(0, na.r(), &m_a), f_b, rot_t(1, nb.r(), &m_b)],
+            state_rows,
+            normal: nf.re(),
+            elastic,
+            delta: delta.re(),
+            delta_dot: delta_dot.re(),
+            friction: re3(&ft),
+            slip: re3(&w),
+        }
+    }
+}
+
+/// `g(s) = μ_d + (μ_s − μ_d) exp(−s²/v_s²)` from s².
+fn stribeck<S: Scalar>(f: &Friction, s2: S) -> S {
+    let vs2 = f.stribeck_velocity * f.stribeck_velocity;
+    (s2 * (-1.0 / vs2)).exp() * (f.static_coefficient - f.dynamic_coefficient)
+        + f.dynamic_coefficient
 }
 
 impl Element for SpherePair {
@@ -60,49 +279,76 @@ impl Element for SpherePair {
         &self.nodes
     }
 
+    fn n_states(&self) -> usize {
+        if self.lugre().is_some() { 3 } else { 0 }
+    }
+
+    fn state_names(&self) -> Vec<String> {
+        if self.lugre().is_some() {
+            vec!["bristle_x".into(), "bristle_y".into(), "bristle_z".into()]
+        } else {
+            Vec::new()
+        }
+    }
+
     fn evaluate(&self, _ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
-        let (n, dist, delta, delta_dot, u) = self.kinematics(x);
-        let [nf, dn_dd, dn_dv, _] = normal_force(&self.law, delta, delta_dot);
-        // Residual rows: A gets +N n (the force on A is −N n), B gets −N n.
-        for i in 0..3 {
-            out.r[i] += nf * n[i];
-            out.r[6 + i] -= nf * n[i];
+        let nz = self.n_states();
+        if nz == 0 {
+            // Apart, a stateless pair gives nothing, in a neighbourhood (exact tangents 0).
+            let (a, b) = (&x.nodes[self.nodes[0]], &x.nodes[self.nodes[1]]);
+            if self.radii[0] + self.radii[1] <= (b.x - a.x).norm() {
+                return;
+            }
         }
-        if need == Need::Residual || nf == 0.0 || dist == 0.0 {
-            return;
-        }
-        // ∂n/∂d = P/|d|, P = I − n nᵀ; ∂δ/∂d = −nᵀ; ∂δ̇/∂d = −uᵀ P/|d|; ∂δ̇/∂u = −nᵀ.
-        let p = (Matrix3::identity() - n * n.transpose()) / dist;
-        let dn_q = -(n.transpose()) * dn_dd - (u.transpose() * p) * dn_dv;
-        let dn_u = -(n.transpose()) * dn_dv;
-        // ∂(N n)/∂d and ∂(N n)/∂u.
-        let kd = n * dn_q + p * nf;
-        let cu = n * dn_u;
-        // d = x_B − x_A: columns of B with +, of A with −; rows of A +, of B −.
-        for (ro, rs) in [(0usize, 1.0), (6, -1.0)] {
-            for (co, cs) in [(0usize, -1.0), (6, 1.0)] {
-                for i in 0..3 {
-                    for j in 0..3 {
-                        out.k[(ro + i, co + j)] += rs * cs * kd[(i, j)];
-                        out.c[(ro + i, co + j)] += rs * cs * cu[(i, j)];
-                    }
+        if need == Need::Residual {
+            let t = self.compute::<f64>(x.nodes, x.states);
+            for (b, row) in t.rows.iter().enumerate() {
+                for (k, y) in row.iter().enumerate() {
+                    out.r[3 * b + k] -= y;
                 }
             }
+            for j in 0..nz {
+                out.r[12 + j] += t.state_rows[j];
+            }
+            return;
+        }
+        let t = self.compute::<Dual<ND>>(x.nodes, x.states);
+        let n = 12 + nz;
+        let mut put = |ri: usize, y: &Dual<ND>, sign: f64| {
+            out.r[ri] += sign * y.v;
+            for j in 0..n {
+                out.k[(ri, j)] += sign * y.d[j];
+                out.c[(ri, j)] += sign * y.d[NV + j];
+            }
+        };
+        for (b, row) in t.rows.iter().enumerate() {
+            for (k, y) in row.iter().enumerate() {
+                put(3 * b + k, y, -1.0);
+            }
+        }
+        for j in 0..nz {
+            put(12 + j, &t.state_rows[j], 1.0);
         }
     }
 
     fn potential_energy(&self, _ctx: &EvalContext, x: &ElementInput) -> f64 {
-        normal_potential(&self.law, self.kinematics(x).2)
+        let (a, b) = (&x.nodes[self.nodes[0]], &x.nodes[self.nodes[1]]);
+        normal_potential(
+            &self.law,
+            self.radii[0] + self.radii[1] - (b.x - a.x).norm(),
+        )
     }
 
+    /// `(N − N_el) δ̇ − F_t·w` (the LuGre bristle's small elastic store counts as
+    /// dissipated, as for the ground contact).
     fn dissipated_power(&self, x: &ElementInput) -> f64 {
-        let (_, _, delta, delta_dot, _) = self.kinematics(x);
-        let [nf, _, _, el] = normal_force(&self.law, delta, delta_dot);
-        if delta > 0.0 {
-            (nf - el) * delta_dot
+        let t = self.compute::<f64>(x.nodes, x.states);
+        let normal = if t.delta > 0.0 {
+            (t.normal - t.elastic) * t.delta_dot
         } else {
             0.0
-        }
+        };
+        normal - t.friction.dot(&t.slip)
     }
 
     fn n_events(&self) -> usize {
@@ -110,17 +356,26 @@ impl Element for SpherePair {
     }
 
     fn events(&self, x: &ElementInput, out: &mut [(f64, f64)]) {
-        let (_, _, delta, delta_dot, _) = self.kinematics(x);
-        out[0] = normal_event(&self.law, delta, delta_dot);
+        let t = self.compute::<f64>(x.nodes, x.states);
+        out[0] = normal_event(&self.law, t.delta, t.delta_dot);
     }
 
     fn output_names(&self) -> Vec<(String, &'static str)> {
-        vec![("normal_force".into(), "N"), ("penetration".into(), "m")]
+        let mut v = vec![("normal_force".into(), "N"), ("penetration".into(), "m")];
+        if self.friction.is_some() {
+            v.push(("friction_force".into(), "N"));
+            v.push(("slip_velocity".into(), "m/s"));
+        }
+        v
     }
 
     fn outputs(&self, _ctx: &EvalContext, x: &ElementInput, out: &mut [f64]) {
-        let (_, _, delta, delta_dot, _) = self.kinematics(x);
-        out[0] = normal_force(&self.law, delta, delta_dot)[0];
-        out[1] = delta;
+        let t = self.compute::<f64>(x.nodes, x.states);
+        out[0] = t.normal;
+        out[1] = t.delta;
+        if self.friction.is_some() {
+            out[2] = t.friction.norm();
+            out[3] = t.slip.norm();
+        }
     }
 }

@@ -37,8 +37,8 @@
 //! block O(1) as h → 0; off, all are 1.
 
 use super::{SignalValues, State, System};
-use crate::core::RowTerms;
-use crate::elements::{EvalContext, LocalTerms, Need};
+use crate::core::{ElementInput, RowTerms};
+use crate::elements::{Element, EvalContext, LocalTerms, Need, SpherePair};
 use crate::joints::CoordinateTangents;
 use crate::solve::{BlockKind, BlockMatrix, BlockStructure};
 use nalgebra::{DMatrix, Matrix3};
@@ -228,6 +228,11 @@ pub struct Assembler {
     nu_pairs: Vec<(usize, usize, usize, usize, usize)>,
     /// Per node, how its rates follow its configuration (empty: they do not).
     rate_maps: Vec<RateMaps>,
+    /// Contacts of the granular sets' candidate pairs ([`Assembler::with_pairs`]), the
+    /// value offsets of their (A,A), (A,B), (B,A), (B,B) blocks, and their scratch.
+    pairs: Vec<SpherePair>,
+    pair_slots: Vec<[usize; 4]>,
+    pair_terms: LocalTerms,
 }
 
 /// How a node's rates follow its configuration in a steadily spinning state:
@@ -242,6 +247,14 @@ pub struct RateMaps {
 
 impl Assembler {
     pub fn new(sys: &System, formulation: Formulation) -> Self {
+        Self::with_pairs(sys, formulation, Vec::new())
+    }
+
+    /// The assembler with the contacts of `pairs` (granular candidate pairs, stateless)
+    /// added to the system's elements: their (A, B) blocks enter the pattern. Built again
+    /// whenever the candidate set changes (pattern and symbolic factorization follow);
+    /// reused otherwise.
+    pub fn with_pairs(sys: &System, formulation: Formulation, pairs: Vec<SpherePair>) -> Self {
         let n = sys.n_nodes();
         let stabilized = formulation == Formulation::StabilizedIndex2;
         let mut sizes = vec![6; n];
@@ -387,6 +400,11 @@ impl Assembler {
                     places[l].projection.unwrap_or(0),
                 ));
             }
+        }
+        for p in &pairs {
+            debug_assert_eq!(p.n_states(), 0, "granular pairs have no states");
+            let [a, b] = [p.nodes()[0], p.nodes()[1]];
+            couplings.push((a, b));
         }
         couplings.retain(|(a, b)| a != b);
         let structure = Arc::new(
@@ -555,7 +573,17 @@ impl Assembler {
         } else {
             Vec::new()
         };
+        let pair_slots = pairs
+            .iter()
+            .map(|p| {
+                let [a, b] = [p.nodes()[0], p.nodes()[1]];
+                [slot(a, a), slot(a, b), slot(b, a), slot(b, b)]
+            })
+            .collect();
         Self {
+            pairs,
+            pair_slots,
+            pair_terms: LocalTerms::new(2),
             formulation,
             structure,
             terms,
@@ -806,6 +834,33 @@ impl Assembler {
                 });
             for (k, t) in self.element_terms.iter().enumerate() {
                 self.scatter_element(sys, k, t, coef, residual, matrix.as_deref_mut());
+            }
+        }
+        // Granular candidate pairs: node blocks only.
+        for (p, slots) in self.pairs.iter().zip(&self.pair_slots) {
+            let t = &mut self.pair_terms;
+            let need = if tangents.is_some() {
+                Need::ResidualAndTangents
+            } else {
+                Need::Residual
+            };
+            t.clear(need);
+            p.evaluate(ctx, &ElementInput::nodes(&state.nodes), need, t);
+            let en = p.nodes();
+            for (a, &na) in en.iter().enumerate() {
+                for i in 0..6 {
+                    residual[6 * na + i] += sr * t.r[6 * a + i];
+                }
+            }
+            let (Some(tg), Some(mat)) = (tangents.as_ref(), matrix.as_deref_mut()) else {
+                continue;
+            };
+            combine_node_terms(t, en, tg);
+            for a in 0..2 {
+                for b in 0..2 {
+                    let off = slots[2 * a + b];
+                    add_block6(&mut mat.values[off..off + 36], t.k.as_slice(), 12, a, b);
+                }
             }
         }
 
@@ -1375,25 +1430,16 @@ fn element_terms(
     };
     let coef = tg.coef;
     let en = e.nodes();
-    apply_tangent_ops(&mut t.k, en, tg.tangent_ops);
-    if !tg.rate_maps.is_empty() {
-        add_rate_terms(t, en, tg.rate_maps);
-    }
-    let sr = coef.row_scale;
-    let (cm, cc, ck) = (sr * coef.mass, sr * coef.damping, sr * coef.stiffness);
     let n6 = 6 * en.len();
     let nz = e.n_states();
     if nz == 0 {
-        // K_eff = s_r (c_M M + c_C C + c_K K), combined in place in `k`.
-        for ((k, m), c) in
-            t.k.as_mut_slice()
-                .iter_mut()
-                .zip(t.m.as_slice())
-                .zip(t.c.as_slice())
-        {
-            *k = ck * *k + cm * m + cc * c;
-        }
+        combine_node_terms(t, en, tg);
     } else {
+        apply_tangent_ops(&mut t.k, en, tg.tangent_ops);
+        if !tg.rate_maps.is_empty() {
+            add_rate_terms(t, en, tg.rate_maps);
+        }
+        let sr = coef.row_scale;
         // Node columns as above; state columns: c_K ∂r/∂z + (∂ż/∂Δz) ∂r/∂ż. State
         // rows are scaled by s_z instead of s_r.
         let nl = n6 + nz;
@@ -1409,6 +1455,26 @@ fn element_terms(
                     rs * (coef.stiffness * t.k[(i, j)] + cmj * t.m[(i, j)] + ccj * t.c[(i, j)]);
             }
         }
+    }
+}
+
+/// `t.k ← s_r (c_M M + c_C C + c_K K T)` (plus the rate-map terms) for an element with
+/// node unknowns only, in place.
+fn combine_node_terms(t: &mut LocalTerms, en: &[usize], tg: &TangentInputs) {
+    let coef = tg.coef;
+    apply_tangent_ops(&mut t.k, en, tg.tangent_ops);
+    if !tg.rate_maps.is_empty() {
+        add_rate_terms(t, en, tg.rate_maps);
+    }
+    let sr = coef.row_scale;
+    let (cm, cc, ck) = (sr * coef.mass, sr * coef.damping, sr * coef.stiffness);
+    for ((k, m), c) in
+        t.k.as_mut_slice()
+            .iter_mut()
+            .zip(t.m.as_slice())
+            .zip(t.c.as_slice())
+    {
+        *k = ck * *k + cm * m + cc * c;
     }
 }
 

@@ -35,6 +35,9 @@ pub struct System {
     pub beams: Vec<crate::elements::beam::Beam>,
     /// Copies of the rigid bodies (for momenta).
     pub bodies: Vec<RigidBody>,
+    /// Granular contact sets: their pair contacts are not in `elements` (the pairs change
+    /// during a run); the dynamic analysis detects them and the [`Assembler`] adds them.
+    pub granular: Vec<crate::elements::GranularSet>,
     pub gravity: Vector3<f64>,
     /// Offset of each constraint's enforced multipliers in the multiplier vector.
     pub multiplier_offsets: Vec<usize>,
@@ -95,6 +98,7 @@ impl System {
             constraints,
             bodies,
             beams,
+            granular,
             ..
         } = parts;
         let mut sys = Self::from_parts(
@@ -105,6 +109,7 @@ impl System {
             model.gravity,
             &initial,
         );
+        sys.granular = granular;
         if !beams.is_empty() {
             sys.characteristic_mass = characteristic_mass(model, &beams);
             sys.beams = beams;
@@ -428,6 +433,7 @@ impl System {
             constraints,
             beams: Vec::new(),
             bodies,
+            granular: Vec::new(),
             gravity,
             multiplier_offsets,
             n_multipliers: m,
@@ -700,6 +706,11 @@ impl System {
         let signals = self.signal_values(ctx, s);
         self.element_sum(s, &signals, |e, x| e.potential_energy(ctx, x))
             + self.coordinate_sum(s, |c, q| c.potential_energy(q))
+            + self
+                .granular
+                .iter()
+                .map(|g| g.potential_energy(ctx, &s.nodes))
+                .sum::<f64>()
     }
 
     pub fn external_power(&self, ctx: &EvalContext, s: &State) -> f64 {
@@ -772,6 +783,11 @@ impl System {
         let signals = self.signal_values(&ctx, s);
         self.element_sum(s, &signals, |e, x| e.dissipated_power(x))
             + self.coordinate_sum(s, |c, q| c.dissipated_power(q))
+            + self
+                .granular
+                .iter()
+                .map(|g| g.dissipated_power(&s.nodes))
+                .sum::<f64>()
     }
 
     /// Total linear and angular momentum (about the global origin) of the rigid bodies and

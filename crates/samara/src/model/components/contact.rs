@@ -30,12 +30,15 @@
 //! axis): a sphere at each end, `<name>.end_a` and `<name>.end_b`.
 //!
 //! Body–body: `other_node` and `other_radius` put a second sphere on another node instead
-//! of the ground plane (frictionless; kernel [`crate::elements::SpherePair`]).
+//! of the ground plane (kernel [`crate::elements::SpherePair`]); the friction keys give
+//! it LuGre friction at the contact point (three bristle states `<name>.bristle_x|y|z`).
 
 use super::ground::{GroundInput, height_field};
 use super::{Build, ComponentKind, ModelInput};
 use crate::core::NodeRef;
-use crate::elements::{Contact, ContactShape, Friction, GroundPlane, NormalLaw, SpherePair};
+use crate::elements::{
+    Contact, ContactShape, Friction, GroundPlane, NormalLaw, PairFriction, SpherePair,
+};
 use crate::math::height_field::HeightField;
 use crate::model::input::AnalysisType;
 use crate::model::validate::{Checker, Entry};
@@ -142,7 +145,8 @@ pub struct ContactInput {
     #[serde(default)]
     pub segment: Option<[[f64; 3]; 2]>,
     /// Body–body contact: the node of a second sphere (instead of the ground plane);
-    /// outputs `<name>.normal_force`, `.penetration`. Frictionless.
+    /// outputs `<name>.normal_force`, `.penetration` (with friction also
+    /// `.friction_force`, `.slip_velocity`; states `<name>.bristle_x`, `_y`, `_z`).
     #[serde(default)]
     pub other_node: Option<Located<String>>,
     /// Radius of the second sphere [m], positive (with `other_node`).
@@ -168,6 +172,278 @@ pub struct ContactDef {
     pub other: Option<(usize, f64)>,
     /// Capsule: the ends of its segment (global, initial configuration).
     pub segment: Option<[Vector3<f64>; 2]>,
+}
+
+/// The normal-law and friction keys shared by `[[contacts]]` and `[[granular]]`.
+#[derive(Clone, Copy, Debug)]
+pub struct LawKeys {
+    pub normal: NormalInput,
+    pub stiffness: f64,
+    pub exponent: Option<f64>,
+    pub damping_factor: Option<f64>,
+    pub restitution: Option<f64>,
+    pub impact_velocity: Option<f64>,
+    pub damping: Option<f64>,
+    pub static_friction: Option<f64>,
+    pub dynamic_friction: Option<f64>,
+    pub stribeck_velocity: Option<f64>,
+    pub bristle_stiffness: Option<f64>,
+    pub bristle_damping: Option<f64>,
+    pub viscous_friction: Option<f64>,
+}
+
+impl ContactInput {
+    pub fn law_keys(&self) -> LawKeys {
+        LawKeys {
+            normal: self.normal,
+            stiffness: self.stiffness,
+            exponent: self.exponent,
+            damping_factor: self.damping_factor,
+            restitution: self.restitution,
+            impact_velocity: self.impact_velocity,
+            damping: self.damping,
+            static_friction: self.static_friction,
+            dynamic_friction: self.dynamic_friction,
+            stribeck_velocity: self.stribeck_velocity,
+            bristle_stiffness: self.bristle_stiffness,
+            bristle_damping: self.bristle_damping,
+            viscous_friction: self.viscous_friction,
+        }
+    }
+}
+
+/// Validates the normal law and the LuGre friction keys: `(law, friction, ok)`, each
+/// error located at its key.
+pub fn validate_law(
+    cx: &mut Checker,
+    e: &Entry,
+    what: &str,
+    k: &LawKeys,
+) -> (Option<NormalLaw>, Option<Friction>, bool) {
+    let mut ok = true;
+    let e = e.clone();
+    // Normal law.
+    ok &= check(
+        cx,
+        &e,
+        what,
+        ("stiffness", k.stiffness),
+        |v| v > 0.0,
+        "positive",
+        "the contact stiffness k [N/m^e]",
+    );
+    let law = match k.normal {
+        NormalInput::HuntCrossley => {
+            ok &= unused(
+                cx,
+                &e,
+                what,
+                "damping",
+                k.damping.is_some(),
+                "Hunt–Crossley damping is `damping_factor` α [s/m] or `restitution` with `impact_velocity`",
+            );
+            let exponent = k.exponent.unwrap_or(1.5);
+            ok &= check(
+                cx,
+                &e,
+                what,
+                ("exponent", exponent),
+                |v| v >= 1.0,
+                "at least 1",
+                "1.5 is Hertz's sphere; 1 a linear spring",
+            );
+            let alpha = match (k.damping_factor, k.restitution, k.impact_velocity) {
+                (Some(a), None, None) => check(
+                    cx,
+                    &e,
+                    what,
+                    ("damping_factor", a),
+                    |v| v >= 0.0,
+                    "non-negative",
+                    "α [s/m]; 0 is an elastic contact",
+                )
+                .then_some(a),
+                (None, Some(r), Some(v)) => {
+                    let r_ok = check(
+                        cx,
+                        &e,
+                        what,
+                        ("restitution", r),
+                        |x| x > 0.0 && x <= 1.0,
+                        "in (0, 1]",
+                        "a restitution of 0 needs infinite Hunt–Crossley damping; use a small positive value",
+                    );
+                    let v_ok = check(
+                        cx,
+                        &e,
+                        what,
+                        ("impact_velocity", v),
+                        |x| x > 0.0,
+                        "positive",
+                        "the impact speed [m/s] at which `restitution` holds",
+                    );
+                    (r_ok && v_ok).then(|| crate::elements::hunt_crossley_damping(r, v))
+                }
+                _ => {
+                    cx.error(
+                            format!("{what}: give either `damping_factor` or both `restitution` and `impact_velocity`"),
+                            e.span.clone(),
+                            Some("Hunt–Crossley damping: α [s/m], or the restitution ε at an impact speed".into()),
+                        );
+                    None
+                }
+            };
+            alpha.map(|a| NormalLaw::HuntCrossley {
+                stiffness: k.stiffness,
+                exponent,
+                damping_factor: a,
+            })
+        }
+        NormalInput::Linear => {
+            for key in [
+                "exponent",
+                "damping_factor",
+                "restitution",
+                "impact_velocity",
+            ] {
+                let given = match key {
+                    "exponent" => k.exponent.is_some(),
+                    "damping_factor" => k.damping_factor.is_some(),
+                    "restitution" => k.restitution.is_some(),
+                    _ => k.impact_velocity.is_some(),
+                };
+                ok &= unused(
+                    cx,
+                    &e,
+                    what,
+                    key,
+                    given,
+                    "this key belongs to normal = \"hunt_crossley\"; the linear law takes `stiffness` and `damping`",
+                );
+            }
+            let c = k.damping.unwrap_or(0.0);
+            check(
+                cx,
+                &e,
+                what,
+                ("damping", c),
+                |v| v >= 0.0,
+                "non-negative",
+                "c [N s/m]",
+            )
+            .then_some(NormalLaw::Linear {
+                stiffness: k.stiffness,
+                damping: c,
+            })
+        }
+    };
+    // Friction.
+    let friction = match k.static_friction {
+        None => {
+            for (key, given) in [
+                ("dynamic_friction", k.dynamic_friction.is_some()),
+                ("stribeck_velocity", k.stribeck_velocity.is_some()),
+                ("bristle_stiffness", k.bristle_stiffness.is_some()),
+                ("bristle_damping", k.bristle_damping.is_some()),
+                ("viscous_friction", k.viscous_friction.is_some()),
+            ] {
+                ok &= unused(
+                    cx,
+                    &e,
+                    what,
+                    key,
+                    given,
+                    "friction is on only with `static_friction` (μ_s)",
+                );
+            }
+            None
+        }
+        Some(ms) => {
+            let hint = "LuGre friction takes static_friction, dynamic_friction, stribeck_velocity, bristle_stiffness and bristle_damping";
+            let md = required(cx, &e, what, "dynamic_friction", k.dynamic_friction, hint);
+            let vs = required(cx, &e, what, "stribeck_velocity", k.stribeck_velocity, hint);
+            let s0 = required(cx, &e, what, "bristle_stiffness", k.bristle_stiffness, hint);
+            let s1 = required(cx, &e, what, "bristle_damping", k.bristle_damping, hint);
+            let s2 = k.viscous_friction.unwrap_or(0.0);
+            let mut f_ok = check(
+                cx,
+                &e,
+                what,
+                ("static_friction", ms),
+                |v| v > 0.0,
+                "positive",
+                "μ_s; without friction leave out the friction keys",
+            );
+            if let Some(md) = md {
+                f_ok &= check(
+                    cx,
+                    &e,
+                    what,
+                    ("dynamic_friction", md),
+                    |v| v > 0.0 && v <= ms.max(0.0),
+                    "positive and at most `static_friction`",
+                    "μ_d ≤ μ_s: sliding friction does not exceed stiction",
+                );
+            }
+            if let Some(vs) = vs {
+                f_ok &= check(
+                    cx,
+                    &e,
+                    what,
+                    ("stribeck_velocity", vs),
+                    |v| v > 0.0,
+                    "positive",
+                    "v_s [m/s], the speed over which friction falls from μ_s to μ_d",
+                );
+            }
+            if let Some(s0) = s0 {
+                f_ok &= check(
+                    cx,
+                    &e,
+                    what,
+                    ("bristle_stiffness", s0),
+                    |v| v > 0.0,
+                    "positive",
+                    "σ₀ [1/m]: stiction holds the body within about μ_s/σ₀",
+                );
+            }
+            if let Some(s1) = s1 {
+                f_ok &= check(
+                    cx,
+                    &e,
+                    what,
+                    ("bristle_damping", s1),
+                    |v| v >= 0.0,
+                    "non-negative",
+                    "σ₁ [s/m]; about 2√(σ₀/g) damps the stuck body critically",
+                );
+            }
+            f_ok &= check(
+                cx,
+                &e,
+                what,
+                ("viscous_friction", s2),
+                |v| v >= 0.0,
+                "non-negative",
+                "σ₂ [s/m]",
+            );
+            match (md, vs, s0, s1) {
+                (Some(md), Some(vs), Some(s0), Some(s1)) if f_ok => Some(Friction {
+                    static_coefficient: ms,
+                    dynamic_coefficient: md,
+                    stribeck_velocity: vs,
+                    bristle_stiffness: s0,
+                    bristle_damping: s1,
+                    viscous: s2,
+                }),
+                _ => {
+                    ok = false;
+                    None
+                }
+            }
+        }
+    };
+    (law, friction, ok)
 }
 
 pub struct ContactKind;
@@ -442,245 +718,12 @@ impl ComponentKind for ContactKind {
             );
             ok = false;
         }
-        // Normal law.
-        ok &= check(
-            cx,
-            &e,
-            &what,
-            ("stiffness", ci.stiffness),
-            |v| v > 0.0,
-            "positive",
-            "the contact stiffness k [N/m^e]",
-        );
-        let law = match ci.normal {
-            NormalInput::HuntCrossley => {
-                ok &= unused(
-                    cx,
-                    &e,
-                    &what,
-                    "damping",
-                    ci.damping.is_some(),
-                    "Hunt–Crossley damping is `damping_factor` α [s/m] or `restitution` with `impact_velocity`",
-                );
-                let exponent = ci.exponent.unwrap_or(1.5);
-                ok &= check(
-                    cx,
-                    &e,
-                    &what,
-                    ("exponent", exponent),
-                    |v| v >= 1.0,
-                    "at least 1",
-                    "1.5 is Hertz's sphere; 1 a linear spring",
-                );
-                let alpha = match (ci.damping_factor, ci.restitution, ci.impact_velocity) {
-                    (Some(a), None, None) => check(
-                        cx,
-                        &e,
-                        &what,
-                        ("damping_factor", a),
-                        |v| v >= 0.0,
-                        "non-negative",
-                        "α [s/m]; 0 is an elastic contact",
-                    )
-                    .then_some(a),
-                    (None, Some(r), Some(v)) => {
-                        let r_ok = check(
-                            cx,
-                            &e,
-                            &what,
-                            ("restitution", r),
-                            |x| x > 0.0 && x <= 1.0,
-                            "in (0, 1]",
-                            "a restitution of 0 needs infinite Hunt–Crossley damping; use a small positive value",
-                        );
-                        let v_ok = check(
-                            cx,
-                            &e,
-                            &what,
-                            ("impact_velocity", v),
-                            |x| x > 0.0,
-                            "positive",
-                            "the impact speed [m/s] at which `restitution` holds",
-                        );
-                        (r_ok && v_ok).then(|| crate::elements::hunt_crossley_damping(r, v))
-                    }
-                    _ => {
-                        cx.error(
-                            format!("{what}: give either `damping_factor` or both `restitution` and `impact_velocity`"),
-                            e.span.clone(),
-                            Some("Hunt–Crossley damping: α [s/m], or the restitution ε at an impact speed".into()),
-                        );
-                        None
-                    }
-                };
-                alpha.map(|a| NormalLaw::HuntCrossley {
-                    stiffness: ci.stiffness,
-                    exponent,
-                    damping_factor: a,
-                })
-            }
-            NormalInput::Linear => {
-                for key in [
-                    "exponent",
-                    "damping_factor",
-                    "restitution",
-                    "impact_velocity",
-                ] {
-                    let given = match key {
-                        "exponent" => ci.exponent.is_some(),
-                        "damping_factor" => ci.damping_factor.is_some(),
-                        "restitution" => ci.restitution.is_some(),
-                        _ => ci.impact_velocity.is_some(),
-                    };
-                    ok &= unused(
-                        cx,
-                        &e,
-                        &what,
-                        key,
-                        given,
-                        "this key belongs to normal = \"hunt_crossley\"; the linear law takes `stiffness` and `damping`",
-                    );
-                }
-                let c = ci.damping.unwrap_or(0.0);
-                check(
-                    cx,
-                    &e,
-                    &what,
-                    ("damping", c),
-                    |v| v >= 0.0,
-                    "non-negative",
-                    "c [N s/m]",
-                )
-                .then_some(NormalLaw::Linear {
-                    stiffness: ci.stiffness,
-                    damping: c,
-                })
-            }
-        };
-        // Friction.
-        let friction = match ci.static_friction {
-            None => {
-                for (key, given) in [
-                    ("dynamic_friction", ci.dynamic_friction.is_some()),
-                    ("stribeck_velocity", ci.stribeck_velocity.is_some()),
-                    ("bristle_stiffness", ci.bristle_stiffness.is_some()),
-                    ("bristle_damping", ci.bristle_damping.is_some()),
-                    ("viscous_friction", ci.viscous_friction.is_some()),
-                ] {
-                    ok &= unused(
-                        cx,
-                        &e,
-                        &what,
-                        key,
-                        given,
-                        "friction is on only with `static_friction` (μ_s)",
-                    );
-                }
-                None
-            }
-            Some(ms) => {
-                let hint = "LuGre friction takes static_friction, dynamic_friction, stribeck_velocity, bristle_stiffness and bristle_damping";
-                let md = required(cx, &e, &what, "dynamic_friction", ci.dynamic_friction, hint);
-                let vs = required(
-                    cx,
-                    &e,
-                    &what,
-                    "stribeck_velocity",
-                    ci.stribeck_velocity,
-                    hint,
-                );
-                let s0 = required(
-                    cx,
-                    &e,
-                    &what,
-                    "bristle_stiffness",
-                    ci.bristle_stiffness,
-                    hint,
-                );
-                let s1 = required(cx, &e, &what, "bristle_damping", ci.bristle_damping, hint);
-                let s2 = ci.viscous_friction.unwrap_or(0.0);
-                let mut f_ok = check(
-                    cx,
-                    &e,
-                    &what,
-                    ("static_friction", ms),
-                    |v| v > 0.0,
-                    "positive",
-                    "μ_s; without friction leave out the friction keys",
-                );
-                if let Some(md) = md {
-                    f_ok &= check(
-                        cx,
-                        &e,
-                        &what,
-                        ("dynamic_friction", md),
-                        |v| v > 0.0 && v <= ms.max(0.0),
-                        "positive and at most `static_friction`",
-                        "μ_d ≤ μ_s: sliding friction does not exceed stiction",
-                    );
-                }
-                if let Some(vs) = vs {
-                    f_ok &= check(
-                        cx,
-                        &e,
-                        &what,
-                        ("stribeck_velocity", vs),
-                        |v| v > 0.0,
-                        "positive",
-                        "v_s [m/s], the speed over which friction falls from μ_s to μ_d",
-                    );
-                }
-                if let Some(s0) = s0 {
-                    f_ok &= check(
-                        cx,
-                        &e,
-                        &what,
-                        ("bristle_stiffness", s0),
-                        |v| v > 0.0,
-                        "positive",
-                        "σ₀ [1/m]: stiction holds the body within about μ_s/σ₀",
-                    );
-                }
-                if let Some(s1) = s1 {
-                    f_ok &= check(
-                        cx,
-                        &e,
-                        &what,
-                        ("bristle_damping", s1),
-                        |v| v >= 0.0,
-                        "non-negative",
-                        "σ₁ [s/m]; about 2√(σ₀/g) damps the stuck body critically",
-                    );
-                }
-                f_ok &= check(
-                    cx,
-                    &e,
-                    &what,
-                    ("viscous_friction", s2),
-                    |v| v >= 0.0,
-                    "non-negative",
-                    "σ₂ [s/m]",
-                );
-                match (md, vs, s0, s1) {
-                    (Some(md), Some(vs), Some(s0), Some(s1)) if f_ok => Some(Friction {
-                        static_coefficient: ms,
-                        dynamic_coefficient: md,
-                        stribeck_velocity: vs,
-                        bristle_stiffness: s0,
-                        bristle_damping: s1,
-                        viscous: s2,
-                    }),
-                    _ => {
-                        ok = false;
-                        None
-                    }
-                }
-            }
-        };
+        let (law, friction, law_ok) = validate_law(cx, &e, &what, &ci.law_keys());
+        ok &= law_ok;
         // Body–body.
         let mut other = None;
         if let Some(on) = &ci.other_node {
-            let hint = "a body–body contact is frictionless between two spheres: `shape = \"sphere\"`, `radius`, `other_node`, `other_radius` and the normal law";
+            let hint = "a body–body contact is between two spheres: `shape = \"sphere\"`, `radius`, `other_node`, `other_radius`, the normal law and optionally the LuGre friction keys";
             match cx.node_ref(on, &what) {
                 Some(NodeRef::Node(j)) if Some(j) == node => {
                     cx.error(
@@ -713,7 +756,6 @@ impl ComponentKind for ContactKind {
                 ("ground_point", ci.ground_point.is_some()),
                 ("ground_normal", ci.ground_normal.is_some()),
                 ("ground_velocity", ci.ground_velocity.is_some()),
-                ("static_friction", ci.static_friction.is_some()),
             ] {
                 ok &= unused(cx, &e, &what, key, given, hint);
             }
@@ -796,12 +838,10 @@ impl ComponentKind for ContactKind {
 
     fn build(def: &ContactDef, parts: &mut Build) {
         if let (Some((j, rb)), ContactShape::Sphere { radius }) = (def.other, def.shape) {
-            parts.elements.push(Box::new(SpherePair::new(
-                &def.name,
-                [def.node, j],
-                [radius, rb],
-                def.law,
-            )));
+            parts.elements.push(Box::new(
+                SpherePair::new(&def.name, [def.node, j], [radius, rb], def.law)
+                    .with_friction(def.friction.map(PairFriction::LuGre)),
+            ));
             return;
         }
         if let (Some(seg), ContactShape::Sphere { radius }) = (def.segment, def.shape) {
@@ -957,6 +997,35 @@ impl ComponentKind for ContactKind {
             let dist = (b.x - a.x).norm();
             let e = SpherePair::new("pair", [0, 1], [0.6 * dist, 0.5 * dist], law);
             out.push(TangentCase::element(Box::new(e), vec![a, b]));
+        }
+        // Sphere pairs with friction: LuGre (bristle states, in contact and, k = 2, apart)
+        // and regularized Coulomb–Stribeck; spinning nodes (random Ω) so the contact
+        // points' velocities carry ω × (±ρ n).
+        for k in 0..4u64 {
+            let a = random_node(960 + k);
+            let b = random_node(970 + k);
+            let dist = (b.x - a.x).norm();
+            let radii = if k == 2 {
+                [0.4 * dist, 0.3 * dist]
+            } else {
+                [0.6 * dist, 0.5 * dist]
+            };
+            let law = if k % 2 == 0 { hc } else { lin };
+            let pf = if k < 3 {
+                PairFriction::LuGre(friction)
+            } else {
+                PairFriction::Regularized {
+                    friction,
+                    regularization_velocity: 0.05,
+                }
+            };
+            let e = SpherePair::new("pair", [0, 1], radii, law).with_friction(Some(pf));
+            let case = TangentCase::element(Box::new(e), vec![a, b]);
+            out.push(if k < 3 {
+                case.with_states(vec![(0.004, -0.3), (-0.002, 0.5), (0.001, 0.2)])
+            } else {
+                case
+            });
         }
         out
     }

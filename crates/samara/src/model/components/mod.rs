@@ -17,6 +17,7 @@ pub mod body;
 pub mod contact;
 pub mod controller;
 pub mod force;
+pub mod granular;
 pub mod ground;
 pub mod hydraulic;
 pub mod joint;
@@ -49,6 +50,8 @@ pub struct Build<'a> {
     pub bodies: Vec<RigidBody>,
     /// The beams' elements grouped per beam (for sectional output).
     pub beams: Vec<Beam>,
+    /// Granular contact sets (pairs found during the run).
+    pub granular: Vec<crate::elements::GranularSet>,
 }
 
 impl<'a> Build<'a> {
@@ -59,6 +62,7 @@ impl<'a> Build<'a> {
             constraints: Vec::new(),
             bodies: Vec::new(),
             beams: Vec::new(),
+            granular: Vec::new(),
         }
     }
 
@@ -273,6 +277,9 @@ registry! {
     /// Contacts of bodies with a ground plane (Hunt–Crossley or linear normal force,
     /// LuGre friction with bristle states).
     contacts: contact::ContactKind,
+    /// Granular contact sets: many spheres mutually in contact and with a ground plane,
+    /// pairs found by a broad phase during the run (docs/multi-field.md).
+    granular: granular::GranularKind,
     /// Hydraulic circuits: volumes with pressure states, reservoirs, orifices, check
     /// valves and a double-acting actuator.
     hydraulics: hydraulic::Hydraulic,

@@ -1,0 +1,232 @@
+//! Granular column benchmark (issue #16): N spheres (radius 5 cm, 1 kg) in a loose lattice
+//! of 5 × 5 spheres per layer (pitch 10.5 cm, deterministic offsets of ±2 mm), N/25 layers
+//! high, starting 2 mm above the ground and on each other, in a frictionless box, settling
+//! under gravity with the contact laws of examples/contact/granular_column.toml ([[granular]]: Hunt–Crossley,
+//! LuGre on the ground, regularized Coulomb–Stribeck between spheres, margin 1 cm).
+//!
+//! `cargo bench -p samara --bench granular [-- T] [N…]` (default T = 0.05 s simulated at
+//! h = 1 ms, N = 125 250 500 1000) prints per N the CPU and wall time per step (CPU from
+//! /proc/self/stat: the machine may be shared), Newton iterations per
+//! step, candidate and touching pairs, pattern rebuilds and the time of the broad phase
+//! alone (grid against all pairs); then the growth exponents d log(time)/d log N.
+
+use samara::analysis::{History, run_analysis};
+use samara::elements::{GranularSet, NormalLaw};
+use samara::model::Model;
+use samara::system::NodeState;
+use samara::system::System;
+use std::time::Instant;
+
+/// The model text of a column of `n` spheres (n a multiple of 25), simulated for `t_end`.
+pub fn column(n: usize, t_end: f64) -> String {
+    let (r, pitch) = (0.05, 0.105);
+    let inertia = 0.4 * r * r;
+    let off = |i: usize, k: usize| {
+        let x = ((12.9898 * i as f64 + 78.233 * k as f64).sin() * 43758.5453).fract();
+        (x.abs() - 0.5) * 0.004
+    };
+    let mut s =
+        String::from("[model]\nname = \"granular_column\"\ngravity = [0.0, 0.0, -9.81]\n\n");
+    for k in 0..n {
+        let (lx, ly, lz) = (k % 5, (k / 5) % 5, k / 25);
+        let x = (lx as f64 - 2.0) * pitch + off(k, 1);
+        let y = (ly as f64 - 2.0) * pitch + off(k, 2);
+        let z = r + 0.002 + lz as f64 * pitch;
+        s += &format!("[[nodes]]\nname = \"s{k}\"\nposition = [{x}, {y}, {z}]\n\n");
+    }
+    for k in 0..n {
+        s += &format!(
+            "[[bodies]]\nname = \"s{k}\"\nnode = \"s{k}\"\nmass = 1.0\ninertia = [[{inertia}, 0.0, 0.0], [0.0, {inertia}, 0.0], [0.0, 0.0, {inertia}]]\n\n"
+        );
+    }
+    s += &format!(
+        r#"[[granular]]
+name = "pile"
+nodes_matching = "s*"
+radius = {r}
+margin = 0.01
+walls = [
+  {{ point = [0.27, 0.0, 0.0], normal = [-1.0, 0.0, 0.0] }},
+  {{ point = [-0.27, 0.0, 0.0], normal = [1.0, 0.0, 0.0] }},
+  {{ point = [0.0, 0.27, 0.0], normal = [0.0, -1.0, 0.0] }},
+  {{ point = [0.0, -0.27, 0.0], normal = [0.0, 1.0, 0.0] }},
+]
+normal = "hunt_crossley"
+stiffness = 1e6
+restitution = 0.3
+impact_velocity = 1.0
+static_friction = 0.5
+dynamic_friction = 0.4
+stribeck_velocity = 0.01
+bristle_stiffness = 1e4
+bristle_damping = 60.0
+regularization_velocity = 1e-3
+
+[[analyses]]
+name = "settle"
+type = "dynamic"
+t_end = {t_end}
+step = 1e-3
+rho_inf = 0.6
+output_every = 1000000
+"#
+    );
+    s
+}
+
+/// CPU time of this process [s] (user + system, from /proc/self/stat; 0 where absent).
+fn cpu_time() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0.0;
+    };
+    // Fields after the command name's closing parenthesis: utime is the 12th, stime the 13th.
+    let rest = &stat[stat.rfind(')').map_or(0, |i| i + 2)..];
+    let f: Vec<f64> = rest
+        .split_whitespace()
+        .skip(11)
+        .take(2)
+        .filter_map(|x| x.parse().ok())
+        .collect();
+    f.iter().sum::<f64>() / 100.0
+}
+
+fn main() {
+    let args: Vec<f64> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    let t_end = args.first().copied().unwrap_or(0.05);
+    let sizes: Vec<usize> = if args.len() > 1 {
+        args[1..].iter().map(|&x| x as usize).collect()
+    } else {
+        vec![125, 250, 500, 1000]
+    };
+    let mut rows = Vec::new();
+    for &n in &sizes {
+        let m = Model::from_toml_str(&column(n, t_end), "column.toml")
+            .unwrap()
+            .model;
+        let sys = System::new(&m);
+        let mut h = History::default();
+        let cpu0 = cpu_time();
+        let clock = Instant::now();
+        let s = run_analysis(
+            &sys,
+            &m.analyses[0],
+            sys.initial_state(),
+            &mut h,
+            &mut |_| {},
+        )
+        .unwrap();
+        let wall = clock.elapsed().as_secs_f64();
+        let cpu = cpu_time() - cpu0;
+        assert!(s.failure.is_none(), "{:?}", s.failure);
+        let set = &sys.granular[0];
+        let last = &s.final_state.nodes;
+        // The broad phase alone, at the final state: grid against all pairs.
+        let mut pairs = Vec::new();
+        let clock = Instant::now();
+        let reps = 20;
+        for _ in 0..reps {
+            set.candidate_pairs(last, set.margin, &mut pairs);
+        }
+        let grid = clock.elapsed().as_secs_f64() / reps as f64;
+        let clock = Instant::now();
+        let all = set.all_pairs(last, set.margin);
+        let brute = clock.elapsed().as_secs_f64();
+        assert_eq!(all, pairs);
+        let per_step = cpu / s.steps as f64;
+        println!(
+            "N = {n:5}: {:.3} ms CPU/step, {:.3} ms wall/step ({} steps, {:.2} Newton it./step, {} redos), {} candidate pairs (max {}), {} touching, {} pattern rebuilds; broad phase {:.3} ms (all pairs {:.3} ms)",
+            1e3 * per_step,
+            1e3 * wall / s.steps as f64,
+            s.steps,
+            s.newton_iterations as f64 / s.steps as f64,
+            s.contact_redos,
+            pairs.len(),
+            s.max_candidate_pairs,
+            set.contacts(last),
+            s.pattern_rebuilds,
+            1e3 * grid,
+            1e3 * brute
+        );
+        rows.push((n as f64, per_step, grid, brute));
+    }
+    // The broad phase alone on larger columns (5 × 5 spheres per layer, the same lattice,
+    // no simulation): grid against all pairs.
+    let mut broad = Vec::new();
+    for n in [1000usize, 4000, 16000, 64000] {
+        let nodes: Vec<NodeState> = (0..n)
+            .map(|k| {
+                let off = |i: usize, c: usize| {
+                    ((12.9898 * i as f64 + 78.233 * c as f64).sin() * 43758.5453).fract() * 0.004
+                };
+                NodeState {
+                    x: nalgebra::Vector3::new(
+                        (k % 5) as f64 * 0.105 + off(k, 1),
+                        ((k / 5) % 5) as f64 * 0.105 + off(k, 2),
+                        (k / 25) as f64 * 0.105,
+                    ),
+                    ..NodeState::default()
+                }
+            })
+            .collect();
+        let set = GranularSet {
+            name: "column".into(),
+            nodes: (0..n).collect(),
+            radii: vec![0.05; n],
+            law: NormalLaw::Linear {
+                stiffness: 1.0,
+                damping: 0.0,
+            },
+            friction: None,
+            margin: 0.01,
+        };
+        let mut pairs = Vec::new();
+        let reps = (64000 / n).max(1);
+        let clock = Instant::now();
+        for _ in 0..reps {
+            set.candidate_pairs(&nodes, set.margin, &mut pairs);
+        }
+        let grid = clock.elapsed().as_secs_f64() / reps as f64;
+        let brute = if n <= 16000 {
+            let clock = Instant::now();
+            let all = set.all_pairs(&nodes, set.margin);
+            let t = clock.elapsed().as_secs_f64();
+            assert_eq!(all, pairs);
+            t
+        } else {
+            f64::NAN
+        };
+        println!(
+            "broad phase, N = {n:6}: {} pairs, grid {:.3} ms ({:.3} µs per sphere), all pairs {:.3} ms",
+            pairs.len(),
+            1e3 * grid,
+            1e6 * grid / n as f64,
+            1e3 * brute
+        );
+        broad.push((n as f64, grid, brute));
+    }
+    for w in broad.windows(2) {
+        let e = |x: f64, y: f64| (y / x).ln() / (w[1].0 / w[0].0).ln();
+        println!(
+            "broad phase N {} → {}: growth exponent grid {:.2}, all pairs {:.2}",
+            w[0].0,
+            w[1].0,
+            e(w[0].1, w[1].1),
+            e(w[0].2, w[1].2)
+        );
+    }
+    for w in rows.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let e = |x: f64, y: f64| (y / x).ln() / (b.0 / a.0).ln();
+        println!(
+            "N {} → {}: growth exponent CPU time/step {:.2}, broad phase {:.2}, all pairs {:.2}",
+            a.0,
+            b.0,
+            e(a.1, b.1),
+            e(a.2, b.2),
+            e(a.3, b.3)
+        );
+    }
+}

@@ -1,0 +1,147 @@
+//! A granular contact set: many spheres centred at nodes, mutually in contact, with the
+//! sphere–sphere kernel of [`super::sphere_pair`] for every pair that touches.
+//!
+//! **Broad phase** (a uniform grid, spatial hashing by sorting): with the cell size
+//! `h = 2 ρ_max + m` (m the Verlet margin), every sphere is keyed by its cell
+//! `⌊x/h⌋ ∈ Z³`; the keys are sorted (O(N log N)) and each sphere looks for partners in
+//! its own and the 26 neighbouring cells by binary search (O(log N) each). Two spheres
+//! are a candidate pair when their gap `|x_i − x_j| − ρ_i − ρ_j` is below m. Cost
+//! O(N log N + N k) with k the spheres per cell neighbourhood (bounded for spheres that
+//! do not overlap much), against O(N²) for all pairs ([`GranularSet::all_pairs`]).
+//!
+//! **Verlet list.** The candidate pairs found at a configuration X₀ stay a superset of the
+//! pairs in contact as long as no sphere has moved more than m/2 from X₀: a pair outside
+//! the set had a gap ≥ m, and two displacements ≤ m/2 cannot close it. The integrator
+//! checks this after every step ([`GranularSet::max_displacement`]) and detects again
+//! when it fails; a step that ends with a pair in contact that was not a candidate is
+//! redone with it (see `analysis::dynamic`).
+//!
+//! Pair friction, when on, is the stateless regularized Coulomb–Stribeck law
+//! ([`PairFriction::Regularized`]): pairs come and go with the candidate set, and a
+//! stateless law needs no bristle state to be created or dropped with them.
+
+use super::contact::NormalLaw;
+use super::{Element, EvalContext, PairFriction, SpherePair};
+use crate::core::{ElementInput, NodeState};
+use nalgebra::Vector3;
+
+/// Spheres in mutual contact.
+#[derive(Clone, Debug)]
+pub struct GranularSet {
+    pub name: String,
+    /// The spheres' nodes.
+    pub nodes: Vec<usize>,
+    /// Their radii [m].
+    pub radii: Vec<f64>,
+    pub law: NormalLaw,
+    pub friction: Option<PairFriction>,
+    /// Verlet margin m [m] > 0.
+    pub margin: f64,
+}
+
+impl GranularSet {
+    /// The contact element of spheres i < j (indices into [`GranularSet::nodes`]).
+    pub fn pair(&self, i: usize, j: usize) -> SpherePair {
+        SpherePair::new(
+            self.name.as_str(),
+            [self.nodes[i], self.nodes[j]],
+            [self.radii[i], self.radii[j]],
+            self.law,
+        )
+        .with_friction(self.friction)
+    }
+
+    /// Gap `|x_i − x_j| − ρ_i − ρ_j` of spheres i, j.
+    pub fn gap(&self, nodes: &[NodeState], i: usize, j: usize) -> f64 {
+        (nodes[self.nodes[j]].x - nodes[self.nodes[i]].x).norm() - self.radii[i] - self.radii[j]
+    }
+
+    /// Candidate pairs (i < j, sorted) with gap below `margin`, by the uniform grid.
+    pub fn candidate_pairs(&self, nodes: &[NodeState], margin: f64, out: &mut Vec<(usize, usize)>) {
+        out.clear();
+        let n = self.nodes.len();
+        if n < 2 {
+            return;
+        }
+        let rmax = self.radii.iter().copied().fold(0.0, f64::max);
+        let h = 2.0 * rmax + margin;
+        let cell =
+            |x: &Vector3<f64>| -> [i64; 3] { std::array::from_fn(|k| (x[k] / h).floor() as i64) };
+        let mut keys: Vec<([i64; 3], usize)> =
+            (0..n).map(|i| (cell(&nodes[self.nodes[i]].x), i)).collect();
+        keys.sort_unstable();
+        for i in 0..n {
+            let c = cell(&nodes[self.nodes[i]].x);
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        let k = [c[0] + dx, c[1] + dy, c[2] + dz];
+                        let lo = keys.partition_point(|e| e.0 < k);
+                        for &(kk, j) in &keys[lo..] {
+                            if kk != k {
+                                break;
+                            }
+                            if j > i && self.gap(nodes, i, j) < margin {
+                                out.push((i, j));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        out.sort_unstable();
+    }
+
+    /// Candidate pairs by testing all N(N − 1)/2 pairs (the reference for the grid).
+    pub fn all_pairs(&self, nodes: &[NodeState], margin: f64) -> Vec<(usize, usize)> {
+        let n = self.nodes.len();
+        let mut out = Vec::new();
+        for i in 0..n {
+            for j in i + 1..n {
+                if self.gap(nodes, i, j) < margin {
+                    out.push((i, j));
+                }
+            }
+        }
+        out
+    }
+
+    /// Largest distance a sphere's centre has moved from `reference` (positions of the
+    /// spheres at the last detection).
+    pub fn max_displacement(&self, nodes: &[NodeState], reference: &[Vector3<f64>]) -> f64 {
+        self.nodes
+            .iter()
+            .zip(reference)
+            .map(|(&i, r)| (nodes[i].x - r).norm())
+            .fold(0.0, f64::max)
+    }
+
+    /// Σ over the touching pairs of `f(pair element)`.
+    fn sum_touching(
+        &self,
+        nodes: &[NodeState],
+        f: impl Fn(&SpherePair, &ElementInput) -> f64,
+    ) -> f64 {
+        let mut pairs = Vec::new();
+        self.candidate_pairs(nodes, 0.0, &mut pairs);
+        let x = ElementInput::nodes(nodes);
+        pairs.iter().map(|&(i, j)| f(&self.pair(i, j), &x)).sum()
+    }
+
+    /// Elastic energy of the normal forces of the touching pairs.
+    pub fn potential_energy(&self, ctx: &EvalContext, nodes: &[NodeState]) -> f64 {
+        self.sum_touching(nodes, |p, x| p.potential_energy(ctx, x))
+    }
+
+    /// Power dissipated by the touching pairs (normal damping and friction).
+    pub fn dissipated_power(&self, nodes: &[NodeState]) -> f64 {
+        self.sum_touching(nodes, |p, x| p.dissipated_power(x))
+    }
+
+    /// Number of pairs in contact (gap < 0).
+    pub fn contacts(&self, nodes: &[NodeState]) -> usize {
+        let mut pairs = Vec::new();
+        self.candidate_pairs(nodes, 0.0, &mut pairs);
+        pairs.len()
+    }
+}
