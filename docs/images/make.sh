@@ -39,6 +39,9 @@ $samara section examples/sections/airfoil.section.toml --out "$tmp/section" --pl
 cp "$tmp/section/airfoil.png" docs/images/section_airfoil.png
 $samara run examples/verification/rotating_beam_campbell.toml --out "$tmp/campbell" --quiet > /dev/null
 $samara plot "$tmp/campbell/campbell.nc" campbell --out docs/images/rotating_beam_campbell.png
+$samara run examples/rotor/nrel5mw_rotor.toml --out "$tmp/nrel5mw" --quiet > /dev/null
+$samara plot "$tmp/nrel5mw/spin.nc" span blade1 alpha cl axial_induction normal_load tangential_load \
+    --out docs/images/nrel5mw_span.png
 cargo run --release --quiet -p samara --example nrel5mw_curves > "$tmp/curves.csv"
 python3 docs/images/nrel5mw_curves.py "$tmp/curves.csv" docs/images/nrel5mw_curves.png
 $samara run examples/rotor/hingeless_blade_campbell.toml --out "$tmp/hingeless" --quiet > /dev/null

@@ -6,6 +6,7 @@ mod plot;
 mod report;
 mod section;
 mod section_plot;
+mod span_plot;
 mod sweep;
 
 use clap::{Parser, Subcommand};
@@ -65,16 +66,22 @@ enum Command {
     /// Print the JSON Schema of the model file.
     Schema,
     /// Plot time histories of channels, e.g. `position:bob:z`, `joint_force:pivot:x`, `kinetic_energy`;
-    /// `campbell` draws the Campbell diagram of a Campbell analysis.
+    /// `campbell` draws the Campbell diagram of a Campbell analysis; `span LINE QUANTITY…`
+    /// a lifting line's station outputs against span (`--time`).
     Plot {
         /// Results file (NetCDF) written by `samara run`.
         results: PathBuf,
-        /// Channels: `variable` or `variable:node_or_joint:component` (x, y, z; w for quaternions).
+        /// Channels: `variable` or `variable:node_or_joint:component` (x, y, z; w for quaternions);
+        /// or `campbell`; or `span LINE QUANTITY…` (station outputs such as `alpha`, `cl`, `normal_load`).
         #[arg(required = true)]
         channels: Vec<String>,
         /// Figure file, .png or .svg [default: `<results stem>.png` beside the results file].
         #[arg(long, short)]
         out: Option<PathBuf>,
+        /// Output time of a span-wise plot (the nearest one; repeat for several curves)
+        /// [default: the last].
+        #[arg(long, allow_hyphen_values = true)]
+        time: Vec<f64>,
     },
     /// Write a ParaView scene from a results file: a time series (.pvd + one binary .vtu
     /// per output time), `<stem>_scene.py` (`paraview --script=...`), and for modal results
@@ -166,12 +173,17 @@ fn main() -> ExitCode {
             results,
             channels,
             out,
+            time,
         } => {
             let out = out.unwrap_or_else(|| results.with_extension("png"));
             let done = samara::output::ResultsReader::open(&results)
                 .map_err(|e| e.to_string())
                 .and_then(|mut r| {
-                    if channels == ["campbell"] {
+                    if channels.first().is_some_and(|c| c == "span") {
+                        span_plot::plot(&mut r, &channels[1..], &time, &out)
+                    } else if !time.is_empty() {
+                        Err("--time picks the output time of a span-wise plot (`samara plot RESULTS span LINE QUANTITY… --time T`); time histories and Campbell diagrams take every time".to_string())
+                    } else if channels == ["campbell"] {
                         campbell_plot::plot(&mut r, &out)
                     } else {
                         plot::plot(&mut r, &channels, &out)

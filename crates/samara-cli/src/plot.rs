@@ -17,10 +17,19 @@ const COLORS: [RGBColor; 6] = [
     RGBColor(140, 86, 75),
 ];
 
+/// One line of a figure: `y` against `x`, in the panel of its `units`.
+pub struct Curve {
+    /// Legend entry.
+    pub label: String,
+    /// The quantity's name on the panel's axis (curves of one unit list theirs).
+    pub quantity: String,
+    pub units: String,
+    pub x: Vec<f64>,
+    pub y: Vec<f64>,
+}
+
 /// Plots `channels` of `reader` into `out` (`.png` or `.svg`).
 pub fn plot(reader: &mut ResultsReader, channels: &[String], out: &Path) -> Result<(), String> {
-    plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular())
-        .map_err(|_| "the built-in font could not be loaded".to_string())?;
     let time = reader.time().map_err(|e| e.to_string())?;
     if time.is_empty() {
         return Err(format!(
@@ -28,16 +37,16 @@ pub fn plot(reader: &mut ResultsReader, channels: &[String], out: &Path) -> Resu
             reader.path().display()
         ));
     }
-    let mut data: Vec<Channel> = Vec::new();
+    let mut curves: Vec<Curve> = Vec::new();
     for c in channels {
-        data.push(reader.channel(c).map_err(|e| e.to_string())?);
-    }
-    // Panels: one per distinct unit, in order of first appearance.
-    let mut units: Vec<String> = Vec::new();
-    for c in &data {
-        if !units.contains(&c.units) {
-            units.push(c.units.clone());
-        }
+        let ch: Channel = reader.channel(c).map_err(|e| e.to_string())?;
+        curves.push(Curve {
+            quantity: ch.label.split(':').next().unwrap_or("").to_string(),
+            label: ch.label,
+            units: ch.units,
+            x: time.clone(),
+            y: ch.values,
+        });
     }
     let x_label = if reader.attr("analysis_type").as_deref() == Some("static") {
         "load factor"
@@ -49,6 +58,20 @@ pub fn plot(reader: &mut ResultsReader, channels: &[String], out: &Path) -> Resu
         reader.attr("model").unwrap_or_default(),
         reader.attr("analysis").unwrap_or_default()
     );
+    figure(&title, x_label, &curves, out)
+}
+
+/// Draws `curves` into `out` (`.png` or `.svg`), one panel per distinct unit (in order of
+/// first appearance) with a common x axis.
+pub fn figure(title: &str, x_label: &str, curves: &[Curve], out: &Path) -> Result<(), String> {
+    plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular())
+        .map_err(|_| "the built-in font could not be loaded".to_string())?;
+    let mut units: Vec<String> = Vec::new();
+    for c in curves {
+        if !units.contains(&c.units) {
+            units.push(c.units.clone());
+        }
+    }
     let height = 120 + 260 * units.len() as u32;
     let ext = out
         .extension()
@@ -58,18 +81,16 @@ pub fn plot(reader: &mut ResultsReader, channels: &[String], out: &Path) -> Resu
     match ext.as_str() {
         "svg" => draw(
             SVGBackend::new(out, (900, height)).into_drawing_area(),
-            &title,
+            title,
             x_label,
-            &time,
-            &data,
+            curves,
             &units,
         ),
         "png" => draw(
             BitMapBackend::new(out, (900, height)).into_drawing_area(),
-            &title,
+            title,
             x_label,
-            &time,
-            &data,
+            curves,
             &units,
         ),
         _ => Err(format!(
@@ -83,8 +104,7 @@ fn draw<DB: DrawingBackend>(
     root: DrawingArea<DB, plotters::coord::Shift>,
     title: &str,
     x_label: &str,
-    time: &[f64],
-    data: &[Channel],
+    data: &[Curve],
     units: &[String],
 ) -> Result<(), String>
 where
@@ -96,17 +116,24 @@ where
         .titled(title, ("sans-serif", 22))
         .map_err(|e| err(&e))?;
     let panels = root.split_evenly((units.len(), 1));
-    let (t0, t1) = (time[0], time[time.len() - 1]);
+    let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
+    for x in data.iter().flat_map(|c| &c.x).filter(|x| x.is_finite()) {
+        t0 = t0.min(*x);
+        t1 = t1.max(*x);
+    }
+    if !t0.is_finite() {
+        (t0, t1) = (0.0, 1.0);
+    }
     let t1 = if t1 > t0 { t1 } else { t0 + 1.0 };
     for (panel, unit) in panels.iter().zip(units) {
-        let group: Vec<(usize, &Channel)> = data
+        let group: Vec<(usize, &Curve)> = data
             .iter()
             .enumerate()
             .filter(|(_, c)| &c.units == unit)
             .collect();
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         for (_, c) in &group {
-            for v in c.values.iter().filter(|v| v.is_finite()) {
+            for v in c.y.iter().filter(|v| v.is_finite()) {
                 lo = lo.min(*v);
                 hi = hi.max(*v);
             }
@@ -127,9 +154,8 @@ where
             .map_err(|e| err(&e))?;
         let mut vars: Vec<&str> = Vec::new();
         for (_, c) in &group {
-            let v = c.label.split(':').next().unwrap_or("");
-            if !vars.contains(&v) {
-                vars.push(v);
+            if !vars.contains(&c.quantity.as_str()) {
+                vars.push(&c.quantity);
             }
         }
         let y_label = if unit.is_empty() {
@@ -149,8 +175,8 @@ where
             let color = COLORS[i % COLORS.len()];
             chart
                 .draw_series(LineSeries::new(
-                    time.iter()
-                        .zip(&c.values)
+                    c.x.iter()
+                        .zip(&c.y)
                         .filter(|(_, v)| v.is_finite())
                         .map(|(t, v)| (*t, *v)),
                     color.stroke_width(2),

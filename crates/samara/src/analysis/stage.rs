@@ -85,6 +85,7 @@ impl Analysis for DynamicAnalysis<'_> {
         recorder: &mut dyn Recorder,
         progress: Progress,
     ) -> Result<AnalysisSummary, crate::Error> {
+        sys.begin_analysis();
         run_dynamic(sys, self.name, self.settings, initial, recorder, progress)
     }
 }
@@ -115,6 +116,7 @@ impl Analysis for StaticAnalysis<'_> {
         recorder: &mut dyn Recorder,
         progress: Progress,
     ) -> Result<AnalysisSummary, crate::Error> {
+        sys.begin_analysis();
         run_static(sys, self.name, self.settings, initial, recorder, progress)
     }
 }
@@ -142,6 +144,7 @@ impl Analysis for ModalAnalysis<'_> {
         recorder: &mut dyn Recorder,
         progress: Progress,
     ) -> Result<AnalysisSummary, crate::Error> {
+        sys.begin_analysis();
         run_modal(sys, self.name, self.settings, initial, recorder, progress)
     }
 }
@@ -170,6 +173,7 @@ impl Analysis for CampbellAnalysis<'_> {
         recorder: &mut dyn Recorder,
         progress: Progress,
     ) -> Result<AnalysisSummary, crate::Error> {
+        sys.begin_analysis();
         super::campbell::run_campbell(sys, self.name, self.settings, initial, recorder, progress)
     }
 }
@@ -198,6 +202,7 @@ impl Analysis for FloquetAnalysis<'_> {
         recorder: &mut dyn Recorder,
         progress: Progress,
     ) -> Result<AnalysisSummary, crate::Error> {
+        sys.begin_analysis();
         super::floquet::run_floquet(sys, self.name, self.settings, initial, recorder, progress)
     }
 }

@@ -251,6 +251,10 @@ pub trait Element: Send + Sync {
     /// Values and rates `(g, ġ)` of the event functions (ġ = NaN where the rate is not
     /// known); the law is smooth where no g changes sign.
     fn events(&self, _x: &ElementInput, _out: &mut [(f64, f64)]) {}
+    /// Forgets what earlier evaluations left in the element (a solver's warm start), so
+    /// that every analysis gives the same bits however often and wherever the system ran
+    /// before; called as each analysis starts.
+    fn begin_analysis(&self) {}
     /// Why the element's loads could not be evaluated (a wind sampled outside its box),
     /// and a hint: the analysis reports it when it fails.
     fn runtime_error(&self) -> Option<(String, String)> {

@@ -39,6 +39,13 @@ pub enum ReadError {
         reason: String,
         suggestion: Option<String>,
     },
+    #[error("time {time} is outside the output times of '{}' ({first} … {last})", path.display())]
+    OutsideTimes {
+        path: PathBuf,
+        time: f64,
+        first: f64,
+        last: f64,
+    },
     #[error("cannot read variable '{name}' of '{}': {detail}", path.display())]
     Variable {
         path: PathBuf,
@@ -258,6 +265,26 @@ impl ResultsReader {
                 .map_err(|e| err(format!("{e:?}"))),
             Some(t) => Err(err(format!("type {t:?} is not numeric"))),
             None => Err(err("no such variable".into())),
+        }
+    }
+
+    /// One record (output time) of a record variable as f64.
+    pub fn read_record(&mut self, name: &str, record: usize) -> Result<Vec<f64>, ReadError> {
+        let err = |d: String| ReadError::Variable {
+            path: self.path.clone(),
+            name: name.to_string(),
+            detail: d,
+        };
+        let data = self
+            .reader
+            .read_record(name, record)
+            .map_err(|e| err(format!("{e:?}")))?;
+        match data.get_f64() {
+            Some(v) => Ok(v.to_vec()),
+            None => data
+                .get_i32()
+                .map(|v| v.iter().map(|&x| f64::from(x)).collect())
+                .ok_or_else(|| err(format!("type {:?} is not f64 or i32", data.data_type()))),
         }
     }
 

@@ -644,6 +644,13 @@ impl System {
         6 * self.n_nodes() + self.n_coordinates + self.n_states
     }
 
+    /// Clears the elements' warm starts before an analysis ([`Element::begin_analysis`]).
+    pub fn begin_analysis(&self) {
+        for e in &self.elements {
+            e.begin_analysis();
+        }
+    }
+
     /// Evaluation context at time `t` with load factor `lf`.
     pub fn context(&self, t: f64, lf: f64) -> EvalContext {
         EvalContext {

@@ -50,8 +50,10 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The station's last BEM root φ (f64 bits; NaN: none yet), the warm start of its next
 /// solve ([`BemRotor::solve_near`]). Every solve converges to rounding from any start, so
-/// the results do not depend on it beyond rounding (nor on the order in which stations
-/// are evaluated); a fresh or cloned station starts from its copy or bracketing.
+/// the results depend on it only at rounding level; it is cleared as each analysis starts
+/// ([`Element::begin_analysis`]), and each station is evaluated in the same sequence
+/// whatever the number of threads, so a run gives the same bits every time. (Parallel
+/// linearizations of one system — Campbell, Floquet — share it between threads.)
 #[derive(Debug)]
 struct RootHint(AtomicU64);
 
@@ -64,6 +66,9 @@ impl RootHint {
     }
     fn set(&self, phi: f64) {
         self.0.store(phi.to_bits(), Ordering::Relaxed);
+    }
+    fn clear(&self) {
+        self.set(f64::NAN);
     }
 }
 
@@ -166,6 +171,9 @@ pub struct AeroStation {
     outputs: Vec<String>,
     /// Warm start of the BEM root.
     root_hint: RootHint,
+    /// Distance of the station from its line's root [m] (the input's `span`; an output,
+    /// the abscissa of span-wise plots).
+    span: f64,
 }
 
 /// Øye's lead factor k of the dynamic wake's first filter (Snel & Schepers 1995).
@@ -220,7 +228,7 @@ pub struct StationResult<S> {
     pub a_quasi_steady: f64,
 }
 
-const OUTPUTS: [(&str, &str); 9] = [
+const OUTPUTS: [(&str, &str); 10] = [
     ("alpha", "rad"),
     ("relative_speed", "m/s"),
     ("cl", "1"),
@@ -230,6 +238,7 @@ const OUTPUTS: [(&str, &str); 9] = [
     ("tangential_induction", "1"),
     ("normal_load", "N/m"),
     ("tangential_load", "N/m"),
+    ("span", "m"),
 ];
 
 impl AeroStation {
@@ -264,7 +273,14 @@ impl AeroStation {
             inputs,
             outputs,
             root_hint: RootHint::new(),
+            span: 0.0,
         }
+    }
+
+    /// The station at `span` [m] from its line's root (written as the output `span`).
+    pub fn with_span(mut self, span: f64) -> Self {
+        self.span = span;
+        self
     }
 
     /// The station with unsteady airfoil models; its states start at their
@@ -1111,12 +1127,17 @@ impl Element for AeroStation {
             r.ap,
             r.normal,
             r.tangential,
+            self.span,
         ];
         out[..vals.len()].copy_from_slice(&vals);
     }
 
     fn breakpoints(&self, out: &mut Vec<f64>) {
         out.extend(self.wind.function.breakpoints());
+    }
+
+    fn begin_analysis(&self) {
+        self.root_hint.clear();
     }
 
     fn runtime_error(&self) -> Option<(String, String)> {

@@ -1570,7 +1570,8 @@ pub(crate) fn line_stations(def: &AeroLineDef, parts: &Build) -> Vec<AeroStation
             wind.clone(),
             inflow.clone(),
         )
-        .with_unsteady(unsteady, 0.0, parts.initial);
+        .with_unsteady(unsteady, 0.0, parts.initial)
+        .with_span(s.span);
         out.push(station);
     }
     out
