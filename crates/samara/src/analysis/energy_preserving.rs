@@ -26,7 +26,7 @@
 //! `a(a − s b) ≥ (a² − b²)/2` for s ≤ 1:
 //!
 //! ```text
-//! Ẽ₁ − Ẽ₀ = −D − (c/2)(‖Δv − sΔv_prev‖²_M + Σ‖e − s e_prev‖²_C) + W − (1 − s²)(…) ≤ W − D,
+//! Ẽ₁ − Ẽ₀ ≤ W − D − (c/2)(‖Δv − sΔv_prev‖²_M + Σ‖e − s e_prev‖²_C) ≤ W − D,
 //! Ẽ = E + (c/2)(‖Δv_last‖²_M + Σ_e ‖e_last‖²_C),
 //! ```
 //!
@@ -206,12 +206,11 @@ impl<'a> EnergyStepper<'a> {
                 }
             }
         }
-        let n_node6 = n_node;
         Ok(Self {
             sys,
             xi,
-            dv_last: vec![0.0; n_node6],
-            dv_scaled: vec![0.0; n_node6],
+            dv_last: vec![0.0; n_node],
+            dv_scaled: vec![0.0; n_node],
             mem_last: vec![0.0; off],
             mem_scaled: vec![0.0; off],
             mem_offsets,
