@@ -4,7 +4,9 @@
 //! References: conservation laws (energy, linear and angular momentum — exact statements
 //! of the schemes, checked to the Newton tolerance), the pendulum's closed-form period
 //! (complete elliptic integral), the heavy top's steady precession (Goldstein §5.7) and
-//! the θ-method's amplification factor for the decaying scheme on a linear oscillator.
+//! the closed-form motion of a linear oscillator for the decaying scheme's order and its
+//! high-frequency limit ρ∞, and an independent high-accuracy run (h/8 or finer) where
+//! no closed form exists.
 
 mod common;
 use common::*;
@@ -32,6 +34,45 @@ fn energy_drift(h: &samara::analysis::History, scale: f64) -> f64 {
         .iter()
         .map(|f| (energy(f) - e0).abs() / scale)
         .fold(0.0, f64::max)
+}
+
+/// Steps `m`'s first analysis (dynamic, an energy scheme) by hand with
+/// [`EnergyStepper`], for `n` steps of its `step`: the discrete energy Ẽ after every
+/// step (index 0: the start) and the states every `every` steps (and the last).
+fn step_by_hand(m: &Model, n: usize, every: usize) -> (Vec<f64>, Vec<samara::system::State>) {
+    use samara::analysis::energy_preserving::{EnergyStepper, consistent_initial_state};
+    let sys = System::new(m);
+    let AnalysisKind::Dynamic(d) = &m.analyses[0].kind else {
+        panic!("not dynamic")
+    };
+    let start = consistent_initial_state(&sys, d).unwrap();
+    let mut it = EnergyStepper::new(
+        &sys,
+        d.integrator,
+        d.rho_inf,
+        d.solver.tolerance,
+        d.solver.relative_tolerance,
+        d.solver.max_iterations,
+        start,
+    )
+    .unwrap();
+    let mut e = vec![it.decaying_energy()];
+    let mut states = vec![it.state().clone()];
+    for k in 1..=n {
+        it.step(d.step).unwrap();
+        e.push(it.decaying_energy());
+        if k % every == 0 || k == n {
+            states.push(it.state().clone());
+        }
+    }
+    (e, states)
+}
+
+/// Largest one-step rise of a sequence.
+fn largest_rise(e: &[f64]) -> f64 {
+    e.windows(2)
+        .map(|w| w[1] - w[0])
+        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 const HEAVY_TOP: &str = "examples/heavy_top.toml";
@@ -267,6 +308,7 @@ fn beam_discrete_residual_is_a_discrete_gradient_and_keeps_momenta() {
         mid: &mid,
         increments: &inc,
         decay: 0.0,
+        memory: &[],
     };
     let mut r = vec![0.0; 6 * n];
     for e in &sys.elements {
@@ -311,6 +353,63 @@ fn beam_discrete_residual_is_a_discrete_gradient_and_keeps_momenta() {
     assert!(balance.abs() < 1e-11 * scale, "{balance:e}");
     assert!(dp < 1e-11 * (p1 - p0).norm().max(p0.norm()), "{dp:e}");
     assert!(dl < 1e-11 * (l1 - l0).norm().max(l0.norm()), "{dl:e}");
+    // The decaying scheme's dissipative stress (c = 0.05, an arbitrary previous memory
+    // p = −0.7 e + 10⁻³): Σ Δ·r̄ = ΔE + D with D = c Σ eᵀC(e − p) exactly, and still no
+    // resultant and no moment beyond Δp/h and ΔL/h. D from the elements' ½xᵀCx:
+    // eᵀCp = Q(e + p) − Q(e) − Q(p).
+    let c = 0.05;
+    let mut r = vec![0.0; 6 * n];
+    let mut dissipation = 0.0;
+    for el in &sys.elements {
+        let len = el.discrete_memory_len();
+        let mut e = vec![0.0; len];
+        el.discrete_memory(&step, &mut e);
+        let prev: Vec<f64> = e.iter().map(|x| -0.7 * x + 1e-3).collect();
+        let sum: Vec<f64> = e.iter().zip(&prev).map(|(a, b)| a + b).collect();
+        let q = |x: &[f64]| {
+            if x.is_empty() {
+                0.0
+            } else {
+                el.discrete_memory_energy(x)
+            }
+        };
+        dissipation += c * (2.0 * q(&e) - (q(&sum) - q(&e) - q(&prev)));
+        let own = DiscreteStep {
+            decay: c,
+            memory: &prev,
+            ..step
+        };
+        let nodes = el.nodes();
+        let mut local = vec![0.0; 6 * nodes.len()];
+        el.discrete_residual(&own, &mut local);
+        for (a, &i) in nodes.iter().enumerate() {
+            for q in 0..6 {
+                r[6 * i + q] += local[6 * a + q];
+            }
+        }
+    }
+    let work: f64 = inc.iter().zip(&r).map(|(a, b)| a * b).sum();
+    let balance = work - (t1 + v1 - t0 - v0) - dissipation;
+    let (mut force, mut moment) = (Vector3::zeros(), Vector3::zeros());
+    for i in 0..n {
+        let f = Vector3::new(r[6 * i], r[6 * i + 1], r[6 * i + 2]);
+        let rpsi = Vector3::new(r[6 * i + 3], r[6 * i + 4], r[6 * i + 5]);
+        let psi = Vector3::new(inc[6 * i + 3], inc[6 * i + 4], inc[6 * i + 5]);
+        let a = (Matrix3::identity() - skew(&psi) * 0.5)
+            .try_inverse()
+            .unwrap();
+        force += f;
+        moment += mid[i].x.cross(&f) + s0.nodes[i].r() * (a * rpsi);
+    }
+    let dp = (force * h - (p1 - p0)).norm();
+    let dl = (moment * h - (l1 - l0)).norm();
+    eprintln!(
+        "with decay: D = {dissipation:.4e} J, Σ Δ·r̄ − ΔE − D = {balance:.2e} J; |h Σ f − Δp| {dp:.2e}, |h Σ m − ΔL| {dl:.2e}"
+    );
+    assert!(dissipation.abs() > 1e-6 * scale, "{dissipation:e}");
+    assert!(balance.abs() < 1e-11 * scale, "{balance:e}");
+    assert!(dp < 1e-11 * (p1 - p0).norm().max(p0.norm()), "{dp:e}");
+    assert!(dl < 1e-11 * (l1 - l0).norm().max(l0.norm()), "{dl:e}");
 }
 
 /// Steps land on the load's knots (2.5 s and 5 s) even when they are off the step grid
@@ -337,8 +436,10 @@ fn energy_steps_land_on_the_load_knots() {
     );
 }
 
-/// The decaying scheme never increases the heavy top's energy (ρ∞ = 0.5, 10 precession
-/// periods at 100 steps per period); tolerance 1e-10 of m g l, the Newton tolerance.
+/// The decaying scheme never increases the heavy top's discrete energy Ẽ (ρ∞ = 0.5, 10
+/// precession periods at 100 steps per period: only the kinematic dissipation acts, the
+/// top has no elastic element); tolerance 1e-10 of m g l, the Newton tolerance (1e-12 on
+/// the increments) times the moments.
 #[test]
 fn decaying_heavy_top_never_gains_energy() {
     let m = example_with(
@@ -349,26 +450,24 @@ fn decaying_heavy_top_never_gains_energy() {
             TOP_PERIOD / 100.0
         ),
     );
-    let (s, h) = run(&m);
-    assert!(s.failure.is_none(), "{:?}", s.failure);
-    let rise = h
-        .frames
-        .windows(2)
-        .map(|w| energy(&w[1]) - energy(&w[0]))
-        .fold(f64::NEG_INFINITY, f64::max);
-    let lost = energy(&h.frames[0]) - energy(h.last().unwrap());
-    eprintln!("decaying heavy top: largest one-step rise {rise:.2e} J, lost {lost:.3e} J");
+    let (e, _) = step_by_hand(&m, 1000, 1000);
+    let rise = largest_rise(&e);
+    let lost = e[0] - e[e.len() - 1];
+    eprintln!("decaying heavy top: largest one-step rise of Ẽ {rise:.2e} J, lost {lost:.3e} J");
     assert!(rise < 1e-10 * 4.905, "{rise:e}");
-    assert!(lost >= 0.0);
+    assert!(lost > 0.0, "{lost:e}");
 }
 
-/// The decaying scheme on the flying spaghetti (ρ∞ = 0.5): once the load is gone the
-/// energy falls in every step (1e-9 J: the Newton tolerance times the beam's forces), the
-/// linear momentum stays the load's impulse exactly (all forces internal); the angular
-/// momentum is *not* an invariant of the decaying scheme (its kinematics
-/// `Δx = h(v̄ + ξ(v₁ − v₀))` leaves `Δx × p̄ = hξ (v₁ − v₀) × p̄` in each step's balance):
-/// its change is measured and reported. Its order in positions is measured like the
-/// preserving scheme's (the θ-method: first order for ξ > 0).
+/// The decaying scheme on the flying spaghetti (ρ∞ = 0.5): once the load is gone (5 s) the
+/// discrete energy Ẽ falls in every step (1e-9 J: the Newton tolerance times the beam's
+/// forces), the linear momentum stays the load's impulse exactly (all forces internal).
+/// The angular momentum is conserved only to the scheme's order (the translations'
+/// kinematic dissipation leaves `h c (Δv − sΔv_prev) × M v̄` per node and step): its
+/// change over the free flight must fall ≥ 3× per halving of h (second order: 4).
+/// Positions at 3 s with h = 0.05, 0.025, 0.0125 s against 0.00625 s: second order,
+/// error ratios in [3, 6.5] (4.2 and 5 expected against a reference at h/8; at h = 0.1 s
+/// the dissipation of the partly resolved modes is not yet asymptotic: ratio 1.7 from
+/// 0.1 to 0.05; the θ-method gave 1.8 and 3.1 from h = 0.1).
 #[test]
 fn decaying_scheme_on_the_flying_spaghetti() {
     let decaying = |step: f64, t_end: f64, every: usize| {
@@ -379,29 +478,38 @@ fn decaying_scheme_on_the_flying_spaghetti() {
         }
         m
     };
-    let m = decaying(0.05, 10.0, 1);
-    let sys = System::new(&m);
-    let (s, h) = run(&m);
-    assert!(s.failure.is_none(), "{:?}", s.failure);
-    let free: Vec<_> = h.frames.iter().filter(|f| f.time >= 5.0 - 1e-9).collect();
-    let (p5, l5) = sys.momenta(&free[0].state);
-    let mut rise: f64 = f64::NEG_INFINITY;
-    let mut dp: f64 = 0.0;
-    for w in free.windows(2) {
-        rise = rise.max(energy(w[1]) - energy(w[0]));
-        dp = dp.max((sys.momenta(&w[1].state).0 - p5).norm());
+    let sys = System::new(&decaying(0.05, 10.0, 1));
+    let mut dls = Vec::new();
+    for step in [0.05, 0.025] {
+        let n = (10.0 / step) as usize;
+        let n5 = (5.0 / step) as usize;
+        let (e, states) = step_by_hand(&decaying(step, 10.0, 1), n, 1);
+        let (p5, l5) = sys.momenta(&states[n5]);
+        let rise = largest_rise(&e[n5..]);
+        let dp = states[n5..]
+            .iter()
+            .map(|s| (sys.momenta(s).0 - p5).norm())
+            .fold(0.0, f64::max);
+        let dl = (sys.momenta(&states[n]).1 - l5).norm();
+        eprintln!(
+            "decaying spaghetti (ρ∞ = 0.5, h = {step}): Ẽ {:.4} → {:.4} J over 5 s free, largest one-step rise {rise:.2e} J, |Δp| {dp:.2e}, |ΔL| {dl:.3e} of |L| {:.3}",
+            e[n5],
+            e[n],
+            l5.norm()
+        );
+        assert!(rise < 1e-9, "{rise:e}");
+        assert!(e[n] < e[n5]);
+        assert!(dp < 1e-9 * p5.norm(), "{dp:e}");
+        dls.push(dl);
     }
-    let last = free.last().unwrap();
-    let dl = (sys.momenta(&last.state).1 - l5).norm();
-    let (e5, e10) = (energy(free[0]), energy(last));
-    // Order: nodes at 3 s, h = 0.1, 0.05, 0.025 against 0.0125 (as the preserving test).
+    assert!(dls[0] / dls[1] > 3.0, "angular momentum drifts {dls:?}");
     let nodes = |step: f64| {
         let (s, h) = run(&decaying(step, 3.0, 1_000_000));
         assert!(s.failure.is_none(), "{:?}", s.failure);
         h.last().unwrap().state.nodes.clone()
     };
-    let reference = nodes(0.0125);
-    let errors: Vec<f64> = [0.1, 0.05, 0.025]
+    let reference = nodes(0.00625);
+    let errors: Vec<f64> = [0.05, 0.025, 0.0125]
         .iter()
         .map(|&st| {
             nodes(st)
@@ -412,15 +520,8 @@ fn decaying_scheme_on_the_flying_spaghetti() {
         })
         .collect();
     let ratios = [errors[0] / errors[1], errors[1] / errors[2]];
-    eprintln!(
-        "decaying spaghetti (ρ∞ = 0.5): E {e5:.4} → {e10:.4} J over 5 s free, largest one-step rise {rise:.2e} J, |Δp| {dp:.2e}, |ΔL| {dl:.3e} of |L| {:.3}; position errors {errors:?}, ratios {ratios:?}",
-        l5.norm()
-    );
-    assert!(rise < 1e-9, "{rise:e}");
-    assert!(e10 < e5);
-    assert!(dp < 1e-9 * p5.norm(), "{dp:e}");
-    // First order: ratios (4 − ½)/(2 − ½)... → 2 (second order would give 4.2 and 5).
-    assert!(ratios.iter().all(|r| (1.5..3.2).contains(r)), "{ratios:?}");
+    eprintln!("decaying spaghetti: position errors {errors:?}, ratios {ratios:?}");
+    assert!(ratios.iter().all(|r| (3.0..6.5).contains(r)), "{ratios:?}");
 }
 
 /// A stiff cantilever (L = 2, EI = 500, EA = GA = 10⁴, ρA = 1) hit at the tip by a 10 ms
@@ -434,11 +535,11 @@ fn decaying_scheme_on_the_flying_spaghetti() {
 ///   order it keeps the partly resolved modes (ωh ≲ 2) nearly undamped, so it is not held
 ///   to this;
 /// - low-mode amplitude: max of the tip deflection smoothed over 50 ms, relative to the
-///   preserving run. For the decaying scheme it must match the θ-method's amplitude
-///   factor on mode 1, `r^N` with `r² = (1 + (1−θ)²Ω²)/(1 + θ²Ω²)`, Ω = ω₁h,
-///   θ = ½ + ξ, N the steps since the pulse (3 %: ω₁ from Euler–Bernoulli, shear and
-///   rotary inertia lower it by ~1 %, which moves the prediction by < 1 %);
-/// - the decaying scheme's energy falls in every step after the pulse.
+///   preserving run. The decaying scheme's dissipation is of third order in ω₁h (a
+///   linear oscillator at ω₁h = 0.1 and ρ∞ = 0.8 loses 8e-5 of its amplitude per period),
+///   so the first mode must keep its amplitude to 1 % (what the smoothing leaves of the
+///   higher modes); the θ-method this scheme replaced kept 0.814 of it;
+/// - the decaying scheme's discrete energy Ẽ falls in every step after the pulse.
 #[test]
 fn stiff_beam_hit_by_an_impulse_loses_its_high_frequencies() {
     let base = "[model]\nname = \"impulse\"\n[[beams]]\nname = \"b\"\norder = 4\nelements = 4\npoints = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]]\nroot = \"root\"\ntip = \"tip\"\n[[beams.sections]]\nstation = 0.0\nstiffness = [[1e4, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, 1e4, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1e4, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 500.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 500.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0, 500.0]]\nmass = [[1.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.02, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.01, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0, 0.01]]\n[[joints]]\nname = \"clamp\"\ntype = \"fixed\"\nnode_a = \"ground\"\nnode_b = \"root\"\n[[forces]]\nname = \"hit\"\nnode = \"tip\"\nforce = [0.0, 0.0, 100.0]\nfunction = { type = \"table\", points = [[0.0, 0.0], [0.005, 1.0], [0.01, 0.0]] }\n";
@@ -471,66 +572,77 @@ fn stiff_beam_hit_by_an_impulse_loses_its_high_frequencies() {
         (hf.sqrt(), low)
     };
     let (zp, _) = history("integrator = \"energy_preserving\"");
-    let (zd, ed) = history("integrator = \"energy_decaying\"\nrho_inf = 0.8");
+    let (zd, ed) = {
+        let m = model(&format!(
+            "{base}[[analyses]]\nname = \"p\"\ntype = \"dynamic\"\nintegrator = \"energy_decaying\"\nrho_inf = 0.8\nt_end = {t_end}\nstep = {h}\ntolerance = 1e-11\nrelative_tolerance = 1e-13\n"
+        ));
+        let tip = m.node_index("tip").unwrap();
+        let (e, states) = step_by_hand(&m, (t_end / h).round() as usize, 1);
+        let z: Vec<f64> = states.iter().map(|s| s.nodes[tip].x.z).collect();
+        (z, e)
+    };
     let (zg, _) = history("integrator = \"generalized_alpha\"\nrho_inf = 0.8");
     let (hp, lp) = measures(&zp);
     let (hd, ld) = measures(&zd);
     let (hg, lg) = measures(&zg);
-    let theta = 0.5 + samara::analysis::energy_preserving::decay_parameter(0.8);
-    let o2 = (omega1 * h).powi(2);
-    let r = ((1.0 + (1.0 - theta).powi(2) * o2) / (1.0 + theta * theta * o2)).sqrt();
-    let predicted = r.powf((n - 2) as f64 - 0.5 * (period / h));
     let rise = ed[2..]
         .windows(2)
         .map(|w| w[1] - w[0])
         .fold(f64::NEG_INFINITY, f64::max);
     eprintln!(
-        "impulse on a stiff beam, last period: high-frequency RMS preserving {hp:.3e}, decaying {hd:.3e}, gen-α {hg:.3e}; low-mode amplitude preserving {lp:.4e}, decaying {ld:.4e} (ratio {:.4}, θ-method prediction {predicted:.4}), gen-α {lg:.4e} (ratio {:.4}); decaying: largest one-step energy rise {rise:.2e} J",
+        "impulse on a stiff beam, last period: high-frequency RMS preserving {hp:.3e}, decaying {hd:.3e}, gen-α {hg:.3e}; low-mode amplitude preserving {lp:.4e}, decaying {ld:.4e} (ratio {:.4}), gen-α {lg:.4e} (ratio {:.4}); decaying: largest one-step rise of Ẽ {rise:.2e} J",
         ld / lp,
         lg / lp
     );
     assert!(hd < 0.1 * hp, "{hd:e} vs {hp:e}");
-    assert!(
-        ((ld / lp) - predicted).abs() < 0.03 * predicted,
-        "{} vs {predicted}",
-        ld / lp
-    );
+    assert!((ld / lp - 1.0).abs() < 0.01, "{}", ld / lp);
     assert!(rise < 1e-10, "{rise:e}");
 }
 
 /// The example's second analysis: the decaying scheme (ρ∞ = 0.5) removes the chain's
-/// vibration energy while the linear momentum stays exact (the springs' dissipative
-/// tension is internal) and the energy falls in every step.
+/// vibration energy; its discrete energy Ẽ falls in every step (1e-11 J: the Newton
+/// tolerance times the spring forces), the linear momentum stays exact (the springs'
+/// dissipative tension is internal), and the angular momentum's drift over 20 s is of
+/// second order: ≥ 3× smaller at h/2 (4 in theory).
 #[test]
 fn decaying_chain_loses_vibration_energy_and_keeps_its_momentum() {
-    let m = example_with(
-        CHAIN,
-        "[[analyses]]\nname = \"p\"\ntype = \"dynamic\"\nintegrator = \"energy_decaying\"\nrho_inf = 0.5\nt_end = 20.0\nstep = 0.01\ntolerance = 1e-12\nrelative_tolerance = 1e-14\n",
-    );
-    let sys = System::new(&m);
-    let (_, h) = run(&m);
-    let (p0, l0) = sys.momenta(&h.frames[0].state);
-    let mut dp: f64 = 0.0;
-    let mut rise: f64 = f64::NEG_INFINITY;
-    for w in h.frames.windows(2) {
-        dp = dp.max((sys.momenta(&w[1].state).0 - p0).norm());
-        rise = rise.max(energy(&w[1]) - energy(&w[0]));
+    let mut dls = Vec::new();
+    for step in [0.01, 0.005] {
+        let m = example_with(
+            CHAIN,
+            &format!(
+                "[[analyses]]\nname = \"p\"\ntype = \"dynamic\"\nintegrator = \"energy_decaying\"\nrho_inf = 0.5\nt_end = 20.0\nstep = {step}\ntolerance = 1e-12\nrelative_tolerance = 1e-14\n"
+            ),
+        );
+        let sys = System::new(&m);
+        let n = (20.0 / step) as usize;
+        let (e, states) = step_by_hand(&m, n, 10);
+        let (p0, l0) = sys.momenta(&states[0]);
+        let dp = states
+            .iter()
+            .map(|s| (sys.momenta(s).0 - p0).norm())
+            .fold(0.0, f64::max);
+        let dl = (sys.momenta(&states[states.len() - 1]).1 - l0).norm();
+        let rise = largest_rise(&e);
+        eprintln!(
+            "decaying chain (h = {step}): Ẽ {:.4} → {:.4} J, largest one-step rise {rise:.2e} J, |Δp| {dp:.2e}, |ΔL| {dl:.2e} of |L| {:.3}",
+            e[0],
+            e[n],
+            l0.norm()
+        );
+        assert!(rise < 1e-11, "{rise:e}");
+        assert!(dp < 1e-10, "{dp:e}");
+        assert!(e[n] < e[0]);
+        dls.push(dl);
     }
-    let (e0, e1) = (energy(&h.frames[0]), energy(h.last().unwrap()));
-    let dl = (sys.momenta(&h.last().unwrap().state).1 - l0).norm();
-    eprintln!(
-        "decaying chain: E {e0:.4} → {e1:.4} J, largest one-step rise {rise:.2e} J, |Δp| {dp:.2e}, |ΔL| {dl:.2e} (not an invariant of the decaying scheme)"
-    );
-    assert!(rise < 1e-11, "{rise:e}");
-    assert!(dp < 1e-10, "{dp:e}");
-    assert!(e1 < e0);
+    assert!(dls[0] / dls[1] > 3.0, "{dls:?}");
 }
 
 /// Pendulum (1 m, released horizontal at rest): after a quarter of the closed-form period
 /// T = 4√(I/(m g l)) K(sin 45°) (I = m l² + J: the bob turns too) the bob passes the bottom (0, 0, −1) at full speed, so the
 /// position error there measures the phase error. It must fall as h²
-/// for both schemes with ρ∞ = 1 (the decaying one then is the preserving one) and for
-/// the preserving scheme; the decaying scheme with ρ∞ < 1 is first order (θ-method).
+/// for the preserving scheme and for the decaying one with ρ∞ = 1 (then the preserving
+/// one), 0.8 and 1/3 (its strongest dissipation).
 fn pendulum_error(integrator: &str, extra: &str, step: f64) -> f64 {
     // Quarter period of the compound pendulum: I = m l² + J = 1.001 kg m² about the pivot.
     let period = (1.001f64 / 9.81).sqrt() * elliptic_k(std::f64::consts::FRAC_1_SQRT_2);
@@ -552,6 +664,8 @@ fn pendulum_period_is_second_order() {
     for (integrator, extra) in [
         ("energy_preserving", ""),
         ("energy_decaying", "rho_inf = 1.0\n"),
+        ("energy_decaying", "rho_inf = 0.8\n"),
+        ("energy_decaying", "rho_inf = 0.3333333333333333\n"),
     ] {
         let errors: Vec<f64> = [0.02, 0.01, 0.005]
             .iter()
@@ -564,14 +678,6 @@ fn pendulum_period_is_second_order() {
         }
         assert!(errors[2] < 1e-3, "{errors:?}");
     }
-    // ρ∞ = 0.8: the θ-method's dissipation is first order; its phase error here partly
-    // cancels the mid-point's, so only a bound is asserted (measured ≤ 9.1e-5 m).
-    let errors: Vec<f64> = [0.01, 0.005, 0.0025]
-        .iter()
-        .map(|&h| pendulum_error("energy_decaying", "rho_inf = 0.8\n", h))
-        .collect();
-    eprintln!("energy_decaying ρ∞ = 0.8: errors {errors:?}");
-    assert!(errors.iter().all(|e| *e < 2e-4), "{errors:?}");
 }
 
 /// Heavy top in steady precession (the example): the tilt must stay at 30° and the
@@ -609,70 +715,120 @@ fn heavy_top_precession_is_second_order() {
     assert!(tilt[2] < 1e-4, "{tilt:?}");
 }
 
-/// The decaying scheme never increases the energy, step by step (double pendulum, 2,000
-/// steps), and the preserving one keeps it.
+/// The decaying scheme never increases its discrete energy Ẽ, step by step, on the
+/// chaotic double pendulum (2,000 steps of 0.01 s; tolerance 1e-10 J: the Newton
+/// tolerance, 1e-12 on increments, times the forces, ~10 N), and Ẽ stays within O(h²) of
+/// E: the memory term (c/2)‖Δv‖²_M with ‖Δv‖ ≈ |a|h, |a| up to ~100 m/s² in the
+/// chaotic phase, is ≈ 0.03 J here; checked < 1e-2 m g l.
 #[test]
 fn decaying_scheme_never_increases_the_energy() {
-    for rho in [0.0, 0.5, 0.9] {
+    for rho in [1.0 / 3.0, 0.5, 0.9] {
         let m = example_with(
             "examples/double_pendulum.toml",
             &format!(
                 "[[analyses]]\nname = \"p\"\ntype = \"dynamic\"\nintegrator = \"energy_decaying\"\nrho_inf = {rho}\nt_end = 20.0\nstep = 0.01\ntolerance = 1e-12\nrelative_tolerance = 1e-14\n"
             ),
         );
-        let (_, h) = run(&m);
-        let mut worst_rise: f64 = f64::NEG_INFINITY;
-        for w in h.frames.windows(2) {
-            worst_rise = worst_rise.max(energy(&w[1]) - energy(&w[0]));
-        }
-        let lost = energy(&h.frames[0]) - energy(h.last().unwrap());
-        eprintln!("ρ∞ = {rho}: largest one-step rise {worst_rise:.2e} J, lost {lost:.3e} J");
-        // 1e-10 J: the Newton tolerance (1e-12 on increments) times the forces (~10 N).
+        let sys = System::new(&m);
+        let (e, states) = step_by_hand(&m, 2000, 1);
+        let worst_rise = largest_rise(&e);
+        let lost = e[0] - e[e.len() - 1];
+        let gap = states
+            .iter()
+            .zip(&e)
+            .map(|(s, et)| {
+                let ctx = sys.context(s.time, 1.0);
+                let (t, v) = sys.discrete_energies(&ctx, s);
+                (et - t - v).abs()
+            })
+            .fold(0.0, f64::max);
+        eprintln!(
+            "ρ∞ = {rho:.3}: largest one-step rise of Ẽ {worst_rise:.2e} J, lost {lost:.3e} J, max |Ẽ − E| {gap:.2e} J"
+        );
         assert!(worst_rise < 1e-10, "{worst_rise:e}");
         assert!(lost > 0.0);
+        assert!(gap < 1e-2 * 9.81, "{gap:e}");
     }
 }
 
-/// A linear spring–mass (mass 1 kg on a spring to the ground, k = 10⁶ N/m, ωh = 10 at
-/// h = 0.01 s): the decaying scheme is the θ-method with θ = ½ + ξ, whose amplification
-/// factor has modulus |1 − (1−θ)θ... |: checked against its closed form per step, and its
-/// limit ρ∞ as ωh → ∞.
+/// A linear spring–mass (1 kg, k = 100 N/m: ω = 10 rad/s, amplitude 0.01 m along the
+/// spring) against its closed form `x = 1 + 0.01 cos ωt` at t = 2 s: the decaying scheme
+/// is second order for ρ∞ = 0.5 and 1/3 (orders within 0.2 of 2 at ωh = 0.2 → 0.05).
+/// With k = 10¹² (ωh = 10⁴ at h = 0.01 s) the amplitude falls per step by the scheme's
+/// ρ∞: the ratio of Ẽ over steps 20 → 40 must be ρ∞⁴⁰ to 2 % in ρ∞ (the
+/// subdominant roots, ≤ 0.2 ρ∞ at ρ∞ ≥ 0.5, are gone by then; ωh = 10⁴ moves the radius
+/// by < 1e-6).
 #[test]
-fn decaying_scheme_damps_like_the_theta_method() {
-    let k: f64 = 1e6;
-    let h = 0.01;
-    for rho in [0.0, 0.5, 0.8] {
-        let toml = format!(
-            "[model]\nname = \"osc\"\n[[nodes]]\nname = \"m\"\nposition = [1.01, 0.0, 0.0]\n[[bodies]]\nname = \"m\"\nnode = \"m\"\nmass = 1.0\ninertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]\n[[springs]]\nname = \"s\"\nnode_a = \"ground\"\nnode_b = \"m\"\npoint_a = [0.0, 0.0, 0.0]\npoint_b = [1.01, 0.0, 0.0]\nstiffness = {k}\nrest_length = 1.0\n[[analyses]]\nname = \"p\"\ntype = \"dynamic\"\nintegrator = \"energy_decaying\"\nrho_inf = {rho}\nt_end = {}\nstep = {h}\ntolerance = 1e-14\nrelative_tolerance = 1e-14\n",
-            20.0 * h
-        );
-        let (_, hist) = run(&model(&toml));
-        // θ-method on ẍ = −ω²x: the amplification matrix of (x, v).
-        let theta = 0.5 + samara::analysis::energy_preserving::decay_parameter(rho);
-        let w2h2 = k * h * h;
-        let a = nalgebra::Matrix2::new(1.0, -theta * h, theta * h * k, 1.0);
-        let b = nalgebra::Matrix2::new(1.0, (1.0 - theta) * h, -(1.0 - theta) * h * k, 1.0);
-        let amp = a.try_inverse().unwrap() * b;
-        let ev = amp.complex_eigenvalues();
-        let radius = ev[0].norm().max(ev[1].norm());
-        // Energy ratio over 20 steps = radius⁴⁰ (a normal amplification matrix up to the
-        // energy norm: the θ-method's is, for the scaled variables (ωx, v)).
-        let e0 = energy(&hist.frames[0]);
-        let e20 = energy(hist.last().unwrap());
-        let measured = (e20 / e0).powf(1.0 / 40.0);
-        eprintln!(
-            "ρ∞ = {rho}: ωh = {:.1}, θ-method radius {radius:.6}, measured {measured:.6}",
-            w2h2.sqrt()
-        );
-        if rho > 0.0 {
-            assert!(
-                (measured - radius).abs() < 1e-6 * radius,
-                "{measured} vs {radius}"
-            );
-        } else {
-            assert!(e20 < 1e-20 * e0 + 1e-9, "{e20}");
+fn decaying_scheme_is_second_order_with_the_set_high_frequency_radius() {
+    let osc = |k: f64, rho: f64, h: f64, t_end: f64| {
+        model(&format!(
+            "[model]\nname = \"osc\"\n[[nodes]]\nname = \"m\"\nposition = [1.01, 0.0, 0.0]\n[[bodies]]\nname = \"m\"\nnode = \"m\"\nmass = 1.0\ninertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]\n[[springs]]\nname = \"s\"\nnode_a = \"ground\"\nnode_b = \"m\"\npoint_a = [0.0, 0.0, 0.0]\npoint_b = [1.01, 0.0, 0.0]\nstiffness = {k}\nrest_length = 1.0\n[[analyses]]\nname = \"p\"\ntype = \"dynamic\"\nintegrator = \"energy_decaying\"\nrho_inf = {rho}\nt_end = {t_end}\nstep = {h}\ntolerance = 1e-14\nrelative_tolerance = 1e-14\noutput_every = 1000000\n"
+        ))
+    };
+    for rho in [0.5, 1.0 / 3.0] {
+        let errors: Vec<f64> = [0.02, 0.01, 0.005]
+            .iter()
+            .map(|&h| {
+                let (s, hist) = run(&osc(100.0, rho, h, 2.0));
+                assert!(s.failure.is_none(), "{:?}", s.failure);
+                let x = hist.last().unwrap().state.nodes[0].x.x;
+                (x - (1.0 + 0.01 * (10.0f64 * 2.0).cos())).abs()
+            })
+            .collect();
+        let p = orders(&errors);
+        eprintln!("oscillator ρ∞ = {rho:.3}: errors {errors:?}, orders {p:?}");
+        for o in &p {
+            assert!((o - 2.0).abs() < 0.2, "ρ∞ = {rho}: orders {p:?}");
         }
     }
+    for rho in [0.5, 0.8, 0.9] {
+        let (e, _) = step_by_hand(&osc(1e12, rho, 0.01, 1.0), 40, 40);
+        let measured = (e[40] / e[20]).powf(1.0 / 40.0);
+        eprintln!("ωh = 1e4, ρ∞ = {rho}: measured radius {measured:.5}");
+        assert!((measured - rho).abs() < 0.02 * rho, "{measured} vs {rho}");
+    }
+}
+
+/// A joint-coordinate spring (`[joints.d3]` of a prismatic joint, k = 31582.734 N/m,
+/// m = 2 kg: ω = 40π rad/s) released at x = 0 with v₀ = 1 m/s: the decaying scheme
+/// (ρ∞ = 0.5) against the closed form x = (v₀/ω) sin ωt at t = 0.1 s is second order
+/// (orders within 0.2 of 2 at ωh = 0.2 → 0.05); at ωh = 10³ the amplitude falls per step
+/// by ρ∞ (2 %: the coordinate's dissipation, weighted by the spring's stiffness, damps
+/// the position part of the unresolved mode — without it the radius would be 1); Ẽ never
+/// rises (1e-9 J: the Newton tolerance times the spring force).
+#[test]
+fn decaying_scheme_on_a_joint_coordinate_spring() {
+    let k: f64 = 31582.734;
+    let omega = (k / 2.0).sqrt();
+    let text = |rho: f64, h: f64, t_end: f64| {
+        model(&format!(
+            "[model]\nname = \"rail\"\n[[nodes]]\nname = \"mass\"\nposition = [0.0, 0.0, 0.0]\nvelocity = [1.0, 0.0, 0.0]\n[[bodies]]\nname = \"mass\"\nnode = \"mass\"\nmass = 2.0\ninertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]\n[[joints]]\nname = \"rail\"\ntype = \"prismatic\"\nnode_a = \"ground\"\nnode_b = \"mass\"\nposition = [0.0, 0.0, 0.0]\naxis = [1.0, 0.0, 0.0]\n[joints.d3]\nstiffness = {k}\n[[analyses]]\nname = \"p\"\ntype = \"dynamic\"\nintegrator = \"energy_decaying\"\nrho_inf = {rho}\nt_end = {t_end}\nstep = {h}\ntolerance = 1e-13\nrelative_tolerance = 1e-14\noutput_every = 1000000\n"
+        ))
+    };
+    let errors: Vec<f64> = [0.2, 0.1, 0.05]
+        .iter()
+        .map(|&wh| {
+            let n = (0.1 * omega / wh).round();
+            let h = 0.1 / n;
+            let (s, hist) = run(&text(0.5, h, 0.1));
+            assert!(s.failure.is_none(), "{:?}", s.failure);
+            let x = hist.last().unwrap().state.nodes[0].x.x;
+            (x - (omega * 0.1).sin() / omega).abs()
+        })
+        .collect();
+    let p = orders(&errors);
+    eprintln!("joint-coordinate spring, ρ∞ = 0.5: errors {errors:?}, orders {p:?}");
+    for o in &p {
+        assert!((o - 2.0).abs() < 0.2, "orders {p:?}");
+    }
+    let (e, _) = step_by_hand(&text(0.5, 1e3 / omega, 1e3), 40, 40);
+    let measured = (e[40] / e[20]).powf(1.0 / 40.0);
+    let rise = largest_rise(&e);
+    eprintln!(
+        "joint-coordinate spring at ωh = 1e3: radius {measured:.5}, largest rise of Ẽ {rise:.2e} J"
+    );
+    assert!((measured - 0.5).abs() < 0.01, "{measured}");
+    assert!(rise < 1e-9, "{rise:e}");
 }
 
 /// Models with element kinds that have no discrete form are refused with a located
@@ -762,6 +918,23 @@ fn energy_schemes_refuse_what_they_cannot_integrate() {
         .to_string();
     assert!(
         err.contains("signal.toml:") && err.contains("[[forces]]") && err.contains("signal"),
+        "{err}"
+    );
+    // ρ∞ below the decaying scheme's reach (1/3) is refused at its key.
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/pendulum.toml"),
+    )
+    .unwrap();
+    let body = text.split("[[analyses]]").next().unwrap();
+    let bad = format!(
+        "{body}[[analyses]]\nname = \"p\"\ntype = \"dynamic\"\nintegrator = \"energy_decaying\"\nrho_inf = 0.2\nt_end = 1.0\nstep = 0.01\n"
+    );
+    let err = Model::from_toml_str(&bad, "rho.toml")
+        .unwrap_err()
+        .to_string();
+    let line = bad.lines().position(|l| l.starts_with("rho_inf")).unwrap() + 1;
+    assert!(
+        err.contains(&format!("rho.toml:{line}:")) && err.contains("[1/3, 1]"),
         "{err}"
     );
 }

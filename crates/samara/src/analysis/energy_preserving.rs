@@ -3,29 +3,47 @@
 //! `"energy_decaying"`; docs/integrators.md).
 //!
 //! Each node moves over a step by `Δ = (Δx, ψ)` with `x₁ = x₀ + Δx`, `R₁ = R₀ cay(ψ)`
-//! (Cayley update; Simo & Wong 1991) and the mid-point kinematics
+//! (Cayley update; Simo & Wong 1991) and the kinematics
 //!
 //! ```text
-//! Δx/h = (½ − ξ) v₀ + (½ + ξ) v₁,     ψ/h = (½ − ξ) Ω₀ + (½ + ξ) Ω₁
+//! Δx/h = (v₀ + v₁)/2 + c (Δv − s Δv_prev),     ψ/h = (Ω₀ + Ω₁)/2 + c (ΔΩ − s ΔΩ_prev)
 //! ```
 //!
-//! (ξ = 0: preserving). Equilibrium is imposed in the discrete form of every element
+//! with `Δv = v₁ − v₀`, `Δv_prev` that of the previous step and `s = min(h/h_prev, 1)`
+//! (0 on the first step). Equilibrium is imposed in the discrete form of every element
 //! ([`crate::core::DiscreteStep`]; a discrete gradient of its energy) plus the constraint
 //! forces `B̄ᵀλ`, with the constraints enforced at the end of the step, `Φ(q₁, t₁) = 0`.
 //! `B̄` is the mid-point Jacobian corrected row by row after Gonzalez (1996),
 //! `B̄Δ = Φ(q₁, t₁) − Φ(q₀, t₁)`, so the constraint forces do no work over a step
 //! (Gonzalez 1999, "Mechanical systems subject to holonomic constraints", Physica D 132;
-//! Betsch & Leyendecker 2006 reach the same statement by a discrete null space): then
+//! Betsch & Leyendecker 2006 reach the same statement by a discrete null space).
+//!
+//! c = 0 is the preserving scheme. For c > 0 (the decaying scheme) every element with a
+//! potential adds the dissipative stress `c C (e − s e_prev)` on its strain increments
+//! e over the step (a spring's Δl, a beam's Δε at its elastic points, a joint
+//! coordinate's Δν), also against the previous step's. Dotting the step's equations with
+//! Δ (the inertia rows give `ΔT + c Δvᵀ M (Δv − s Δv_prev)`) and using
+//! `a(a − s b) ≥ (a² − b²)/2` for s ≤ 1:
 //!
 //! ```text
-//! E₁ − E₀ = −D − ξ (‖v₁ − v₀‖²_M + d) ≤ 0           (no applied loads)
+//! Ẽ₁ − Ẽ₀ ≤ W − D − (c/2)(‖Δv − sΔv_prev‖²_M + Σ‖e − s e_prev‖²_C) ≤ W − D,
+//! Ẽ = E + (c/2)(‖Δv_last‖²_M + Σ_e ‖e_last‖²_C),
 //! ```
 //!
-//! exactly up to the Newton tolerance, with D ≥ 0 the dampers' dissipation and `d ≥ 0`
-//! the dissipation each element with a potential adds for ξ > 0
-//! ([`DiscreteStep::decay`]; `k Δl²` for a spring, the θ-method's `θ = ½ + ξ` on its
-//! length): the decaying scheme is the θ-method of a linear oscillator,
-//! `ρ∞ = (½ − ξ)/(½ + ξ)`, first order in its dissipative terms (error ∝ ξh).
+//! the discrete energy Ẽ, which differs from E by O(h²), never increases without applied
+//! loads (D ≥ 0 the dampers' dissipation). Both dissipative terms are second differences
+//! (O(h²) on a smooth motion), so the scheme is second order; on a linear oscillator
+//! its high-frequency spectral radius is the ρ∞ with `c = ρ∞(1 − ρ∞)/(2(1 + ρ∞)²)`,
+//! ρ∞ ∈ [1/3, 1] (the minimum, c = 1/16, is a double root). The dissipation on the
+//! strains is internal (no resultant, no moment): linear momentum is conserved exactly;
+//! the kinematic term `c(Δv − sΔv_prev)` of the translations leaves the angular momentum
+//! balance a defect `h c (Δv − sΔv_prev) × M v̄` per node, O(h³) per step (an O(h²)
+//! drift), which the rotations do not have (Simo & Wong's balance holds for any ψ).
+//! The construction is a two-step relative of the θ-method's dissipation with second
+//! differences in place of first ones, in the spirit of the G-stability of BDF2 (Dahlquist
+//! 1978); it is not one of Bauchau, Bottasso & Trainelli's (2003) time-discontinuous
+//! schemes nor Armero & Romero's (2001) ED methods, which reach exact angular momentum
+//! by other means.
 //!
 //! The Newton matrix is formed by forward differences of the step residual (dense LU):
 //! meant for models of a few hundred unknowns.
@@ -39,11 +57,17 @@ use crate::system::{State, System};
 use nalgebra::{DMatrix, DVector, Vector3};
 use std::time::Instant;
 
-/// ξ of the decaying scheme for a high-frequency spectral radius ρ∞ (linear oscillator):
-/// ρ∞ = (½ − ξ)/(½ + ξ), i.e. ξ = (1 − ρ∞)/(2(1 + ρ∞)).
+/// The decaying scheme's dissipation coefficient c for a high-frequency spectral radius
+/// ρ∞ of a linear oscillator (the root −ρ∞ of `(½ + c) r² + (½ − 2c) r + c` is the
+/// dominant one for ρ∞ ≥ 1/3): `c = ρ∞(1 − ρ∞)/(2(1 + ρ∞)²)`. ρ∞ below 1/3 (refused at
+/// validation) is clamped to 1/3, the scheme's strongest dissipation.
 pub fn decay_parameter(rho_inf: f64) -> f64 {
-    (1.0 - rho_inf) / (2.0 * (1.0 + rho_inf))
+    let r = rho_inf.clamp(1.0 / 3.0, 1.0);
+    r * (1.0 - r) / (2.0 * (1.0 + r) * (1.0 + r))
 }
+
+/// The smallest ρ∞ the decaying scheme reaches.
+pub const MIN_RHO_INF: f64 = 1.0 / 3.0;
 
 /// One step's failure.
 #[derive(Clone, Debug, PartialEq)]
@@ -55,6 +79,7 @@ pub struct StepFailure {
 /// [`run_energy_consistent`].
 pub struct EnergyStepper<'a> {
     sys: &'a System,
+    /// Dissipation coefficient c (0: preserving).
     xi: f64,
     tolerance: f64,
     relative_tolerance: f64,
@@ -78,6 +103,21 @@ pub struct EnergyStepper<'a> {
     /// across steps while the iteration contracts).
     lu: Option<nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>>,
     lu_h: f64,
+    /// Decaying scheme's memory: the last step's Δv, ΔΩ per node (6 per node), the
+    /// elements' strain increments (offsets `mem_offsets`), the joint coordinates' Δν;
+    /// `*_scaled` the same times s for the step being taken.
+    dv_last: Vec<f64>,
+    dv_scaled: Vec<f64>,
+    mem_offsets: Vec<usize>,
+    mem_last: Vec<f64>,
+    mem_scaled: Vec<f64>,
+    dnu_last: Vec<f64>,
+    dnu_scaled: Vec<f64>,
+    /// Weights of the joint coordinates' dissipation: |∂f/∂ν| of their springs at the
+    /// start (constant, so that the energy statement telescopes).
+    coord_stiffness: Vec<f64>,
+    /// Step of the last step taken (NaN before the first: s = 0).
+    h_last: f64,
     /// Newton matrices formed so far.
     pub factorizations: usize,
     /// max |Φ| after the last step.
@@ -128,9 +168,56 @@ impl<'a> EnergyStepper<'a> {
             .map(|c| c.n_equations())
             .max()
             .unwrap_or(0);
+        let mut mem_offsets = Vec::with_capacity(sys.elements.len() + 1);
+        let mut off = 0;
+        for e in &sys.elements {
+            mem_offsets.push(off);
+            if xi > 0.0 {
+                off += e.discrete_memory_len();
+            }
+        }
+        mem_offsets.push(off);
+        let mut coord_stiffness = vec![0.0; n_coord];
+        if xi > 0.0 {
+            let ctx = sys.context(state.time, 1.0);
+            for (k, c) in sys.constraints.iter().enumerate() {
+                let nc = c.n_coordinates();
+                if nc == 0 {
+                    continue;
+                }
+                let co = sys.coordinate_offsets[k];
+                let mut r = vec![0.0; nc];
+                let mut kk = vec![0.0; nc];
+                let mut dd = vec![0.0; nc];
+                let mut ss = vec![0.0; nc * c.signal_inputs().len().max(1)];
+                c.coordinate_forces(
+                    &ctx,
+                    &state.coords[co..co + nc],
+                    &[],
+                    &mut r,
+                    Some(crate::core::CoordinateTangents {
+                        stiffness: &mut kk,
+                        damping: &mut dd,
+                        signals: &mut ss,
+                    }),
+                );
+                for (j, k) in kk.iter().enumerate() {
+                    coord_stiffness[co + j] = k.abs();
+                }
+            }
+        }
         Ok(Self {
             sys,
             xi,
+            dv_last: vec![0.0; n_node],
+            dv_scaled: vec![0.0; n_node],
+            mem_last: vec![0.0; off],
+            mem_scaled: vec![0.0; off],
+            mem_offsets,
+            dnu_last: vec![0.0; n_coord],
+            dnu_scaled: vec![0.0; n_coord],
+            coord_stiffness,
+            h_last: f64::NAN,
             tolerance,
             relative_tolerance,
             max_iterations,
@@ -159,9 +246,43 @@ impl<'a> EnergyStepper<'a> {
         &self.state
     }
 
-    /// The decay parameter ξ (0: preserving).
+    /// The decaying scheme's dissipation coefficient c (0: preserving).
     pub fn xi(&self) -> f64 {
         self.xi
+    }
+
+    /// The discrete energy of the decaying scheme,
+    /// `Ẽ = E + (c/2)(‖Δv_last‖²_M + Σ_e ‖e_last‖²_C + Σ k_ν Δν_last²)`, which never
+    /// increases in a step without applied loads (the module's documentation); E for the
+    /// preserving scheme.
+    pub fn decaying_energy(&self) -> f64 {
+        let e = self.energy();
+        if self.xi == 0.0 {
+            return e;
+        }
+        // ‖Δv‖²_M = 2 T(Δv): the kinetic energy of the state moving with the increments.
+        let mut moving = self.state.clone();
+        for (i, n) in moving.nodes.iter_mut().enumerate() {
+            let d = &self.dv_last[6 * i..6 * i + 6];
+            n.v = Vector3::new(d[0], d[1], d[2]);
+            n.w = Vector3::new(d[3], d[4], d[5]);
+        }
+        let ctx = self.sys.context(self.state.time, 1.0);
+        let (t_dv, _) = self.sys.discrete_energies(&ctx, &moving);
+        let mut memory = 0.0;
+        for (k, el) in self.sys.elements.iter().enumerate() {
+            let (a, b) = (self.mem_offsets[k], self.mem_offsets[k + 1]);
+            if b > a {
+                memory += el.discrete_memory_energy(&self.mem_last[a..b]);
+            }
+        }
+        let coords: f64 = self
+            .coord_stiffness
+            .iter()
+            .zip(&self.dnu_last)
+            .map(|(k, d)| 0.5 * k * d * d)
+            .sum();
+        e + self.xi * (t_dv + memory + coords)
     }
 
     /// Kinetic plus potential energy at the current state.
@@ -173,14 +294,16 @@ impl<'a> EnergyStepper<'a> {
 
     /// Sets node, coordinate and scratch states for the unknowns `u`.
     fn configure(&mut self, h: f64, u: &[f64]) {
+        // Δx/h = (v₀ + v₁)/2 + c(v₁ − v₀ − s Δv_prev), solved for v₁ (and the same for Ω).
         let xi = self.xi;
         let (c0, c1) = (0.5 - xi, 0.5 + xi);
         for (i, n0) in self.state.nodes.iter().enumerate() {
             let d = &u[6 * i..6 * i + 6];
             let dx = Vector3::new(d[0], d[1], d[2]);
             let psi = Vector3::new(d[3], d[4], d[5]);
-            let v1 = (dx / h - n0.v * c0) / c1;
-            let w1 = (psi / h - n0.w * c0) / c1;
+            let p = &self.dv_scaled[6 * i..6 * i + 6];
+            let v1 = (dx / h + Vector3::new(p[0], p[1], p[2]) * xi - n0.v * c0) / c1;
+            let w1 = (psi / h + Vector3::new(p[3], p[4], p[5]) * xi - n0.w * c0) / c1;
             let a = (v1 - n0.v) / h;
             let wd = (w1 - n0.w) / h;
             let q0 = *n0.rot.quaternion();
@@ -233,13 +356,18 @@ impl<'a> EnergyStepper<'a> {
                 mid: &self.mid,
                 increments: &u[..self.n_node],
                 decay: xi,
+                memory: &[],
             };
-            for e in &sys.elements {
+            for (k, e) in sys.elements.iter().enumerate() {
                 let nodes = e.nodes();
                 let nl = 6 * nodes.len();
                 let local = &mut self.local[..nl];
                 local.fill(0.0);
-                e.discrete_residual(&step, local);
+                let own = DiscreteStep {
+                    memory: &self.mem_scaled[self.mem_offsets[k]..self.mem_offsets[k + 1]],
+                    ..step
+                };
+                e.discrete_residual(&own, local);
                 for (a, &ni) in nodes.iter().enumerate() {
                     for k in 0..6 {
                         r[6 * ni + k] += h2 * self.local[6 * a + k];
@@ -344,7 +472,11 @@ impl<'a> EnergyStepper<'a> {
                 }
                 gonzalez_correction(&mut fs, &delta[nn..], dv);
                 for q in 0..nc {
-                    r[self.n_node + co + q] += h2 * (fs[q] + full[q]);
+                    // Decay: c k_ν (Δν − s Δν_prev), dissipating c k_ν Δν (Δν − s Δν_prev).
+                    let dis = xi
+                        * self.coord_stiffness[co + q]
+                        * (delta[nn + q] - self.dnu_scaled[co + q]);
+                    r[self.n_node + co + q] += h2 * (fs[q] + full[q] + dis);
                 }
             }
         }
@@ -359,6 +491,24 @@ impl<'a> EnergyStepper<'a> {
 
     fn solve_step(&mut self, h: f64, full: bool) -> Result<(), StepFailure> {
         let n = self.n;
+        if self.xi > 0.0 {
+            // s = min(h/h_prev, 1): the second differences are O(h²) on a smooth motion
+            // for any s ≈ h/h_prev, and s ≤ 1 keeps the energy statement.
+            let s = if self.h_last.is_finite() {
+                (h / self.h_last).min(1.0)
+            } else {
+                0.0
+            };
+            for (a, b) in self.dv_scaled.iter_mut().zip(&self.dv_last) {
+                *a = s * b;
+            }
+            for (a, b) in self.mem_scaled.iter_mut().zip(&self.mem_last) {
+                *a = s * b;
+            }
+            for (a, b) in self.dnu_scaled.iter_mut().zip(&self.dnu_last) {
+                *a = s * b;
+            }
+        }
         let mut u = vec![0.0; n];
         // Predictor: Δ = h v₀.
         for (i, nd) in self.state.nodes.iter().enumerate() {
@@ -450,6 +600,9 @@ impl<'a> EnergyStepper<'a> {
             });
         }
         self.configure(h, &u);
+        if self.xi > 0.0 {
+            self.update_memory(h, &u);
+        }
         std::mem::swap(&mut self.state.nodes, &mut self.end);
         for j in 0..self.n_coord {
             self.state.coords[j] = self.end_coords[j];
@@ -468,6 +621,52 @@ impl<'a> EnergyStepper<'a> {
         self.end.clone_from(&self.state.nodes);
         Ok(())
     }
+}
+
+impl EnergyStepper<'_> {
+    /// After a converged step (scratch states configured for `u`): the memories of the
+    /// decaying scheme.
+    fn update_memory(&mut self, h: f64, u: &[f64]) {
+        for (i, (n0, n1)) in self.state.nodes.iter().zip(&self.end).enumerate() {
+            let dv = n1.v - n0.v;
+            let dw = n1.w - n0.w;
+            self.dv_last[6 * i..6 * i + 3].copy_from_slice(dv.as_slice());
+            self.dv_last[6 * i + 3..6 * i + 6].copy_from_slice(dw.as_slice());
+        }
+        let step = DiscreteStep {
+            h,
+            ctx: self.sys.context(self.state.time + 0.5 * h, 1.0),
+            start: &self.state.nodes,
+            end: &self.end,
+            mid: &self.mid,
+            increments: &u[..self.n_node],
+            decay: self.xi,
+            memory: &[],
+        };
+        for (k, e) in self.sys.elements.iter().enumerate() {
+            let (a, b) = (self.mem_offsets[k], self.mem_offsets[k + 1]);
+            if b > a {
+                e.discrete_memory(&step, &mut self.mem_last[a..b]);
+            }
+        }
+        self.dnu_last
+            .copy_from_slice(&u[self.n_node..self.n_node + self.n_coord]);
+        self.h_last = h;
+    }
+}
+
+/// The consistent start of a dynamic analysis from the model's initial state (assembled
+/// onto the joints, velocities tangent to them, multipliers): what [`EnergyStepper::new`]
+/// takes when stepping by hand. `Err` gives the reason.
+pub fn consistent_initial_state(sys: &System, settings: &DynamicSettings) -> Result<State, String> {
+    let mut summary = AnalysisSummary::new("start", "dynamic");
+    super::dynamic::consistent_start(sys, settings, sys.initial_state(), &mut summary).map_err(
+        |_| {
+            summary
+                .failure
+                .map_or_else(|| "no consistent start".into(), |f| f.reason)
+        },
+    )
 }
 
 /// Fails, naming the element or joint, when something in `sys` has no discrete form.

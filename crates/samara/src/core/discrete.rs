@@ -34,10 +34,17 @@ pub struct DiscreteStep<'a> {
     pub mid: &'a [NodeState],
     /// `(Δx, ψ)` of every node, 6 per node.
     pub increments: &'a [f64],
-    /// Decay parameter ξ ≥ 0 of the energy-decaying scheme (0: preserving). An element
-    /// with a potential adds a dissipation `ξ d ≥ 0` to its balance (`d = k Δl²` for a
-    /// spring: the θ-method's `θ = ½ + ξ` on its length).
+    /// Dissipation coefficient c ≥ 0 of the energy-decaying scheme (0: preserving). An
+    /// element with a potential that keeps a dissipation memory
+    /// ([`super::Element::discrete_memory_len`]) adds the dissipative stress
+    /// `c C (e − e_prev)` on its strain increments e over the step, with `e_prev` =
+    /// [`DiscreteStep::memory`] (the previous step's, already scaled by the step ratio),
+    /// so that its balance gains `D = c eᵀ C (e − e_prev)` exactly.
     pub decay: f64,
+    /// The element's strain increments of the previous step times `min(h/h_prev, 1)`
+    /// (zeros on the first step); empty when the scheme is preserving or the element
+    /// keeps no memory.
+    pub memory: &'a [f64],
 }
 
 impl DiscreteStep<'_> {

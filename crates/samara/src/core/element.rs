@@ -281,6 +281,20 @@ pub trait Element: Send + Sync {
     /// Discrete residual over a step ([`DiscreteStep`]): 6 rows per node, with
     /// `Σ Δ·r̄ = ΔT + ΔV + D − W` exactly. Called only when [`Element::discrete_form`] is Ok.
     fn discrete_residual(&self, _step: &DiscreteStep, _out: &mut [f64]) {}
+    /// Length of the element's dissipation memory for the energy-decaying scheme: its
+    /// strain increments over a step (1 for a spring's length, 6 per elastic point of a
+    /// beam); 0 for elements without a potential to dissipate through.
+    fn discrete_memory_len(&self) -> usize {
+        0
+    }
+    /// The strain increments e of the step (what the next step reads as
+    /// [`DiscreteStep::memory`]), `discrete_memory_len` values.
+    fn discrete_memory(&self, _step: &DiscreteStep, _out: &mut [f64]) {}
+    /// `½ eᵀ C e` of a memory `e` (the element's part of the decaying scheme's discrete
+    /// energy beyond E).
+    fn discrete_memory_energy(&self, _memory: &[f64]) -> f64 {
+        0.0
+    }
     /// The kinetic energy whose balance [`Element::discrete_residual`] states (the
     /// element's own unless its discrete form uses another inertia, as the beam's lumped
     /// one).

@@ -80,17 +80,31 @@ impl Element for SpringDamper {
     }
 
     /// Discrete gradient of `V = k(l − l₀)²/2` along the line: the mean tension
-    /// `T̄ = k((l₀ + l₁)/2 − l_rest) + ξ k (l₁ − l₀) + c (l₁ − l₀)/h` along
+    /// `T̄ = k((l₀ + l₁)/2 − l_rest) + c_d k (Δl − Δl_prev) + c (l₁ − l₀)/h` along
     /// `ē = (d₀ + d₁)/(l₀ + l₁)`, for which `ē·Δd = Δl` and
-    /// `T̄ Δl = ΔV + ξ k Δl² + c Δl²/h` exactly ([`LineOfAction::add_discrete_tension`];
-    /// ξ = [`DiscreteStep::decay`]).
+    /// `T̄ Δl = ΔV + c_d k Δl (Δl − Δl_prev) + c Δl²/h` exactly
+    /// ([`LineOfAction::add_discrete_tension`]; `c_d` = [`DiscreteStep::decay`], `Δl_prev`
+    /// = [`DiscreteStep::memory`]).
     fn discrete_residual(&self, step: &DiscreteStep, out: &mut [f64]) {
         let (l0, l1) = (self.line.length(step.start), self.line.length(step.end));
         let k = self.stiffness_at(0.0); // constant (discrete_form)
+        let prev = step.memory.first().copied().unwrap_or(0.0);
         let tension = k * (0.5 * (l0 + l1) - self.rest_length)
-            + step.decay * k * (l1 - l0)
+            + step.decay * k * ((l1 - l0) - prev)
             + self.damping * (l1 - l0) / step.h;
         self.line.add_discrete_tension(step, tension, out);
+    }
+
+    fn discrete_memory_len(&self) -> usize {
+        1
+    }
+
+    fn discrete_memory(&self, step: &DiscreteStep, out: &mut [f64]) {
+        out[0] = self.line.length(step.end) - self.line.length(step.start);
+    }
+
+    fn discrete_memory_energy(&self, memory: &[f64]) -> f64 {
+        0.5 * self.stiffness_at(0.0) * memory[0] * memory[0]
     }
 
     fn potential_energy(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {

@@ -1224,6 +1224,16 @@ impl<'a> Checker<'a> {
                             ok = false;
                         }
                     }
+                    if integrator == IntegratorType::EnergyDecaying
+                        && (0.0..crate::analysis::energy_preserving::MIN_RHO_INF).contains(&rho)
+                    {
+                        self.error(
+                            format!("{what}: `rho_inf` must be in [1/3, 1] for integrator = \"energy_decaying\" (got {rho})"),
+                            self.key(&e, "rho_inf"),
+                            Some("the energy-decaying scheme's strongest dissipation is ρ∞ = 1/3 (docs/integrators.md); for more use integrator = \"generalized_alpha\"".into()),
+                        );
+                        ok = false;
+                    }
                     if let Some((table, entry, why)) =
                         super::components::without_discrete_form(input)
                     {

@@ -722,6 +722,7 @@ struct Work {
     io: InertialOut,
     /// Discrete form ([`discrete`]): strains at the start of the step, nodal rows.
     strain0: Vec<Vector6<f64>>,
+    strain1: Vec<Vector6<f64>>,
     rows_a: Vec<f64>,
     rows_b: Vec<f64>,
 }
@@ -745,6 +746,7 @@ impl Work {
         }
         // One strain per elastic point: at most p + 1 = nn.
         self.strain0.resize(nn, Vector6::zeros());
+        self.strain1.resize(nn, Vector6::zeros());
         for x in [
             &mut self.w,
             &mut self.wd,
@@ -798,6 +800,18 @@ impl Element for BeamElement {
 
     fn discrete_residual(&self, step: &crate::core::DiscreteStep, out: &mut [f64]) {
         self.discrete_rows(step, out)
+    }
+
+    fn discrete_memory_len(&self) -> usize {
+        6 * self.elastic.len()
+    }
+
+    fn discrete_memory(&self, step: &crate::core::DiscreteStep, out: &mut [f64]) {
+        self.strain_increments(step, out)
+    }
+
+    fn discrete_memory_energy(&self, memory: &[f64]) -> f64 {
+        self.memory_energy(memory)
     }
 
     fn discrete_kinetic_energy(&self, x: &ElementInput) -> f64 {
@@ -948,6 +962,15 @@ impl Element for Arc<BeamElement> {
     }
     fn discrete_residual(&self, step: &crate::core::DiscreteStep, out: &mut [f64]) {
         self.as_ref().discrete_residual(step, out)
+    }
+    fn discrete_memory_len(&self) -> usize {
+        self.as_ref().discrete_memory_len()
+    }
+    fn discrete_memory(&self, step: &crate::core::DiscreteStep, out: &mut [f64]) {
+        self.as_ref().discrete_memory(step, out)
+    }
+    fn discrete_memory_energy(&self, memory: &[f64]) -> f64 {
+        self.as_ref().discrete_memory_energy(memory)
     }
     fn discrete_kinetic_energy(&self, x: &ElementInput) -> f64 {
         self.as_ref().discrete_kinetic_energy(x)

@@ -16,8 +16,12 @@
 //!   the statement with mid-point strains).
 //! - **Damping** (stiffness-proportional) at the mid-point configuration with the mean
 //!   rates `Δ/h`: `Δ·r̄ = h ε̇ᵀ D ε̇ ≥ 0`.
-//! - **Decay** (ξ > 0): `ξ d w/(w·Δ)` with `d = Σ w_g Δεᵀ C Δε ≥ 0` over the elastic points
-//!   (the spring's `k Δl²`).
+//! - **Decay** (c > 0, the energy-decaying scheme): the strain increments `e_g = ε_g(q₁) −
+//!   ε_g(q₀)` at the elastic points are the element's dissipation memory; the mid-point
+//!   gradient is taken with the stress `C(ε − ε₀) + c C (e_g − e_g,prev)` and the
+//!   correction along w completes `Δ·r̄ = ΔV + D`, `D = c Σ w_g e_gᵀ C (e_g − e_g,prev)`
+//!   (the spring's `c k Δl (Δl − Δl_prev)`). The added stress goes through the same
+//!   mid-point kinematics as g, so it has no resultant and no moment.
 //! - **Gravity** on the lumped masses: `−m_k g`, the exact gradient of the lumped
 //!   potential.
 
@@ -103,18 +107,31 @@ impl BeamElement {
 
     /// Elastic (and, with `damping`, damping) residual rows of the gathered configuration
     /// into `out` (6 per node; rotation rows conjugate to the node's material increment).
-    fn elastic_rows(&self, g: &mut Work, damping: bool, out: &mut [f64]) {
+    /// `shift`: strain offsets per elastic point subtracted from the reference strains
+    /// (a stress `C shift` added: the decaying scheme's dissipative stress).
+    fn elastic_rows(
+        &self,
+        g: &mut Work,
+        damping: bool,
+        shift: Option<&[Vector6<f64>]>,
+        out: &mut [f64],
+    ) {
         let nn = self.nodes.len();
         out[..6 * nn].fill(0.0);
         g.fq[..nn].fill(super::Quat::zeros());
         let mut eo = ElasticOut::default();
-        for ep in &self.elastic {
+        for (p, ep) in self.elastic.iter().enumerate() {
             let f = self.elastic_fields(ep, g);
+            let (mut eps0, mut k0) = (ep.eps0, ep.k0);
+            if let Some(sh) = shift {
+                eps0 -= sh[p].fixed_rows::<3>(0);
+                k0 -= sh[p].fixed_rows::<3>(3);
+            }
             let sec = ElasticSection {
                 c: &ep.c,
                 d: if damping { ep.d.as_ref() } else { None },
-                eps0: ep.eps0,
-                k0: ep.k0,
+                eps0,
+                k0,
             };
             kernel::elastic(&f, &sec, false, &mut eo);
             for j in 0..nn {
@@ -156,35 +173,37 @@ impl BeamElement {
         with_work(nn, |g| {
             // Strain energies and strains at both ends of the step.
             let mut strain0 = std::mem::take(&mut g.strain0);
+            let mut strain1 = std::mem::take(&mut g.strain1);
             self.gather(step.start, g);
             let v0 = self.strains(g, Some(&mut strain0));
             self.gather(step.end, g);
-            let v1 = self.strains(g, None);
-            let mut d = 0.0;
-            if step.decay > 0.0 {
-                let mut eo = ElasticOut::default();
+            let v1 = self.strains(g, Some(&mut strain1));
+            // Decay: dissipative stress c C (e − e_prev) through the strain offsets
+            // (strain1 becomes the offsets), its dissipation D = c Σ w eᵀ C (e − e_prev).
+            let mut dis = 0.0;
+            let decaying = step.decay > 0.0;
+            if decaying {
                 for (p, ep) in self.elastic.iter().enumerate() {
-                    let f = self.elastic_fields(ep, g);
-                    let sec = ElasticSection {
-                        c: &ep.c,
-                        d: None,
-                        eps0: ep.eps0,
-                        k0: ep.k0,
+                    let e = strain1[p] - strain0[p];
+                    let prev = if step.memory.len() >= 6 * (p + 1) {
+                        Vector6::from_column_slice(&step.memory[6 * p..6 * p + 6])
+                    } else {
+                        Vector6::zeros()
                     };
-                    kernel::elastic(&f, &sec, false, &mut eo);
-                    let de = eo.strain - strain0[p];
-                    d += ep.w * de.dot(&(ep.c * de));
+                    let shift = (e - prev) * step.decay;
+                    dis += ep.w * e.dot(&(ep.c * shift));
+                    strain1[p] = shift;
                 }
             }
-            g.strain0 = strain0;
             // Mid-point gradient, rows conjugate to ψ: (I − ψ̃/2) R₀ᵀ R_mid r_θ.
             self.gather(step.mid, g);
             let mut rows = std::mem::take(&mut g.rows_a);
             let mut damp = std::mem::take(&mut g.rows_b);
-            self.elastic_rows(g, false, &mut rows);
+            let shift = decaying.then_some(&strain1[..self.elastic.len()]);
+            self.elastic_rows(g, false, shift, &mut rows);
             let damped = self.elastic.iter().any(|e| e.d.is_some());
             if damped {
-                self.elastic_rows(g, true, &mut damp);
+                self.elastic_rows(g, true, shift, &mut damp);
                 for (a, b) in damp.iter_mut().zip(&rows) {
                     *a -= b;
                 }
@@ -249,10 +268,10 @@ impl BeamElement {
                 let wk = delta_of(k) - rigid(k) * coef;
                 ww += wk.norm_squared();
             }
-            // Correction and decay along w (skipped when the step is rigid to round-off:
-            // then ΔV − g·Δ and d vanish with it).
+            // Correction along w (skipped when the step is rigid to round-off: then
+            // ΔV + D − g·Δ vanishes with it).
             let scale = if ww > 1e-28 * dd.max(f64::MIN_POSITIVE) {
-                ((v1 - v0 - gd) + step.decay * d) / ww
+                (v1 - v0 + dis - gd) / ww
             } else {
                 0.0
             };
@@ -268,6 +287,39 @@ impl BeamElement {
             }
             g.rows_a = rows;
             g.rows_b = damp;
+            g.strain0 = strain0;
+            g.strain1 = strain1;
         });
+    }
+
+    /// The strain increments `ε(q₁) − ε(q₀)` of the step at the elastic points, 6 each
+    /// (the decaying scheme's memory).
+    pub(super) fn strain_increments(&self, step: &DiscreteStep, out: &mut [f64]) {
+        with_work(self.nodes.len(), |g| {
+            let mut strain0 = std::mem::take(&mut g.strain0);
+            let mut strain1 = std::mem::take(&mut g.strain1);
+            self.gather(step.start, g);
+            self.strains(g, Some(&mut strain0));
+            self.gather(step.end, g);
+            self.strains(g, Some(&mut strain1));
+            for p in 0..self.elastic.len() {
+                let e = strain1[p] - strain0[p];
+                out[6 * p..6 * p + 6].copy_from_slice(e.as_slice());
+            }
+            g.strain0 = strain0;
+            g.strain1 = strain1;
+        });
+    }
+
+    /// `½ Σ w eᵀ C e` of a memory of strain increments.
+    pub(super) fn memory_energy(&self, memory: &[f64]) -> f64 {
+        self.elastic
+            .iter()
+            .enumerate()
+            .map(|(p, ep)| {
+                let e = Vector6::from_column_slice(&memory[6 * p..6 * p + 6]);
+                0.5 * ep.w * e.dot(&(ep.c * e))
+            })
+            .sum()
     }
 }
