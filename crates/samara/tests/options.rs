@@ -1910,9 +1910,10 @@ fn every_granular_key_changes_the_pile() {
         ),
         (
             "regularization_velocity",
+            // The stateless pair law instead of the bristles.
             base.replace(
-                "regularization_velocity = 1e-3 ",
-                "regularization_velocity = 1e-1 ",
+                "bristle_damping = 60.0",
+                "bristle_damping = 60.0\nregularization_velocity = 1e-3",
             ),
             true,
         ),
