@@ -12,7 +12,10 @@
 //!   internal, the walls push horizontally). Tolerance 1e-3 relative: the pile's vertical
 //!   momentum changes at Σ m a_z (Newton's law for the pile, checked to 1e-6 M g), and
 //!   at the end of the example's 3-s run the pile is nearly at rest (speeds below 1 cm/s:
-//!   the stateless sphere–sphere friction lets it creep).
+//!   the pairs stick, but a sphere on the floor keeps spinning about the vertical — point
+//!   contacts carry no drilling moment).
+//! - the set's pair friction sticks and slides as Coulomb's law says, and its bristle
+//!   follows the pair through rebuilds of the candidate list (closed forms below).
 //! - the run is deterministic (the same bits twice).
 
 mod common;
