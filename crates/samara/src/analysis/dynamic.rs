@@ -703,7 +703,7 @@ fn start<'a>(
     mut initial: State,
     t0: f64,
     summary: &mut AnalysisSummary,
-) -> Result<(Integrator<'a>, f64), State> {
+) -> Result<(Integrator<'a>, f64), Box<State>> {
     initial.time = t0;
     let formulation = match settings.formulation {
         FormulationType::Index3 => Formulation::Index3,
@@ -780,7 +780,7 @@ fn start<'a>(
         summary,
         t0,
     ) {
-        return Err(it.state);
+        return Err(Box::new(it.state));
     }
     // Sample-and-hold values at the start (kept when continuing a dynamic analysis).
     sys.sample(&mut it.state, false);
@@ -823,7 +823,7 @@ fn start<'a>(
     }
     drop((init_asm, init_lin, init_matrix));
     if summary.failure.is_some() {
-        return Err(it.state);
+        return Err(Box::new(it.state));
     }
     for (i, nd) in it.state.nodes.iter().enumerate() {
         let v = [nd.a.x, nd.a.y, nd.a.z, nd.wd.x, nd.wd.y, nd.wd.z];
@@ -850,7 +850,7 @@ pub(super) fn consistent_start(
     settings: &DynamicSettings,
     initial: State,
     summary: &mut AnalysisSummary,
-) -> Result<State, State> {
+) -> Result<State, Box<State>> {
     start(sys, settings, initial, settings.t_start, summary).map(|(it, _)| {
         let mut s = it.state;
         s.lambda.clone_from(&it.mu);
@@ -886,7 +886,7 @@ pub fn run_dynamic(
     let (mut it, viol0) = match start(sys, settings, initial, settings.t_start, &mut summary) {
         Ok(x) => x,
         Err(state) => {
-            summary.final_state = state;
+            summary.final_state = *state;
             summary.wall_time = clock.elapsed();
             return Ok(summary);
         }
