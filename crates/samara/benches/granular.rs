@@ -1,14 +1,16 @@
 //! Granular column benchmark (issue #16): N spheres (radius 5 cm, 1 kg) in a loose lattice
 //! of 5 × 5 spheres per layer (pitch 10.5 cm, deterministic offsets of ±2 mm), N/25 layers
 //! high, starting 2 mm above the ground and on each other, in a frictionless box, settling
-//! under gravity with the contact laws of examples/contact/granular_column.toml ([[granular]]: Hunt–Crossley,
-//! LuGre on the ground, regularized Coulomb–Stribeck between spheres, margin 1 cm).
+//! under gravity with the contact laws of examples/contact/granular_column.toml
+//! ([[granular]]: Hunt–Crossley, LuGre on the ground and between spheres, margin 1 cm).
 //!
-//! `cargo bench -p samara --bench granular [-- T] [N…]` (default T = 0.05 s simulated at
-//! h = 1 ms, N = 125 250 500 1000) prints per N the CPU and wall time per step (CPU from
-//! /proc/self/stat: the machine may be shared), Newton iterations per
-//! step, candidate and touching pairs, pattern rebuilds and the time of the broad phase
-//! alone (grid against all pairs); then the growth exponents d log(time)/d log N.
+//! `cargo bench -p samara --bench granular [-- T] [N…] [regularized]` (default T = 0.4 s
+//! simulated at h = 1 ms, N = 125 250 500 1000; `regularized`: the stateless
+//! sphere–sphere friction, v_r = 1 mm/s, instead of the bristles) prints per N the CPU
+//! and wall time per step (CPU from /proc/self/stat: the machine may be shared), Newton
+//! iterations per step, steps rejected (Newton failures), candidate and touching pairs,
+//! pattern rebuilds, the largest speed at the end and the time of the broad phase alone
+//! (grid against all pairs); then the growth exponents d log(time)/d log N.
 
 use samara::analysis::{History, run_analysis};
 use samara::elements::{GranularSet, NormalLaw};
@@ -18,7 +20,7 @@ use samara::system::System;
 use std::time::Instant;
 
 /// The model text of a column of `n` spheres (n a multiple of 25), simulated for `t_end`.
-pub fn column(n: usize, t_end: f64) -> String {
+pub fn column(n: usize, t_end: f64, regularized: bool) -> String {
     let (r, pitch) = (0.05, 0.105);
     let inertia = 0.4 * r * r;
     let off = |i: usize, k: usize| {
@@ -39,6 +41,11 @@ pub fn column(n: usize, t_end: f64) -> String {
             "[[bodies]]\nname = \"s{k}\"\nnode = \"s{k}\"\nmass = 1.0\ninertia = [[{inertia}, 0.0, 0.0], [0.0, {inertia}, 0.0], [0.0, 0.0, {inertia}]]\n\n"
         );
     }
+    let regularization = if regularized {
+        "regularization_velocity = 1e-3"
+    } else {
+        ""
+    };
     s += &format!(
         r#"[[granular]]
 name = "pile"
@@ -60,7 +67,7 @@ dynamic_friction = 0.4
 stribeck_velocity = 0.01
 bristle_stiffness = 1e4
 bristle_damping = 60.0
-regularization_velocity = 1e-3
+{regularization}
 
 [[analyses]]
 name = "settle"
@@ -95,7 +102,8 @@ fn main() {
         .skip(1)
         .filter_map(|a| a.parse().ok())
         .collect();
-    let t_end = args.first().copied().unwrap_or(0.05);
+    let regularized = std::env::args().any(|a| a == "regularized");
+    let t_end = args.first().copied().unwrap_or(0.4);
     let sizes: Vec<usize> = if args.len() > 1 {
         args[1..].iter().map(|&x| x as usize).collect()
     } else {
@@ -103,9 +111,16 @@ fn main() {
     };
     let mut rows = Vec::new();
     for &n in &sizes {
-        let m = Model::from_toml_str(&column(n, t_end), "column.toml")
-            .unwrap()
-            .model;
+        let mut text = column(n, t_end, regularized);
+        // Experiments: GRANULAR_EDIT="from=>to;from=>to" edits the model text.
+        if let Ok(edits) = std::env::var("GRANULAR_EDIT") {
+            for e in edits.split(';').filter(|e| !e.is_empty()) {
+                let (from, to) = e.split_once("=>").expect("from=>to");
+                assert!(text.contains(from), "{from}");
+                text = text.replace(from, to);
+            }
+        }
+        let m = Model::from_toml_str(&text, "column.toml").unwrap().model;
         let sys = System::new(&m);
         let mut h = History::default();
         let cpu0 = cpu_time();
@@ -136,11 +151,26 @@ fn main() {
         let brute = clock.elapsed().as_secs_f64();
         assert_eq!(all, pairs);
         let per_step = cpu / s.steps as f64;
+        let vmax = last.iter().map(|x| x.v.norm()).fold(0.0, f64::max);
+        if std::env::var_os("GRANULAR_FASTEST").is_some() {
+            let mut order: Vec<usize> = (0..last.len()).collect();
+            order.sort_by(|&a, &b| last[b].v.norm().total_cmp(&last[a].v.norm()));
+            for &k in order.iter().take(5) {
+                println!(
+                    "  sphere {k}: x = {:.4?}, v = {:.3e}, ω = {:.3e}",
+                    last[k].x.as_slice(),
+                    last[k].v.norm(),
+                    (last[k].r() * last[k].w).norm()
+                );
+            }
+        }
         println!(
-            "N = {n:5}: {:.3} ms CPU/step, {:.3} ms wall/step ({} steps, {:.2} Newton it./step, {} redos), {} candidate pairs (max {}), {} touching, {} pattern rebuilds; broad phase {:.3} ms (all pairs {:.3} ms)",
+            "N = {n:5}: {t_end} s simulated, {:.1} s CPU, {:.3} ms CPU/step, {:.3} ms wall/step ({} steps, {} rejected, {:.2} Newton it./step, {} redos), max speed at the end {vmax:.2e} m/s, {} candidate pairs (max {}), {} touching, {} pattern rebuilds; broad phase {:.3} ms (all pairs {:.3} ms)",
+            cpu,
             1e3 * per_step,
             1e3 * wall / s.steps as f64,
             s.steps,
+            s.rejected_steps,
             s.newton_iterations as f64 / s.steps as f64,
             s.contact_redos,
             pairs.len(),

@@ -97,6 +97,7 @@ fn batched_stations_assemble_as_the_elements_one_by_one() {
         penalty: 0.0,
         state_rate: 0.0,
         state_row_scale: 1.0,
+        step: 0.0,
     };
     let ops: Vec<Matrix3<f64>> = (0..batched.n_nodes())
         .map(|i| {

@@ -12,7 +12,10 @@
 //!   internal, the walls push horizontally). Tolerance 1e-3 relative: the pile's vertical
 //!   momentum changes at Σ m a_z (Newton's law for the pile, checked to 1e-6 M g), and
 //!   at the end of the example's 3-s run the pile is nearly at rest (speeds below 1 cm/s:
-//!   the stateless sphere–sphere friction lets it creep).
+//!   the pairs stick, but a sphere on the floor keeps spinning about the vertical — point
+//!   contacts carry no drilling moment).
+//! - the set's pair friction sticks and slides as Coulomb's law says, and its bristle
+//!   follows the pair through rebuilds of the candidate list (closed forms below).
 //! - the run is deterministic (the same bits twice).
 
 mod common;
@@ -65,6 +68,49 @@ fn the_column_settles_with_the_ground_carrying_its_weight_and_the_broad_phase_fi
         .iter()
         .map(|n| n.v.norm())
         .fold(0.0, f64::max);
+    let fastest = last
+        .state
+        .nodes
+        .iter()
+        .max_by(|a, b| a.v.norm().total_cmp(&b.v.norm()))
+        .unwrap();
+    println!(
+        "fastest sphere: x = {:?}, |v| = {:.2e} m/s, |ω| = {:.2e} rad/s",
+        fastest.x.as_slice(),
+        fastest.v.norm(),
+        fastest.w.norm()
+    );
+    // Slip speeds of the touching pairs and of the spheres on the floor.
+    let x = samara::core::ElementInput::nodes(&last.state.nodes);
+    let ctx = sys.context(last.time, 1.0);
+    let mut touching = Vec::new();
+    set.candidate_pairs(&last.state.nodes, 0.0, &mut touching);
+    let mut pair_slip: f64 = 0.0;
+    for &(i, j) in &touching {
+        let z = last
+            .state
+            .pair_bristles
+            .iter()
+            .find(|b| b.key == (0, i, j))
+            .map_or(nalgebra::Vector3::zeros(), |b| b.z);
+        let mut p = set.pair(i, j);
+        p.set_bristle(z, 0.0);
+        let mut out = [0.0; 4];
+        samara::core::Element::outputs(&p, &ctx, &x, &mut out);
+        pair_slip = pair_slip.max(out[3]);
+    }
+    let mut out = vec![0.0; sys.output_names.len()];
+    sys.element_outputs(&ctx, &last.state, &mut out);
+    let floor_slip = sys
+        .output_names
+        .iter()
+        .zip(&out)
+        .filter(|(n, _)| n.contains(".ground.") && n.ends_with(".slip_velocity"))
+        .map(|(_, v)| *v)
+        .fold(0.0, f64::max);
+    println!(
+        "largest slip speed: touching pairs {pair_slip:.2e} m/s, on the floor {floor_slip:.2e} m/s"
+    );
     // The pile's vertical momentum rate Σ m a_z (every sphere 1 kg).
     let pz: f64 = last.state.nodes.iter().map(|n| n.a[2]).sum();
     let balance = reaction - weight - pz;
@@ -244,9 +290,9 @@ fn bad_granular_sets_are_rejected_where_they_are_written() {
             "`margin` must be positive",
         ),
         (
-            "regularization_velocity = 1e-3 ",
-            "",
-            "`regularization_velocity` is required with friction",
+            "bristle_damping = 60.0",
+            "bristle_damping = 60.0\nregularization_velocity = -1e-3",
+            "`regularization_velocity` must be positive",
         ),
         (
             "type = \"dynamic\"",
@@ -281,4 +327,201 @@ fn bad_granular_sets_are_rejected_where_they_are_written() {
             assert!(line >= want, "{}", d.message);
         }
     }
+}
+
+/// B (m = 2 kg, ρ = 0.1 m, rotation held by a huge inertia so that it cannot roll) pressed
+/// by m g onto A (ρ_A = 1000 m, clamped) and pulled sideways by `force`, in one granular
+/// set with LuGre pair friction (μ_s = 0.5, μ_d = 0.3, Stribeck speed `stribeck`,
+/// σ₀ = 1e5 /m, σ₁ = 200 s/m: the tangential bristle oscillator m, σ₀ m g is about
+/// critically damped).
+/// A third sphere C flies past B at 4 m/s, 6 mm apart (within the 1-cm margin, never
+/// touching): the candidate list and the pattern are rebuilt while B is held.
+fn set_pair(force: f64, stribeck: f64, t_end: f64) -> String {
+    let (m, g) = (2.0, 9.81);
+    format!(
+        r#"
+[model]
+name = "set_pair"
+gravity = [0.0, 0.0, 0.0]
+
+[[nodes]]
+name = "a"
+position = [0.0, 0.0, -1000.0]
+
+[[nodes]]
+name = "b"
+position = [0.0, 0.0, {zb}]
+
+[[nodes]]
+name = "c"
+position = [-0.6, 0.205, 0.12]
+velocity = [4.0, 0.0, 0.0]
+
+[[bodies]]
+name = "a"
+node = "a"
+mass = 100.0
+inertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+
+[[bodies]]
+name = "b"
+node = "b"
+mass = {m}
+inertia = [[1e6, 0.0, 0.0], [0.0, 1e6, 0.0], [0.0, 0.0, 1e6]]
+
+[[bodies]]
+name = "c"
+node = "c"
+mass = 1.0
+inertia = [[0.004, 0.0, 0.0], [0.0, 0.004, 0.0], [0.0, 0.0, 0.004]]
+
+[[joints]]
+name = "clamp"
+type = "fixed"
+node_a = "ground"
+node_b = "a"
+
+[[forces]]
+name = "pull"
+node = "b"
+force = [{force}, 0.0, {press}]
+
+[[granular]]
+name = "g"
+nodes = ["a", "b", "c"]
+radii = [1000.0, 0.1, 0.1]
+margin = 0.01
+ground_point = [0.0, 0.0, -10000.0]
+normal = "linear"
+stiffness = 1e7
+damping = 2e3
+static_friction = 0.5
+dynamic_friction = 0.3
+stribeck_velocity = {stribeck}
+bristle_stiffness = 1e5
+bristle_damping = 200.0
+
+[[analyses]]
+name = "pull"
+type = "dynamic"
+t_end = {t_end}
+step = 5e-4
+rho_inf = 0.6
+"#,
+        zb = 0.1 - m * g / 1e7,
+        press = -m * g,
+    )
+}
+
+/// The bristle deflection of the pair (A, B) in a frame (zero when it has none).
+fn bristle_ab(state: &samara::system::State) -> nalgebra::Vector3<f64> {
+    state
+        .pair_bristles
+        .iter()
+        .find(|b| b.key == (0, 0, 1))
+        .map_or(nalgebra::Vector3::zeros(), |b| b.z)
+}
+
+/// Issue #16: the sphere–sphere friction of a granular set sticks. Closed forms
+/// (Coulomb friction on a block that cannot roll, N = m g):
+/// - F = 0.8 μ_s N < μ_s N, applied at t = 0 (v_s = 0.1 m/s: the load's transient slip,
+///   ≈ F/(m ω) = 4 mm/s, keeps g(s) within 3e-4 of μ_s — with a Stribeck speed below the
+///   transient LuGre breaks away under a sudden load, as it should): B sticks. At rest the
+///   bristle carries the load,
+///   σ₀ N |z| = F (the LuGre law at w = 0; tolerance 1e-6 relative, the Newton tolerance
+///   on a 4-µm deflection), B's speed decays with the tangential oscillator
+///   (ω = √(σ₀ g) ≈ 990 rad/s, about critically damped: e^(−ωt) < 1e-40 after 0.1 s;
+///   tolerance 1e-7 m/s, far below the ≈ 8e-4 m/s creep the stateless law gives here),
+///   and B does not move while C passes and the pairs are rebuilt (|Δx_B| < 1e-7 m, ten
+///   Newton tolerances (1e-8 m), against the 4-µm jump a bristle reset to zero would
+///   cause).
+/// - F = 1.5 μ_s N > μ_s N (v_s = 1 mm/s): B slides with a = (F − μ_d N)/m (the bristle
+///   settles at
+///   g(s)/σ₀ with g(s) = μ_d to e^(−(s/v_s)²) < 1e-40 once s > 1 cm/s); tolerance 1e-4
+///   relative on a from the velocity change over the second half (A's curvature under
+///   the 5-mm slide changes N by < 1e-5).
+#[test]
+fn set_pairs_stick_below_the_static_limit_and_slide_with_coulomb_friction_above_it() {
+    let (m, g, ms, md, s0) = (2.0, 9.81, 0.5, 0.3, 1e5);
+    let n = m * g;
+    // Stick, with C passing.
+    let f = 0.8 * ms * n;
+    let (s, h) = run(&model(&set_pair(f, 0.1, 0.3)));
+    assert!(s.failure.is_none(), "{:?}", s.failure);
+    let last = h.last().unwrap();
+    let z = bristle_ab(&last.state);
+    let vb = last.state.nodes[1].v.norm();
+    // Before C comes near (t = 0.1 s: C 0.2 m away) and at the end.
+    let before = h.frames.iter().find(|fr| fr.time >= 0.1 - 1e-9).unwrap();
+    let dx = (last.state.nodes[1].x - before.state.nodes[1].x).norm();
+    let c_passed = last.state.nodes[2].x[0] > 0.5;
+    println!(
+        "stick: σ₀ N |z| = {:.9} N vs F = {f:.9} N ({:.2e}); |v_B| = {vb:.2e} m/s; Δx_B during C's pass {dx:.2e} m; {} pattern rebuilds, {} steps rejected",
+        s0 * n * z.norm(),
+        (s0 * n * z.norm() - f).abs() / f,
+        s.pattern_rebuilds,
+        s.rejected_steps
+    );
+    assert!(c_passed);
+    assert!(s.pattern_rebuilds >= 2, "C never became a candidate");
+    assert!((s0 * n * z.norm() - f).abs() < 1e-6 * f);
+    assert!(z[0] > 0.0, "the bristle holds B against the pull");
+    assert!(vb < 1e-7, "{vb}");
+    assert!(dx < 1e-7, "{dx}");
+    // Every frame: the pair (A, B) keeps its deflection through the rebuilds (no reset),
+    // and the pairs apart (C with A or B) carry none.
+    for fr in h.frames.iter().filter(|fr| fr.time >= 0.1) {
+        assert!((bristle_ab(&fr.state) - z).norm() < 1e-6 * z.norm());
+        for b in &fr.state.pair_bristles {
+            if b.key != (0, 0, 1) {
+                assert_eq!(b.z, nalgebra::Vector3::zeros(), "{:?}", b.key);
+            }
+        }
+    }
+    // Slide.
+    let f = 1.5 * ms * n;
+    let (s, h) = run(&model(&set_pair(f, 1e-3, 0.05)));
+    assert!(s.failure.is_none(), "{:?}", s.failure);
+    let k = h.frames.len() / 2;
+    let (f0, f1) = (&h.frames[k], h.last().unwrap());
+    let a = (f1.state.nodes[1].v[0] - f0.state.nodes[1].v[0]) / (f1.time - f0.time);
+    let a_ref = (f - md * n) / m;
+    println!(
+        "slide: a = {a:.6} vs (F − μ_d N)/m = {a_ref:.6} m/s² ({:.2e})",
+        (a - a_ref).abs() / a_ref
+    );
+    assert!((a - a_ref).abs() < 1e-4 * a_ref);
+}
+
+/// The bristles follow the pairs through a new candidate list: a pair kept keeps its
+/// deflection, a new pair starts at zero, a pair dropped is forgotten.
+#[test]
+fn pair_bristles_follow_their_pairs_when_the_list_changes() {
+    use nalgebra::Vector3;
+    use samara::core::{PairBristle, remap_bristles};
+    let old = vec![
+        PairBristle {
+            key: (0, 1, 2),
+            z: Vector3::new(1.0, 0.0, 0.0),
+        },
+        PairBristle {
+            key: (0, 1, 5),
+            z: Vector3::new(0.0, 2.0, 0.0),
+        },
+        PairBristle {
+            key: (1, 0, 1),
+            z: Vector3::new(0.0, 0.0, 3.0),
+        },
+    ];
+    let new = remap_bristles(&old, &[(0, 0, 1), (0, 1, 5), (0, 2, 3), (1, 0, 1)]);
+    let got: Vec<_> = new.iter().map(|b| (b.key, b.z)).collect();
+    assert_eq!(
+        got,
+        vec![
+            ((0, 0, 1), Vector3::zeros()),
+            ((0, 1, 5), Vector3::new(0.0, 2.0, 0.0)),
+            ((0, 2, 3), Vector3::zeros()),
+            ((1, 0, 1), Vector3::new(0.0, 0.0, 3.0)),
+        ]
+    );
 }

@@ -200,6 +200,8 @@ struct Integrator<'a> {
     breakpoints: Vec<f64>,
     /// The granular sets' candidate pairs and where they were found.
     contacts: ContactPairs,
+    /// The size of the step solved into `trial`.
+    trial_step: f64,
 }
 
 /// Candidate pairs of the granular sets (a Verlet list, [`crate::elements::GranularSet`]):
@@ -209,6 +211,8 @@ struct ContactPairs {
     pairs: Vec<(usize, usize, usize)>,
     reference: Vec<Vec<Vector3<f64>>>,
     scratch: Vec<(usize, usize)>,
+    /// Some set has pair friction with bristles (history kept in `State::pair_bristles`).
+    with_bristles: bool,
     /// Times the pattern was rebuilt, largest number of pairs, and the factorizations
     /// and fallbacks of the linear solvers replaced.
     rebuilds: usize,
@@ -235,6 +239,17 @@ impl ContactPairs {
             .iter()
             .map(|set| set.nodes.iter().map(|&i| state.nodes[i].x).collect())
             .collect();
+    }
+
+    /// The pairs become `pairs`: the bristle deflections of `states` follow them (kept for
+    /// a pair kept, zero for a new one).
+    fn adopt(&mut self, pairs: Vec<(usize, usize, usize)>, states: [&mut State; 2]) {
+        for s in states {
+            if !s.pair_bristles.is_empty() || self.with_bristles {
+                s.pair_bristles = crate::core::remap_bristles(&s.pair_bristles, &pairs);
+            }
+        }
+        self.pairs = pairs;
     }
 
     /// The contact elements of the pairs.
@@ -269,6 +284,7 @@ impl Integrator<'_> {
     fn step(&mut self, h: f64, predictor: Predictor) -> Result<NewtonReport, NewtonFailure> {
         let ga = self.ga;
         let t1 = self.state.time + h;
+        self.trial_step = h;
         self.trial.clone_from(&self.state);
         self.trial.time = t1;
         let predictor = match predictor {
@@ -376,6 +392,7 @@ impl Integrator<'_> {
             } else {
                 1.0
             },
+            step: h,
         };
         if h != self.factored_h {
             self.lin.invalidate();
@@ -384,6 +401,8 @@ impl Integrator<'_> {
             max_iterations: self.settings.solver.max_iterations,
             constraint_tolerance: self.settings.solver.tolerance,
             reuse_jacobian: self.settings.jacobian == JacobianUpdate::Modified,
+            // Granular sets: damped Newton (the pair friction's stick–slip kinks).
+            line_search: !self.sys.granular.is_empty(),
         };
         // A step ending on a breakpoint sees the forcing's left limit there.
         let ctx_time = if self.on_breakpoint(t1) {
@@ -562,13 +581,19 @@ impl Integrator<'_> {
             union.extend_from_slice(&self.contacts.pairs);
             union.sort_unstable();
             union.dedup();
-            self.contacts.pairs = union;
+            self.contacts
+                .adopt(union, [&mut self.state, &mut self.trial]);
             self.rebuild_pattern();
             return false;
         }
         self.contacts.set_reference(sys, &self.trial);
         if found != self.contacts.pairs {
-            self.contacts.pairs = found;
+            // The trial's bristles are still those of the step's start (updated when it
+            // is accepted, [`Integrator::accept`]): a pair kept keeps them, a new pair was
+            // not in contact during the step (else it would have been missed) and starts
+            // at zero.
+            self.contacts
+                .adopt(found, [&mut self.state, &mut self.trial]);
             self.rebuild_pattern();
         }
         true
@@ -659,6 +684,11 @@ impl Integrator<'_> {
             let wn = self.acc[z0 + j];
             self.acc[z0 + j] = self.fo.algorithmic_rate(wn, p.zd, z.zd);
         }
+        // The granular pairs' bristles at the end of the step (the trial's are the start
+        // values the step used, aligned with the assembler's pairs).
+        for (b, p) in self.trial.pair_bristles.iter_mut().zip(self.asm.pairs()) {
+            b.z = p.bristle_end(&self.trial.nodes, b.z, self.trial_step);
+        }
         self.sys.update_passive_coordinates(&mut self.trial, false);
         std::mem::swap(&mut self.state, &mut self.trial);
     }
@@ -673,7 +703,7 @@ fn start<'a>(
     mut initial: State,
     t0: f64,
     summary: &mut AnalysisSummary,
-) -> Result<(Integrator<'a>, f64), State> {
+) -> Result<(Integrator<'a>, f64), Box<State>> {
     initial.time = t0;
     let formulation = match settings.formulation {
         FormulationType::Index3 => Formulation::Index3,
@@ -708,12 +738,18 @@ fn start<'a>(
         restart: None,
         breakpoints: sys.breakpoints(),
         contacts: ContactPairs::default(),
+        trial_step: 0.0,
     };
     // Granular sets: the candidate pairs at the start, in the pattern from the first
     // assembly on.
     if !sys.granular.is_empty() {
         let found = it.contacts.detect(sys, &it.state);
-        it.contacts.pairs = found;
+        it.contacts.with_bristles = sys
+            .granular
+            .iter()
+            .any(|g| matches!(g.friction, Some(crate::elements::PairFriction::LuGre(_))));
+        let mut trial = it.state.clone();
+        it.contacts.adopt(found, [&mut it.state, &mut trial]);
         it.contacts.set_reference(sys, &it.state);
         it.rebuild_pattern();
     }
@@ -744,7 +780,7 @@ fn start<'a>(
         summary,
         t0,
     ) {
-        return Err(it.state);
+        return Err(Box::new(it.state));
     }
     // Sample-and-hold values at the start (kept when continuing a dynamic analysis).
     sys.sample(&mut it.state, false);
@@ -787,7 +823,7 @@ fn start<'a>(
     }
     drop((init_asm, init_lin, init_matrix));
     if summary.failure.is_some() {
-        return Err(it.state);
+        return Err(Box::new(it.state));
     }
     for (i, nd) in it.state.nodes.iter().enumerate() {
         let v = [nd.a.x, nd.a.y, nd.a.z, nd.wd.x, nd.wd.y, nd.wd.z];
@@ -814,7 +850,7 @@ pub(super) fn consistent_start(
     settings: &DynamicSettings,
     initial: State,
     summary: &mut AnalysisSummary,
-) -> Result<State, State> {
+) -> Result<State, Box<State>> {
     start(sys, settings, initial, settings.t_start, summary).map(|(it, _)| {
         let mut s = it.state;
         s.lambda.clone_from(&it.mu);
@@ -850,7 +886,7 @@ pub fn run_dynamic(
     let (mut it, viol0) = match start(sys, settings, initial, settings.t_start, &mut summary) {
         Ok(x) => x,
         Err(state) => {
-            summary.final_state = state;
+            summary.final_state = *state;
             summary.wall_time = clock.elapsed();
             return Ok(summary);
         }

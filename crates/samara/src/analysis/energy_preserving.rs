@@ -734,7 +734,7 @@ pub(super) fn run_energy_consistent(
     let state = match super::dynamic::consistent_start(sys, settings, initial, &mut summary) {
         Ok(s) => s,
         Err(s) => {
-            summary.final_state = s;
+            summary.final_state = *s;
             summary.wall_time = clock.elapsed();
             return Ok(summary);
         }

@@ -227,6 +227,7 @@ pub fn consistent_accelerations(
         // The element states' rates ż are unknowns of this problem like v̇.
         state_rate: 1.0,
         state_row_scale: 1.0,
+        step: 0.0,
     };
     asm.assemble(sys, state, ctx, &coef, &[], residual, Some(matrix));
     asm.acceleration_rows(sys, state, ctx, residual);

@@ -252,6 +252,7 @@ pub fn run_static(
         max_iterations: settings.solver.max_iterations,
         constraint_tolerance: settings.solver.tolerance,
         reuse_jacobian: false,
+        line_search: false,
     };
     // The first record is the unloaded state (load factor 0): the assembled reference
     // configuration, reactions as the least-squares multipliers there.

@@ -9,7 +9,7 @@ mod state;
 pub use constraint::{Constraint, CoordinateTangents, RowRole, RowTerms};
 pub use discrete::{DiscreteStep, gonzalez_correction};
 pub use element::{Element, ElementInput, EvalContext, LocalTerms, Need, SignalTerms, add_block};
-pub use state::{Coordinate, ElementState, NodeState, State};
+pub use state::{Coordinate, ElementState, NodeState, PairBristle, State, remap_bristles};
 
 /// Either the fixed inertial frame or one of the model's nodes (by index).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -64,4 +64,34 @@ pub struct State {
     /// element by element (`System::held_offsets`). Empty when nothing samples (statics):
     /// every hold then passes its input through.
     pub held: Box<[f64]>,
+    /// The LuGre bristle deflections of the granular sets' candidate sphere pairs (history
+    /// variables, [`crate::elements::SpherePair::bristle_end`]), sorted by pair, in the
+    /// order of the integrator's candidate list; empty without sets or pair friction.
+    pub pair_bristles: Vec<PairBristle>,
+}
+
+/// The bristle deflection z (global components, in the tangent plane) of the sphere pair
+/// `(i, j)` (i < j, indices into the set's spheres) of granular set `set`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PairBristle {
+    pub key: (usize, usize, usize),
+    pub z: Vector3<f64>,
+}
+
+/// The bristles of `old` carried over to the pairs `keys` (both sorted): a pair kept keeps
+/// its deflection, a new pair starts at zero.
+pub fn remap_bristles(old: &[PairBristle], keys: &[(usize, usize, usize)]) -> Vec<PairBristle> {
+    let mut k = 0;
+    keys.iter()
+        .map(|&key| {
+            while k < old.len() && old[k].key < key {
+                k += 1;
+            }
+            let z = match old.get(k) {
+                Some(b) if b.key == key => b.z,
+                _ => Vector3::zeros(),
+            };
+            PairBristle { key, z }
+        })
+        .collect()
 }

@@ -16,13 +16,17 @@
 //! when it fails; a step that ends with a pair in contact that was not a candidate is
 //! redone with it (see `analysis::dynamic`).
 //!
-//! Pair friction, when on, is the stateless regularized Coulomb–Stribeck law
-//! ([`PairFriction::Regularized`]): pairs come and go with the candidate set, and a
-//! stateless law needs no bristle state to be created or dropped with them.
+//! Pair friction, when on, is LuGre with the bristle deflection as a history variable of
+//! the pair ([`SpherePair::with_bristle`]: backward Euler, condensed, so the pair has no
+//! unknowns of its own and the Newton unknowns do not change when pairs come and go); the
+//! integrator keeps the deflections keyed by pair (`State::pair_bristles`), carries them
+//! over when the candidate list is rebuilt, starts new pairs at zero and drops a pair's
+//! deflection when it separates. The stateless regularized Coulomb–Stribeck law
+//! ([`PairFriction::Regularized`]) is the alternative without stick.
 
 use super::contact::NormalLaw;
 use super::{Element, EvalContext, PairFriction, SpherePair};
-use crate::core::{ElementInput, NodeState};
+use crate::core::{ElementInput, NodeState, PairBristle};
 use nalgebra::Vector3;
 
 /// Spheres in mutual contact.
@@ -49,6 +53,7 @@ impl GranularSet {
             self.law,
         )
         .with_friction(self.friction)
+        .with_bristle(Vector3::zeros(), 0.0)
     }
 
     /// Gap `|x_i − x_j| − ρ_i − ρ_j` of spheres i, j.
@@ -117,25 +122,45 @@ impl GranularSet {
     }
 
     /// Σ over the touching pairs of `f(pair element)`.
+    /// (the bristle deflections of set `set` looked up in `bristles`, zero where absent).
     fn sum_touching(
         &self,
         nodes: &[NodeState],
+        set: usize,
+        bristles: &[PairBristle],
         f: impl Fn(&SpherePair, &ElementInput) -> f64,
     ) -> f64 {
         let mut pairs = Vec::new();
         self.candidate_pairs(nodes, 0.0, &mut pairs);
         let x = ElementInput::nodes(nodes);
-        pairs.iter().map(|&(i, j)| f(&self.pair(i, j), &x)).sum()
+        pairs
+            .iter()
+            .map(|&(i, j)| {
+                let z = bristles
+                    .binary_search_by(|b| b.key.cmp(&(set, i, j)))
+                    .map_or(Vector3::zeros(), |k| bristles[k].z);
+                let mut p = self.pair(i, j);
+                p.set_bristle(z, 0.0);
+                f(&p, &x)
+            })
+            .sum()
     }
 
     /// Elastic energy of the normal forces of the touching pairs.
     pub fn potential_energy(&self, ctx: &EvalContext, nodes: &[NodeState]) -> f64 {
-        self.sum_touching(nodes, |p, x| p.potential_energy(ctx, x))
+        self.sum_touching(nodes, 0, &[], |p, x| p.potential_energy(ctx, x))
     }
 
-    /// Power dissipated by the touching pairs (normal damping and friction).
-    pub fn dissipated_power(&self, nodes: &[NodeState]) -> f64 {
-        self.sum_touching(nodes, |p, x| p.dissipated_power(x))
+    /// Power dissipated by the touching pairs (normal damping and friction), this being
+    /// set number `set` with the pairs' bristle deflections in `bristles`
+    /// (`State::pair_bristles`).
+    pub fn dissipated_power(
+        &self,
+        set: usize,
+        nodes: &[NodeState],
+        bristles: &[PairBristle],
+    ) -> f64 {
+        self.sum_touching(nodes, set, bristles, |p, x| p.dissipated_power(x))
     }
 
     /// Number of pairs in contact (gap < 0).

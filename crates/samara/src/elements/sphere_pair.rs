@@ -22,6 +22,18 @@
 //!   tangential part `P z` acts, P = I − n nᵀ, so no tangent basis is needed and no
 //!   direction of n is singular): `r_z = ż − w + σ₀ |w| z / g(|w|) = 0`,
 //!   `F_t = −N (σ₀ P z + σ₁ P ż + σ₂ w)`. Sticks below μ_s N, slides at μ_d N.
+//!
+//!   In a granular set ([`super::GranularSet`]) the pairs come and go, so the bristle is a
+//!   history variable of the pair instead of an unknown of the system (as the tangential
+//!   spring of a DEM contact): its rate equation is discretized by backward Euler over the
+//!   step h and condensed, `ż = (w − ψ z₀)/(1 + h ψ)`, `z = z₀ + h ż` (z₀ the deflection
+//!   at the start of the step; linear in z, so this is exact), which makes F_t a function
+//!   of the node unknowns alone with exact tangents through w and ψ(|w|). Backward Euler
+//!   gives `ż = w − ψ z` at the end of the step, so the force at an accepted state follows
+//!   from its z with h = 0 (energies, restarts), and stick (w → 0: ż → 0, z held) and steady
+//!   slip (z → g(s) w/(σ₀ s)) are those of the ODE. The integrator keeps z per pair
+//!   (`State::pair_bristles`, keyed by the pair), projects it on the tangent plane after
+//!   each step and drops it when the pair separates ([`SpherePair::bristle_end`]).
 //! - regularized Coulomb–Stribeck ([`PairFriction::Regularized`], no states):
 //!   `F_t = −N (g(|w|) w / √(|w|² + v_r²) + σ₂ w)`, `g(s) = μ_d + (μ_s − μ_d) e^(−(s/v_s)²)`:
 //!   |F_t| → g N when |w| ≫ v_r; below v_r it is a viscous law (creep at speed
@@ -66,6 +78,16 @@ struct PairResult<S> {
     delta_dot: f64,
     friction: Vector3<f64>,
     slip: Vector3<f64>,
+    /// The bristle deflection z (LuGre).
+    bristle: Vector3<f64>,
+}
+
+/// The condensed LuGre bristle of a pair in a granular set: its deflection at the start
+/// of the step and the step (0: the rate equation at the state).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Bristle {
+    pub z0: Vector3<f64>,
+    pub step: f64,
 }
 
 /// A sphere–sphere contact.
@@ -76,6 +98,8 @@ pub struct SpherePair {
     radii: [f64; 2],
     law: NormalLaw,
     friction: Option<PairFriction>,
+    /// LuGre as a history variable instead of states (pairs of a granular set).
+    bristle: Option<Bristle>,
 }
 
 /// `[N, N_el]` of a normal law over any scalar (zero out of contact and when it would
@@ -160,13 +184,60 @@ impl SpherePair {
             radii,
             law,
             friction: None,
+            bristle: None,
         }
+    }
+
+    /// The pair with its LuGre bristle condensed into a history variable (no states):
+    /// deflection `z0` at the start of a step of size `step` (0: at the state).
+    pub fn with_bristle(mut self, z0: Vector3<f64>, step: f64) -> Self {
+        self.bristle = Some(Bristle { z0, step });
+        self
+    }
+
+    /// Sets the condensed bristle's start deflection and step (no effect without one).
+    #[inline]
+    pub fn set_bristle(&mut self, z0: Vector3<f64>, step: f64) {
+        if let Some(b) = &mut self.bristle {
+            *b = Bristle { z0, step };
+        }
+    }
+
+    /// Whether the pair carries a condensed bristle.
+    pub fn has_bristle(&self) -> bool {
+        self.bristle.is_some() && self.lugre().is_some()
+    }
+
+    /// The condensed bristle's deflection at the end of a step of size `step` that started
+    /// from `z0`, at the converged `nodes`: projected on the tangent plane there (the
+    /// normal part never acts), zero when the spheres are apart (a pair that separates
+    /// forgets its stick).
+    pub fn bristle_end(&self, nodes: &[NodeState], z0: Vector3<f64>, step: f64) -> Vector3<f64> {
+        if !self.has_bristle() {
+            return Vector3::zeros();
+        }
+        let (a, b) = (&nodes[self.nodes[0]], &nodes[self.nodes[1]]);
+        let d = b.x - a.x;
+        let dist = d.norm();
+        if dist >= self.radii[0] + self.radii[1] || dist == 0.0 {
+            return Vector3::zeros();
+        }
+        let n = d / dist;
+        let z = self
+            .compute_with::<f64>(nodes, &[], Some(&Bristle { z0, step }))
+            .bristle;
+        z - n * n.dot(&z)
     }
 
     /// The pair with friction.
     pub fn with_friction(mut self, friction: Option<PairFriction>) -> Self {
         self.friction = friction;
         self
+    }
+
+    /// Global LuGre states (a pair outside a granular set).
+    fn lugre_states(&self) -> bool {
+        self.lugre().is_some() && self.bristle.is_none()
     }
 
     fn lugre(&self) -> Option<&Friction> {
@@ -177,6 +248,16 @@ impl SpherePair {
     }
 
     fn compute<S: Scalar>(&self, nodes: &[NodeState], states: &[ElementState]) -> PairResult<S> {
+        self.compute_with(nodes, states, self.bristle.as_ref())
+    }
+
+    /// The kernel with the condensed bristle `bristle` (None: global states).
+    fn compute_with<S: Scalar>(
+        &self,
+        nodes: &[NodeState],
+        states: &[ElementState],
+        bristle: Option<&Bristle>,
+    ) -> PairResult<S> {
         let (na, nb) = (&nodes[self.nodes[0]], &nodes[self.nodes[1]]);
         let [ra, rb] = self.radii;
         let zero = S::cst(0.0);
@@ -204,19 +285,10 @@ impl SpherePair {
         let s2 = dot(&w, &w);
         let mut ft = [zero; 3];
         let mut state_rows = [zero; 3];
+        let mut z_end = Vector3::zeros();
         match &self.friction {
             None => {}
             Some(PairFriction::LuGre(f)) => {
-                let z: V3<S> = std::array::from_fn(|j| {
-                    let mut x = S::cst(states[j].z);
-                    x.add_deriv(12 + j, 1.0);
-                    x
-                });
-                let zd: V3<S> = std::array::from_fn(|j| {
-                    let mut x = S::cst(states[j].zd);
-                    x.add_deriv(NV + 12 + j, 1.0);
-                    x
-                });
                 // ψ(s) = σ₀ s / g(s); |w| is not differentiable at 0, where ψ z = 0.
                 let psi = if s2.re() > 0.0 {
                     let s = s2.sqrt();
@@ -224,9 +296,31 @@ impl SpherePair {
                 } else {
                     zero
                 };
-                for j in 0..3 {
-                    state_rows[j] = zd[j] - w[j] + psi * z[j];
-                }
+                let (z, zd): (V3<S>, V3<S>) = match bristle {
+                    None => {
+                        let z = std::array::from_fn(|j| {
+                            let mut x = S::cst(states[j].z);
+                            x.add_deriv(12 + j, 1.0);
+                            x
+                        });
+                        let zd = std::array::from_fn(|j| {
+                            let mut x = S::cst(states[j].zd);
+                            x.add_deriv(NV + 12 + j, 1.0);
+                            x
+                        });
+                        for j in 0..3 {
+                            state_rows[j] = zd[j] - w[j] + psi * z[j];
+                        }
+                        (z, zd)
+                    }
+                    Some(b) => {
+                        // Backward Euler, condensed: ż = (w − ψ z₀)/(1 + hψ), z = z₀ + h ż.
+                        let den = psi * b.step + 1.0;
+                        let zd: V3<S> = std::array::from_fn(|j| (w[j] - psi * b.z0[j]) / den);
+                        (std::array::from_fn(|j| zd[j] * b.step + b.z0[j]), zd)
+                    }
+                };
+                z_end = re3(&z);
                 let pz = sub(&z, &scale(&n, dot(&n, &z)));
                 let pzd = sub(&zd, &scale(&n, dot(&n, &zd)));
                 let phi = add(
@@ -259,6 +353,7 @@ impl SpherePair {
             delta_dot: delta_dot.re(),
             friction: re3(&ft),
             slip: re3(&w),
+            bristle: z_end,
         }
     }
 }
@@ -280,11 +375,11 @@ impl Element for SpherePair {
     }
 
     fn n_states(&self) -> usize {
-        if self.lugre().is_some() { 3 } else { 0 }
+        if self.lugre_states() { 3 } else { 0 }
     }
 
     fn state_names(&self) -> Vec<String> {
-        if self.lugre().is_some() {
+        if self.lugre_states() {
             vec!["bristle_x".into(), "bristle_y".into(), "bristle_z".into()]
         } else {
             Vec::new()

@@ -77,6 +77,9 @@ pub struct Coefficients {
     pub state_rate: f64,
     /// `s_z`, multiplies the element-state rows.
     pub state_row_scale: f64,
+    /// The time step h of a dynamic step (0 otherwise): the granular pairs' condensed
+    /// bristles are integrated over it ([`SpherePair::with_bristle`]).
+    pub step: f64,
 }
 
 impl Coefficients {
@@ -92,6 +95,7 @@ impl Coefficients {
             penalty,
             state_rate: 0.0,
             state_row_scale: 1.0,
+            step: 0.0,
         }
     }
 
@@ -402,7 +406,11 @@ impl Assembler {
             }
         }
         for p in &pairs {
-            debug_assert_eq!(p.n_states(), 0, "granular pairs have no states");
+            debug_assert_eq!(
+                p.n_states(),
+                0,
+                "granular pairs have no unknowns of their own"
+            );
             let [a, b] = [p.nodes()[0], p.nodes()[1]];
             couplings.push((a, b));
         }
@@ -641,6 +649,11 @@ impl Assembler {
         }
     }
 
+    /// The granular candidate pairs' contacts ([`Assembler::with_pairs`]).
+    pub fn pairs(&self) -> &[SpherePair] {
+        &self.pairs
+    }
+
     pub fn formulation(&self) -> Formulation {
         self.formulation
     }
@@ -836,8 +849,17 @@ impl Assembler {
                 self.scatter_element(sys, k, t, coef, residual, matrix.as_deref_mut());
             }
         }
-        // Granular candidate pairs: node blocks only.
-        for (p, slots) in self.pairs.iter().zip(&self.pair_slots) {
+        // Granular candidate pairs: node blocks only; their bristles (history) from the
+        // state, aligned with the pairs.
+        debug_assert!(
+            state.pair_bristles.is_empty() || state.pair_bristles.len() == self.pairs.len()
+        );
+        for (k, (p, slots)) in self.pairs.iter_mut().zip(&self.pair_slots).enumerate() {
+            let z0 = state
+                .pair_bristles
+                .get(k)
+                .map_or(nalgebra::Vector3::zeros(), |b| b.z);
+            p.set_bristle(z0, coef.step);
             let t = &mut self.pair_terms;
             let need = if tangents.is_some() {
                 Need::ResidualAndTangents

@@ -136,6 +136,7 @@ impl System {
             states,
             lambda: vec![0.0; self.n_multipliers],
             held: Box::default(),
+            pair_bristles: Vec::new(),
         };
         self.measure_coordinates(&mut s);
         s
@@ -793,7 +794,8 @@ impl System {
             + self
                 .granular
                 .iter()
-                .map(|g| g.dissipated_power(&s.nodes))
+                .enumerate()
+                .map(|(k, g)| g.dissipated_power(k, &s.nodes, &s.pair_bristles))
                 .sum::<f64>()
     }
 

@@ -19,12 +19,12 @@
 //! stiffness = 1e6
 //! restitution = 0.5
 //! impact_velocity = 1.0
-//! static_friction = 0.5          # friction (optional): LuGre on the ground …
-//! dynamic_friction = 0.4
+//! static_friction = 0.5          # friction (optional): LuGre on the ground and between
+//! dynamic_friction = 0.4         # spheres (the pairs' bristles are history variables)
 //! stribeck_velocity = 0.01
 //! bristle_stiffness = 1e4
 //! bristle_damping = 50.0
-//! regularization_velocity = 1e-3 # … regularized Coulomb–Stribeck between spheres
+//! # regularization_velocity = 1e-3 # stateless regularized Coulomb between spheres instead
 //! ```
 
 use super::contact::{LawKeys, NormalInput, validate_law};
@@ -91,8 +91,7 @@ pub struct GranularInput {
     /// Linear law: damping c [N s/m] ≥ 0.
     #[serde(default)]
     pub damping: Option<f64>,
-    /// μ_s: friction on (LuGre against the ground, regularized Coulomb–Stribeck between
-    /// spheres).
+    /// μ_s: friction on (LuGre against the ground and between spheres).
     #[serde(default)]
     pub static_friction: Option<f64>,
     /// μ_d, 0 < μ_d ≤ μ_s.
@@ -101,17 +100,18 @@ pub struct GranularInput {
     /// Stribeck speed v_s [m/s], positive.
     #[serde(default)]
     pub stribeck_velocity: Option<f64>,
-    /// LuGre bristle stiffness σ₀ [1/m] of the ground contacts, positive.
+    /// LuGre bristle stiffness σ₀ [1/m], positive.
     #[serde(default)]
     pub bristle_stiffness: Option<f64>,
-    /// LuGre bristle damping σ₁ [s/m] of the ground contacts, ≥ 0.
+    /// LuGre bristle damping σ₁ [s/m], ≥ 0.
     #[serde(default)]
     pub bristle_damping: Option<f64>,
     /// Viscous friction σ₂ [s/m], ≥ 0 (default 0).
     #[serde(default)]
     pub viscous_friction: Option<f64>,
-    /// Sphere–sphere friction: regularization speed v_r [m/s] > 0 of the stateless
-    /// Coulomb–Stribeck law (required with friction).
+    /// Sphere–sphere friction: the stateless regularized Coulomb–Stribeck law with this
+    /// regularization speed v_r [m/s] > 0 instead of LuGre bristles (no stick: creep at
+    /// ≈ v_r below the friction limit).
     #[serde(default)]
     pub regularization_velocity: Option<f64>,
 }
@@ -140,7 +140,8 @@ pub struct GranularDef {
     pub walls: Vec<GroundPlane>,
     pub law: NormalLaw,
     pub friction: Option<Friction>,
-    pub regularization_velocity: f64,
+    /// The stateless pair law instead of LuGre bristles.
+    pub regularization_velocity: Option<f64>,
 }
 
 pub struct GranularKind;
@@ -355,24 +356,15 @@ impl ComponentKind for GranularKind {
         let (law, friction, law_ok) = validate_law(cx, &e, &what, &keys);
         ok &= law_ok;
         let vr = match (gi.static_friction.is_some(), gi.regularization_velocity) {
-            (true, Some(v)) if v.is_finite() && v > 0.0 => v,
+            (true, Some(v)) if v.is_finite() && v > 0.0 => Some(v),
             (true, Some(v)) => {
                 cx.error(
                     format!("{what}: `regularization_velocity` must be positive (got {v})"),
                     cx.key(&e, "regularization_velocity"),
-                    Some("v_r [m/s]: below it sphere–sphere friction is viscous; a tenth of `stribeck_velocity` is typical".into()),
+                    Some("v_r [m/s]: below it sphere–sphere friction is viscous; a tenth of `stribeck_velocity` is typical (leave it out for LuGre bristles, which stick)".into()),
                 );
                 ok = false;
-                0.0
-            }
-            (true, None) => {
-                cx.error(
-                    format!("{what}: `regularization_velocity` is required with friction"),
-                    e.span.clone(),
-                    Some("sphere–sphere friction is regularized Coulomb–Stribeck (no states): give v_r [m/s]".into()),
-                );
-                ok = false;
-                0.0
+                None
             }
             (false, Some(_)) => {
                 cx.error(
@@ -381,9 +373,9 @@ impl ComponentKind for GranularKind {
                     Some("friction is on only with `static_friction` (μ_s)".into()),
                 );
                 ok = false;
-                0.0
+                None
             }
-            (false, None) => 0.0,
+            (_, None) => None,
         };
         let (normal, law) = (normal?, law?);
         ok.then(|| GranularDef {
@@ -454,16 +446,22 @@ impl ComponentKind for GranularKind {
             nodes: def.nodes.clone(),
             radii: def.radii.clone(),
             law: def.law,
-            friction: def.friction.map(|friction| PairFriction::Regularized {
-                friction,
-                regularization_velocity: def.regularization_velocity,
-            }),
+            friction: def
+                .friction
+                .map(|friction| match def.regularization_velocity {
+                    Some(regularization_velocity) => PairFriction::Regularized {
+                        friction,
+                        regularization_velocity,
+                    },
+                    None => PairFriction::LuGre(friction),
+                }),
             margin: def.margin,
         });
     }
 
-    /// The set's pair contact (stateless, regularized friction) at generic spinning
-    /// states, in contact; its ground contacts are `[[contacts]]`' elements.
+    /// The set's pair contact at generic spinning states, in contact: regularized
+    /// friction, frictionless, and LuGre with the condensed bristle (a start deflection,
+    /// over a step and at the state); its ground contacts are `[[contacts]]`' elements.
     fn tangent_cases() -> Vec<TangentCase> {
         let friction = Friction {
             static_coefficient: 0.6,
@@ -478,7 +476,7 @@ impl ComponentKind for GranularKind {
             exponent: 1.5,
             damping_factor: 0.2,
         };
-        (0..2u64)
+        (0..4u64)
             .map(|k| {
                 let a = random_node(980 + k);
                 let b = random_node(985 + k);
@@ -488,13 +486,19 @@ impl ComponentKind for GranularKind {
                     nodes: vec![0, 1],
                     radii: vec![0.55 * dist, 0.5 * dist],
                     law,
-                    friction: (k == 0).then_some(PairFriction::Regularized {
-                        friction,
-                        regularization_velocity: 0.1,
-                    }),
+                    friction: match k {
+                        0 => Some(PairFriction::Regularized {
+                            friction,
+                            regularization_velocity: 0.1,
+                        }),
+                        1 => None,
+                        _ => Some(PairFriction::LuGre(friction)),
+                    },
                     margin: 0.01,
                 };
-                let e: SpherePair = set.pair(0, 1);
+                let mut e: SpherePair = set.pair(0, 1);
+                let step = if k == 2 { 0.05 } else { 0.0 };
+                e.set_bristle(Vector3::new(0.004, -0.007, 0.002), step);
                 TangentCase::element(Box::new(e), vec![a, b])
             })
             .collect()
