@@ -148,6 +148,7 @@ fn ideal_rotor_cp(lambda: f64, n: usize) -> f64 {
                 chord,
                 width: 1.0 / n as f64,
                 airfoil: airfoil.clone(),
+                viscosity: None,
             },
             1.0,
             wind.clone(),

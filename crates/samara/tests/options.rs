@@ -483,6 +483,46 @@ step = 0.01
     assert!(none != reference && uniform != reference && none != uniform);
     // `beam` (instead of `node`) and `aerodyn` (instead of `stations`): tests/aerodynamics.rs
     // (the cantilever wing, the NREL 5-MW rotor).
+    // Reynolds-number tables: a two-table airfoil (a.csv's polar at Re = 1e5, b.csv's at
+    // 1e6); the stations' Re = W₀ c/ν ≈ 2.2e5 … 2.9e5 lie between them. `reynolds =
+    // "interpolate"` reads between the tables (the default `"first"` reads a.csv's), and
+    // `kinematic_viscosity` moves Re.
+    let a = std::fs::read_to_string(dir.path().join("a.csv")).unwrap();
+    let b = std::fs::read_to_string(dir.path().join("b.csv")).unwrap();
+    let mut c = String::from("re,alpha,cl,cd,cm\n");
+    for (re, t) in [(1e5, &a), (1e6, &b)] {
+        for l in t.lines().skip(1) {
+            c += &format!("{re},{l}\n");
+        }
+    }
+    std::fs::write(dir.path().join("c.csv"), c).unwrap();
+    let two = base.replace("airfoil = \"a.csv\"", "airfoil = \"c.csv\"");
+    let first = loads(&two);
+    assert_eq!(first, reference, "the first table is a.csv's polar");
+    let explicit_first =
+        loads(&two.replacen("pitch = 0.02", "pitch = 0.02\nreynolds = \"first\"", 1));
+    assert_eq!(explicit_first, reference);
+    let interpolated = two.replacen(
+        "pitch = 0.02",
+        "pitch = 0.02\nreynolds = \"interpolate\"",
+        1,
+    );
+    let li = loads(&interpolated);
+    let lb = loads(&base.replace("airfoil = \"a.csv\"", "airfoil = \"b.csv\""));
+    let diff = |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(a, b)| (a - b).abs()).sum() };
+    assert!(
+        diff(&li, &reference) > 1e-6 && diff(&li, &lb) > 1e-6,
+        "between the tables"
+    );
+    let lv = loads(&interpolated.replacen(
+        "reynolds = \"interpolate\"",
+        "reynolds = \"interpolate\"\nkinematic_viscosity = 3e-5",
+        1,
+    ));
+    assert!(
+        diff(&lv, &li) > 1e-6,
+        "`kinematic_viscosity` changed nothing"
+    );
 }
 
 /// Issue #15: the unsteady-airfoil keys of `[[aero_lines]]` (`unsteady`, `dynamic_stall`,

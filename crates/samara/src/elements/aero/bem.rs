@@ -70,6 +70,9 @@ pub struct StationFlow<S> {
     pub r: S,
     pub chord: f64,
     pub theta: S,
+    /// The Reynolds number the airfoil's tables are interpolated at (`None`: its first
+    /// table).
+    pub re: Option<S>,
 }
 
 impl BemRotor {
@@ -97,9 +100,7 @@ impl BemRotor {
     ) -> (S, Induction<S>) {
         let (sp, cp) = (phi.sin(), phi.cos());
         let alpha = phi - p.theta;
-        let c = airfoil.eval(alpha.re());
-        let cl = alpha.chain(c.cl, c.dcl);
-        let cd = alpha.chain(c.cd, c.dcd);
+        let ([cl, cd, _], _) = airfoil.coefficients(alpha, p.re);
         let cn = cl * cp + cd * sp;
         let ct = cl * sp - cd * cp;
         let sigma = S::cst(self.blades as f64 * p.chord / (2.0 * PI)) / p.r;
@@ -169,6 +170,7 @@ impl BemRotor {
             r: p.r.re(),
             chord: p.chord,
             theta: p.theta.re(),
+            re: p.re.map(|x| x.re()),
         };
         if !(pv.vx > 1e-9 && pv.vy > 1e-9 && pv.r > 0.0) {
             return None;
@@ -179,6 +181,7 @@ impl BemRotor {
             r: Dual::<1>::cst(pv.r),
             chord: pv.chord,
             theta: Dual::<1>::cst(pv.theta),
+            re: pv.re.map(Dual::<1>::cst),
         };
         // R and ∂R/∂φ at φ (one dual direction), with the induction's φ-derivatives.
         let with_slope = |phi: f64| self.residual(Dual::<1>::var(phi, 0), &pd, airfoil);
@@ -329,6 +332,7 @@ mod tests {
                     r,
                     chord: 4.0 - 0.04 * r,
                     theta,
+                    re: None,
                 };
                 let cold = rotor.solve(&p, &airfoil).unwrap();
                 for hint in [cold.phi + 0.05, cold.phi - 0.05, 1.5] {
@@ -348,6 +352,7 @@ mod tests {
                             r: Dual::<1>::cst(p.r),
                             chord: p.chord,
                             theta: Dual::<1>::cst(p.theta),
+                            re: None,
                         };
                         rotor.residual(Dual::<1>::var(phi, 0), &pd, &airfoil)
                     };
@@ -378,6 +383,7 @@ mod tests {
             r: 30.0,
             chord: 3.0,
             theta: 0.05,
+            re: None,
         };
         let with_slope = |phi: f64| {
             let pd = StationFlow {
@@ -386,6 +392,7 @@ mod tests {
                 r: Dual::<1>::cst(p.r),
                 chord: p.chord,
                 theta: Dual::<1>::cst(p.theta),
+                re: None,
             };
             rotor.residual(Dual::<1>::var(phi, 0), &pd, &airfoil)
         };

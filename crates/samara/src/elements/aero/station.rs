@@ -112,6 +112,9 @@ pub struct Section {
     /// Span width Δs the station stands for [m].
     pub width: f64,
     pub airfoil: Arc<Airfoil>,
+    /// Kinematic viscosity ν [m²/s] when the airfoil's tables are interpolated in the
+    /// Reynolds number Re = W c/ν ([`Airfoil::eval_re`]); `None`: its first table.
+    pub viscosity: Option<f64>,
 }
 
 /// The unsteady airfoil models of a station (none by default: quasi-steady).
@@ -218,6 +221,8 @@ pub struct StationResult<S> {
     pub rotor_forcing: [S; 3],
     /// The quasi-steady BEM axial induction (before the dynamic wake).
     pub a_quasi_steady: f64,
+    /// The Reynolds number the tables are read at (NaN without Re interpolation).
+    pub reynolds: f64,
 }
 
 const OUTPUTS: [(&str, &str); 9] = [
@@ -397,7 +402,10 @@ impl AeroStation {
             alpha_effective: 0.0,
             rotor_forcing: [zero; 3],
             a_quasi_steady: 0.0,
+            reynolds: f64::NAN,
         };
+        // With BEM the Reynolds number is the undisturbed one (set below).
+        let mut re_bem: Option<S> = None;
         let (u, bem_frame) = match &*self.inflow {
             Inflow::None => (u0, None),
             Inflow::Uniform(vi) => (add(&u0, &cst3(vi)), None),
@@ -414,12 +422,20 @@ impl AeroStation {
                 let vx = dot(&u0, &n);
                 let vy = -dot(&u0, &tdir);
                 let theta = dot(&ec, &n).atan2(-dot(&ec, &tdir));
+                // Re from the in-plane speed without induction, W₀ = √(V_x² + V_y²):
+                // the momentum balance and the loads read the tables at the same Re,
+                // which does not depend on the induction being solved for.
+                re_bem = self
+                    .section
+                    .viscosity
+                    .map(|nu| (vx * vx + vy * vy).sqrt() * (self.section.chord / nu));
                 let flow = StationFlow {
                     vx,
                     vy,
                     r: rr,
                     chord: self.section.chord,
                     theta,
+                    re: re_bem,
                 };
                 let ind = rotor.solve_near(&flow, &self.section.airfoil, self.root_hint.get());
                 if let Some(i) = &ind {
@@ -514,12 +530,14 @@ impl AeroStation {
         } else {
             alpha
         };
-        let c = self.section.airfoil.eval(alpha_e.re());
-        let (mut cl, mut cd, mut cm) = (
-            alpha_e.chain(c.cl, c.dcl),
-            alpha_e.chain(c.cd, c.dcd),
-            alpha_e.chain(c.cm, c.dcm),
-        );
+        // Re = W c/ν at the speed the airfoil sees (W₀ with BEM).
+        let re = self
+            .section
+            .viscosity
+            .map(|nu| re_bem.unwrap_or(speed * (ch / nu)));
+        res.reynolds = re.map_or(f64::NAN, |r| r.re());
+        let ([cl, cd, cm], c) = self.section.airfoil.coefficients(alpha_e, re);
+        let (mut cl, mut cd, mut cm) = (cl, cd, cm);
         let mut cl_out = c.cl;
         if let Some((stall, a_tau)) = &self.unsteady.stall {
             // Øye: cl = f cl_inv + (1 − f) cl_fs, τ ḟ = f_st − f.
@@ -1080,6 +1098,9 @@ impl Element for AeroStation {
         if self.unsteady.wagner_states() == 2 || self.unsteady.hgm.is_some() {
             v.push(("effective_alpha".into(), "rad"));
         }
+        if self.section.viscosity.is_some() {
+            v.push(("reynolds".into(), "1"));
+        }
         v
     }
 
@@ -1098,8 +1119,13 @@ impl Element for AeroStation {
             &mut rows,
             &mut zrows,
         );
+        let mut k = OUTPUTS.len();
         if self.unsteady.wagner_states() == 2 || self.unsteady.hgm.is_some() {
-            out[OUTPUTS.len()] = r.alpha_effective;
+            out[k] = r.alpha_effective;
+            k += 1;
+        }
+        if self.section.viscosity.is_some() {
+            out[k] = r.reynolds;
         }
         let vals = [
             r.alpha,

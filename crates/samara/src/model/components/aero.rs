@@ -21,6 +21,7 @@ use nalgebra::{Matrix3, Vector3};
 use schemars::JsonSchema;
 use serde::Deserialize;
 use std::collections::HashMap;
+use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -208,7 +209,30 @@ pub struct AeroLineInput {
     /// the airfoil file's unsteady-aerodynamics block (or UnsteadyAero's defaults).
     #[serde(default)]
     pub hgm: Option<Located<HgmInput>>,
+    /// Which table of an airfoil with several Reynolds-number tables is read: `"first"`
+    /// (default, AeroDyn's AFTabMod = 1) or `"interpolate"` (linear in ln Re at the
+    /// station's Re = W c/ν, AFTabMod = 2).
+    #[serde(default)]
+    pub reynolds: Option<ReynoldsInput>,
+    /// Kinematic viscosity ν of the air [m²/s] in Re = W c/ν; default 1.464e-5 (only with
+    /// `reynolds = "interpolate"`).
+    #[serde(default)]
+    pub kinematic_viscosity: Option<f64>,
 }
+
+/// How the Reynolds-number tables of an airfoil are read.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ReynoldsInput {
+    /// The first table of every airfoil (default).
+    First,
+    /// Linear interpolation in ln Re between the tables around the station's Re.
+    Interpolate,
+}
+
+/// The default kinematic viscosity of air [m²/s] (AeroDyn's `KinVisc` of the NREL
+/// reference models, air at about 15 °C).
+pub const DEFAULT_KINEMATIC_VISCOSITY: f64 = 1.464e-5;
 
 /// HGM (Beddoes–Leishman type) coefficients set in the model; each one optional.
 #[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
@@ -301,6 +325,8 @@ pub struct AeroLineDef {
     pub inflow_span: Option<std::ops::Range<usize>>,
     /// Øye's dynamic wake on the BEM induction.
     pub dynamic_wake: bool,
+    /// Kinematic viscosity ν when the airfoils' tables are interpolated in Re.
+    pub viscosity: Option<f64>,
     /// The TurbSim file of a turbulent wind and where its key is (the box's coverage of
     /// the stations and the analyses' times are checked once the model is known).
     pub turbsim: Option<(PathBuf, Option<std::ops::Range<usize>>)>,
@@ -860,6 +886,50 @@ impl ComponentKind for AeroLine {
                 None
             }
         };
+        // Reynolds-number tables.
+        let viscosity = match li.reynolds {
+            None | Some(ReynoldsInput::First) => {
+                if li.kinematic_viscosity.is_some() {
+                    cx.error(
+                        format!("{what}: `kinematic_viscosity` without `reynolds = \"interpolate\"`: the first table of each airfoil is read whatever the Reynolds number"),
+                        cx.key(&e, "kinematic_viscosity"),
+                        Some("add `reynolds = \"interpolate\"`, or remove `kinematic_viscosity`".into()),
+                    );
+                    ok = false;
+                }
+                None
+            }
+            Some(ReynoldsInput::Interpolate) => {
+                let nu = li
+                    .kinematic_viscosity
+                    .unwrap_or(DEFAULT_KINEMATIC_VISCOSITY);
+                if !(nu.is_finite() && nu > 0.0) {
+                    cx.error(
+                        format!("{what}: `kinematic_viscosity` = {nu} must be > 0 [m²/s]"),
+                        cx.key(&e, "kinematic_viscosity"),
+                        Some("air at 15 °C: 1.46e-5 m²/s".into()),
+                    );
+                    ok = false;
+                }
+                if !defs.is_empty() && defs.iter().all(|d| d.airfoil.tables() < 2) {
+                    cx.error(
+                        format!("{what}: `reynolds = \"interpolate\"` but every airfoil of the line has a single table"),
+                        cx.key(&e, "reynolds"),
+                        Some("give airfoil files with several Reynolds-number tables (AeroDyn NumTabs > 1, or a CSV with a `re` column), or remove `reynolds`".into()),
+                    );
+                    ok = false;
+                }
+                if !matches!(li.dynamic_stall, None | Some(DynamicStallInput::None)) {
+                    cx.error(
+                        format!("{what}: `reynolds = \"interpolate\"` with a dynamic-stall model: the stall models are built on one table and do not interpolate in Re"),
+                        cx.key(&e, "reynolds"),
+                        Some("use `reynolds = \"first\"` (or no `reynolds`) with dynamic stall".into()),
+                    );
+                    ok = false;
+                }
+                Some(nu)
+            }
+        };
         // Wind.
         let mut turbsim = None;
         let wind = match &li.wind {
@@ -1091,6 +1161,7 @@ impl ComponentKind for AeroLine {
             ),
             turbsim,
             rotor: li.rotor.as_ref().map(|r| (r.value.clone(), r.span.clone())),
+            viscosity,
         })
     }
 
@@ -1175,6 +1246,7 @@ impl ComponentKind for AeroLine {
             chord: 0.4,
             width: 0.3,
             airfoil,
+            viscosity: None,
         };
         let mut cases = Vec::new();
         let inflows = [
@@ -1514,6 +1586,71 @@ impl ComponentKind for AeroLine {
                 cases.push(TangentCase::element(Box::new(e), nodes).with_states(states));
             }
         }
+        // Reynolds-number interpolation: a two-table airfoil (Re 1e5 and 1e6, the second
+        // with 1.3× the lift, more moment and less drag); the stations' Re ≈ W c/ν ≈
+        // 12 · 0.4/1.5e-5 ≈ 3.2e5 lies between the tables, so Re enters every load
+        // (through W, and with BEM through the undisturbed W₀), quasi-steady and with
+        // Wagner's states, on 1 and 2 nodes.
+        let table = |scale: f64| -> Vec<(usize, [f64; 4])> {
+            (-180..=180)
+                .map(|d| {
+                    let a = (d as f64).to_radians();
+                    (
+                        0,
+                        [
+                            d as f64,
+                            scale * PI * (2.0 * a).sin(),
+                            (0.01 + 1.5 * a.sin().powi(2)) / scale,
+                            -0.1 * scale * a.sin(),
+                        ],
+                    )
+                })
+                .collect()
+        };
+        let two = Arc::new(
+            Airfoil::from_tables(&[(1e5, 0, table(1.0)), (1e6, 0, table(1.3))])
+                .unwrap_or_else(|_| unreachable!()),
+        );
+        let re_section = Section {
+            airfoil: two,
+            viscosity: Some(1.5e-5),
+            ..section.clone()
+        };
+        for (k, inflow) in [Arc::new(Inflow::None), bem.clone()]
+            .into_iter()
+            .enumerate()
+        {
+            for (a, attached) in [AttachedFlow::QuasiSteady, AttachedFlow::Wagner]
+                .into_iter()
+                .enumerate()
+            {
+                for nn in [1usize, 2] {
+                    let seed = 4000 + 40 * k as u64 + 10 * a as u64 + nn as u64;
+                    let nodes: Vec<_> = (0..nn).map(|i| node(seed + 3 * i as u64)).collect();
+                    let w = 1.0 / nn as f64;
+                    let unsteady = Unsteady {
+                        attached,
+                        ..Unsteady::default()
+                    };
+                    let e = AeroStation::new(
+                        "aero_reynolds",
+                        (0..nn).collect(),
+                        (0..nn).map(|i| attach(i as f64 - 0.5, w)).collect(),
+                        re_section.clone(),
+                        1.2,
+                        wind.clone(),
+                        inflow.clone(),
+                    )
+                    .with_unsteady(unsteady, 0.0, &nodes);
+                    let case = TangentCase::element(Box::new(e), nodes);
+                    cases.push(if attached == AttachedFlow::Wagner {
+                        case.with_states(vec![(0.3, -0.2), (0.5, 0.1)])
+                    } else {
+                        case
+                    });
+                }
+            }
+        }
         cases
     }
 }
@@ -1565,6 +1702,7 @@ pub(crate) fn line_stations(def: &AeroLineDef, parts: &Build) -> Vec<AeroStation
                 chord: s.chord,
                 width,
                 airfoil: s.airfoil.clone(),
+                viscosity: def.viscosity,
             },
             def.density,
             wind.clone(),
