@@ -516,7 +516,7 @@ fn parse_csv(text: &str) -> Result<Vec<TableRows>, AirfoilError> {
                 };
                 match tables.last_mut() {
                     Some(t) if t.0 == re || (re.is_nan() && t.0.is_nan()) => t.2.push((line, r)),
-                    Some(t) if !(re > t.0) => {
+                    Some(t) if re.partial_cmp(&t.0) != Some(std::cmp::Ordering::Greater) => {
                         return Err(AirfoilError::at(
                             line,
                             1,
