@@ -674,6 +674,45 @@ step = 0.01
         let diff: f64 = v.iter().zip(&r_rates).map(|(a, b)| (a - b).abs()).sum();
         assert!(diff > 1e-9, "`{key}` changed nothing");
     }
+    // The wind's `gust` (velocity and function) changes the loads; `gust_response =
+    // "kussner"` adds Küssner's two states (after Wagner's) and routes the gust through
+    // them: a different residual, and the explicit default "wagner" is the default.
+    let gusty = base.replacen(
+        "direction = [1.0, 0.0, 0.1] }",
+        "direction = [1.0, 0.0, 0.1], gust = { velocity = [0.0, 0.0, 1.5], function = { type = \"constant\", value = 0.8 } } }",
+        1,
+    );
+    let r_gust = residual(&gusty);
+    assert_eq!(r_gust.len(), reference.len());
+    let diff = |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(a, b)| (a - b).abs()).sum() };
+    assert!(diff(&r_gust, &reference) > 1e-9, "`gust` changed nothing");
+    for (from, to) in [
+        ("velocity = [0.0, 0.0, 1.5]", "velocity = [0.0, 0.0, 1.0]"),
+        ("value = 0.8", "value = 0.5"),
+    ] {
+        let v = residual(&gusty.replacen(from, to, 1));
+        assert!(diff(&v, &r_gust) > 1e-9, "`{to}` changed nothing");
+    }
+    assert_eq!(
+        residual(&gusty.replacen(
+            "unsteady = \"wagner\"",
+            "unsteady = \"wagner\"\ngust_response = \"wagner\"",
+            1
+        )),
+        r_gust
+    );
+    let kussner = gusty.replacen(
+        "unsteady = \"wagner\"",
+        "unsteady = \"wagner\"\ngust_response = \"kussner\"",
+        1,
+    );
+    let r_k = residual(&kussner);
+    assert_eq!(r_k.len(), 6 + 5, "Wagner 2, Küssner 2, Øye 1");
+    // At the states' quasi-steady values + 0.05 the two differ in the loads.
+    assert!(
+        diff(&r_k[..6], &r_gust[..6]) > 1e-9,
+        "`gust_response` changed nothing"
+    );
 }
 
 /// Issue #16: every `[[controllers]]` key changes the signals or states it drives (the

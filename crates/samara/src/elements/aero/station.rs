@@ -32,7 +32,8 @@
 //! **Unsteady airfoil** ([`super::unsteady`]): with Wagner's attached-flow states or Øye's
 //! dynamic stall the station takes the air velocity at the three-quarter-chord point,
 //! U₃/₄ = U − (c/2) ė_c (the point p + (c/2) e_c, p the aerodynamic centre at the
-//! quarter chord), and owns up to three states (Wagner z₁, z₂ [m/s], then Øye's
+//! quarter chord), and owns up to five states (Wagner z₁, z₂ [m/s], Küssner z_K1, z_K2
+//! [m/s] on the wind's gust, then Øye's
 //! separation f); their rows follow the node rows, their tangents come from the same
 //! dual pass.
 
@@ -40,7 +41,7 @@ use super::airfoil::Airfoil;
 use super::bem::{BemRotor, StationFlow};
 use super::dynamic_inflow::{RotorDisc, inflow_signals, thrust_signals};
 use super::hgm::{Hgm, HgmFlow};
-use super::unsteady::{AttachedFlow, JONES_A, JONES_B, OyeStall};
+use super::unsteady::{AttachedFlow, JONES_A, JONES_B, KUSSNER_A, KUSSNER_B, OyeStall};
 use super::wind::Wind;
 use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, NodeState, SignalTerms};
 use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
@@ -128,6 +129,9 @@ pub struct Unsteady {
     /// Beddoes–Leishman dynamic stall in Hansen–Gaunaa–Madsen's four-state form
     /// ([`super::hgm`]; its own circulatory lag: not with Wagner or Øye).
     pub hgm: Option<Arc<Hgm>>,
+    /// Küssner's gust response (with Wagner): the downwash of the wind's gust component
+    /// through Küssner's function (two states), the rest through Wagner's.
+    pub kussner: bool,
 }
 
 impl Unsteady {
@@ -137,9 +141,18 @@ impl Unsteady {
             AttachedFlow::Wagner => 2,
         }
     }
-    /// Number of airfoil states (Wagner, Øye's stall).
+    /// Number of Küssner states (two with Wagner and the gust response).
+    fn kussner_states(&self) -> usize {
+        if self.kussner && self.wagner_states() == 2 {
+            2
+        } else {
+            0
+        }
+    }
+    /// Number of airfoil states (Wagner, Küssner, Øye's stall).
     fn airfoil_states(&self) -> usize {
         self.wagner_states()
+            + self.kussner_states()
             + usize::from(self.stall.is_some())
             + 4 * usize::from(self.hgm.is_some())
     }
@@ -179,9 +192,9 @@ const WAKE_MIN_SPEED: f64 = 0.1;
 
 /// The most nodes a station hangs on (a beam element of order ≤ 7).
 pub const MAX_NODES: usize = 8;
-/// The most states a station owns (Wagner's two and Øye's stall one, or HGM's four;
-/// the dynamic wake two).
-pub const MAX_STATES: usize = 6;
+/// The most states a station owns (Wagner's two, Küssner's two and Øye's stall one, or
+/// HGM's four; the dynamic wake two).
+pub const MAX_STATES: usize = 7;
 
 /// Number of kinematic quantities of a station the loads read, y = (p, e_c, e_n, ṗ, ė_c).
 const KINEMATICS: usize = 15;
@@ -223,6 +236,8 @@ pub struct StationResult<S> {
     pub a_quasi_steady: f64,
     /// The Reynolds number the tables are read at (NaN without Re interpolation).
     pub reynolds: f64,
+    /// The gust's share of the normal velocity u_n (Küssner's input; 0 without it).
+    pub un_gust: f64,
 }
 
 const OUTPUTS: [(&str, &str); 9] = [
@@ -290,12 +305,17 @@ impl AeroStation {
         let r = self.compute(t, nodes, &z[..ns], &z[..ns], &[], &mut rows, &mut zr);
         let mut out = [0.0; MAX_STATES];
         let nw = self.unsteady.wagner_states();
+        let nk = self.unsteady.kussner_states();
         if nw == 2 {
-            out[0] = JONES_A[0] * r.un;
-            out[1] = JONES_A[1] * r.un;
+            out[0] = JONES_A[0] * (r.un - r.un_gust);
+            out[1] = JONES_A[1] * (r.un - r.un_gust);
+        }
+        if nk == 2 {
+            out[2] = KUSSNER_A[0] * r.un_gust;
+            out[3] = KUSSNER_A[1] * r.un_gust;
         }
         if let Some((stall, _)) = &self.unsteady.stall {
-            out[nw] = stall.eval(r.un.atan2(r.uc)).f;
+            out[nw + nk] = stall.eval(r.un.atan2(r.uc)).f;
         }
         if let Some(h) = &self.unsteady.hgm {
             out[..4].copy_from_slice(&h.steady_states(r.un.atan2(r.uc)));
@@ -403,6 +423,7 @@ impl AeroStation {
             rotor_forcing: [zero; 3],
             a_quasi_steady: 0.0,
             reynolds: f64::NAN,
+            un_gust: 0.0,
         };
         // With BEM the Reynolds number is the undisturbed one (set below).
         let mut re_bem: Option<S> = None;
@@ -505,6 +526,7 @@ impl AeroStation {
         let un = dot(&u, &en);
         let q2 = uc * uc + un * un;
         let nw = self.unsteady.wagner_states();
+        let nk = self.unsteady.kussner_states();
         (res.uc, res.un) = (uc.re(), un.re());
         if q2.re() < 1e-20 {
             // No flow: the airfoil states hold.
@@ -519,13 +541,28 @@ impl AeroStation {
         }
         let speed = q2.sqrt();
         let alpha = un.atan2(uc);
-        // Wagner: the effective downwash w_E and the states' rows.
+        // Wagner: the effective downwash w_E and the states' rows. With Küssner's gust
+        // response the gust's normal velocity w_g = g f_g(t)·e_n goes through Küssner's
+        // states, the rest w − w_g through Wagner's.
         let alpha_e = if nw == 2 {
             let k = speed * (2.0 / ch);
+            let wg = if nk == 2 {
+                dot(&cst3(&self.wind.gust_velocity(t)), &en)
+            } else {
+                zero
+            };
+            res.un_gust = wg.re();
+            let wm = un - wg;
             for i in 0..2 {
-                zrows[i] = zd[i] + k * JONES_B[i] * (z[i] - un * JONES_A[i]);
+                zrows[i] = zd[i] + k * JONES_B[i] * (z[i] - wm * JONES_A[i]);
             }
-            let we = un * (1.0 - JONES_A[0] - JONES_A[1]) + z[0] + z[1];
+            let mut we = wm * (1.0 - JONES_A[0] - JONES_A[1]) + z[0] + z[1];
+            if nk == 2 {
+                for i in 0..2 {
+                    zrows[2 + i] = zd[2 + i] + k * KUSSNER_B[i] * (z[2 + i] - wg * KUSSNER_A[i]);
+                }
+                we = we + wg * (1.0 - KUSSNER_A[0] - KUSSNER_A[1]) + z[2] + z[3];
+            }
             we.atan2(uc)
         } else {
             alpha
@@ -547,8 +584,8 @@ impl AeroStation {
                 alpha_e.chain(sc.fs, sc.dfs),
                 alpha_e.chain(sc.inv, sc.dinv),
             );
-            let f = z[nw];
-            zrows[nw] = zd[nw] + speed * (1.0 / (a_tau * ch)) * (f - fst);
+            let f = z[nw + nk];
+            zrows[nw + nk] = zd[nw + nk] + speed * (1.0 / (a_tau * ch)) * (f - fst);
             cl = f * inv + (S::cst(1.0) - f) * fs;
             cl_out = cl.re();
         }
@@ -1006,6 +1043,9 @@ impl Element for AeroStation {
         if self.unsteady.wagner_states() == 2 {
             v.extend(["wagner_1".to_string(), "wagner_2".to_string()]);
         }
+        if self.unsteady.kussner_states() == 2 {
+            v.extend(["kussner_1".to_string(), "kussner_2".to_string()]);
+        }
         if self.unsteady.stall.is_some() {
             v.push("separation".into());
         }
@@ -1142,7 +1182,7 @@ impl Element for AeroStation {
     }
 
     fn breakpoints(&self, out: &mut Vec<f64>) {
-        out.extend(self.wind.function.breakpoints());
+        out.extend(self.wind.breakpoints());
     }
 
     fn runtime_error(&self) -> Option<(String, String)> {

@@ -34,6 +34,12 @@ use super::airfoil::Airfoil;
 pub const JONES_A: [f64; 2] = [0.165, 0.335];
 pub const JONES_B: [f64; 2] = [0.0455, 0.3];
 
+/// Sears & Sparks' (1941) two-exponential approximation of Küssner's sharp-edged-gust
+/// function, ψ(s) ≈ 1 − 0.5 e^{−0.13 s} − 0.5 e^{−s} (Leishman, *Principles of Helicopter
+/// Aerodynamics*, 2nd ed., §8.16).
+pub const KUSSNER_A: [f64; 2] = [0.5, 0.5];
+pub const KUSSNER_B: [f64; 2] = [0.13, 1.0];
+
 /// The attached-flow model of a line.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum AttachedFlow {

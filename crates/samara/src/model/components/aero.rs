@@ -75,6 +75,31 @@ pub struct WindInput {
     /// Time function multiplying the speed (a gust); default 1.
     #[serde(default)]
     pub function: Option<Located<TimeFunctionInput>>,
+    /// A uniform gust added to the wind, `{ velocity, function }`: velocity g [m/s,
+    /// global] times the time function f_g(t) (the wind's component that Küssner's gust
+    /// response reads).
+    #[serde(default)]
+    pub gust: Option<Located<GustInput>>,
+}
+
+/// A uniform gust of a line's wind.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GustInput {
+    /// Gust velocity g, global [m/s].
+    pub velocity: [f64; 3],
+    /// Time function f_g(t) multiplying it.
+    pub function: Located<TimeFunctionInput>,
+}
+
+/// How an unsteady airfoil responds to the wind's gust.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum GustResponseInput {
+    /// Through Wagner's function, like the motion (default).
+    Wagner,
+    /// Through Küssner's function (Sears & Sparks' exponentials), two states per station.
+    Kussner,
 }
 
 /// The induced-velocity model of a line.
@@ -218,6 +243,10 @@ pub struct AeroLineInput {
     /// `reynolds = "interpolate"`).
     #[serde(default)]
     pub kinematic_viscosity: Option<f64>,
+    /// The response to the wind's `gust`: `"wagner"` (default: like the motion) or
+    /// `"kussner"` (Küssner's function, two more states; needs `unsteady = "wagner"`).
+    #[serde(default)]
+    pub gust_response: Option<GustResponseInput>,
 }
 
 /// How the Reynolds-number tables of an airfoil are read.
@@ -327,6 +356,8 @@ pub struct AeroLineDef {
     pub dynamic_wake: bool,
     /// Kinematic viscosity ν when the airfoils' tables are interpolated in Re.
     pub viscosity: Option<f64>,
+    /// Küssner's gust response (with Wagner's states).
+    pub kussner: bool,
     /// The TurbSim file of a turbulent wind and where its key is (the box's coverage of
     /// the stations and the analyses' times are checked once the model is known).
     pub turbsim: Option<(PathBuf, Option<std::ops::Range<usize>>)>,
@@ -1058,7 +1089,40 @@ impl ComponentKind for AeroLine {
                     wind.shear_exponent = alpha;
                     wind.reference_height = if href > 0.0 { href } else { 1.0 };
                 }
+                if let Some(g) = &wi.gust {
+                    let ge = Entry {
+                        span: g.span.clone(),
+                    };
+                    ok &= cx.finite(&ge, "velocity", &g.value.velocity, &what);
+                    let f = cx
+                        .time_function(&g.value.function, &what)
+                        .unwrap_or_default();
+                    wind.gust = Some((Vector3::from(g.value.velocity), f));
+                }
                 wind
+            }
+        };
+        // Küssner's gust response.
+        let kussner = match li.gust_response {
+            None | Some(GustResponseInput::Wagner) => false,
+            Some(GustResponseInput::Kussner) => {
+                if unsteady != AttachedFlow::Wagner {
+                    cx.error(
+                        format!("{what}: `gust_response = \"kussner\"` without `unsteady = \"wagner\"`: Küssner's states split the downwash that Wagner's states lag"),
+                        cx.key(&e, "gust_response"),
+                        Some("add `unsteady = \"wagner\"`".into()),
+                    );
+                    ok = false;
+                }
+                if wind.gust.is_none() {
+                    cx.error(
+                        format!("{what}: `gust_response = \"kussner\"` but the line's wind has no `gust`"),
+                        cx.key(&e, "gust_response"),
+                        Some("give the wind a gust: wind = { …, gust = { velocity = [0.0, 0.0, 1.0], function = { type = \"step\", … } } }".into()),
+                    );
+                    ok = false;
+                }
+                true
             }
         };
         let inflow = match li.inflow.as_ref().map(|i| &i.value) {
@@ -1162,6 +1226,7 @@ impl ComponentKind for AeroLine {
             turbsim,
             rotor: li.rotor.as_ref().map(|r| (r.value.clone(), r.span.clone())),
             viscosity,
+            kussner,
         })
     }
 
@@ -1372,6 +1437,7 @@ impl ComponentKind for AeroLine {
                         stall: with_stall.then(|| (stall.clone(), 4.0)),
                         dynamic_wake: false,
                         hgm: None,
+                        kussner: false,
                     };
                     let ns = unsteady.states();
                     let e = AeroStation::new(
@@ -1563,6 +1629,7 @@ impl ComponentKind for AeroLine {
                     stall: airfoil_states.then(|| (stall.clone(), 4.0)),
                     dynamic_wake: true,
                     hgm: None,
+                    kussner: false,
                 };
                 let e = AeroStation::new(
                     "aero_wake",
@@ -1651,6 +1718,55 @@ impl ComponentKind for AeroLine {
                 }
             }
         }
+        // Küssner's gust response: a gusty wind (the sheared wind plus a gust along a
+        // direction off the chord plane), Wagner + Küssner (four states) with none, uniform
+        // and BEM inflow on 1 and 2 nodes, and all seven states (with Øye's stall and the
+        // dynamic wake) on BEM.
+        let gusty = Arc::new(Wind {
+            gust: Some((
+                Vector3::new(0.4, -0.8, 1.5),
+                crate::math::TimeFunction::Constant(0.7),
+            )),
+            ..(*wind).clone()
+        });
+        let uniform = Arc::new(Inflow::Uniform(Vector3::new(-0.5, 0.3, 0.1)));
+        for (k, inflow) in [Arc::new(Inflow::None), uniform, bem.clone()]
+            .into_iter()
+            .enumerate()
+        {
+            for nn in [1usize, 2] {
+                for full in [false, true] {
+                    if full && k != 2 {
+                        continue;
+                    }
+                    let seed = 5000 + 40 * k as u64 + 10 * nn as u64 + u64::from(full);
+                    let nodes: Vec<_> = (0..nn).map(|i| node(seed + 3 * i as u64)).collect();
+                    let w = 1.0 / nn as f64;
+                    let unsteady = Unsteady {
+                        attached: AttachedFlow::Wagner,
+                        kussner: true,
+                        stall: full.then(|| (stall.clone(), 4.0)),
+                        dynamic_wake: full,
+                        hgm: None,
+                    };
+                    let e = AeroStation::new(
+                        "aero_kussner",
+                        (0..nn).collect(),
+                        (0..nn).map(|i| attach(i as f64 - 0.5, w)).collect(),
+                        section.clone(),
+                        1.2,
+                        gusty.clone(),
+                        inflow.clone(),
+                    )
+                    .with_unsteady(unsteady, 0.0, &nodes);
+                    let mut states = vec![(0.3, -0.2), (0.5, 0.1), (0.2, 0.3), (-0.1, 0.2)];
+                    if full {
+                        states.extend([(0.6, 0.05), (0.25, 0.1), (0.2, -0.05)]);
+                    }
+                    cases.push(TangentCase::element(Box::new(e), nodes).with_states(states));
+                }
+            }
+        }
         cases
     }
 }
@@ -1693,6 +1809,7 @@ pub(crate) fn line_stations(def: &AeroLineDef, parts: &Build) -> Vec<AeroStation
             stall: s.stall.clone().zip(def.stall_time_constant),
             dynamic_wake: def.dynamic_wake,
             hgm: s.hgm.clone(),
+            kussner: def.kussner,
         };
         let station = AeroStation::new(
             format!("{}.{k}", def.name),
