@@ -114,6 +114,7 @@ fn ideal_rotor_cp(lambda: f64, n: usize) -> f64 {
             tip_loss: false,
             hub_loss: false,
             tangential_induction: true,
+            skewed_wake: false,
         },
         centre: Vector3::zeros(),
         axis: Vector3::x(),

@@ -159,6 +159,7 @@ fn a_bem_station_reads_the_tables_at_the_undisturbed_reynolds_number() {
             tip_loss: true,
             hub_loss: true,
             tangential_induction: true,
+            skewed_wake: false,
         },
         centre: Vector3::zeros(),
         axis: Vector3::x(),

@@ -523,6 +523,26 @@ step = 0.01
         diff(&lv, &li) > 1e-6,
         "`kinematic_viscosity` changed nothing"
     );
+    // `skewed_wake = true` changes the loads in yawed flow (the wind 22° off the axis);
+    // `false` is the default.
+    let yawed = base.replacen(
+        "direction = [1.0, 0.0, 0.0], shear",
+        "direction = [1.0, 0.4, 0.0], shear",
+        1,
+    );
+    let ly = loads(&yawed);
+    let skew = |on: &str| {
+        yawed.replacen(
+            "tangential_induction = true }",
+            &format!("tangential_induction = true, skewed_wake = {on} }}"),
+            1,
+        )
+    };
+    assert!(
+        diff(&loads(&skew("true")), &ly) > 1e-6,
+        "`skewed_wake` changed nothing"
+    );
+    assert_eq!(loads(&skew("false")), ly);
 }
 
 /// Issue #15: the unsteady-airfoil keys of `[[aero_lines]]` (`unsteady`, `dynamic_stall`,

@@ -47,7 +47,14 @@ pub struct BemRotor {
     pub hub_loss: bool,
     /// Include the tangential induction a'.
     pub tangential_induction: bool,
+    /// Pitt–Peters/Glauert skewed-wake correction of the axial induction in yawed flow
+    /// (AeroDyn's SkewMod = 2), applied by the station after the momentum solve.
+    pub skewed_wake: bool,
 }
+
+/// The skewed-wake correction's constant 15π/32 (Pitt & Peters 1981; Moriarty & Hansen,
+/// AeroDyn Theory Manual, 2005, §"Skewed wake correction").
+pub const SKEW_CONSTANT: f64 = 15.0 * PI / 32.0;
 
 /// The BEM solution at a station.
 #[derive(Clone, Copy, Debug)]
@@ -321,6 +328,7 @@ mod tests {
             tip_loss: true,
             hub_loss: true,
             tangential_induction: true,
+            skewed_wake: false,
         };
         let airfoil = Airfoil::thin_plate_with_drag();
         let mut warm = 0;
@@ -375,6 +383,7 @@ mod tests {
             tip_loss: true,
             hub_loss: false,
             tangential_induction: true,
+            skewed_wake: false,
         };
         let airfoil = Airfoil::thin_plate_with_drag();
         let p = StationFlow {

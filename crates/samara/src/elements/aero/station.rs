@@ -38,7 +38,7 @@
 //! dual pass.
 
 use super::airfoil::Airfoil;
-use super::bem::{BemRotor, StationFlow};
+use super::bem::{BemRotor, SKEW_CONSTANT, StationFlow};
 use super::dynamic_inflow::{RotorDisc, inflow_signals, thrust_signals};
 use super::hgm::{Hgm, HgmFlow};
 use super::unsteady::{AttachedFlow, JONES_A, JONES_B, KUSSNER_A, KUSSNER_B, OyeStall};
@@ -458,9 +458,29 @@ impl AeroStation {
                     theta,
                     re: re_bem,
                 };
-                let ind = rotor.solve_near(&flow, &self.section.airfoil, self.root_hint.get());
-                if let Some(i) = &ind {
+                let mut ind = rotor.solve_near(&flow, &self.section.airfoil, self.root_hint.get());
+                if let Some(i) = &mut ind {
                     self.root_hint.set(i.phi.re());
+                    if rotor.skewed_wake {
+                        // Pitt–Peters/Glauert: a ← a [1 + (15π/32)(r/R) tan(χ/2) cos ψ],
+                        // χ = (1 + 0.6a) γ the wake skew, γ the wind's angle to the axis,
+                        // ψ the azimuth from the most downwind position (the radial
+                        // direction along the wind's in-plane part).
+                        let wv = self.wind.velocity(&p, t);
+                        let wn = dot(&wv, &n);
+                        let wip = sub(&wv, &scale(&n, wn));
+                        let m2 = dot(&wip, &wip);
+                        if wn.re() > 0.0 && m2.re() > 1e-24 * dot(&wv, &wv).re() {
+                            let m = m2.sqrt();
+                            let gamma = m.atan2(wn);
+                            let half = gamma * (i.a * 0.6 + 1.0) * 0.5;
+                            let cos_psi = dot(&radial, &wip) / (rr * m);
+                            let k = half.sin() / half.cos()
+                                * cos_psi
+                                * (rr * (SKEW_CONSTANT / rotor.tip_radius));
+                            i.a = i.a * (k + 1.0);
+                        }
+                    }
                 }
                 let a_qs = ind.map_or(zero, |i| i.a);
                 res.a_quasi_steady = a_qs.re();

@@ -130,6 +130,9 @@ pub enum InflowInput {
         /// Tangential induction a'; default true.
         #[serde(default)]
         tangential_induction: Option<bool>,
+        /// Skewed-wake correction of the axial induction in yawed flow; default false.
+        #[serde(default)]
+        skewed_wake: Option<bool>,
         /// Dynamic wake on the axial induction: `"none"` (default, quasi-steady) or
         /// `"oye"` (Øye's two first-order filters, two states per station).
         #[serde(default)]
@@ -1140,6 +1143,7 @@ impl ComponentKind for AeroLine {
                 tip_loss,
                 hub_loss,
                 tangential_induction,
+                skewed_wake,
                 ..
             }) => {
                 let span = li.inflow.as_ref().and_then(|i| i.span.clone());
@@ -1168,6 +1172,7 @@ impl ComponentKind for AeroLine {
                         tip_loss: tip_loss.unwrap_or(true),
                         hub_loss: hub_loss.unwrap_or(true),
                         tangential_induction: tangential_induction.unwrap_or(true),
+                        skewed_wake: skewed_wake.unwrap_or(false),
                     },
                     centre: Vector3::from(*centre),
                     axis: if axis.norm() > 0.0 {
@@ -1325,6 +1330,7 @@ impl ComponentKind for AeroLine {
                     tip_loss: true,
                     hub_loss: true,
                     tangential_induction: true,
+                    skewed_wake: false,
                 },
                 centre: Vector3::new(0.0, 0.0, 0.0),
                 axis: Vector3::x(),
@@ -1549,6 +1555,7 @@ impl ComponentKind for AeroLine {
                     tip_loss: true,
                     hub_loss: true,
                     tangential_induction: true,
+                    skewed_wake: false,
                 },
                 centre: Vector3::zeros(),
                 axis: Vector3::x(),
@@ -1595,6 +1602,7 @@ impl ComponentKind for AeroLine {
                 tip_loss: true,
                 hub_loss: true,
                 tangential_induction: true,
+                skewed_wake: false,
             },
             centre: Vector3::zeros(),
             axis: Vector3::x(),
@@ -1716,6 +1724,48 @@ impl ComponentKind for AeroLine {
                         case
                     });
                 }
+            }
+        }
+        // The skewed-wake correction: BEM in the tangent cases' wind (about 13° off the
+        // axis), quasi-steady and with the dynamic wake, on 1 and 2 nodes.
+        let skewed = Arc::new(Inflow::Bem {
+            rotor: BemRotor {
+                blades: 3,
+                hub_radius: 0.2,
+                tip_radius: 4.0,
+                tip_loss: true,
+                hub_loss: true,
+                tangential_induction: true,
+                skewed_wake: true,
+            },
+            centre: Vector3::zeros(),
+            axis: Vector3::x(),
+        });
+        for nn in [1usize, 2] {
+            for wake in [false, true] {
+                let seed = 6000 + 10 * nn as u64 + u64::from(wake);
+                let nodes: Vec<_> = (0..nn).map(|i| node(seed + 3 * i as u64)).collect();
+                let w = 1.0 / nn as f64;
+                let unsteady = Unsteady {
+                    dynamic_wake: wake,
+                    ..Unsteady::default()
+                };
+                let e = AeroStation::new(
+                    "aero_skewed",
+                    (0..nn).collect(),
+                    (0..nn).map(|i| attach(i as f64 - 0.5, w)).collect(),
+                    section.clone(),
+                    1.2,
+                    wind.clone(),
+                    skewed.clone(),
+                )
+                .with_unsteady(unsteady, 0.0, &nodes);
+                let case = TangentCase::element(Box::new(e), nodes);
+                cases.push(if wake {
+                    case.with_states(vec![(0.25, 0.1), (0.2, -0.05)])
+                } else {
+                    case
+                });
             }
         }
         // Küssner's gust response: a gusty wind (the sheared wind plus a gust along a
