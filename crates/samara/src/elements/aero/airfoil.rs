@@ -1,6 +1,8 @@
 //! Airfoil tables: lift, drag and pitching-moment coefficients cl, cd, cm(α) over the
 //! whole circle −180° … 180°, read from a CSV table or an OpenFAST/AeroDyn airfoil file,
-//! interpolated by a C¹ piecewise-cubic Hermite curve (docs/aerodynamics.md).
+//! interpolated by a C¹ piecewise-cubic Hermite curve (docs/aerodynamics.md); several
+//! tables at increasing Reynolds numbers are interpolated linearly in ln Re
+//! ([`Airfoil::eval_re`]).
 //!
 //! Interpolation: on each interval [αᵢ, αᵢ₊₁] the cubic Hermite polynomial through the
 //! values with the slopes of the three-point parabola at each knot,
