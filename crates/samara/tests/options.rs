@@ -483,6 +483,66 @@ step = 0.01
     assert!(none != reference && uniform != reference && none != uniform);
     // `beam` (instead of `node`) and `aerodyn` (instead of `stations`): tests/aerodynamics.rs
     // (the cantilever wing, the NREL 5-MW rotor).
+    // Reynolds-number tables: a two-table airfoil (a.csv's polar at Re = 1e5, b.csv's at
+    // 1e6); the stations' Re = W₀ c/ν ≈ 2.2e5 … 2.9e5 lie between them. `reynolds =
+    // "interpolate"` reads between the tables (the default `"first"` reads a.csv's), and
+    // `kinematic_viscosity` moves Re.
+    let a = std::fs::read_to_string(dir.path().join("a.csv")).unwrap();
+    let b = std::fs::read_to_string(dir.path().join("b.csv")).unwrap();
+    let mut c = String::from("re,alpha,cl,cd,cm\n");
+    for (re, t) in [(1e5, &a), (1e6, &b)] {
+        for l in t.lines().skip(1) {
+            c += &format!("{re},{l}\n");
+        }
+    }
+    std::fs::write(dir.path().join("c.csv"), c).unwrap();
+    let two = base.replace("airfoil = \"a.csv\"", "airfoil = \"c.csv\"");
+    let first = loads(&two);
+    assert_eq!(first, reference, "the first table is a.csv's polar");
+    let explicit_first =
+        loads(&two.replacen("pitch = 0.02", "pitch = 0.02\nreynolds = \"first\"", 1));
+    assert_eq!(explicit_first, reference);
+    let interpolated = two.replacen(
+        "pitch = 0.02",
+        "pitch = 0.02\nreynolds = \"interpolate\"",
+        1,
+    );
+    let li = loads(&interpolated);
+    let lb = loads(&base.replace("airfoil = \"a.csv\"", "airfoil = \"b.csv\""));
+    let diff = |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(a, b)| (a - b).abs()).sum() };
+    assert!(
+        diff(&li, &reference) > 1e-6 && diff(&li, &lb) > 1e-6,
+        "between the tables"
+    );
+    let lv = loads(&interpolated.replacen(
+        "reynolds = \"interpolate\"",
+        "reynolds = \"interpolate\"\nkinematic_viscosity = 3e-5",
+        1,
+    ));
+    assert!(
+        diff(&lv, &li) > 1e-6,
+        "`kinematic_viscosity` changed nothing"
+    );
+    // `skewed_wake = true` changes the loads in yawed flow (the wind 22° off the axis);
+    // `false` is the default.
+    let yawed = base.replacen(
+        "direction = [1.0, 0.0, 0.0], shear",
+        "direction = [1.0, 0.4, 0.0], shear",
+        1,
+    );
+    let ly = loads(&yawed);
+    let skew = |on: &str| {
+        yawed.replacen(
+            "tangential_induction = true }",
+            &format!("tangential_induction = true, skewed_wake = {on} }}"),
+            1,
+        )
+    };
+    assert!(
+        diff(&loads(&skew("true")), &ly) > 1e-6,
+        "`skewed_wake` changed nothing"
+    );
+    assert_eq!(loads(&skew("false")), ly);
 }
 
 /// Issue #15: the unsteady-airfoil keys of `[[aero_lines]]` (`unsteady`, `dynamic_stall`,
@@ -634,6 +694,45 @@ step = 0.01
         let diff: f64 = v.iter().zip(&r_rates).map(|(a, b)| (a - b).abs()).sum();
         assert!(diff > 1e-9, "`{key}` changed nothing");
     }
+    // The wind's `gust` (velocity and function) changes the loads; `gust_response =
+    // "kussner"` adds Küssner's two states (after Wagner's) and routes the gust through
+    // them: a different residual, and the explicit default "wagner" is the default.
+    let gusty = base.replacen(
+        "direction = [1.0, 0.0, 0.1] }",
+        "direction = [1.0, 0.0, 0.1], gust = { velocity = [0.0, 0.0, 1.5], function = { type = \"constant\", value = 0.8 } } }",
+        1,
+    );
+    let r_gust = residual(&gusty);
+    assert_eq!(r_gust.len(), reference.len());
+    let diff = |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(a, b)| (a - b).abs()).sum() };
+    assert!(diff(&r_gust, &reference) > 1e-9, "`gust` changed nothing");
+    for (from, to) in [
+        ("velocity = [0.0, 0.0, 1.5]", "velocity = [0.0, 0.0, 1.0]"),
+        ("value = 0.8", "value = 0.5"),
+    ] {
+        let v = residual(&gusty.replacen(from, to, 1));
+        assert!(diff(&v, &r_gust) > 1e-9, "`{to}` changed nothing");
+    }
+    assert_eq!(
+        residual(&gusty.replacen(
+            "unsteady = \"wagner\"",
+            "unsteady = \"wagner\"\ngust_response = \"wagner\"",
+            1
+        )),
+        r_gust
+    );
+    let kussner = gusty.replacen(
+        "unsteady = \"wagner\"",
+        "unsteady = \"wagner\"\ngust_response = \"kussner\"",
+        1,
+    );
+    let r_k = residual(&kussner);
+    assert_eq!(r_k.len(), 6 + 5, "Wagner 2, Küssner 2, Øye 1");
+    // At the states' quasi-steady values + 0.05 the two differ in the loads.
+    assert!(
+        diff(&r_k[..6], &r_gust[..6]) > 1e-9,
+        "`gust_response` changed nothing"
+    );
 }
 
 /// Issue #16: every `[[controllers]]` key changes the signals or states it drives (the

@@ -490,3 +490,149 @@ fn bad_unsteady_options_are_located_errors() {
         "{e}"
     );
 }
+
+/// Sears & Sparks' approximation of Küssner's function, the model's states' closed form.
+fn sears_sparks(s: f64) -> f64 {
+    1.0 - 0.5 * (-0.13 * s).exp() - 0.5 * (-s).exp()
+}
+
+/// The plate of [`plate_model`] held at α = 0 in a steady wind `v` along the chord, hit at
+/// `t0` by a sharp-edged vertical gust `wg` (the wind's `gust`), with Küssner's response.
+fn gust_model(dir: &Path, v: f64, wg: f64, t0: f64, t_end: f64, h: f64) -> String {
+    plate_model(dir, v, "", "", t_end, h)
+        .replace(
+            "function = { type = \"step\", time = 0.00995, before = 0.0, after = 1.0 } }",
+            &format!(
+                "gust = {{ velocity = [0.0, 0.0, {wg}], function = {{ type = \"step\", time = {t0}, before = 0.0, after = 1.0 }} }} }}"
+            ),
+        )
+        .replace("unsteady = \"wagner\"", "unsteady = \"wagner\"\ngust_response = \"kussner\"")
+}
+
+#[test]
+fn kussner_states_give_the_sharp_edged_gust_response() {
+    // A flat plate (cl = π sin 2α, c = 1 m) at α = 0 in a 50 m/s wind meets a vertical
+    // sharp-edged gust w_g = 0.5 m/s at t₀: its lift builds as Küssner's function,
+    // cl = π sin 2α_E, α_E = atan2(w_g ψ(s), V), s = 2|U|(t − t₀)/c, with ψ the model's
+    // Sears–Sparks exponentials 1 − ½e^{−0.13s} − ½e^{−s} (their closed form; the motion
+    // part, zero here, goes through Wagner's states). The gust arrives between two steps:
+    // the error is first order in h; at h = 0.01 and 0.005 semichords it must stay below
+    // 2e-3 of the final lift and shrink under halving.
+    let dir = tempfile::tempdir().unwrap();
+    let (v, wg) = (50.0f64, 0.5f64);
+    let speed = (v * v + wg * wg).sqrt();
+    let t0 = 0.009975;
+    let cl_inf = PI * (2.0 * wg.atan2(v)).sin();
+    let mut worst = Vec::new();
+    for h in [1e-4, 5e-5] {
+        let text = gust_model(dir.path(), v, wg, t0, t0 + 0.21, h);
+        let (t, outs, names, states) = run(&text, dir.path());
+        let icl = names.iter().position(|n| n == "plate.0.cl").unwrap();
+        let mut err = 0.0f64;
+        for s in [0.25, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0] {
+            let ts = t0 + s / (2.0 * speed);
+            let i = (0..t.len())
+                .min_by(|&a, &b| (t[a] - ts).abs().total_cmp(&(t[b] - ts).abs()))
+                .unwrap();
+            let si = 2.0 * speed * (t[i] - t0);
+            let want = PI * (2.0 * (wg * sears_sparks(si)).atan2(v)).sin();
+            let got = outs[i][icl];
+            println!(
+                "h = {h}: s = {si:.3}: cl/cl∞ simulated {:.5}, Küssner (Sears–Sparks) {:.5}",
+                got / cl_inf,
+                want / cl_inf
+            );
+            err = err.max((got - want).abs() / cl_inf);
+        }
+        // Before the gust: no lift, Küssner and Wagner states at rest.
+        let before = t.iter().position(|&x| x > t0).unwrap() - 1;
+        assert!(outs[before][icl].abs() < 1e-12);
+        assert!(states[before].iter().all(|z| z.abs() < 1e-12));
+        // After it: the Wagner states stay at rest (no motion downwash).
+        let last = states.last().unwrap();
+        assert!(last[0].abs() < 1e-12 && last[1].abs() < 1e-12, "{last:?}");
+        println!("h = {h}: worst |cl − cl_K|/cl∞ = {err:.2e}");
+        assert!(err < 2e-3, "h = {h}: {err}");
+        worst.push(err);
+    }
+    assert!(worst[1] < 0.75 * worst[0], "no convergence: {worst:?}");
+}
+
+#[test]
+fn kussner_keeps_the_wagner_response_to_motion() {
+    // With Küssner's gust response on and no gust acting (the gust's function 0), the
+    // plate pitching at k = 0.2 gives the same lift as with Wagner alone (the motion goes
+    // through Wagner's states unchanged; the Küssner states stay exactly 0): equal to the
+    // Newton tolerance, 1e-9 of the peak.
+    let dir = tempfile::tempdir().unwrap();
+    let (v, b, k) = (50.0, 0.5, 0.2);
+    let w = k * v / b;
+    let alpha_hat = 0.5f64.to_radians();
+    let theta2 = format!(
+        "[joints.theta2]\ndrive = {{ type = \"sine\", amplitude = {alpha_hat}, frequency = {} }}",
+        w / (2.0 * PI)
+    );
+    let period = 2.0 * PI / w;
+    let base = plate_model(dir.path(), v, &theta2, "", 2.0 * period, period / 100.0).replace(
+        ", function = { type = \"step\", time = 0.00995, before = 0.0, after = 1.0 } }",
+        " }",
+    );
+    let with = base
+        .replace(
+            "direction = [1.0, 0.0, 0.0] }",
+            "direction = [1.0, 0.0, 0.0], gust = { velocity = [0.0, 0.0, 1.0], function = { type = \"constant\", value = 0.0 } } }",
+        )
+        .replace("unsteady = \"wagner\"", "unsteady = \"wagner\"\ngust_response = \"kussner\"");
+    assert!(
+        with.contains("kussner") && with.contains("gust ="),
+        "{with}"
+    );
+    let (_, a, na, _) = run(&base, dir.path());
+    let (_, g, ng, _) = run(&with, dir.path());
+    let ia = na.iter().position(|n| n == "plate.0.cl").unwrap();
+    let ig = ng.iter().position(|n| n == "plate.0.cl").unwrap();
+    assert_eq!(a.len(), g.len());
+    let peak = a.iter().map(|o| o[ia].abs()).fold(0.0, f64::max);
+    assert!(peak > 0.01);
+    for (x, y) in a.iter().zip(&g) {
+        assert!(
+            (x[ia] - y[ig]).abs() < 1e-9 * peak,
+            "{} vs {}",
+            x[ia],
+            y[ig]
+        );
+    }
+}
+
+#[test]
+fn bad_gust_options_are_located_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = gust_model(dir.path(), 10.0, 0.5, 0.05, 0.1, 0.01);
+    assert!(Model::from_toml_str(&good, dir.path().join("ok.toml")).is_ok());
+    let line = |text: &str, key: &str| text.lines().position(|l| l.starts_with(key)).unwrap() + 1;
+    // Küssner without Wagner's states.
+    let bad = good.replace("unsteady = \"wagner\"\n", "");
+    let e = model_error(dir.path(), &bad);
+    assert!(
+        e.contains("without `unsteady = \"wagner\"`")
+            && e.contains(&format!("bad.toml:{}:", line(&bad, "gust_response"))),
+        "{e}"
+    );
+    // Küssner with no gust in the wind.
+    let bad = plate_model(dir.path(), 10.0, "", "", 0.1, 0.01).replace(
+        "unsteady = \"wagner\"",
+        "unsteady = \"wagner\"\ngust_response = \"kussner\"",
+    );
+    let e = model_error(dir.path(), &bad);
+    assert!(
+        e.contains("has no `gust`")
+            && e.contains(&format!("bad.toml:{}:", line(&bad, "gust_response"))),
+        "{e}"
+    );
+    // An unknown response, a non-finite gust.
+    let bad = good.replace("gust_response = \"kussner\"", "gust_response = \"sears\"");
+    assert!(model_error(dir.path(), &bad).contains("sears"));
+    let bad = good.replace("velocity = [0.0, 0.0, 0.5]", "velocity = [0.0, 0.0, nan]");
+    let e = model_error(dir.path(), &bad);
+    assert!(e.contains("finite") || e.contains("velocity"), "{e}");
+}

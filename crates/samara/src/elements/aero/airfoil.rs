@@ -1,6 +1,8 @@
 //! Airfoil tables: lift, drag and pitching-moment coefficients cl, cd, cm(α) over the
 //! whole circle −180° … 180°, read from a CSV table or an OpenFAST/AeroDyn airfoil file,
-//! interpolated by a C¹ piecewise-cubic Hermite curve (docs/aerodynamics.md).
+//! interpolated by a C¹ piecewise-cubic Hermite curve (docs/aerodynamics.md); several
+//! tables at increasing Reynolds numbers are interpolated linearly in ln Re
+//! ([`Airfoil::eval_re`]).
 //!
 //! Interpolation: on each interval [αᵢ, αᵢ₊₁] the cubic Hermite polynomial through the
 //! values with the slopes of the three-point parabola at each knot,
@@ -8,6 +10,7 @@
 //! taken across ±180° as the circle closes: the coefficients and their first derivative
 //! are continuous, as Newton needs. The curve passes through every table point.
 
+use crate::math::dual::Scalar;
 use std::f64::consts::PI;
 
 /// A parse or check error of an airfoil file, at a 1-based line and column of that file
@@ -56,19 +59,36 @@ pub struct Coefficients {
     pub dcm: f64,
 }
 
-/// An airfoil table covering −π … π.
+/// One table of an airfoil covering −π … π.
 #[derive(Clone, Debug)]
-pub struct Airfoil {
+struct Table {
     /// Angles of attack [rad], strictly increasing, first −π, last π.
     alpha: Vec<f64>,
     /// cl, cd, cm at the knots.
     values: [Vec<f64>; 3],
     /// Their knot slopes.
     slopes: [Vec<f64>; 3],
+}
+
+/// An airfoil: one table covering −π … π, or several at increasing Reynolds numbers
+/// (interpolated linearly in ln Re by [`Airfoil::eval_re`], clamped to the first and last
+/// table outside their range).
+#[derive(Clone, Debug)]
+pub struct Airfoil {
+    /// The tables, at least one.
+    tables: Vec<Table>,
+    /// The Reynolds number of each table (NaN where a single table gives none), strictly
+    /// increasing with several tables, and their logarithms.
+    reynolds: Vec<f64>,
+    log_reynolds: Vec<f64>,
     /// The unsteady-aerodynamics block of an AeroDyn file (`InclUAdata = True`), read
     /// for the Beddoes–Leishman (HGM) model; its error is reported only where it is used.
     ua: Option<Result<super::hgm::HgmCoefficients, AirfoilError>>,
 }
+
+/// One table as read: its Reynolds number (NaN if none is given), the 1-based line where
+/// the number is (0: none), and the rows (line, [α °, cl, cd, cm]).
+pub type TableRows = (f64, usize, Vec<(usize, [f64; 4])>);
 
 /// How far from ±180° a table end may be [deg] (printed tables round).
 const COVER_TOL_DEG: f64 = 1e-6;
@@ -78,6 +98,82 @@ impl Airfoil {
     /// (for messages; 0 if built in code). Checks: finite values, α strictly increasing,
     /// first −180°, last 180°.
     pub fn from_rows(rows: &[(usize, [f64; 4])]) -> Result<Self, AirfoilError> {
+        Ok(Self {
+            tables: vec![Table::from_rows(rows)?],
+            reynolds: vec![f64::NAN],
+            log_reynolds: vec![f64::NAN],
+            ua: None,
+        })
+    }
+
+    /// An airfoil from several tables, each with its Reynolds number (> 0, strictly
+    /// increasing from table to table) and each covering −180° … 180° (its own α grid).
+    /// A single table may have no Reynolds number (NaN).
+    pub fn from_tables(tables: &[TableRows]) -> Result<Self, AirfoilError> {
+        let Some(first) = tables.first() else {
+            return Err(AirfoilError::at(0, 0, "the file has no table", ""));
+        };
+        if tables.len() > 1 {
+            for (k, (re, line, _)) in tables.iter().enumerate() {
+                if !(re.is_finite() && *re > 0.0) {
+                    return Err(AirfoilError::at(
+                        *line,
+                        1,
+                        format!(
+                            "table {} has Reynolds number {re}: with several tables each needs a Reynolds number > 0",
+                            k + 1
+                        ),
+                        "give every table its Reynolds number",
+                    ));
+                }
+            }
+            for (k, w) in tables.windows(2).enumerate() {
+                if w[1].0 <= w[0].0 {
+                    return Err(AirfoilError::at(
+                        w[1].1,
+                        1,
+                        format!(
+                            "the Reynolds number of table {} ({}) does not exceed that of table {} ({}): tables must be sorted by strictly increasing Reynolds number",
+                            k + 2,
+                            w[1].0,
+                            k + 1,
+                            w[0].0
+                        ),
+                        "order the tables by Reynolds number; tables that differ only in UserProp/Ctrl (AeroDyn's AFTabMod = 3) are not read",
+                    ));
+                }
+            }
+        }
+        let built = tables
+            .iter()
+            .map(|(_, _, rows)| Table::from_rows(rows))
+            .collect::<Result<Vec<_>, _>>()?;
+        let reynolds: Vec<f64> = if tables.len() == 1 {
+            vec![first.0]
+        } else {
+            tables.iter().map(|t| t.0).collect()
+        };
+        Ok(Self {
+            tables: built,
+            log_reynolds: reynolds.iter().map(|r| r.ln()).collect(),
+            reynolds,
+            ua: None,
+        })
+    }
+
+    /// Number of tables (Reynolds numbers).
+    pub fn tables(&self) -> usize {
+        self.tables.len()
+    }
+
+    /// The tables' Reynolds numbers (NaN for a single table without one).
+    pub fn reynolds_numbers(&self) -> &[f64] {
+        &self.reynolds
+    }
+}
+
+impl Table {
+    fn from_rows(rows: &[(usize, [f64; 4])]) -> Result<Self, AirfoilError> {
         if rows.len() < 3 {
             return Err(AirfoilError::at(
                 rows.last().map_or(0, |r| r.0),
@@ -131,45 +227,11 @@ impl Airfoil {
             alpha,
             values,
             slopes,
-            ua: None,
         })
     }
 
-    /// The flat plate of thin-airfoil theory near zero incidence, cl = 2π sin α cos α
-    /// (2πα for small α), cd = 0, cm = 0, tabulated every degree.
-    pub fn thin_plate() -> Self {
-        let rows: Vec<(usize, [f64; 4])> = (-180..=180)
-            .map(|d| {
-                let a = (d as f64).to_radians();
-                (0, [d as f64, PI * (2.0 * a).sin(), 0.0, 0.0])
-            })
-            .collect();
-        // The rows are valid by construction.
-        Self::from_rows(&rows).unwrap_or_else(|_| unreachable!())
-    }
-
-    /// A smooth table with lift, drag and moment everywhere (for tangent checks):
-    /// cl = π sin 2α, cd = 0.01 + 1.5 sin²α, cm = −0.1 sin α.
-    pub fn thin_plate_with_drag() -> Self {
-        let rows: Vec<(usize, [f64; 4])> = (-180..=180)
-            .map(|d| {
-                let a = (d as f64).to_radians();
-                (
-                    0,
-                    [
-                        d as f64,
-                        PI * (2.0 * a).sin(),
-                        0.01 + 1.5 * a.sin().powi(2),
-                        -0.1 * a.sin(),
-                    ],
-                )
-            })
-            .collect();
-        Self::from_rows(&rows).unwrap_or_else(|_| unreachable!())
-    }
-
     /// Coefficients at α [rad] (any angle: wrapped to −π … π).
-    pub fn eval(&self, alpha: f64) -> Coefficients {
+    fn eval(&self, alpha: f64) -> Coefficients {
         let a = wrap(alpha);
         let n = self.alpha.len();
         // Interval by bisection.
@@ -212,32 +274,137 @@ impl Airfoil {
             dcm,
         }
     }
+}
 
-    /// The knots' angles [rad] and lift coefficients.
-    pub fn knots_cl(&self) -> (&[f64], &[f64]) {
-        (&self.alpha, &self.values[0])
+impl Airfoil {
+    /// The flat plate of thin-airfoil theory near zero incidence, cl = 2π sin α cos α
+    /// (2πα for small α), cd = 0, cm = 0, tabulated every degree.
+    pub fn thin_plate() -> Self {
+        let rows: Vec<(usize, [f64; 4])> = (-180..=180)
+            .map(|d| {
+                let a = (d as f64).to_radians();
+                (0, [d as f64, PI * (2.0 * a).sin(), 0.0, 0.0])
+            })
+            .collect();
+        // The rows are valid by construction.
+        Self::from_rows(&rows).unwrap_or_else(|_| unreachable!())
     }
 
-    /// Number of table rows.
+    /// A smooth table with lift, drag and moment everywhere (for tangent checks):
+    /// cl = π sin 2α, cd = 0.01 + 1.5 sin²α, cm = −0.1 sin α.
+    pub fn thin_plate_with_drag() -> Self {
+        let rows: Vec<(usize, [f64; 4])> = (-180..=180)
+            .map(|d| {
+                let a = (d as f64).to_radians();
+                (
+                    0,
+                    [
+                        d as f64,
+                        PI * (2.0 * a).sin(),
+                        0.01 + 1.5 * a.sin().powi(2),
+                        -0.1 * a.sin(),
+                    ],
+                )
+            })
+            .collect();
+        Self::from_rows(&rows).unwrap_or_else(|_| unreachable!())
+    }
+
+    /// Coefficients of the first table at α [rad] (any angle: wrapped to −π … π).
+    pub fn eval(&self, alpha: f64) -> Coefficients {
+        self.tables[0].eval(alpha)
+    }
+
+    /// Coefficients at α [rad] and Reynolds number Re, with their derivatives over Re:
+    /// linear in ln Re between the two tables around Re,
+    /// c = (1 − t) c_k + t c_{k+1}, t = (ln Re − ln Re_k)/(ln Re_{k+1} − ln Re_k)
+    /// (as AeroDyn's AFTabMod = 2), each table's own C¹ cubic in α; below the first
+    /// table's Re the first table, above the last the last (∂/∂Re = 0 there). A single
+    /// table: its coefficients whatever Re.
+    pub fn eval_re(&self, alpha: f64, re: f64) -> (Coefficients, [f64; 3]) {
+        let n = self.tables.len();
+        if n == 1 || re.is_nan() || re <= self.reynolds[0] {
+            return (self.tables[0].eval(alpha), [0.0; 3]);
+        }
+        if re >= self.reynolds[n - 1] {
+            return (self.tables[n - 1].eval(alpha), [0.0; 3]);
+        }
+        let k = self.reynolds.partition_point(|&r| r <= re) - 1;
+        let span = self.log_reynolds[k + 1] - self.log_reynolds[k];
+        let t = (re.ln() - self.log_reynolds[k]) / span;
+        let dt = 1.0 / (re * span);
+        let (a, b) = (self.tables[k].eval(alpha), self.tables[k + 1].eval(alpha));
+        let mix = |x: f64, y: f64| (1.0 - t) * x + t * y;
+        (
+            Coefficients {
+                cl: mix(a.cl, b.cl),
+                cd: mix(a.cd, b.cd),
+                cm: mix(a.cm, b.cm),
+                dcl: mix(a.dcl, b.dcl),
+                dcd: mix(a.dcd, b.dcd),
+                dcm: mix(a.dcm, b.dcm),
+            },
+            [(b.cl - a.cl) * dt, (b.cd - a.cd) * dt, (b.cm - a.cm) * dt],
+        )
+    }
+
+    /// cl, cd, cm as functions of α and, if given, Re ([`Self::eval_re`]; the first
+    /// table without), with the derivatives of both carried (dual numbers), and their
+    /// values.
+    pub fn coefficients<S: Scalar>(&self, alpha: S, re: Option<S>) -> ([S; 3], Coefficients) {
+        match re {
+            None => {
+                let c = self.eval(alpha.re());
+                (
+                    [
+                        alpha.chain(c.cl, c.dcl),
+                        alpha.chain(c.cd, c.dcd),
+                        alpha.chain(c.cm, c.dcm),
+                    ],
+                    c,
+                )
+            }
+            Some(re) => {
+                let (c, d) = self.eval_re(alpha.re(), re.re());
+                let dre = re - S::cst(re.re());
+                (
+                    [
+                        alpha.chain(c.cl, c.dcl) + dre * d[0],
+                        alpha.chain(c.cd, c.dcd) + dre * d[1],
+                        alpha.chain(c.cm, c.dcm) + dre * d[2],
+                    ],
+                    c,
+                )
+            }
+        }
+    }
+
+    /// The knots' angles [rad] and lift coefficients (first table).
+    pub fn knots_cl(&self) -> (&[f64], &[f64]) {
+        (&self.tables[0].alpha, &self.tables[0].values[0])
+    }
+
+    /// Number of rows of the first table.
     pub fn len(&self) -> usize {
-        self.alpha.len()
+        self.tables[0].alpha.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.alpha.is_empty()
+        self.tables[0].alpha.is_empty()
     }
 
-    /// Reads a table from text: CSV if `csv` (header `alpha,cl,cd[,cm]`, α in degrees,
-    /// `#` comments), otherwise the OpenFAST/AeroDyn airfoil file format (AirfoilInfo
-    /// v1.01: the `NumAlf` rows of α [deg], cl, cd[, cm] after the `NumAlf` line; `!`
-    /// comments; one table).
+    /// Reads tables from text: CSV if `csv` (header `alpha,cl,cd[,cm]`, α in degrees, `#`
+    /// comments; with a first column `re`, several tables: consecutive rows of equal Re
+    /// form one, Re increasing), otherwise the OpenFAST/AeroDyn airfoil file format
+    /// (AirfoilInfo v1.01: `NumTabs` tables, each with its `Re` line [millions] and the
+    /// `NumAlf` rows of α [deg], cl, cd[, cm] after its `NumAlf` line; `!` comments).
     pub fn parse(text: &str, csv: bool) -> Result<Self, AirfoilError> {
-        let rows = if csv {
+        let tables = if csv {
             parse_csv(text)?
         } else {
             parse_aerodyn(text)?
         };
-        let mut a = Self::from_rows(&rows)?;
+        let mut a = Self::from_tables(&tables)?;
         if !csv {
             a.ua = super::hgm::HgmCoefficients::from_aerodyn(text);
         }
@@ -289,9 +456,11 @@ fn number(tok: &str, line: usize, column: usize, what: &str) -> Result<f64, Airf
     })
 }
 
-fn parse_csv(text: &str) -> Result<Vec<(usize, [f64; 4])>, AirfoilError> {
-    let mut rows = Vec::new();
-    let mut columns: Option<usize> = None;
+fn parse_csv(text: &str) -> Result<Vec<TableRows>, AirfoilError> {
+    let mut tables: Vec<TableRows> = Vec::new();
+    // Columns and whether the first is Re.
+    let mut columns: Option<(usize, bool)> = None;
+    const NAMES: [&str; 5] = ["re", "alpha", "cl", "cd", "cm"];
     for (k, raw) in text.lines().enumerate() {
         let line = k + 1;
         let content = raw.split('#').next().unwrap_or("").trim();
@@ -302,38 +471,66 @@ fn parse_csv(text: &str) -> Result<Vec<(usize, [f64; 4])>, AirfoilError> {
         match columns {
             None => {
                 let names: Vec<String> = cells.iter().map(|c| c.trim().to_lowercase()).collect();
-                let ok = names.len() >= 3
-                    && names.len() <= 4
-                    && (names[0] == "alpha" || names[0] == "alpha_deg")
-                    && names[1] == "cl"
-                    && names[2] == "cd"
-                    && (names.len() == 3 || names[3] == "cm");
+                let with_re = names.first().is_some_and(|n| n == "re");
+                let n = &names[usize::from(with_re)..];
+                let ok = n.len() >= 3
+                    && n.len() <= 4
+                    && (n[0] == "alpha" || n[0] == "alpha_deg")
+                    && n[1] == "cl"
+                    && n[2] == "cd"
+                    && (n.len() == 3 || n[3] == "cm");
                 if !ok {
                     return Err(AirfoilError::at(
                         line,
                         1,
-                        format!("expected the header `alpha,cl,cd,cm`, found '{content}'"),
-                        "the first line that is not a comment names the columns: alpha (degrees), cl, cd and optionally cm",
+                        format!(
+                            "expected the header `alpha,cl,cd,cm` (or `re,alpha,cl,cd,cm`), found '{content}'"
+                        ),
+                        "the first line that is not a comment names the columns: optionally re (the Reynolds number of the row's table), then alpha (degrees), cl, cd and optionally cm",
                     ));
                 }
-                columns = Some(names.len());
+                columns = Some((names.len(), with_re));
             }
-            Some(nc) => {
+            Some((nc, with_re)) => {
                 if cells.len() != nc {
                     return Err(AirfoilError::at(
                         line,
                         1,
                         format!("expected {nc} values, found {}", cells.len()),
-                        "one row per angle: alpha, cl, cd[, cm]",
+                        if with_re {
+                            "one row per angle: re, alpha, cl, cd[, cm]"
+                        } else {
+                            "one row per angle: alpha, cl, cd[, cm]"
+                        },
                     ));
                 }
-                let mut r = [0.0; 4];
+                let mut v = [0.0; 5];
                 let mut col = 1;
+                let names = &NAMES[usize::from(!with_re)..];
                 for (j, c) in cells.iter().enumerate() {
-                    r[j] = number(c, line, col, ["alpha", "cl", "cd", "cm"][j])?;
+                    v[j] = number(c, line, col, names[j])?;
                     col += c.len() + 1;
                 }
-                rows.push((line, r));
+                let (re, r) = if with_re {
+                    (v[0], [v[1], v[2], v[3], v[4]])
+                } else {
+                    (f64::NAN, [v[0], v[1], v[2], v[3]])
+                };
+                match tables.last_mut() {
+                    Some(t) if t.0 == re || (re.is_nan() && t.0.is_nan()) => t.2.push((line, r)),
+                    Some(t) if re.partial_cmp(&t.0) != Some(std::cmp::Ordering::Greater) => {
+                        return Err(AirfoilError::at(
+                            line,
+                            1,
+                            format!(
+                                "Re = {re} after a table at Re = {}: the tables must follow each other by strictly increasing Reynolds number, each in one block of rows",
+                                t.0
+                            ),
+                            "sort the rows by re, then by alpha",
+                        ));
+                    }
+                    _ => tables.push((re, line, vec![(line, r)])),
+                }
             }
         }
     }
@@ -345,7 +542,10 @@ fn parse_csv(text: &str) -> Result<Vec<(usize, [f64; 4])>, AirfoilError> {
             "give the header `alpha,cl,cd,cm` and one row per angle",
         ));
     }
-    Ok(rows)
+    if tables.is_empty() {
+        tables.push((f64::NAN, 0, Vec::new()));
+    }
+    Ok(tables)
 }
 
 /// Value of a `value  Name  ! comment` line of an OpenFAST file whose second token is `key`.
@@ -357,71 +557,137 @@ fn keyed<'a>(text: &'a str, key: &str) -> Option<(usize, &'a str)> {
     })
 }
 
-fn parse_aerodyn(text: &str) -> Result<Vec<(usize, [f64; 4])>, AirfoilError> {
-    if let Some((line, v)) = keyed(text, "NumTabs") {
-        let n = number(v, line, 1, "NumTabs")?;
-        if n != 1.0 {
-            return Err(AirfoilError::at(
-                line,
-                1,
-                format!("NumTabs = {v}: several Reynolds-number tables are not read yet"),
-                "keep the table of the Reynolds number of the operating point (NumTabs = 1)",
-            ));
+/// The 1-based lines whose second token is `key`, and their first token.
+fn keyed_all<'a>(text: &'a str, key: &str) -> Vec<(usize, &'a str)> {
+    text.lines()
+        .enumerate()
+        .filter_map(|(k, l)| {
+            let mut t = l.split_whitespace();
+            let v = t.next()?;
+            (t.next()? == key).then_some((k + 1, v))
+        })
+        .collect()
+}
+
+fn parse_aerodyn(text: &str) -> Result<Vec<TableRows>, AirfoilError> {
+    let ntabs = match keyed(text, "NumTabs") {
+        Some((line, v)) => {
+            let n = number(v, line, 1, "NumTabs")?;
+            if !((1.0..=1000.0).contains(&n) && n.fract() == 0.0) {
+                return Err(AirfoilError::at(
+                    line,
+                    1,
+                    format!("NumTabs = {v}: expected a whole number of tables 1…1000"),
+                    "",
+                ));
+            }
+            Some((line, n as usize))
         }
-    }
-    let Some((line0, v)) = keyed(text, "NumAlf") else {
+        None => None,
+    };
+    let counts = keyed_all(text, "NumAlf");
+    if counts.is_empty() {
         return Err(AirfoilError::at(
             0,
             0,
             "no `NumAlf` line: this is not an AeroDyn airfoil file",
             "give an AeroDyn (AirfoilInfo v1.01) file, or a `.csv` table with the header alpha,cl,cd,cm",
         ));
-    };
-    let n = number(v, line0, 1, "NumAlf")?;
-    if !((3.0..=1e6).contains(&n) && n.fract() == 0.0) {
+    }
+    let res = keyed_all(text, "Re");
+    let n_tabs = ntabs.map_or(1, |t| t.1);
+    if counts.len() < n_tabs {
+        let line = ntabs.map_or(0, |t| t.0);
         return Err(AirfoilError::at(
-            line0,
+            line,
             1,
-            format!("NumAlf = {v}: expected a whole number of rows ≥ 3"),
-            "",
+            format!(
+                "NumTabs = {n_tabs} but the file has {} `NumAlf` line(s)",
+                counts.len()
+            ),
+            "each table has its `Re`, `UserProp` (or `Ctrl`), `InclUAdata` and `NumAlf` lines, then its rows",
         ));
     }
-    let n = n as usize;
-    let mut rows = Vec::with_capacity(n);
-    for (k, l) in text.lines().enumerate().skip(line0) {
-        if rows.len() == n {
-            break;
-        }
-        let t = l.trim();
-        if t.is_empty() || t.starts_with('!') {
-            continue;
-        }
-        let line = k + 1;
-        let toks: Vec<&str> = t.split_whitespace().collect();
-        if toks.len() < 3 {
+    if n_tabs > 1 && res.len() < n_tabs {
+        return Err(AirfoilError::at(
+            ntabs.map_or(0, |t| t.0),
+            1,
+            format!(
+                "NumTabs = {n_tabs} but the file has {} `Re` line(s)",
+                res.len()
+            ),
+            "each table starts with its Reynolds number in millions: `<value>  Re`",
+        ));
+    }
+    let mut tables = Vec::with_capacity(n_tabs);
+    for (t, &(line0, v)) in counts.iter().take(n_tabs).enumerate() {
+        // The table's Reynolds number [millions], on a line before its NumAlf (and after
+        // the previous table's).
+        let re = match res.get(t) {
+            Some(&(rl, rv)) => {
+                let prev = if t > 0 { counts[t - 1].0 } else { 0 };
+                if !(rl < line0 && rl > prev) {
+                    return Err(AirfoilError::at(
+                        rl,
+                        1,
+                        format!(
+                            "the `Re` line of table {} is not between its `NumAlf` line and the previous table's",
+                            t + 1
+                        ),
+                        "each table gives `Re` before its `NumAlf` line",
+                    ));
+                }
+                (number(rv, rl, 1, "Re [millions]")? * 1e6, rl)
+            }
+            None => (f64::NAN, 0),
+        };
+        let n = number(v, line0, 1, "NumAlf")?;
+        if !((3.0..=1e6).contains(&n) && n.fract() == 0.0) {
             return Err(AirfoilError::at(
-                line,
+                line0,
                 1,
-                format!("expected alpha, cl, cd[, cm], found '{t}'"),
-                "the NumAlf rows follow the NumAlf line",
+                format!("NumAlf = {v}: expected a whole number of rows ≥ 3"),
+                "",
             ));
         }
-        let mut r = [0.0; 4];
-        for j in 0..toks.len().min(4) {
-            let col = l.find(toks[j]).map_or(1, |c| c + 1);
-            r[j] = number(toks[j], line, col, ["alpha", "cl", "cd", "cm"][j])?;
+        let n = n as usize;
+        let mut rows = Vec::with_capacity(n);
+        for (k, l) in text.lines().enumerate().skip(line0) {
+            if rows.len() == n {
+                break;
+            }
+            let tr = l.trim();
+            if tr.is_empty() || tr.starts_with('!') {
+                continue;
+            }
+            let line = k + 1;
+            let toks: Vec<&str> = tr.split_whitespace().collect();
+            if toks.len() < 3 {
+                return Err(AirfoilError::at(
+                    line,
+                    1,
+                    format!("expected alpha, cl, cd[, cm], found '{tr}'"),
+                    "the NumAlf rows follow the NumAlf line",
+                ));
+            }
+            let mut r = [0.0; 4];
+            for j in 0..toks.len().min(4) {
+                let col = l.find(toks[j]).map_or(1, |c| c + 1);
+                r[j] = number(toks[j], line, col, ["alpha", "cl", "cd", "cm"][j])?;
+            }
+            rows.push((line, r));
         }
-        rows.push((line, r));
+        if rows.len() < n {
+            return Err(AirfoilError::at(
+                line0,
+                1,
+                format!("NumAlf = {n} but the file has {} rows after it", rows.len()),
+                "make NumAlf the number of table rows",
+            ));
+        }
+        tables.push((re.0, re.1, rows));
     }
-    if rows.len() < n {
-        return Err(AirfoilError::at(
-            line0,
-            1,
-            format!("NumAlf = {n} but the file has {} rows after it", rows.len()),
-            "make NumAlf the number of table rows",
-        ));
-    }
-    Ok(rows)
+    Ok(tables)
 }
 
 #[cfg(test)]

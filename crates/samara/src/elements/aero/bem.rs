@@ -47,7 +47,14 @@ pub struct BemRotor {
     pub hub_loss: bool,
     /// Include the tangential induction a'.
     pub tangential_induction: bool,
+    /// Pitt–Peters/Glauert skewed-wake correction of the axial induction in yawed flow
+    /// (AeroDyn's SkewMod = 2), applied by the station after the momentum solve.
+    pub skewed_wake: bool,
 }
+
+/// The skewed-wake correction's constant 15π/32 (Pitt & Peters 1981; Moriarty & Hansen,
+/// AeroDyn Theory Manual, 2005, §"Skewed wake correction").
+pub const SKEW_CONSTANT: f64 = 15.0 * PI / 32.0;
 
 /// The BEM solution at a station.
 #[derive(Clone, Copy, Debug)]
@@ -70,6 +77,9 @@ pub struct StationFlow<S> {
     pub r: S,
     pub chord: f64,
     pub theta: S,
+    /// The Reynolds number the airfoil's tables are interpolated at (`None`: its first
+    /// table).
+    pub re: Option<S>,
 }
 
 impl BemRotor {
@@ -97,9 +107,7 @@ impl BemRotor {
     ) -> (S, Induction<S>) {
         let (sp, cp) = (phi.sin(), phi.cos());
         let alpha = phi - p.theta;
-        let c = airfoil.eval(alpha.re());
-        let cl = alpha.chain(c.cl, c.dcl);
-        let cd = alpha.chain(c.cd, c.dcd);
+        let ([cl, cd, _], _) = airfoil.coefficients(alpha, p.re);
         let cn = cl * cp + cd * sp;
         let ct = cl * sp - cd * cp;
         let sigma = S::cst(self.blades as f64 * p.chord / (2.0 * PI)) / p.r;
@@ -169,6 +177,7 @@ impl BemRotor {
             r: p.r.re(),
             chord: p.chord,
             theta: p.theta.re(),
+            re: p.re.map(|x| x.re()),
         };
         if !(pv.vx > 1e-9 && pv.vy > 1e-9 && pv.r > 0.0) {
             return None;
@@ -179,6 +188,7 @@ impl BemRotor {
             r: Dual::<1>::cst(pv.r),
             chord: pv.chord,
             theta: Dual::<1>::cst(pv.theta),
+            re: pv.re.map(Dual::<1>::cst),
         };
         // R and ∂R/∂φ at φ (one dual direction), with the induction's φ-derivatives.
         let with_slope = |phi: f64| self.residual(Dual::<1>::var(phi, 0), &pd, airfoil);
@@ -318,6 +328,7 @@ mod tests {
             tip_loss: true,
             hub_loss: true,
             tangential_induction: true,
+            skewed_wake: false,
         };
         let airfoil = Airfoil::thin_plate_with_drag();
         let mut warm = 0;
@@ -329,6 +340,7 @@ mod tests {
                     r,
                     chord: 4.0 - 0.04 * r,
                     theta,
+                    re: None,
                 };
                 let cold = rotor.solve(&p, &airfoil).unwrap();
                 for hint in [cold.phi + 0.05, cold.phi - 0.05, 1.5] {
@@ -348,6 +360,7 @@ mod tests {
                             r: Dual::<1>::cst(p.r),
                             chord: p.chord,
                             theta: Dual::<1>::cst(p.theta),
+                            re: None,
                         };
                         rotor.residual(Dual::<1>::var(phi, 0), &pd, &airfoil)
                     };
@@ -370,6 +383,7 @@ mod tests {
             tip_loss: true,
             hub_loss: false,
             tangential_induction: true,
+            skewed_wake: false,
         };
         let airfoil = Airfoil::thin_plate_with_drag();
         let p = StationFlow {
@@ -378,6 +392,7 @@ mod tests {
             r: 30.0,
             chord: 3.0,
             theta: 0.05,
+            re: None,
         };
         let with_slope = |phi: f64| {
             let pd = StationFlow {
@@ -386,6 +401,7 @@ mod tests {
                 r: Dual::<1>::cst(p.r),
                 chord: p.chord,
                 theta: Dual::<1>::cst(p.theta),
+                re: None,
             };
             rotor.residual(Dual::<1>::var(phi, 0), &pd, &airfoil)
         };

@@ -296,6 +296,6 @@ impl Element for PittPeters {
     }
 
     fn breakpoints(&self, out: &mut Vec<f64>) {
-        out.extend(self.wind.function.breakpoints());
+        out.extend(self.wind.breakpoints());
     }
 }

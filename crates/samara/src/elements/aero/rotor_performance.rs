@@ -214,6 +214,6 @@ impl Element for RotorPerformance {
     }
 
     fn breakpoints(&self, out: &mut Vec<f64>) {
-        out.extend(self.wind.function.breakpoints());
+        out.extend(self.wind.breakpoints());
     }
 }

@@ -32,15 +32,16 @@
 //! **Unsteady airfoil** ([`super::unsteady`]): with Wagner's attached-flow states or Øye's
 //! dynamic stall the station takes the air velocity at the three-quarter-chord point,
 //! U₃/₄ = U − (c/2) ė_c (the point p + (c/2) e_c, p the aerodynamic centre at the
-//! quarter chord), and owns up to three states (Wagner z₁, z₂ [m/s], then Øye's
+//! quarter chord), and owns up to five states (Wagner z₁, z₂ [m/s], Küssner z_K1, z_K2
+//! [m/s] on the wind's gust, then Øye's
 //! separation f); their rows follow the node rows, their tangents come from the same
 //! dual pass.
 
 use super::airfoil::Airfoil;
-use super::bem::{BemRotor, StationFlow};
+use super::bem::{BemRotor, SKEW_CONSTANT, StationFlow};
 use super::dynamic_inflow::{RotorDisc, inflow_signals, thrust_signals};
 use super::hgm::{Hgm, HgmFlow};
-use super::unsteady::{AttachedFlow, JONES_A, JONES_B, OyeStall};
+use super::unsteady::{AttachedFlow, JONES_A, JONES_B, KUSSNER_A, KUSSNER_B, OyeStall};
 use super::wind::Wind;
 use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, NodeState, SignalTerms};
 use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
@@ -117,6 +118,9 @@ pub struct Section {
     /// Span width Δs the station stands for [m].
     pub width: f64,
     pub airfoil: Arc<Airfoil>,
+    /// Kinematic viscosity ν [m²/s] when the airfoil's tables are interpolated in the
+    /// Reynolds number Re = W c/ν ([`Airfoil::eval_re`]); `None`: its first table.
+    pub viscosity: Option<f64>,
 }
 
 /// The unsteady airfoil models of a station (none by default: quasi-steady).
@@ -130,6 +134,9 @@ pub struct Unsteady {
     /// Beddoes–Leishman dynamic stall in Hansen–Gaunaa–Madsen's four-state form
     /// ([`super::hgm`]; its own circulatory lag: not with Wagner or Øye).
     pub hgm: Option<Arc<Hgm>>,
+    /// Küssner's gust response (with Wagner): the downwash of the wind's gust component
+    /// through Küssner's function (two states), the rest through Wagner's.
+    pub kussner: bool,
 }
 
 impl Unsteady {
@@ -139,9 +146,18 @@ impl Unsteady {
             AttachedFlow::Wagner => 2,
         }
     }
-    /// Number of airfoil states (Wagner, Øye's stall).
+    /// Number of Küssner states (two with Wagner and the gust response).
+    fn kussner_states(&self) -> usize {
+        if self.kussner && self.wagner_states() == 2 {
+            2
+        } else {
+            0
+        }
+    }
+    /// Number of airfoil states (Wagner, Küssner, Øye's stall).
     fn airfoil_states(&self) -> usize {
         self.wagner_states()
+            + self.kussner_states()
             + usize::from(self.stall.is_some())
             + 4 * usize::from(self.hgm.is_some())
     }
@@ -184,9 +200,9 @@ const WAKE_MIN_SPEED: f64 = 0.1;
 
 /// The most nodes a station hangs on (a beam element of order ≤ 7).
 pub const MAX_NODES: usize = 8;
-/// The most states a station owns (Wagner's two and Øye's stall one, or HGM's four;
-/// the dynamic wake two).
-pub const MAX_STATES: usize = 6;
+/// The most states a station owns (Wagner's two, Küssner's two and Øye's stall one, or
+/// HGM's four; the dynamic wake two).
+pub const MAX_STATES: usize = 7;
 
 /// Number of kinematic quantities of a station the loads read, y = (p, e_c, e_n, ṗ, ė_c).
 const KINEMATICS: usize = 15;
@@ -226,6 +242,10 @@ pub struct StationResult<S> {
     pub rotor_forcing: [S; 3],
     /// The quasi-steady BEM axial induction (before the dynamic wake).
     pub a_quasi_steady: f64,
+    /// The Reynolds number the tables are read at (NaN without Re interpolation).
+    pub reynolds: f64,
+    /// The gust's share of the normal velocity u_n (Küssner's input; 0 without it).
+    pub un_gust: f64,
 }
 
 const OUTPUTS: [(&str, &str); 10] = [
@@ -301,12 +321,17 @@ impl AeroStation {
         let r = self.compute(t, nodes, &z[..ns], &z[..ns], &[], &mut rows, &mut zr);
         let mut out = [0.0; MAX_STATES];
         let nw = self.unsteady.wagner_states();
+        let nk = self.unsteady.kussner_states();
         if nw == 2 {
-            out[0] = JONES_A[0] * r.un;
-            out[1] = JONES_A[1] * r.un;
+            out[0] = JONES_A[0] * (r.un - r.un_gust);
+            out[1] = JONES_A[1] * (r.un - r.un_gust);
+        }
+        if nk == 2 {
+            out[2] = KUSSNER_A[0] * r.un_gust;
+            out[3] = KUSSNER_A[1] * r.un_gust;
         }
         if let Some((stall, _)) = &self.unsteady.stall {
-            out[nw] = stall.eval(r.un.atan2(r.uc)).f;
+            out[nw + nk] = stall.eval(r.un.atan2(r.uc)).f;
         }
         if let Some(h) = &self.unsteady.hgm {
             out[..4].copy_from_slice(&h.steady_states(r.un.atan2(r.uc)));
@@ -413,7 +438,11 @@ impl AeroStation {
             alpha_effective: 0.0,
             rotor_forcing: [zero; 3],
             a_quasi_steady: 0.0,
+            reynolds: f64::NAN,
+            un_gust: 0.0,
         };
+        // With BEM the Reynolds number is the undisturbed one (set below).
+        let mut re_bem: Option<S> = None;
         let (u, bem_frame) = match &*self.inflow {
             Inflow::None => (u0, None),
             Inflow::Uniform(vi) => (add(&u0, &cst3(vi)), None),
@@ -430,16 +459,44 @@ impl AeroStation {
                 let vx = dot(&u0, &n);
                 let vy = -dot(&u0, &tdir);
                 let theta = dot(&ec, &n).atan2(-dot(&ec, &tdir));
+                // Re from the in-plane speed without induction, W₀ = √(V_x² + V_y²):
+                // the momentum balance and the loads read the tables at the same Re,
+                // which does not depend on the induction being solved for.
+                re_bem = self
+                    .section
+                    .viscosity
+                    .map(|nu| (vx * vx + vy * vy).sqrt() * (self.section.chord / nu));
                 let flow = StationFlow {
                     vx,
                     vy,
                     r: rr,
                     chord: self.section.chord,
                     theta,
+                    re: re_bem,
                 };
-                let ind = rotor.solve_near(&flow, &self.section.airfoil, self.root_hint.get());
-                if let Some(i) = &ind {
+                let mut ind = rotor.solve_near(&flow, &self.section.airfoil, self.root_hint.get());
+                if let Some(i) = &mut ind {
                     self.root_hint.set(i.phi.re());
+                    if rotor.skewed_wake {
+                        // Pitt–Peters/Glauert: a ← a [1 + (15π/32)(r/R) tan(χ/2) cos ψ],
+                        // χ = (1 + 0.6a) γ the wake skew, γ the wind's angle to the axis,
+                        // ψ the azimuth from the most downwind position (the radial
+                        // direction along the wind's in-plane part).
+                        let wv = self.wind.velocity(&p, t);
+                        let wn = dot(&wv, &n);
+                        let wip = sub(&wv, &scale(&n, wn));
+                        let m2 = dot(&wip, &wip);
+                        if wn.re() > 0.0 && m2.re() > 1e-24 * dot(&wv, &wv).re() {
+                            let m = m2.sqrt();
+                            let gamma = m.atan2(wn);
+                            let half = gamma * (i.a * 0.6 + 1.0) * 0.5;
+                            let cos_psi = dot(&radial, &wip) / (rr * m);
+                            let k = half.sin() / half.cos()
+                                * cos_psi
+                                * (rr * (SKEW_CONSTANT / rotor.tip_radius));
+                            i.a = i.a * (k + 1.0);
+                        }
+                    }
                 }
                 let a_qs = ind.map_or(zero, |i| i.a);
                 res.a_quasi_steady = a_qs.re();
@@ -505,6 +562,7 @@ impl AeroStation {
         let un = dot(&u, &en);
         let q2 = uc * uc + un * un;
         let nw = self.unsteady.wagner_states();
+        let nk = self.unsteady.kussner_states();
         (res.uc, res.un) = (uc.re(), un.re());
         if q2.re() < 1e-20 {
             // No flow: the airfoil states hold.
@@ -519,23 +577,40 @@ impl AeroStation {
         }
         let speed = q2.sqrt();
         let alpha = un.atan2(uc);
-        // Wagner: the effective downwash w_E and the states' rows.
+        // Wagner: the effective downwash w_E and the states' rows. With Küssner's gust
+        // response the gust's normal velocity w_g = g f_g(t)·e_n goes through Küssner's
+        // states, the rest w − w_g through Wagner's.
         let alpha_e = if nw == 2 {
             let k = speed * (2.0 / ch);
+            let wg = if nk == 2 {
+                dot(&cst3(&self.wind.gust_velocity(t)), &en)
+            } else {
+                zero
+            };
+            res.un_gust = wg.re();
+            let wm = un - wg;
             for i in 0..2 {
-                zrows[i] = zd[i] + k * JONES_B[i] * (z[i] - un * JONES_A[i]);
+                zrows[i] = zd[i] + k * JONES_B[i] * (z[i] - wm * JONES_A[i]);
             }
-            let we = un * (1.0 - JONES_A[0] - JONES_A[1]) + z[0] + z[1];
+            let mut we = wm * (1.0 - JONES_A[0] - JONES_A[1]) + z[0] + z[1];
+            if nk == 2 {
+                for i in 0..2 {
+                    zrows[2 + i] = zd[2 + i] + k * KUSSNER_B[i] * (z[2 + i] - wg * KUSSNER_A[i]);
+                }
+                we = we + wg * (1.0 - KUSSNER_A[0] - KUSSNER_A[1]) + z[2] + z[3];
+            }
             we.atan2(uc)
         } else {
             alpha
         };
-        let c = self.section.airfoil.eval(alpha_e.re());
-        let (mut cl, mut cd, mut cm) = (
-            alpha_e.chain(c.cl, c.dcl),
-            alpha_e.chain(c.cd, c.dcd),
-            alpha_e.chain(c.cm, c.dcm),
-        );
+        // Re = W c/ν at the speed the airfoil sees (W₀ with BEM).
+        let re = self
+            .section
+            .viscosity
+            .map(|nu| re_bem.unwrap_or(speed * (ch / nu)));
+        res.reynolds = re.map_or(f64::NAN, |r| r.re());
+        let ([cl, cd, cm], c) = self.section.airfoil.coefficients(alpha_e, re);
+        let (mut cl, mut cd, mut cm) = (cl, cd, cm);
         let mut cl_out = c.cl;
         if let Some((stall, a_tau)) = &self.unsteady.stall {
             // Øye: cl = f cl_inv + (1 − f) cl_fs, τ ḟ = f_st − f.
@@ -545,8 +620,8 @@ impl AeroStation {
                 alpha_e.chain(sc.fs, sc.dfs),
                 alpha_e.chain(sc.inv, sc.dinv),
             );
-            let f = z[nw];
-            zrows[nw] = zd[nw] + speed * (1.0 / (a_tau * ch)) * (f - fst);
+            let f = z[nw + nk];
+            zrows[nw + nk] = zd[nw + nk] + speed * (1.0 / (a_tau * ch)) * (f - fst);
             cl = f * inv + (S::cst(1.0) - f) * fs;
             cl_out = cl.re();
         }
@@ -1004,6 +1079,9 @@ impl Element for AeroStation {
         if self.unsteady.wagner_states() == 2 {
             v.extend(["wagner_1".to_string(), "wagner_2".to_string()]);
         }
+        if self.unsteady.kussner_states() == 2 {
+            v.extend(["kussner_1".to_string(), "kussner_2".to_string()]);
+        }
         if self.unsteady.stall.is_some() {
             v.push("separation".into());
         }
@@ -1096,6 +1174,9 @@ impl Element for AeroStation {
         if self.unsteady.wagner_states() == 2 || self.unsteady.hgm.is_some() {
             v.push(("effective_alpha".into(), "rad"));
         }
+        if self.section.viscosity.is_some() {
+            v.push(("reynolds".into(), "1"));
+        }
         v
     }
 
@@ -1114,8 +1195,13 @@ impl Element for AeroStation {
             &mut rows,
             &mut zrows,
         );
+        let mut k = OUTPUTS.len();
         if self.unsteady.wagner_states() == 2 || self.unsteady.hgm.is_some() {
-            out[OUTPUTS.len()] = r.alpha_effective;
+            out[k] = r.alpha_effective;
+            k += 1;
+        }
+        if self.section.viscosity.is_some() {
+            out[k] = r.reynolds;
         }
         let vals = [
             r.alpha,
@@ -1133,7 +1219,7 @@ impl Element for AeroStation {
     }
 
     fn breakpoints(&self, out: &mut Vec<f64>) {
-        out.extend(self.wind.function.breakpoints());
+        out.extend(self.wind.breakpoints());
     }
 
     fn begin_analysis(&self) {

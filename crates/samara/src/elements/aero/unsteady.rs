@@ -14,6 +14,12 @@
 //! airfoil table. Filtering the downwash (not α) keeps the states continuous where α
 //! wraps at ±180°. The rows are in m/s²; the assembler scales them by 1/(∂ż/∂Δz).
 //!
+//! **Gust response (Küssner).** With `gust_response = "kussner"` the downwash of the
+//! wind's gust component w_g goes through two more states with Sears & Sparks'
+//! approximation of Küssner's function, ψ(s) ≈ 1 − 0.5e^{−0.13s} − 0.5e^{−s}
+//! ([`KUSSNER_A`], [`KUSSNER_B`]), the rest w − w_g through Wagner's (the station kernel,
+//! [`super::station`]).
+//!
 //! **Dynamic stall (Øye 1991).** The trailing-edge separation point lags its static
 //! value: with Kirchhoff's flow cl = cl_inv ((1 + √f)/2)², cl_inv = c_lα(α − α₀) (α₀ the
 //! table's zero-lift angle nearest 0, c_lα its least-squares slope over α₀ − 4° … α₀ + 6°;
@@ -33,6 +39,12 @@ use super::airfoil::Airfoil;
 /// R. T. Jones' (1940) coefficients of the Wagner function's exponential approximation.
 pub const JONES_A: [f64; 2] = [0.165, 0.335];
 pub const JONES_B: [f64; 2] = [0.0455, 0.3];
+
+/// Sears & Sparks' (1941) two-exponential approximation of Küssner's sharp-edged-gust
+/// function, ψ(s) ≈ 1 − 0.5 e^{−0.13 s} − 0.5 e^{−s} (Leishman, *Principles of Helicopter
+/// Aerodynamics*, 2nd ed., §8.16).
+pub const KUSSNER_A: [f64; 2] = [0.5, 0.5];
+pub const KUSSNER_B: [f64; 2] = [0.13, 1.0];
 
 /// The attached-flow model of a line.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -42,6 +42,10 @@ pub struct Wind {
     pub function: TimeFunction,
     /// A turbulent box replacing the analytic wind (speed, shear and function unused).
     pub turbulence: Option<Arc<FullField>>,
+    /// A uniform gust added to the wind: velocity g (global) times its time function,
+    /// g f_g(t); the part of the wind an unsteady airfoil with Küssner's gust response
+    /// takes through Küssner's function.
+    pub gust: Option<(Vector3<f64>, TimeFunction)>,
 }
 
 impl Default for Wind {
@@ -55,6 +59,7 @@ impl Default for Wind {
             ground: 0.0,
             function: TimeFunction::Constant(1.0),
             turbulence: None,
+            gust: None,
         }
     }
 }
@@ -62,6 +67,35 @@ impl Default for Wind {
 impl Wind {
     /// Wind velocity at point p, time t.
     pub fn velocity<S: Scalar>(&self, p: &V3<S>, t: f64) -> V3<S> {
+        let w = self.steady_velocity(p, t);
+        match &self.gust {
+            None => w,
+            Some(_) => {
+                let g = self.gust_velocity(t);
+                [w[0] + g[0], w[1] + g[1], w[2] + g[2]]
+            }
+        }
+    }
+
+    /// The times where the wind's functions (speed and gust) jump or kink.
+    pub fn breakpoints(&self) -> Vec<f64> {
+        let mut v = self.function.breakpoints();
+        if let Some((_, f)) = &self.gust {
+            v.extend(f.breakpoints());
+        }
+        v
+    }
+
+    /// The gust g f_g(t) (zero without one).
+    pub fn gust_velocity(&self, t: f64) -> Vector3<f64> {
+        match &self.gust {
+            None => Vector3::zeros(),
+            Some((g, f)) => g * f.eval(t),
+        }
+    }
+
+    /// The wind without its gust: the sheared wind times its function, or the box.
+    fn steady_velocity<S: Scalar>(&self, p: &V3<S>, t: f64) -> V3<S> {
         if let Some(field) = &self.turbulence {
             return self.turbulent(field, p, t);
         }

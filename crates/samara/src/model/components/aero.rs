@@ -21,6 +21,7 @@ use nalgebra::{Matrix3, Vector3};
 use schemars::JsonSchema;
 use serde::Deserialize;
 use std::collections::HashMap;
+use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -74,6 +75,31 @@ pub struct WindInput {
     /// Time function multiplying the speed (a gust); default 1.
     #[serde(default)]
     pub function: Option<Located<TimeFunctionInput>>,
+    /// A uniform gust added to the wind, `{ velocity, function }`: velocity g [m/s,
+    /// global] times the time function f_g(t) (the wind's component that Küssner's gust
+    /// response reads).
+    #[serde(default)]
+    pub gust: Option<Located<GustInput>>,
+}
+
+/// A uniform gust of a line's wind.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GustInput {
+    /// Gust velocity g, global [m/s].
+    pub velocity: [f64; 3],
+    /// Time function f_g(t) multiplying it.
+    pub function: Located<TimeFunctionInput>,
+}
+
+/// How an unsteady airfoil responds to the wind's gust.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum GustResponseInput {
+    /// Through Wagner's function, like the motion (default).
+    Wagner,
+    /// Through Küssner's function (Sears & Sparks' exponentials), two states per station.
+    Kussner,
 }
 
 /// The induced-velocity model of a line.
@@ -104,6 +130,9 @@ pub enum InflowInput {
         /// Tangential induction a'; default true.
         #[serde(default)]
         tangential_induction: Option<bool>,
+        /// Skewed-wake correction of the axial induction in yawed flow; default false.
+        #[serde(default)]
+        skewed_wake: Option<bool>,
         /// Dynamic wake on the axial induction: `"none"` (default, quasi-steady) or
         /// `"oye"` (Øye's two first-order filters, two states per station).
         #[serde(default)]
@@ -208,7 +237,34 @@ pub struct AeroLineInput {
     /// the airfoil file's unsteady-aerodynamics block (or UnsteadyAero's defaults).
     #[serde(default)]
     pub hgm: Option<Located<HgmInput>>,
+    /// Which table of an airfoil with several Reynolds-number tables is read: `"first"`
+    /// (default, AeroDyn's AFTabMod = 1) or `"interpolate"` (linear in ln Re at the
+    /// station's Re = W c/ν, AFTabMod = 2).
+    #[serde(default)]
+    pub reynolds: Option<ReynoldsInput>,
+    /// Kinematic viscosity ν of the air [m²/s] in Re = W c/ν; default 1.464e-5 (only with
+    /// `reynolds = "interpolate"`).
+    #[serde(default)]
+    pub kinematic_viscosity: Option<f64>,
+    /// The response to the wind's `gust`: `"wagner"` (default: like the motion) or
+    /// `"kussner"` (Küssner's function, two more states; needs `unsteady = "wagner"`).
+    #[serde(default)]
+    pub gust_response: Option<GustResponseInput>,
 }
+
+/// How the Reynolds-number tables of an airfoil are read.
+#[derive(Clone, Copy, Debug, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ReynoldsInput {
+    /// The first table of every airfoil (default).
+    First,
+    /// Linear interpolation in ln Re between the tables around the station's Re.
+    Interpolate,
+}
+
+/// The default kinematic viscosity of air [m²/s] (AeroDyn's `KinVisc` of the NREL
+/// reference models, air at about 15 °C).
+pub const DEFAULT_KINEMATIC_VISCOSITY: f64 = 1.464e-5;
 
 /// HGM (Beddoes–Leishman type) coefficients set in the model; each one optional.
 #[derive(Clone, Debug, Default, Deserialize, JsonSchema)]
@@ -301,6 +357,10 @@ pub struct AeroLineDef {
     pub inflow_span: Option<std::ops::Range<usize>>,
     /// Øye's dynamic wake on the BEM induction.
     pub dynamic_wake: bool,
+    /// Kinematic viscosity ν when the airfoils' tables are interpolated in Re.
+    pub viscosity: Option<f64>,
+    /// Küssner's gust response (with Wagner's states).
+    pub kussner: bool,
     /// The TurbSim file of a turbulent wind and where its key is (the box's coverage of
     /// the stations and the analyses' times are checked once the model is known).
     pub turbsim: Option<(PathBuf, Option<std::ops::Range<usize>>)>,
@@ -860,6 +920,50 @@ impl ComponentKind for AeroLine {
                 None
             }
         };
+        // Reynolds-number tables.
+        let viscosity = match li.reynolds {
+            None | Some(ReynoldsInput::First) => {
+                if li.kinematic_viscosity.is_some() {
+                    cx.error(
+                        format!("{what}: `kinematic_viscosity` without `reynolds = \"interpolate\"`: the first table of each airfoil is read whatever the Reynolds number"),
+                        cx.key(&e, "kinematic_viscosity"),
+                        Some("add `reynolds = \"interpolate\"`, or remove `kinematic_viscosity`".into()),
+                    );
+                    ok = false;
+                }
+                None
+            }
+            Some(ReynoldsInput::Interpolate) => {
+                let nu = li
+                    .kinematic_viscosity
+                    .unwrap_or(DEFAULT_KINEMATIC_VISCOSITY);
+                if !(nu.is_finite() && nu > 0.0) {
+                    cx.error(
+                        format!("{what}: `kinematic_viscosity` = {nu} must be > 0 [m²/s]"),
+                        cx.key(&e, "kinematic_viscosity"),
+                        Some("air at 15 °C: 1.46e-5 m²/s".into()),
+                    );
+                    ok = false;
+                }
+                if !defs.is_empty() && defs.iter().all(|d| d.airfoil.tables() < 2) {
+                    cx.error(
+                        format!("{what}: `reynolds = \"interpolate\"` but every airfoil of the line has a single table"),
+                        cx.key(&e, "reynolds"),
+                        Some("give airfoil files with several Reynolds-number tables (AeroDyn NumTabs > 1, or a CSV with a `re` column), or remove `reynolds`".into()),
+                    );
+                    ok = false;
+                }
+                if !matches!(li.dynamic_stall, None | Some(DynamicStallInput::None)) {
+                    cx.error(
+                        format!("{what}: `reynolds = \"interpolate\"` with a dynamic-stall model: the stall models are built on one table and do not interpolate in Re"),
+                        cx.key(&e, "reynolds"),
+                        Some("use `reynolds = \"first\"` (or no `reynolds`) with dynamic stall".into()),
+                    );
+                    ok = false;
+                }
+                Some(nu)
+            }
+        };
         // Wind.
         let mut turbsim = None;
         let wind = match &li.wind {
@@ -988,7 +1092,40 @@ impl ComponentKind for AeroLine {
                     wind.shear_exponent = alpha;
                     wind.reference_height = if href > 0.0 { href } else { 1.0 };
                 }
+                if let Some(g) = &wi.gust {
+                    let ge = Entry {
+                        span: g.span.clone(),
+                    };
+                    ok &= cx.finite(&ge, "velocity", &g.value.velocity, &what);
+                    let f = cx
+                        .time_function(&g.value.function, &what)
+                        .unwrap_or_default();
+                    wind.gust = Some((Vector3::from(g.value.velocity), f));
+                }
                 wind
+            }
+        };
+        // Küssner's gust response.
+        let kussner = match li.gust_response {
+            None | Some(GustResponseInput::Wagner) => false,
+            Some(GustResponseInput::Kussner) => {
+                if unsteady != AttachedFlow::Wagner {
+                    cx.error(
+                        format!("{what}: `gust_response = \"kussner\"` without `unsteady = \"wagner\"`: Küssner's states split the downwash that Wagner's states lag"),
+                        cx.key(&e, "gust_response"),
+                        Some("add `unsteady = \"wagner\"`".into()),
+                    );
+                    ok = false;
+                }
+                if wind.gust.is_none() {
+                    cx.error(
+                        format!("{what}: `gust_response = \"kussner\"` but the line's wind has no `gust`"),
+                        cx.key(&e, "gust_response"),
+                        Some("give the wind a gust: wind = { …, gust = { velocity = [0.0, 0.0, 1.0], function = { type = \"step\", … } } }".into()),
+                    );
+                    ok = false;
+                }
+                true
             }
         };
         let inflow = match li.inflow.as_ref().map(|i| &i.value) {
@@ -1006,6 +1143,7 @@ impl ComponentKind for AeroLine {
                 tip_loss,
                 hub_loss,
                 tangential_induction,
+                skewed_wake,
                 ..
             }) => {
                 let span = li.inflow.as_ref().and_then(|i| i.span.clone());
@@ -1034,6 +1172,7 @@ impl ComponentKind for AeroLine {
                         tip_loss: tip_loss.unwrap_or(true),
                         hub_loss: hub_loss.unwrap_or(true),
                         tangential_induction: tangential_induction.unwrap_or(true),
+                        skewed_wake: skewed_wake.unwrap_or(false),
                     },
                     centre: Vector3::from(*centre),
                     axis: if axis.norm() > 0.0 {
@@ -1091,6 +1230,8 @@ impl ComponentKind for AeroLine {
             ),
             turbsim,
             rotor: li.rotor.as_ref().map(|r| (r.value.clone(), r.span.clone())),
+            viscosity,
+            kussner,
         })
     }
 
@@ -1175,6 +1316,7 @@ impl ComponentKind for AeroLine {
             chord: 0.4,
             width: 0.3,
             airfoil,
+            viscosity: None,
         };
         let mut cases = Vec::new();
         let inflows = [
@@ -1188,6 +1330,7 @@ impl ComponentKind for AeroLine {
                     tip_loss: true,
                     hub_loss: true,
                     tangential_induction: true,
+                    skewed_wake: false,
                 },
                 centre: Vector3::new(0.0, 0.0, 0.0),
                 axis: Vector3::x(),
@@ -1300,6 +1443,7 @@ impl ComponentKind for AeroLine {
                         stall: with_stall.then(|| (stall.clone(), 4.0)),
                         dynamic_wake: false,
                         hgm: None,
+                        kussner: false,
                     };
                     let ns = unsteady.states();
                     let e = AeroStation::new(
@@ -1411,6 +1555,7 @@ impl ComponentKind for AeroLine {
                     tip_loss: true,
                     hub_loss: true,
                     tangential_induction: true,
+                    skewed_wake: false,
                 },
                 centre: Vector3::zeros(),
                 axis: Vector3::x(),
@@ -1457,6 +1602,7 @@ impl ComponentKind for AeroLine {
                 tip_loss: true,
                 hub_loss: true,
                 tangential_induction: true,
+                skewed_wake: false,
             },
             centre: Vector3::zeros(),
             axis: Vector3::x(),
@@ -1491,6 +1637,7 @@ impl ComponentKind for AeroLine {
                     stall: airfoil_states.then(|| (stall.clone(), 4.0)),
                     dynamic_wake: true,
                     hgm: None,
+                    kussner: false,
                 };
                 let e = AeroStation::new(
                     "aero_wake",
@@ -1512,6 +1659,162 @@ impl ComponentKind for AeroLine {
                     wake.to_vec()
                 };
                 cases.push(TangentCase::element(Box::new(e), nodes).with_states(states));
+            }
+        }
+        // Reynolds-number interpolation: a two-table airfoil (Re 1e5 and 1e6, the second
+        // with 1.3× the lift, more moment and less drag); the stations' Re ≈ W c/ν ≈
+        // 12 · 0.4/1.5e-5 ≈ 3.2e5 lies between the tables, so Re enters every load
+        // (through W, and with BEM through the undisturbed W₀), quasi-steady and with
+        // Wagner's states, on 1 and 2 nodes.
+        let table = |scale: f64| -> Vec<(usize, [f64; 4])> {
+            (-180..=180)
+                .map(|d| {
+                    let a = (d as f64).to_radians();
+                    (
+                        0,
+                        [
+                            d as f64,
+                            scale * PI * (2.0 * a).sin(),
+                            (0.01 + 1.5 * a.sin().powi(2)) / scale,
+                            -0.1 * scale * a.sin(),
+                        ],
+                    )
+                })
+                .collect()
+        };
+        let two = Arc::new(
+            Airfoil::from_tables(&[(1e5, 0, table(1.0)), (1e6, 0, table(1.3))])
+                .unwrap_or_else(|_| unreachable!()),
+        );
+        let re_section = Section {
+            airfoil: two,
+            viscosity: Some(1.5e-5),
+            ..section.clone()
+        };
+        for (k, inflow) in [Arc::new(Inflow::None), bem.clone()]
+            .into_iter()
+            .enumerate()
+        {
+            for (a, attached) in [AttachedFlow::QuasiSteady, AttachedFlow::Wagner]
+                .into_iter()
+                .enumerate()
+            {
+                for nn in [1usize, 2] {
+                    let seed = 4000 + 40 * k as u64 + 10 * a as u64 + nn as u64;
+                    let nodes: Vec<_> = (0..nn).map(|i| node(seed + 3 * i as u64)).collect();
+                    let w = 1.0 / nn as f64;
+                    let unsteady = Unsteady {
+                        attached,
+                        ..Unsteady::default()
+                    };
+                    let e = AeroStation::new(
+                        "aero_reynolds",
+                        (0..nn).collect(),
+                        (0..nn).map(|i| attach(i as f64 - 0.5, w)).collect(),
+                        re_section.clone(),
+                        1.2,
+                        wind.clone(),
+                        inflow.clone(),
+                    )
+                    .with_unsteady(unsteady, 0.0, &nodes);
+                    let case = TangentCase::element(Box::new(e), nodes);
+                    cases.push(if attached == AttachedFlow::Wagner {
+                        case.with_states(vec![(0.3, -0.2), (0.5, 0.1)])
+                    } else {
+                        case
+                    });
+                }
+            }
+        }
+        // The skewed-wake correction: BEM in the tangent cases' wind (about 13° off the
+        // axis), quasi-steady and with the dynamic wake, on 1 and 2 nodes.
+        let skewed = Arc::new(Inflow::Bem {
+            rotor: BemRotor {
+                blades: 3,
+                hub_radius: 0.2,
+                tip_radius: 4.0,
+                tip_loss: true,
+                hub_loss: true,
+                tangential_induction: true,
+                skewed_wake: true,
+            },
+            centre: Vector3::zeros(),
+            axis: Vector3::x(),
+        });
+        for nn in [1usize, 2] {
+            for wake in [false, true] {
+                let seed = 6000 + 10 * nn as u64 + u64::from(wake);
+                let nodes: Vec<_> = (0..nn).map(|i| node(seed + 3 * i as u64)).collect();
+                let w = 1.0 / nn as f64;
+                let unsteady = Unsteady {
+                    dynamic_wake: wake,
+                    ..Unsteady::default()
+                };
+                let e = AeroStation::new(
+                    "aero_skewed",
+                    (0..nn).collect(),
+                    (0..nn).map(|i| attach(i as f64 - 0.5, w)).collect(),
+                    section.clone(),
+                    1.2,
+                    wind.clone(),
+                    skewed.clone(),
+                )
+                .with_unsteady(unsteady, 0.0, &nodes);
+                let case = TangentCase::element(Box::new(e), nodes);
+                cases.push(if wake {
+                    case.with_states(vec![(0.25, 0.1), (0.2, -0.05)])
+                } else {
+                    case
+                });
+            }
+        }
+        // Küssner's gust response: a gusty wind (the sheared wind plus a gust along a
+        // direction off the chord plane), Wagner + Küssner (four states) with none, uniform
+        // and BEM inflow on 1 and 2 nodes, and all seven states (with Øye's stall and the
+        // dynamic wake) on BEM.
+        let gusty = Arc::new(Wind {
+            gust: Some((
+                Vector3::new(0.4, -0.8, 1.5),
+                crate::math::TimeFunction::Constant(0.7),
+            )),
+            ..(*wind).clone()
+        });
+        let uniform = Arc::new(Inflow::Uniform(Vector3::new(-0.5, 0.3, 0.1)));
+        for (k, inflow) in [Arc::new(Inflow::None), uniform, bem.clone()]
+            .into_iter()
+            .enumerate()
+        {
+            for nn in [1usize, 2] {
+                for full in [false, true] {
+                    if full && k != 2 {
+                        continue;
+                    }
+                    let seed = 5000 + 40 * k as u64 + 10 * nn as u64 + u64::from(full);
+                    let nodes: Vec<_> = (0..nn).map(|i| node(seed + 3 * i as u64)).collect();
+                    let w = 1.0 / nn as f64;
+                    let unsteady = Unsteady {
+                        attached: AttachedFlow::Wagner,
+                        kussner: true,
+                        stall: full.then(|| (stall.clone(), 4.0)),
+                        dynamic_wake: full,
+                        hgm: None,
+                    };
+                    let e = AeroStation::new(
+                        "aero_kussner",
+                        (0..nn).collect(),
+                        (0..nn).map(|i| attach(i as f64 - 0.5, w)).collect(),
+                        section.clone(),
+                        1.2,
+                        gusty.clone(),
+                        inflow.clone(),
+                    )
+                    .with_unsteady(unsteady, 0.0, &nodes);
+                    let mut states = vec![(0.3, -0.2), (0.5, 0.1), (0.2, 0.3), (-0.1, 0.2)];
+                    if full {
+                        states.extend([(0.6, 0.05), (0.25, 0.1), (0.2, -0.05)]);
+                    }
+                    cases.push(TangentCase::element(Box::new(e), nodes).with_states(states));
+                }
             }
         }
         cases
@@ -1556,6 +1859,7 @@ pub(crate) fn line_stations(def: &AeroLineDef, parts: &Build) -> Vec<AeroStation
             stall: s.stall.clone().zip(def.stall_time_constant),
             dynamic_wake: def.dynamic_wake,
             hgm: s.hgm.clone(),
+            kussner: def.kussner,
         };
         let station = AeroStation::new(
             format!("{}.{k}", def.name),
@@ -1565,6 +1869,7 @@ pub(crate) fn line_stations(def: &AeroLineDef, parts: &Build) -> Vec<AeroStation
                 chord: s.chord,
                 width,
                 airfoil: s.airfoil.clone(),
+                viscosity: def.viscosity,
             },
             def.density,
             wind.clone(),
