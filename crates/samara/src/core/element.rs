@@ -124,11 +124,9 @@ impl LocalTerms {
 /// Adds a 3×3 block into a local matrix at (row, col).
 #[inline]
 pub fn add_block(m: &mut DMatrix<f64>, row: usize, col: usize, b: &Matrix3<f64>) {
-    for j in 0..3 {
-        for i in 0..3 {
-            m[(row + i, col + j)] += b[(i, j)];
-        }
-    }
+    // One bounds check for the block, then unchecked fixed-size access.
+    let mut v = m.fixed_view_mut::<3, 3>(row, col);
+    v += b;
 }
 
 /// Values and derivatives of the signals an element produces: per output `o`, the value

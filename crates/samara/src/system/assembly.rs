@@ -134,6 +134,8 @@ struct ConstraintWork {
     b: DMatrix<f64>,
     /// B T.
     bt: DMatrix<f64>,
+    /// Scratch: the rows of B, row-major (for ρ BᵀB).
+    b_rows: Vec<f64>,
     k: DMatrix<f64>,
     /// Scratch: ∂(B_r · v)/∂q of one row r (stabilized only), and the unit multiplier e_r.
     kr: DMatrix<f64>,
@@ -520,6 +522,7 @@ impl Assembler {
                     force: vec![0.0; nl],
                     b: DMatrix::zeros(m, nl),
                     bt: DMatrix::zeros(m, nl),
+                    b_rows: vec![0.0; m * nl],
                     k: DMatrix::zeros(nl, nl),
                     kr: DMatrix::zeros(nl, nl),
                     unit: vec![0.0; m],
@@ -762,8 +765,50 @@ impl Assembler {
     ///
     /// `tangent_ops[i]` is the tangent operator of node i's rotation update; an empty slice
     /// means identity.
+    ///
+    /// On x86-64 CPUs with AVX the scatter runs in a copy compiled for AVX: the same
+    /// operations in the same order (no fused multiply–add), so the same results to the
+    /// bit; the elements and constraints it calls are not affected.
     #[allow(clippy::too_many_arguments)]
     pub fn assemble(
+        &mut self,
+        sys: &System,
+        state: &State,
+        ctx: &EvalContext,
+        coef: &Coefficients,
+        tangent_ops: &[Matrix3<f64>],
+        residual: &mut [f64],
+        matrix: Option<&mut BlockMatrix>,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU supports AVX (checked at run time).
+            return unsafe {
+                self.assemble_avx(sys, state, ctx, coef, tangent_ops, residual, matrix)
+            };
+        }
+        self.assemble_impl(sys, state, ctx, coef, tangent_ops, residual, matrix)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    #[allow(clippy::too_many_arguments)]
+    fn assemble_avx(
+        &mut self,
+        sys: &System,
+        state: &State,
+        ctx: &EvalContext,
+        coef: &Coefficients,
+        tangent_ops: &[Matrix3<f64>],
+        residual: &mut [f64],
+        matrix: Option<&mut BlockMatrix>,
+    ) {
+        self.assemble_impl(sys, state, ctx, coef, tangent_ops, residual, matrix)
+    }
+
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn assemble_impl(
         &mut self,
         sys: &System,
         state: &State,
@@ -981,7 +1026,14 @@ impl Assembler {
             }
             let size = m + nc;
             if coef.penalty != 0.0 {
-                w.k.gemm_tr(coef.penalty, &w.b, &w.b, 1.0);
+                add_gram(
+                    w.k.as_mut_slice(),
+                    w.b.as_slice(),
+                    &mut w.b_rows,
+                    m,
+                    nl,
+                    coef.penalty,
+                );
             }
             // T is applied to the node columns as they are added (no scaled copies).
             let t_of = |a: usize| tangent_ops.get(cn[a]);
@@ -1502,7 +1554,7 @@ fn combine_node_terms(t: &mut LocalTerms, en: &[usize], tg: &TangentInputs) {
 
 /// `dst += src[6a.., 6b..]` for the 6×6 block (a, b) of a column-major `src` with `nr`
 /// rows; `dst` row-major.
-#[inline]
+#[inline(always)]
 fn add_block6(dst: &mut [f64], src: &[f64], nr: usize, a: usize, b: usize) {
     let dst: &mut [f64; 36] = (&mut dst[..36]).try_into().expect("6×6 block");
     for c in 0..6 {
@@ -1510,6 +1562,31 @@ fn add_block6(dst: &mut [f64], src: &[f64], nr: usize, a: usize, b: usize) {
         let col: &[f64; 6] = src[o..o + 6].try_into().expect("6 rows");
         for (r, v) in col.iter().enumerate() {
             dst[6 * r + c] += v;
+        }
+    }
+}
+
+/// `K += ρ BᵀB` for `B` (`m × nl`, column-major) and `K` (`nl × nl`, column-major), as
+/// rank-one updates `K[:, j] += ρ b_r[j] b_r` per row `b_r` of `B` (copied row-major into
+/// `rows`): contiguous column updates the compiler vectorizes, in place of nalgebra's
+/// `gemm_tr` (one short dot product per entry).
+#[inline(always)]
+fn add_gram(k: &mut [f64], b: &[f64], rows: &mut [f64], m: usize, nl: usize, rho: f64) {
+    let rows = &mut rows[..m * nl];
+    for (j, col) in b[..m * nl].chunks_exact(m).enumerate() {
+        for (r, &x) in col.iter().enumerate() {
+            rows[r * nl + j] = x;
+        }
+    }
+    for row in rows.chunks_exact(nl) {
+        for (kc, &bj) in k[..nl * nl].chunks_exact_mut(nl).zip(row) {
+            let s = rho * bj;
+            if s == 0.0 {
+                continue;
+            }
+            for (kv, &bi) in kc.iter_mut().zip(row) {
+                *kv += s * bi;
+            }
         }
     }
 }
@@ -1538,7 +1615,7 @@ fn local_velocities(
 /// `dst[(r0 + r) · stride + c0 + c] += scale · src[sr0 + r, sc0 + c]` for an
 /// `rows × cols` block; `dst` row-major with row length `stride`, `src` column-major
 /// with `nr` rows.
-#[inline]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn add_sub(
     dst: &mut [f64],
@@ -1602,7 +1679,7 @@ fn add_node_columns(
 }
 
 /// Like [`add_sub`] with the source transposed: `dst[r, c] += scale · src[sr0 + c, sc0 + r]`.
-#[inline]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn add_sub_t(
     dst: &mut [f64],
