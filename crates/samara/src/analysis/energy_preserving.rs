@@ -62,12 +62,12 @@ use std::time::Instant;
 /// dominant one for ρ∞ ≥ 1/3): `c = ρ∞(1 − ρ∞)/(2(1 + ρ∞)²)`. ρ∞ below 1/3 (refused at
 /// validation) is clamped to 1/3, the scheme's strongest dissipation.
 pub fn decay_parameter(rho_inf: f64) -> f64 {
-    let r = rho_inf.clamp(1.0 / 3.0, 1.0);
+    let r = rho_inf.clamp(MIN_RHO_INF, 1.0);
     r * (1.0 - r) / (2.0 * (1.0 + r) * (1.0 + r))
 }
 
 /// The smallest ρ∞ the decaying scheme reaches.
-pub const MIN_RHO_INF: f64 = 1.0 / 3.0;
+pub const MIN_RHO_INF: f64 = IntegratorType::DECAYING_MIN_RHO_INF;
 
 /// One step's failure.
 #[derive(Clone, Debug, PartialEq)]

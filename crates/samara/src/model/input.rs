@@ -210,6 +210,12 @@ pub enum IntegratorType {
     EnergyDecaying,
 }
 
+impl IntegratorType {
+    /// The smallest `rho_inf` the energy-decaying scheme reaches (its strongest
+    /// dissipation: a double root of its linear-oscillator amplification).
+    pub const DECAYING_MIN_RHO_INF: f64 = 1.0 / 3.0;
+}
+
 /// How a dynamic analysis chooses its steps.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]

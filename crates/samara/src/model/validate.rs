@@ -1225,7 +1225,7 @@ impl<'a> Checker<'a> {
                         }
                     }
                     if integrator == IntegratorType::EnergyDecaying
-                        && (0.0..crate::analysis::energy_preserving::MIN_RHO_INF).contains(&rho)
+                        && (0.0..IntegratorType::DECAYING_MIN_RHO_INF).contains(&rho)
                     {
                         self.error(
                             format!("{what}: `rho_inf` must be in [1/3, 1] for integrator = \"energy_decaying\" (got {rho})"),

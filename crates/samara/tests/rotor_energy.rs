@@ -1,0 +1,63 @@
+//! Energy balance of the flexible NREL 5-MW rotor (issue #15, verification 6: "aerodynamic
+//! power = shaft power + structural energy rate over a run").
+
+mod common;
+
+use common::{model_file, run, with_step};
+use samara::analysis::Frame;
+use samara::model::AnalysisKind;
+use samara::system::System;
+
+/// examples/rotor/nrel5mw_flexible.toml: three BeamDyn blades (two order-6 elements each)
+/// clamped to a hub driven at 12.1 rpm, quasi-steady BEM at 11.4 m/s, no gravity. The
+/// blades start straight at speed, so they swing and twist under the first loads while
+/// the wind drives the rotor and the shaft drive takes the power out. Over the run `T + V + D − W_ext` is constant, W_ext the work
+/// of the aerodynamic loads and of the shaft drive and V the strain energy; the air's part
+/// `W_aero` (the stations' power Σ F·v + M·ω) is integrated from the frames by the
+/// trapezoidal rule. ρ∞ = 1 (no numerical dissipation). Reference: the balance itself;
+/// its residual is the error of the power quadrature and of the integrator, O(h²).
+/// Measured against |W_aero| over 0.4 s: 7.5e-4, 1.4e-5, 7.0e-6, 2.3e-6, 6.6e-7 at
+/// h = 10, 5, 2.5, 1.25, 0.625 ms — ratios 3.1 and 3.4 over the last two halvings, still
+/// approaching 4 (the blades' high bending and torsion modes are resolved only at the
+/// finest steps). Tolerances: each of those halvings at least 2.8× (order > 1.5), and the
+/// balance closed to 1e-6 of the aerodynamic work at 0.625 ms.
+#[test]
+fn flexible_rotor_energy_balance_closes_at_second_order() {
+    let mut errors = Vec::new();
+    for step in [0.0025, 0.00125, 0.000625] {
+        let mut m = with_step(model_file("examples/rotor/nrel5mw_flexible.toml"), step);
+        if let AnalysisKind::Dynamic(d) = &mut m.analyses[0].kind {
+            d.t_end = 0.4;
+            d.rho_inf = 1.0;
+        }
+        let sys = System::new(&m);
+        let (_, hist) = run(&m);
+        let power = |f: &Frame| sys.external_power(&sys.context(f.time, 1.0), &f.state);
+        let mut w_aero = 0.0;
+        for w in hist.frames.windows(2) {
+            w_aero += 0.5 * (w[1].time - w[0].time) * (power(&w[0]) + power(&w[1]));
+        }
+        let total = |f: &Frame| {
+            f.energy.kinetic + f.energy.potential + f.energy.dissipated - f.energy.external_work
+        };
+        let (first, last) = (&hist.frames[0], hist.last().expect("frames"));
+        let err = (total(last) - total(first)).abs() / w_aero.abs();
+        println!(
+            "h = {step}: W_aero = {w_aero:.1} J, W_ext (aero + drive) = {:.1} J, ΔT = {:.1} J, strain energy {:.1} J, balance error {err:.2e} of |W_aero|",
+            last.energy.external_work,
+            last.energy.kinetic - first.energy.kinetic,
+            last.energy.potential,
+        );
+        assert!(w_aero > 1e4, "the wind drives the rotor: {w_aero}");
+        assert!(
+            last.energy.potential > 1.0,
+            "the blades deform: {}",
+            last.energy.potential
+        );
+        errors.push(err);
+    }
+    for k in 1..errors.len() {
+        assert!(errors[k - 1] / errors[k] > 2.8, "{errors:?}");
+    }
+    assert!(errors[2] < 1e-6, "{errors:?}");
+}
