@@ -140,6 +140,12 @@ pub fn summary(model: &str, rows: &[Row], total: Duration) {
             r.path.display(),
             r.records
         );
+        if s.line_search_backtracks + s.contact_redos + s.pattern_rebuilds > 0 {
+            println!(
+                "  {:<14} line search halved {} corrections; {} steps redone for new contacts; contact pattern rebuilt {} times",
+                "", s.line_search_backtracks, s.contact_redos, s.pattern_rebuilds
+            );
+        }
         if s.fallbacks > 0 {
             println!(
                 "  {:<14} {} of {} factorizations needed the pivoting sparse LU",

@@ -713,3 +713,56 @@ fn walk(dir: &Path) -> Vec<String> {
     }
     out
 }
+
+/// A granular run reports what its Newton line search and contact handling did: the
+/// halved corrections per step (`line_search_backtracks`, with `diagnostics = true`), and
+/// in the file's attributes, the run summary and `samara info` the totals with the steps
+/// redone for new contacts and the contact-pattern rebuilds. The 27-sphere column of
+/// examples/contact/granular_column.toml over its first 0.25 s (the pile compacting) needs
+/// the line search; the per-step values must add up to the total.
+#[test]
+fn granular_runs_report_line_search_and_contact_counts() {
+    let text = std::fs::read_to_string(root().join("examples/contact/granular_column.toml"))
+        .unwrap();
+    assert!(text.contains("t_end = 3.0\n"));
+    let text = text.replace("t_end = 3.0\n", "t_end = 0.25\ndiagnostics = true\n");
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("column.toml");
+    std::fs::write(&model, text).unwrap();
+    let out = dir.path().join("out");
+    let o = samara(&[
+        "run",
+        model.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let path = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|x| x == "nc"))
+        .unwrap();
+    let mut r = samara::output::ResultsReader::open(&path).unwrap();
+    let total = r.attr_i64("line_search_backtracks").unwrap();
+    let per_step: f64 = r.read("line_search_backtracks").unwrap().iter().sum();
+    let (redos, rebuilds) = (
+        r.attr_i64("contact_redos").unwrap(),
+        r.attr_i64("pattern_rebuilds").unwrap(),
+    );
+    println!("backtracks {total}, redos {redos}, rebuilds {rebuilds}");
+    assert!(total > 0, "the compacting pile needed no line search");
+    assert_eq!(per_step, total as f64);
+    assert!(rebuilds > 0);
+    let line = format!(
+        "line search halved {total} corrections; {redos} steps redone for new contacts; contact pattern rebuilt {rebuilds} times"
+    );
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(s.contains(&line), "'{line}' missing from:\n{s}");
+    let o = samara(&["info", path.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = String::from_utf8_lossy(&o.stdout);
+    let line = format!(
+        "line search halved {total} corrections, {redos} steps redone for new contacts, pattern rebuilt {rebuilds} times"
+    );
+    assert!(s.contains(&line), "'{line}' missing from:\n{s}");
+}

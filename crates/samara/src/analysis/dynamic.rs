@@ -928,6 +928,7 @@ pub fn run_dynamic(
         step_size: 0.0,
         error_estimate: f64::NAN,
         rejected: 0,
+        line_search_backtracks: 0,
     });
     let bad = super::first_non_finite(sys, &it.state, &energy)
         .map(|what| super::non_finite_failure(name, t0, what))
@@ -960,11 +961,14 @@ pub fn run_dynamic(
     let mut rejected_here: usize = 0;
     // Event location (adaptive steps): the event functions at the start of the step and
     // at the trial end, and the end of a step redone to land just past an event.
-    let locate = adaptive.is_some_and(|a| a.event_location) && sys.n_events > 0;
+    let locate = adaptive.is_some_and(|a| a.event_location)
+        && (sys.n_events > 0 || !sys.granular.is_empty());
     let mut ev = EventWork {
         start: vec![(0.0, 0.0); if locate { sys.n_events } else { 0 }],
         end: vec![(0.0, 0.0); if locate { sys.n_events } else { 0 }],
         scratch: Vec::new(),
+        pair_start: Vec::new(),
+        pair_end: Vec::new(),
     };
     if locate {
         sys.event_values(&it.state, &mut ev.start, &mut ev.scratch);
@@ -978,10 +982,11 @@ pub fn run_dynamic(
             t + h
         };
         let nominal = target;
-        // Adaptive steps land on every breakpoint; fixed steps only snap to those on
-        // their grid (to the last ulps), so that the restart there applies.
+        // Fixed and adaptive steps land on every breakpoint (one on the grid is snapped to
+        // the last ulp), so that the restart there applies; a fixed step cut short by one
+        // leaves its grid point ahead (the grid resumes after it).
         if let Some(&b) = breakpoints.iter().find(|&&b| b > t + 1e-9 * h)
-            && (b < target + 1e-9 * h && adaptive.is_some() || (b - target).abs() <= 1e-9 * h)
+            && b < target + 1e-9 * h
         {
             target = b;
         }
@@ -1042,6 +1047,8 @@ pub fn run_dynamic(
                 let mut first_crossing_found = false;
                 if locate {
                     sys.event_values(&it.trial, &mut ev.end, &mut ev.scratch);
+                    pair_events(sys, &it.contacts.pairs, &it.state, &mut ev.pair_start);
+                    pair_events(sys, &it.contacts.pairs, &it.trial, &mut ev.pair_end);
                     // An event crossed more than the resolution before the end: redo the
                     // step ending just past it (the law is smooth on each side).
                     let resolution = (1e-3 * h).max(settings.min_step);
@@ -1049,6 +1056,7 @@ pub fn run_dynamic(
                         .start
                         .iter()
                         .zip(&ev.end)
+                        .chain(ev.pair_start.iter().zip(&ev.pair_end))
                         .filter_map(|(&g0, &g1)| super::events::first_crossing(g0, g1, h_try))
                         .min_by(f64::total_cmp);
                     if let Some(theta) = first
@@ -1073,6 +1081,7 @@ pub fn run_dynamic(
                 step_index += 1;
                 summary.steps += 1;
                 summary.newton_iterations += report.iterations;
+                summary.line_search_backtracks += report.backtracks;
                 // A step shortened to a sample instant leaves the grid point ahead.
                 if on_grid && h == settings.step && (target - nominal).abs() <= 1e-9 * h {
                     grid_k += 1;
@@ -1119,6 +1128,7 @@ pub fn run_dynamic(
                             step_size: h_try,
                             error_estimate: error,
                             rejected: rejected_here,
+                            line_search_backtracks: report.backtracks,
                         })
                     } else {
                         None
@@ -1197,6 +1207,21 @@ struct EventWork {
     start: Vec<(f64, f64)>,
     end: Vec<(f64, f64)>,
     scratch: Vec<f64>,
+    /// The granular candidate pairs' event functions at the step's start and end (the
+    /// pairs change between steps, so both are evaluated for each attempt).
+    pair_start: Vec<(f64, f64)>,
+    pair_end: Vec<(f64, f64)>,
+}
+
+/// The event functions of the granular candidate `pairs` at `s`
+/// ([`crate::elements::GranularSet::pair_event`]).
+fn pair_events(sys: &System, pairs: &[(usize, usize, usize)], s: &State, out: &mut Vec<(f64, f64)>) {
+    out.clear();
+    out.extend(
+        pairs
+            .iter()
+            .map(|&(g, i, j)| sys.granular[g].pair_event(&s.nodes, i, j)),
+    );
 }
 
 /// What one [`Simulation::step`] did.
@@ -1300,10 +1325,10 @@ impl<'a> Simulation<'a> {
             {
                 end = b;
             }
-            if let Some(&b) = it
-                .breakpoints
-                .iter()
-                .find(|&&b| (b - end).abs() <= 1e-9 * hh)
+            // Sub-steps land on every breakpoint inside the step, as the fixed steps of
+            // `run_dynamic` do.
+            if let Some(&b) = it.breakpoints.iter().find(|&&b| b > t + 1e-9 * hh)
+                && b < end + 1e-9 * hh
             {
                 end = b;
             }

@@ -65,6 +65,8 @@ pub struct StepDiagnostics {
     pub error_estimate: f64,
     /// Adaptive steps: attempts rejected by the error control before this step.
     pub rejected: usize,
+    /// Newton corrections the line search halved in this step (granular models).
+    pub line_search_backtracks: usize,
 }
 
 /// Everything written at one output time.
@@ -135,6 +137,8 @@ pub struct AnalysisSummary {
     pub contact_redos: usize,
     pub pattern_rebuilds: usize,
     pub max_candidate_pairs: usize,
+    /// Newton corrections halved by the line search, over the accepted steps.
+    pub line_search_backtracks: usize,
 }
 
 impl AnalysisSummary {
@@ -157,6 +161,7 @@ impl AnalysisSummary {
             contact_redos: 0,
             pattern_rebuilds: 0,
             max_candidate_pairs: 0,
+            line_search_backtracks: 0,
         }
     }
 }

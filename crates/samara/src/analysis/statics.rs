@@ -292,6 +292,7 @@ pub fn run_static(
             step_size: 0.0,
             error_estimate: f64::NAN,
             rejected: 0,
+            line_search_backtracks: 0,
         });
         recorder.record(
             sys,
@@ -377,6 +378,7 @@ pub fn run_static(
                         step_size: target - (target - inc).max(0.0),
                         error_estimate: f64::NAN,
                         rejected: 0,
+                        line_search_backtracks: report.backtracks,
                     }
                 });
                 let energy = Energy {

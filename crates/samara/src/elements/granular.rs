@@ -61,6 +61,23 @@ impl GranularSet {
         (nodes[self.nodes[j]].x - nodes[self.nodes[i]].x).norm() - self.radii[i] - self.radii[j]
     }
 
+    /// The event function `(g, ġ)` of the pair of spheres i, j at `nodes`, as the pair's
+    /// element gives it ([`super::contact::normal_event`] of the penetration
+    /// δ = ρ_i + ρ_j − |x_j − x_i| and its rate): adaptive steps land on its zeros, the
+    /// pair closing or opening.
+    pub fn pair_event(&self, nodes: &[NodeState], i: usize, j: usize) -> (f64, f64) {
+        let (a, b) = (&nodes[self.nodes[i]], &nodes[self.nodes[j]]);
+        let d = b.x - a.x;
+        let dist = d.norm();
+        let delta = self.radii[i] + self.radii[j] - dist;
+        let delta_dot = if dist > 0.0 {
+            -d.dot(&(b.v - a.v)) / dist
+        } else {
+            -(b.v - a.v).z
+        };
+        super::contact::normal_event(&self.law, delta, delta_dot)
+    }
+
     /// Candidate pairs (i < j, sorted) with gap below `margin`, by the uniform grid.
     pub fn candidate_pairs(&self, nodes: &[NodeState], margin: f64, out: &mut Vec<(usize, usize)>) {
         out.clear();

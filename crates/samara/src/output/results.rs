@@ -55,6 +55,7 @@ struct DiagnosticVars {
     step: VarId,
     error: VarId,
     rejected: VarId,
+    backtracks: VarId,
 }
 
 /// Writes one analysis's results as they are computed (a [`Recorder`]).
@@ -510,6 +511,14 @@ impl ResultsFile {
                 "1",
                 "adaptive steps: attempts rejected by the error control before the accepted step",
             ),
+            backtracks: var(
+                &mut d,
+                "line_search_backtracks",
+                NcType::Int,
+                &[time],
+                "1",
+                "Newton corrections halved by the line search in the step (granular models)",
+            ),
         });
 
         let beams = super::beam_vars::BeamVars::define(&mut d, sys, time, vec3, quat);
@@ -719,6 +728,9 @@ impl ResultsFile {
             ("newton_iterations", summary.newton_iterations),
             ("rejected_steps", summary.rejected_steps),
             ("factorizations", summary.factorizations),
+            ("line_search_backtracks", summary.line_search_backtracks),
+            ("contact_redos", summary.contact_redos),
+            ("pattern_rebuilds", summary.pattern_rebuilds),
         ];
         for (name, v) in counts {
             let v = i32::try_from(v).unwrap_or(i32::MAX);
@@ -867,6 +879,11 @@ impl Recorder for ResultsFile {
                 .map_err(e)?;
             w.set_record_i32(dv.rejected, &[dg.rejected.min(i32::MAX as usize) as i32])
                 .map_err(e)?;
+            w.set_record_i32(
+                dv.backtracks,
+                &[dg.line_search_backtracks.min(i32::MAX as usize) as i32],
+            )
+            .map_err(e)?;
         }
         w.commit_record().map_err(e)
     }
