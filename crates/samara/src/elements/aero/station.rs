@@ -134,8 +134,9 @@ pub struct Unsteady {
     /// Beddoes–Leishman dynamic stall in Hansen–Gaunaa–Madsen's four-state form
     /// ([`super::hgm`]; its own circulatory lag: not with Wagner or Øye).
     pub hgm: Option<Arc<Hgm>>,
-    /// Küssner's gust response (with Wagner): the downwash of the wind's gust component
-    /// through Küssner's function (two states), the rest through Wagner's.
+    /// Küssner's gust response (with Wagner): the normal velocity of the wind's
+    /// disturbance (gust and turbulence, at the leading edge) through Küssner's function
+    /// (two states), the rest through Wagner's.
     pub kussner: bool,
 }
 
@@ -248,7 +249,7 @@ pub struct StationResult<S> {
     pub a_quasi_steady: f64,
     /// The Reynolds number the tables are read at (NaN without Re interpolation).
     pub reynolds: f64,
-    /// The gust's share of the normal velocity u_n (Küssner's input; 0 without it).
+    /// The disturbance's share of the normal velocity u_n (Küssner's input; 0 without it).
     pub un_gust: f64,
 }
 
