@@ -889,3 +889,60 @@ fn bad_convected_gusts_are_located_errors() {
     let bad = kussner_model(dir.path(), 10.0, &gust("\"fast\""), 0.1, 0.01);
     assert!(model_error(dir.path(), &bad).contains("bad.toml"));
 }
+
+#[test]
+fn kussner_leaves_a_steady_box_to_wagner() {
+    // A TurbSim box constant in time (u = 50, w = 0.5 m/s everywhere) has no turbulence
+    // about its time mean: with Küssner's response the whole downwash goes through
+    // Wagner's states. The plate at α = 0 sees w from the start: every state starts at its
+    // quasi-steady value and stays there, Küssner's at 0 (to 1e-15: the box mean of equal
+    // int16 samples is the sample itself; the trilinear and bilinear weights sum to 1 to
+    // rounding) and Wagner's at A_i w (to 1e-12), and the lift
+    // stays at its first value (to 1e-12), the static cl = π sin 2 atan(w/u) to within the
+    // table's interpolation between its 1° knots (1e-4).
+    let dir = tempfile::tempdir().unwrap();
+    let (v, wg) = (50.0f64, 0.5f64);
+    let boxed = bts::Box3 {
+        periodic: true,
+        ny: 2,
+        nz: 2,
+        nt: 8,
+        n_tower: 0,
+        dy: 2.0,
+        dz: 2.0,
+        dt: 0.1,
+        mean_speed: v as f32,
+        hub_height: 0.0,
+        grid_bottom: -1.0,
+        slope: [600.0, 1000.0, 1e4],
+        offset: [0.0; 3],
+    };
+    std::fs::write(
+        dir.path().join("steady.bts"),
+        boxed.bytes(|_, _, _| [v, 0.0, wg]),
+    )
+    .unwrap();
+    let text = kussner_model(dir.path(), v, "", 0.2, 1e-3).replace(
+        &format!("speed = {v}, direction = [1.0, 0.0, 0.0], "),
+        "turbsim = \"steady.bts\", direction = [1.0, 0.0, 0.0]",
+    );
+    assert!(
+        text.contains("steady.bts") && text.contains("kussner"),
+        "{text}"
+    );
+    let (_, outs, names, states) = run(&text, dir.path());
+    let icl = names.iter().position(|n| n == "plate.0.cl").unwrap();
+    let cl = outs[0][icl];
+    assert!(
+        (cl / (PI * (2.0 * wg.atan2(v)).sin()) - 1.0).abs() < 1e-4,
+        "{cl}"
+    );
+    for (o, z) in outs.iter().zip(&states) {
+        assert!((o[icl] - cl).abs() < 1e-12 * cl, "{} vs {cl}", o[icl]);
+        assert!(
+            (z[0] - 0.165 * wg).abs() < 1e-12 && (z[1] - 0.335 * wg).abs() < 1e-12,
+            "{z:?}"
+        );
+        assert!(z[2].abs() < 1e-15 && z[3].abs() < 1e-15, "{z:?}");
+    }
+}
