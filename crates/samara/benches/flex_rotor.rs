@@ -4,7 +4,7 @@
 //! interpolated to the 49 BeamDyn key points: chord and twist linear, airfoil of the
 //! nearest AeroDyn node), BEM with tip and hub loss, rated wind, `T` s at h = 0.01 s.
 //!
-//! `cargo bench -p samara --bench flex_rotor [-- T] [oye] [modified]` prints the time per
+//! `cargo bench -p samara --bench flex_rotor [-- T] [oye] [modified] [turbulent] [kussner]` prints the time per
 //! step, the Newton iterations and factorizations per step, the real-time factor, and the
 //! split of one residual-and-tangent evaluation between the structure (beam elements,
 //! hub, joints) and the aerodynamics (the 147 stations, each with its own local block),
@@ -13,9 +13,20 @@
 //! With `oye` the lines carry Øye's dynamic stall (`dynamic_stall = "oye"`, one state per
 //! station); Øye's model needs a lifting airfoil, so in that variant the stations whose
 //! nearest AeroDyn node is a cylinder (non-lifting) take DU40_A17, the innermost lifting
-//! section. Turbulent wind (TurbSim) is not implemented: the wind is steady.
+//! section.
 //!
 //! With `modified` the analysis uses modified Newton (`jacobian = "modified"`).
+//!
+//! With `turbulent` the wind is a TurbSim box written by the bench ([`write_box`]): a
+//! periodic 32 × 32 grid 4.68 m apart (145 m square centred on the hub at 90 m), 512 steps
+//! of 0.05 s (a 25.6 s period), the rated 11.4 m/s mean with a 0.2 power-law shear and
+//! ≈ 10 % turbulence from a few frozen Fourier modes (a load for the sampling, not a
+//! turbulence spectrum), read by `wind = { turbsim }` (trilinear in y, z, τ at each station
+//! and each evaluation). The bench then also times the sampling alone: the 147 stations'
+//! wind at their initial points, as f64 and as the 12-direction dual numbers of the
+//! station kernel. `kussner` (implies `turbulent`) adds Wagner's attached-flow states with
+//! Küssner's response to the box's turbulence (`unsteady = "wagner"`, `gust_response =
+//! "kussner"`, four states per station).
 //!
 //! Measured on the shared 2-core machine (load average ≈ 10), CPU time, `-- 10`: 1.96 ms
 //! per step, 5.1× real time (3.1 ms before the BEM warm start and the batched stations;
@@ -82,6 +93,58 @@ fn stations(reference: &Path, stall: bool) -> String {
     s
 }
 
+/// Writes the bench's TurbSim box ([`main`]'s `turbulent`) to `path`: the layout of a
+/// `.bts` file (docs/aerodynamics.md, "Turbulent wind"), periodic, values to 1/1000 m/s.
+fn write_box(path: &Path) {
+    let (n, nt, dy, dt, hub) = (32usize, 512usize, 145.0f32 / 31.0, 0.05f32, 90.0f32);
+    let bottom = hub - 0.5 * 31.0 * dy;
+    let mut b: Vec<u8> = Vec::new();
+    b.extend(8i16.to_le_bytes());
+    for k in [n as i32, n as i32, 0, nt as i32] {
+        b.extend(k.to_le_bytes());
+    }
+    for v in [
+        dy, dy, dt, 11.4, hub, bottom, 1000.0, -11400.0, 1000.0, 0.0, 1000.0, 0.0,
+    ] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend(0i32.to_le_bytes());
+    // Frozen modes: amplitude [m/s], wavenumbers in y and z [1/m], frequency [rad/s]
+    // (multiples of 2π/25.6 s, periodic over the box), phase.
+    let w0 = 2.0 * std::f64::consts::PI / 25.6;
+    let modes = [
+        (0.8, 0.02, 0.013, 3.0 * w0, 0.3),
+        (0.5, -0.045, 0.031, 11.0 * w0, 1.9),
+        (0.3, 0.09, -0.07, 29.0 * w0, 4.1),
+        (0.2, 0.17, 0.12, 61.0 * w0, 2.6),
+    ];
+    for it in 0..nt {
+        let tau = it as f64 * dt as f64;
+        for iz in 0..n {
+            let z = bottom as f64 + iz as f64 * dy as f64;
+            for iy in 0..n {
+                let y = (iy as f64 - 15.5) * dy as f64;
+                let mut v = [11.4 * (z / 90.0).powf(0.2), 0.0, 0.0];
+                for (c, vc) in v.iter_mut().enumerate() {
+                    for &(a, ky, kz, w, ph) in &modes {
+                        let scale = [1.0, 0.8, 0.5][c];
+                        *vc += scale * a * (ky * y + kz * z + w * tau + ph + c as f64).sin();
+                    }
+                }
+                let raw = [
+                    (v[0] * 1000.0 - 11400.0).round() as i16,
+                    (v[1] * 1000.0).round() as i16,
+                    (v[2] * 1000.0).round() as i16,
+                ];
+                for r in raw {
+                    b.extend(r.to_le_bytes());
+                }
+            }
+        }
+    }
+    std::fs::write(path, b).unwrap();
+}
+
 /// CPU time of this process so far [s] (all threads, from the scheduler's statistics),
 /// or `None` where /proc is not available.
 fn cpu_time() -> Option<f64> {
@@ -106,6 +169,8 @@ fn main() {
     let t_end: f64 = args.iter().find_map(|a| a.parse().ok()).unwrap_or(10.0);
     let stall = args.iter().any(|a| a == "oye");
     let modified = args.iter().any(|a| a == "modified");
+    let kussner = args.iter().any(|a| a == "kussner");
+    let turbulent = kussner || args.iter().any(|a| a == "turbulent");
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let example = root.join("examples/rotor/nrel5mw_flexible.toml");
     let reference = root.join("reference/nrel5mw");
@@ -121,10 +186,26 @@ fn main() {
             if stall {
                 text += "dynamic_stall = \"oye\"\n";
             }
+            if kussner {
+                text += "unsteady = \"wagner\"\ngust_response = \"kussner\"\n";
+            }
             text += &st;
         }
     }
     let mut text = text.replace("t_end = 0.5", &format!("t_end = {t_end}"));
+    let box_path =
+        std::env::temp_dir().join(format!("samara_flex_rotor_{}.bts", std::process::id()));
+    if turbulent {
+        write_box(&box_path);
+        text = text.replace(
+            "wind = { speed = 11.4, direction = [1.0, 0.0, 0.0] }",
+            &format!(
+                "wind = {{ turbsim = {:?}, direction = [1.0, 0.0, 0.0] }}",
+                box_path.to_str().unwrap()
+            ),
+        );
+        assert_eq!(text.matches("turbsim =").count(), 3);
+    }
     if modified {
         text = text.replace("step = 0.01", "step = 0.01\njacobian = \"modified\"");
     }
@@ -132,6 +213,9 @@ fn main() {
         Ok(l) => l.model,
         Err(e) => panic!("{}", e.render_plain()),
     };
+    if turbulent {
+        let _ = std::fs::remove_file(&box_path);
+    }
     // One residual-and-tangent evaluation, structure and aerodynamics apart.
     let initial = initial_nodes(&m);
     let mut parts = Build::new(&initial);
@@ -176,6 +260,55 @@ fn main() {
         100.0 * ta / (ts + ta),
         us(cr),
     );
+    if turbulent {
+        // The sampling alone: 49 points per line spread over the rotor disc (radius
+        // 1.5 … 63 m), f64 and dual.
+        let points: Vec<(std::sync::Arc<samara::elements::aero::Wind>, [f64; 3])> = m
+            .aero_lines
+            .iter()
+            .flat_map(|l| {
+                let wind = std::sync::Arc::new(l.wind.clone());
+                (0..l.stations.len()).map(move |k| (wind.clone(), k))
+            })
+            .map(|(w, k)| {
+                let r = 1.5 + 61.5 * (k as f64 + 0.5) / 49.0;
+                let psi = 2.1 * k as f64;
+                (w, [0.0, r * psi.sin(), 90.0 + r * psi.cos()])
+            })
+            .collect();
+        let reps = 1000;
+        let (sum, wall, cpu) = timed(|| {
+            let mut s = 0.0;
+            for i in 0..reps {
+                for (w, p) in &points {
+                    s += w.velocity(p, 0.01 * i as f64)[0];
+                }
+            }
+            s
+        });
+        let (dsum, dwall, dcpu) = timed(|| {
+            use samara::math::dual::{Dual, Scalar};
+            let mut s = 0.0;
+            for i in 0..reps {
+                for (w, p) in &points {
+                    let q: [Dual<12>; 3] = std::array::from_fn(|c| Dual::var(p[c], c));
+                    s += w.velocity(&q, 0.01 * i as f64)[0].re();
+                }
+            }
+            s
+        });
+        let per = |s: f64| 1e9 * s / (reps * points.len()) as f64;
+        println!(
+            "wind sampling ({} points): f64 {:.0} ns ({} ns CPU), dual (12 directions) {:.0} ns ({} ns CPU) per sample [{:.3}, {:.3}]",
+            points.len(),
+            per(wall),
+            cpu.map_or("—".into(), |c| format!("{:.0}", per(c))),
+            per(dwall),
+            dcpu.map_or("—".into(), |c| format!("{:.0}", per(c))),
+            sum / (reps * points.len()) as f64,
+            dsum / (reps * points.len()) as f64,
+        );
+    }
     let sys = System::new(&m);
     let mut h = History::default();
     let (s, wall, cpu) = timed(|| {
@@ -191,11 +324,16 @@ fn main() {
     assert!(s.failure.is_none(), "{:?}", s.failure);
     let steps = s.steps as f64;
     println!(
-        "{t_end} s simulated{}{}: {} steps, {:.2} Newton iterations and {:.2} factorizations per step; wall {wall:.3} s, {:.3} ms/step, {:.2}× real time; CPU {}",
+        "{t_end} s simulated{}{}{}: {} steps, {:.2} Newton iterations and {:.2} factorizations per step; wall {wall:.3} s, {:.3} ms/step, {:.2}× real time; CPU {}",
         if stall {
             " with Øye's dynamic stall"
         } else {
             ""
+        },
+        match (turbulent, kussner) {
+            (true, true) => " in the TurbSim box, Wagner + Küssner states",
+            (true, false) => " in the TurbSim box",
+            _ => "",
         },
         if modified { ", modified Newton" } else { "" },
         s.steps,

@@ -636,3 +636,313 @@ fn bad_gust_options_are_located_errors() {
     let e = model_error(dir.path(), &bad);
     assert!(e.contains("finite") || e.contains("velocity"), "{e}");
 }
+
+/// Sears' function S(k) = [J₀(k) − iJ₁(k)] C(k) + iJ₁(k): the lift of a flat plate in a
+/// sinusoidal vertical gust w = ŵ e^{iω(t − x/V)}, cl = 2π (ŵ/V) S(k) e^{iωt}, referred to
+/// the gust at the mid-chord x = 0 of this formula (Sears 1941; Bisplinghoff, Ashley &
+/// Halfman, *Aeroelasticity*, §5-7). C(k) and J₀, J₁ from the Bessel functions above.
+fn sears(k: f64) -> C64 {
+    let (j0, _) = bessel(0, k);
+    let (j1, _) = bessel(1, k);
+    C64::new(j0, -j1) * theodorsen(k) + C64::new(0.0, j1)
+}
+
+/// The frequency response of the model's Küssner states (Sears & Sparks' exponentials),
+/// referred to the gust where the states read it (the leading edge, where ψ's front starts):
+/// K(k) = ik ∫₀^∞ ψ(s) e^{−iks} ds = 1 − Σ A_i ik/(ik + b_i).
+fn sears_sparks_response(k: f64) -> C64 {
+    let (a, b) = ([0.5, 0.5], [0.13, 1.0]);
+    let p = C64::new(0.0, k);
+    C64::new(1.0, 0.0) - (0..2).map(|i| p * a[i] / (p + b[i])).sum::<C64>()
+}
+
+/// The plate of [`plate_model`] held at α = 0 in a steady wind `v` along the chord, its
+/// wind given the extra keys `wind_keys` (a gust, or a `turbsim` box instead of `speed`),
+/// with Küssner's gust response.
+fn kussner_model(dir: &Path, v: f64, wind_keys: &str, t_end: f64, h: f64) -> String {
+    plate_model(dir, v, "", "", t_end, h)
+        .replace(
+            "function = { type = \"step\", time = 0.00995, before = 0.0, after = 1.0 } }",
+            &format!("{wind_keys} }}"),
+        )
+        .replace(
+            "unsteady = \"wagner\"",
+            "unsteady = \"wagner\"\ngust_response = \"kussner\"",
+        )
+}
+
+#[path = "common/bts.rs"]
+mod bts;
+
+#[test]
+fn kussner_states_give_the_sears_lift_for_a_convected_sinusoidal_gust() {
+    // A flat plate (c = 2b = 1 m, cl = π sin 2α) at α = 0 in V = 50 m/s meets a vertical
+    // gust convected with the flow, w = ŵ sin ω(t − x/V) (the wind's `gust` with
+    // `convection_speed = V`), ŵ = 0.25 m/s. Thin-airfoil theory: cl = 2π (ŵ/V) S(k)
+    // referred to the gust at the mid-chord (x = +b/2 here: the station, the quarter chord,
+    // is at x = 0). The model's Küssner states read the gust at the leading edge
+    // x = −b/2, so their lift is 2π (ŵ/V) K(k) e^{ik/2} (K the exponentials' response,
+    // the leading edge b/(2V) ahead of x = 0), the exact one 2π (ŵ/V) S(k) e^{−ik/2}:
+    // the approximation's own error is K(k) e^{ik}/S(k) − 1 (computed here).
+    // Tolerances: against the model's K, 2e-3 in amplitude and 0.2° in phase (400 steps per
+    // period, second order, as the Wagner test; the α nonlinearity adds ≈ 2e-5); against
+    // Sears' S, the approximation's error plus the same.
+    // Then the same gust carried by a periodic TurbSim box (w = ŵ sin ωτ about a
+    // uniform 50 m/s mean, τ = t − x/u_hub: the turbulence about the box's mean goes
+    // through Küssner's states), at k = 0.2, with 200 box steps per period: its linear
+    // interpolation in time scales the amplitude by ≈ 1 − (ω dt)²/12 = 1 − 8e-5.
+    let dir = tempfile::tempdir().unwrap();
+    let (v, b, wg) = (50.0f64, 0.5f64, 0.25f64);
+    let check = |k: f64, text: &str, w: f64, t0: f64, what: &str| -> (f64, f64) {
+        let (t, outs, names, _) = run(text, dir.path());
+        let icl = names.iter().position(|n| n == "plate.0.cl").unwrap();
+        let cl: Vec<f64> = outs.iter().map(|o| o[icl]).collect();
+        let sim = fit(&t, &cl, w, t0);
+        let scale = 2.0 * PI * wg / v;
+        let model = sears_sparks_response(k) * C64::from_polar(scale, 0.5 * k);
+        let exact = sears(k) * C64::from_polar(scale, -0.5 * k);
+        let amp_m = sim.norm() / model.norm() - 1.0;
+        let ph_m = (sim / model).arg().to_degrees();
+        let amp_e = sim.norm() / exact.norm() - 1.0;
+        let ph_e = (sim / exact).arg().to_degrees();
+        let own = model / exact;
+        let (own_amp, own_ph) = (own.norm() - 1.0, own.arg().to_degrees());
+        let s = sears(k);
+        println!(
+            "{what} k = {k}: |S| = {:.4}, ∠S = {:.2}°; simulation vs Sears–Sparks K: {amp_m:+.2e}, {ph_m:+.3}°; vs Sears S: {amp_e:+.2e}, {ph_e:+.2}° (the exponentials' own error {own_amp:+.2e}, {own_ph:+.2}°)",
+            s.norm(),
+            s.arg().to_degrees()
+        );
+        assert!(amp_m.abs() < 2e-3 && ph_m.abs() < 0.2, "{what} k = {k}");
+        assert!(
+            amp_e.abs() < own_amp.abs() + 2e-3 && ph_e.abs() < own_ph.abs() + 0.2,
+            "{what} k = {k}"
+        );
+        (own_amp, own_ph)
+    };
+    for k in [0.05, 0.2, 0.5, 1.0] {
+        let w = k * v / b;
+        let period = 2.0 * PI / w;
+        // The slowest Küssner pole decays like e^{−0.13 (2V/c) t} = e^{−13 t}: < 1e-8 at 1.5 s.
+        // The sine starts at θ = t + b/(2V) = 0, before the run, at the leading edge.
+        let t0 = 1.5;
+        let gust = format!(
+            "gust = {{ velocity = [0.0, 0.0, {wg}], function = {{ type = \"sine\", amplitude = 1.0, frequency = {} }}, convection_speed = {v} }}",
+            w / (2.0 * PI)
+        );
+        let text = kussner_model(dir.path(), v, &gust, t0 + 2.0 * period, period / 400.0);
+        let (own_amp, own_ph) = check(k, &text, w, t0, "gust");
+        // Sears & Sparks' fit is that of the exact response within 5 % and 13° up to
+        // k = 1 (measured: +4.3 %, −0.7° at k = 0.05; −1.6 %, −3.0° at 0.2; +2.3 %, −3.3°
+        // at 0.5; +4.4 %, −12.1° at 1).
+        assert!(own_amp.abs() < 0.05 && own_ph.abs() < 13.0, "k = {k}");
+    }
+    // The box: 2 × 2 points 2 m apart around the plate (y, z = −1 … 1 m), 400 steps over
+    // two periods of the k = 0.2 wave, u = 50, v = 0, w = ŵ sin ωτ.
+    let k = 0.2;
+    let period = 2.0 * PI / (k * v / b);
+    let dt = (period / 200.0) as f32;
+    let w = 2.0 * PI / (200.0 * dt as f64);
+    let boxed = bts::Box3 {
+        periodic: true,
+        ny: 2,
+        nz: 2,
+        nt: 400,
+        n_tower: 0,
+        dy: 2.0,
+        dz: 2.0,
+        dt,
+        mean_speed: v as f32,
+        hub_height: 0.0,
+        grid_bottom: -1.0,
+        slope: [600.0, 1000.0, 1e5],
+        offset: [0.0; 3],
+    };
+    std::fs::write(
+        dir.path().join("wave.bts"),
+        boxed.bytes(|_, _, tau| [v, 0.0, wg * (w * tau).sin()]),
+    )
+    .unwrap();
+    let text = kussner_model(dir.path(), v, "", 1.5 + 2.0 * period, period / 400.0).replace(
+        &format!("speed = {v}, direction = [1.0, 0.0, 0.0], "),
+        "turbsim = \"wave.bts\", direction = [1.0, 0.0, 0.0]",
+    );
+    assert!(text.contains("wave.bts"), "{text}");
+    check(k, &text, w, 1.5, "TurbSim box");
+}
+
+#[test]
+fn a_convected_gust_front_reaches_two_stations_delta_x_over_u_apart() {
+    // Two plates (c = 1 m, cl = π sin 2α, α = 0) at x = 0 and x = Δx = 2 m in V = 50 m/s
+    // meet a sharp-edged vertical gust front w_g = 0.5 m/s convected at V (`convection_speed
+    // = 50`) that crosses x = 0 at t₀: each plate's lift builds as Küssner's function
+    // (Sears–Sparks' exponentials, the model's closed form) from the time the front
+    // reaches its leading edge, x_LE = x − c/4: cl = π sin 2 atan(w_g ψ(s)/V),
+    // s = 2|U|(t − t₀ − x_LE/V)/c, i.e. the second plate's lift is the first's delayed by
+    // Δx/V = 0.04 s. Tolerance as the uniform sharp-edged gust: 2e-3 of the final lift,
+    // shrinking when the step halves (the fronts arrive between steps). Without
+    // `convection_speed` (a uniform gust) the two lifts are equal.
+    let dir = tempfile::tempdir().unwrap();
+    let (v, wg, dx) = (50.0f64, 0.5f64, 2.0f64);
+    let speed = (v * v + wg * wg).sqrt();
+    let t0 = 0.010025;
+    let cl_inf = PI * (2.0 * wg.atan2(v)).sin();
+    let two_plates = |text: String| -> String {
+        let second = text
+            .split("[[aero_lines]]")
+            .nth(1)
+            .unwrap()
+            .split("[[analyses]]")
+            .next()
+            .unwrap()
+            .replace("name = \"plate\"", "name = \"aft\"")
+            .replace(
+                "root = [0.0, -0.5, 0.0]",
+                &format!("root = [{dx}, -0.5, 0.0]"),
+            )
+            .replace("tip = [0.0, 0.5, 0.0]", &format!("tip = [{dx}, 0.5, 0.0]"))
+            .replace("node = \"aft\"", "node = \"plate\"");
+        text.replace(
+            "[[analyses]]",
+            &format!("[[aero_lines]]{second}[[analyses]]"),
+        )
+    };
+    let gust = |convected: bool| {
+        format!(
+            "gust = {{ velocity = [0.0, 0.0, {wg}], function = {{ type = \"step\", time = {t0}, before = 0.0, after = 1.0 }}{} }}",
+            if convected {
+                format!(", convection_speed = {v}")
+            } else {
+                String::new()
+            }
+        )
+    };
+    let mut worst = Vec::new();
+    for h in [1e-4, 5e-5] {
+        let text = two_plates(kussner_model(dir.path(), v, &gust(true), t0 + 0.25, h));
+        assert_eq!(text.matches("[[aero_lines]]").count(), 2, "{text}");
+        let (t, outs, names, _) = run(&text, dir.path());
+        let mut err = 0.0f64;
+        for (line, x) in [("plate", 0.0), ("aft", dx)] {
+            let icl = names
+                .iter()
+                .position(|n| *n == format!("{line}.0.cl"))
+                .unwrap();
+            let arrival = t0 + (x - 0.25) / v;
+            for s in [0.25, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0] {
+                let ts = arrival + s / (2.0 * speed);
+                let i = (0..t.len())
+                    .min_by(|&a, &b| (t[a] - ts).abs().total_cmp(&(t[b] - ts).abs()))
+                    .unwrap();
+                let si = 2.0 * speed * (t[i] - arrival);
+                let want = PI * (2.0 * (wg * sears_sparks(si)).atan2(v)).sin();
+                err = err.max((outs[i][icl] - want).abs() / cl_inf);
+            }
+            // Nothing before the front arrives.
+            let before = t.iter().position(|&x| x > arrival).unwrap() - 1;
+            assert!(outs[before][icl].abs() < 1e-12, "{line}");
+        }
+        println!("h = {h}: worst |cl − cl_K(t − x_LE/V)|/cl∞ over both plates = {err:.2e}");
+        assert!(err < 2e-3, "h = {h}: {err}");
+        worst.push(err);
+    }
+    assert!(worst[1] < 0.75 * worst[0], "no convergence: {worst:?}");
+    // A uniform gust (no convection speed) lifts both plates at once.
+    let text = two_plates(kussner_model(dir.path(), v, &gust(false), t0 + 0.05, 1e-4));
+    let (_, outs, names, _) = run(&text, dir.path());
+    let ia = names.iter().position(|n| n == "plate.0.cl").unwrap();
+    let ib = names.iter().position(|n| n == "aft.0.cl").unwrap();
+    let last = outs.last().unwrap();
+    assert!(last[ia] > 0.3 * cl_inf && (last[ia] - last[ib]).abs() < 1e-12 * cl_inf);
+}
+
+#[test]
+fn bad_convected_gusts_are_located_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let gust = |uc: &str| {
+        format!(
+            "gust = {{ velocity = [0.0, 0.0, 0.5], function = {{ type = \"step\", time = 0.05, before = 0.0, after = 1.0 }}, convection_speed = {uc} }}"
+        )
+    };
+    let good = kussner_model(dir.path(), 10.0, &gust("10.0"), 0.1, 0.01);
+    assert!(Model::from_toml_str(&good, dir.path().join("ok.toml")).is_ok());
+    let line = |text: &str| text.lines().position(|l| l.starts_with("wind =")).unwrap() + 1;
+    for uc in ["0.0", "-5.0"] {
+        let bad = kussner_model(dir.path(), 10.0, &gust(uc), 0.1, 0.01);
+        let e = model_error(dir.path(), &bad);
+        assert!(
+            e.contains("gust `convection_speed`")
+                && e.contains("must be finite and > 0")
+                && e.contains(&format!("bad.toml:{}:", line(&bad))),
+            "{uc}: {e}"
+        );
+    }
+    // Non-finite numbers are refused by the reader, at the number.
+    for uc in ["nan", "inf"] {
+        let bad = kussner_model(dir.path(), 10.0, &gust(uc), 0.1, 0.01);
+        let e = model_error(dir.path(), &bad);
+        assert!(
+            e.contains("outside the range") && e.contains(&format!("bad.toml:{}:", line(&bad))),
+            "{uc}: {e}"
+        );
+    }
+    let bad = kussner_model(dir.path(), 10.0, &gust("\"fast\""), 0.1, 0.01);
+    assert!(model_error(dir.path(), &bad).contains("bad.toml"));
+}
+
+#[test]
+fn kussner_leaves_a_steady_box_to_wagner() {
+    // A TurbSim box constant in time (u = 50, w = 0.5 m/s everywhere) has no turbulence
+    // about its time mean: with Küssner's response the whole downwash goes through
+    // Wagner's states. The plate at α = 0 sees w from the start: every state starts at its
+    // quasi-steady value and stays there, Küssner's at 0 (to 1e-15: the box mean of equal
+    // int16 samples is the sample itself; the trilinear and bilinear weights sum to 1 to
+    // rounding) and Wagner's at A_i w (to 1e-12), and the lift
+    // stays at its first value (to 1e-12), the static cl = π sin 2 atan(w/u) to within the
+    // table's interpolation between its 1° knots (1e-4).
+    let dir = tempfile::tempdir().unwrap();
+    let (v, wg) = (50.0f64, 0.5f64);
+    let boxed = bts::Box3 {
+        periodic: true,
+        ny: 2,
+        nz: 2,
+        nt: 8,
+        n_tower: 0,
+        dy: 2.0,
+        dz: 2.0,
+        dt: 0.1,
+        mean_speed: v as f32,
+        hub_height: 0.0,
+        grid_bottom: -1.0,
+        slope: [600.0, 1000.0, 1e4],
+        offset: [0.0; 3],
+    };
+    std::fs::write(
+        dir.path().join("steady.bts"),
+        boxed.bytes(|_, _, _| [v, 0.0, wg]),
+    )
+    .unwrap();
+    let text = kussner_model(dir.path(), v, "", 0.2, 1e-3).replace(
+        &format!("speed = {v}, direction = [1.0, 0.0, 0.0], "),
+        "turbsim = \"steady.bts\", direction = [1.0, 0.0, 0.0]",
+    );
+    assert!(
+        text.contains("steady.bts") && text.contains("kussner"),
+        "{text}"
+    );
+    let (_, outs, names, states) = run(&text, dir.path());
+    let icl = names.iter().position(|n| n == "plate.0.cl").unwrap();
+    let cl = outs[0][icl];
+    assert!(
+        (cl / (PI * (2.0 * wg.atan2(v)).sin()) - 1.0).abs() < 1e-4,
+        "{cl}"
+    );
+    for (o, z) in outs.iter().zip(&states) {
+        assert!((o[icl] - cl).abs() < 1e-12 * cl, "{} vs {cl}", o[icl]);
+        assert!(
+            (z[0] - 0.165 * wg).abs() < 1e-12 && (z[1] - 0.335 * wg).abs() < 1e-12,
+            "{z:?}"
+        );
+        assert!(z[2].abs() < 1e-15 && z[3].abs() < 1e-15, "{z:?}");
+    }
+}

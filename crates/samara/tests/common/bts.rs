@@ -80,9 +80,10 @@ impl Box3 {
                     }
                 }
             }
-            // Tower points below the grid (not used by samara).
+            // Tower points under the hub, from the grid's bottom row down (TurbSim's
+            // placement, as openfast_toolbox reads them: z_bottom − k dz).
             for k in 0..self.n_tower {
-                let z = self.grid_bottom as f64 - (k + 1) as f64 * self.dz as f64;
+                let z = self.grid_bottom as f64 - k as f64 * self.dz as f64;
                 for r in raw(f(0.0, z.max(0.0), self.t(it))) {
                     b.extend(r.to_le_bytes());
                 }

@@ -296,6 +296,9 @@ impl Element for PittPeters {
     }
 
     fn breakpoints(&self, out: &mut Vec<f64>) {
-        out.extend(self.wind.breakpoints());
+        out.extend(
+            self.wind
+                .breakpoints(self.disc.centre.dot(&self.wind.direction)),
+        );
     }
 }

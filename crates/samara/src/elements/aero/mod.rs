@@ -19,4 +19,4 @@ pub use rotor_performance::{Performance, RotorGeometry, RotorPerformance};
 pub use station::{AeroStation, Attachment, Inflow, MAX_NODES, Section};
 pub use turbsim::{BtsError, FullField};
 pub use unsteady::{AttachedFlow, OyeStall};
-pub use wind::Wind;
+pub use wind::{Gust, Wind};

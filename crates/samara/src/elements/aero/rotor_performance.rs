@@ -214,6 +214,9 @@ impl Element for RotorPerformance {
     }
 
     fn breakpoints(&self, out: &mut Vec<f64>) {
-        out.extend(self.wind.breakpoints());
+        out.extend(
+            self.wind
+                .breakpoints(self.geometry.centre.dot(&self.wind.direction)),
+        );
     }
 }

@@ -134,8 +134,9 @@ pub struct Unsteady {
     /// Beddoes–Leishman dynamic stall in Hansen–Gaunaa–Madsen's four-state form
     /// ([`super::hgm`]; its own circulatory lag: not with Wagner or Øye).
     pub hgm: Option<Arc<Hgm>>,
-    /// Küssner's gust response (with Wagner): the downwash of the wind's gust component
-    /// through Küssner's function (two states), the rest through Wagner's.
+    /// Küssner's gust response (with Wagner): the normal velocity of the wind's
+    /// disturbance (gust and turbulence, at the leading edge) through Küssner's function
+    /// (two states), the rest through Wagner's.
     pub kussner: bool,
 }
 
@@ -190,6 +191,10 @@ pub struct AeroStation {
     /// Distance of the station from its line's root [m] (the input's `span`; an output,
     /// the abscissa of span-wise plots).
     span: f64,
+    /// Initial coordinate along the wind's direction of the point where the station
+    /// samples a gust (the leading edge with Küssner's response, else p): a convected
+    /// gust's breakpoints reach it x/U_c later.
+    gust_x: f64,
 }
 
 /// Øye's lead factor k of the dynamic wake's first filter (Snel & Schepers 1995).
@@ -244,7 +249,7 @@ pub struct StationResult<S> {
     pub a_quasi_steady: f64,
     /// The Reynolds number the tables are read at (NaN without Re interpolation).
     pub reynolds: f64,
-    /// The gust's share of the normal velocity u_n (Küssner's input; 0 without it).
+    /// The disturbance's share of the normal velocity u_n (Küssner's input; 0 without it).
     pub un_gust: f64,
 }
 
@@ -294,6 +299,7 @@ impl AeroStation {
             outputs,
             root_hint: RootHint::new(),
             span: 0.0,
+            gust_x: 0.0,
         }
     }
 
@@ -309,6 +315,12 @@ impl AeroStation {
     pub fn with_unsteady(mut self, unsteady: Unsteady, t: f64, nodes: &[NodeState]) -> Self {
         self.unsteady = unsteady;
         self.initial = self.quasi_steady_states(t, nodes);
+        let k = self.kinematics(nodes);
+        let mut q = Vector3::from(k.p);
+        if self.unsteady.kussner_states() == 2 {
+            q -= Vector3::from(k.ec) * (0.25 * self.section.chord);
+        }
+        self.gust_x = q.dot(&self.wind.direction);
         self
     }
 
@@ -419,7 +431,17 @@ impl AeroStation {
         let zero = S::cst(0.0);
         let (p, pd, ec, en, ecd) = (kin.p, kin.pd, kin.ec, kin.en, kin.ecd);
         let unsteady = self.unsteady.active();
-        let u0 = sub(&self.wind.velocity(&p, t), &pd);
+        let (rho, ch, ds) = (self.density, self.section.chord, self.section.width);
+        // The wind at the station; with Küssner's gust response its disturbance (gust and
+        // turbulence) is taken at the leading edge p − (c/4) e_c, where Küssner's
+        // function starts (its front reaches the leading edge at s = 0).
+        let (wind_p, disturbance) = if self.unsteady.kussner_states() == 2 {
+            let le = sub(&p, &scale(&ec, S::cst(0.25 * ch)));
+            self.wind.split(&p, &le, t)
+        } else {
+            (self.wind.velocity(&p, t), [zero; 3])
+        };
+        let u0 = sub(&wind_p, &pd);
         let mut res = StationResult {
             force: [zero; 3],
             moment: [zero; 3],
@@ -482,7 +504,7 @@ impl AeroStation {
                         // χ = (1 + 0.6a) γ the wake skew, γ the wind's angle to the axis,
                         // ψ the azimuth from the most downwind position (the radial
                         // direction along the wind's in-plane part).
-                        let wv = self.wind.velocity(&p, t);
+                        let wv = wind_p;
                         let wn = dot(&wv, &n);
                         let wip = sub(&wv, &scale(&n, wn));
                         let m2 = dot(&wip, &wip);
@@ -506,7 +528,7 @@ impl AeroStation {
                 // the lead term through the state y = z₁ − k a_qs: τ₁ ẏ + y = (1 − k) a_qs.
                 let a = if self.unsteady.dynamic_wake {
                     let iw = self.unsteady.airfoil_states();
-                    let v0 = dot(&self.wind.velocity(&p, t), &n);
+                    let v0 = dot(&wind_p, &n);
                     let v0 = if v0.re() < WAKE_MIN_SPEED {
                         S::cst(WAKE_MIN_SPEED)
                     } else {
@@ -551,7 +573,6 @@ impl AeroStation {
                 (add(&u0, &scale(&cst3(&disc.axis), v)), None)
             }
         };
-        let (rho, ch, ds) = (self.density, self.section.chord, self.section.width);
         let u_ac = u;
         let u = if unsteady {
             sub(&u, &scale(&ecd, S::cst(0.5 * ch)))
@@ -578,12 +599,12 @@ impl AeroStation {
         let speed = q2.sqrt();
         let alpha = un.atan2(uc);
         // Wagner: the effective downwash w_E and the states' rows. With Küssner's gust
-        // response the gust's normal velocity w_g = g f_g(t)·e_n goes through Küssner's
+        // response the disturbance's normal velocity w_g = W'·e_n goes through Küssner's
         // states, the rest w − w_g through Wagner's.
         let alpha_e = if nw == 2 {
             let k = speed * (2.0 / ch);
             let wg = if nk == 2 {
-                dot(&cst3(&self.wind.gust_velocity(t)), &en)
+                dot(&disturbance, &en)
             } else {
                 zero
             };
@@ -1219,7 +1240,7 @@ impl Element for AeroStation {
     }
 
     fn breakpoints(&self, out: &mut Vec<f64>) {
-        out.extend(self.wind.breakpoints());
+        out.extend(self.wind.breakpoints(self.gust_x));
     }
 
     fn begin_analysis(&self) {

@@ -17,9 +17,16 @@
 //! grid width for a normal file (InflowWind's start half a width ahead of the turbine) and
 //! 0 for a periodic one, whose τ wraps modulo NT·dt (the step after the last sample is the
 //! first). The velocity is trilinear in (y, z, τ) within the cell holding the point (the
-//! eight corner values, InflowWind's `Grid3DField_GetVelLinear`). Tower points are read and
-//! not used: a point below the grid is an error (InflowWind interpolates to the tower points
-//! there, which a blade never reaches).
+//! eight corner values, InflowWind's `Grid3DField_GetVelLinear`). Tower points are read
+//! ([`FullField::tower_value`], at heights z_bottom − k dz) and not sampled: a point below
+//! the grid is an error (InflowWind interpolates to the tower points there, which a blade
+//! never reaches).
+//!
+//! **Mean and fluctuation.** The box's time-mean at each grid point,
+//! `ū(y_j, z_k) = (1/NT) Σ_i u(y_j, z_k, τ_i)` (per component), bilinear in (y, z)
+//! between them ([`FullField::mean`]), is the mean wind with its shear; the rest,
+//! u − ū, the turbulence (what an airfoil with Küssner's gust response takes through
+//! Küssner's function, docs/aerodynamics.md).
 
 use crate::math::dual::Scalar;
 use std::sync::OnceLock;
@@ -73,6 +80,10 @@ pub struct FullField {
     pub description: String,
     /// Raw samples (u, v, w) at (t, z, y), y fastest.
     raw: Vec<[i16; 3]>,
+    /// Raw tower samples (u, v, w) at (t, k), k fastest.
+    tower_raw: Vec<[i16; 3]>,
+    /// Time-mean (u, v, w) at each grid point (z, y), y fastest [m/s].
+    mean: Vec<[f64; 3]>,
     /// The first sample taken outside the box (a runtime error, reported by the analysis).
     outside: OnceLock<String>,
 }
@@ -226,6 +237,7 @@ impl FullField {
         }
         let grid = ny * nz;
         let mut raw = Vec::with_capacity(grid * nt);
+        let mut tower_raw = Vec::with_capacity(n_tower * nt);
         for _ in 0..nt {
             for k in 0..per_step {
                 let mut v = [0i16; 3];
@@ -234,9 +246,24 @@ impl FullField {
                 }
                 if k < grid {
                     raw.push(v);
+                } else {
+                    tower_raw.push(v);
                 }
             }
         }
+        // Time means: Σ raw per point, then (Σ/NT − offset)/slope.
+        let mut sum = vec![[0.0f64; 3]; grid];
+        for step in raw.chunks_exact(grid) {
+            for (s, v) in sum.iter_mut().zip(step) {
+                for c in 0..3 {
+                    s[c] += v[c] as f64;
+                }
+            }
+        }
+        let mean = sum
+            .iter()
+            .map(|s| std::array::from_fn(|c| (s[c] / nt as f64 - offset[c]) / slope[c]))
+            .collect();
         Ok(Self {
             source: String::new(),
             periodic,
@@ -254,6 +281,8 @@ impl FullField {
             offset,
             description,
             raw,
+            tower_raw,
+            mean,
             outside: OnceLock::new(),
         })
     }
@@ -292,6 +321,43 @@ impl FullField {
     pub fn value(&self, it: usize, iz: usize, iy: usize, c: usize) -> f64 {
         let raw = self.raw[(it * self.nz + iz) * self.ny + iy][c] as f64;
         (raw - self.offset[c]) / self.slope[c]
+    }
+
+    /// The stored value of component c at time step it, tower point k (height
+    /// z_bottom − k dz, k = 0 at the grid's bottom row, as openfast_toolbox's reader places
+    /// them) [m/s].
+    pub fn tower_value(&self, it: usize, k: usize, c: usize) -> f64 {
+        let raw = self.tower_raw[it * self.n_tower + k][c] as f64;
+        (raw - self.offset[c]) / self.slope[c]
+    }
+
+    /// Height of tower point k [m].
+    pub fn tower_height(&self, k: usize) -> f64 {
+        self.grid_bottom - k as f64 * self.dz
+    }
+
+    /// The time-mean (u, v, w) [m/s] at lateral position y and height z, bilinear between
+    /// the grid points' means; `None` outside the grid.
+    pub fn mean<S: Scalar>(&self, y: S, z: S) -> Option<[S; 3]> {
+        if self.outside(y.re(), z.re(), 0.0).is_some() {
+            return None;
+        }
+        let (iy, xy) = Self::cell((y + self.half_width()) / self.dy, self.ny);
+        let (iz, xz) = Self::cell((z - self.grid_bottom) / self.dz, self.nz);
+        let one = S::cst(1.0);
+        let wy = [one - xy, xy];
+        let wz = [one - xz, xz];
+        let mut out = [S::cst(0.0); 3];
+        for (kz, &wzk) in wz.iter().enumerate() {
+            for (ky, &wyk) in wy.iter().enumerate() {
+                let w = wzk * wyk;
+                let m = &self.mean[(iz + kz) * self.ny + iy + ky];
+                for (o, &mc) in out.iter_mut().zip(m) {
+                    *o += w * mc;
+                }
+            }
+        }
+        Some(out)
     }
 
     /// Why (y, z, τ) is outside the box, if it is.
@@ -433,6 +499,22 @@ mod tests {
         // One period later, the same.
         let u2 = f.sample(-3.0, 87.0, 2.25 + 2.5).unwrap()[0];
         assert!((u2 - u).abs() < 1e-12);
+    }
+
+    #[test]
+    fn time_mean_is_the_average_of_the_steps_bilinear_in_space() {
+        // u = it + 2 iz + 3 iy (raw/100): over it = 0 … 4 the mean is 2 + 2 iz + 3 iy.
+        let b = bts(7, 3, 4, 5, |it, iz, iy| {
+            [(100 * (it + 2 * iz + 3 * iy)) as i16, 50, -100]
+        });
+        let f = FullField::parse(&b).unwrap();
+        // iy 0.5, iz 1.5 (as above).
+        let m = f.mean(-1.5, 90.0).unwrap();
+        let want = [2.0 + 3.0 + 1.5, 50.0 / 200.0, -100.0 / 400.0];
+        for c in 0..3 {
+            assert!((m[c] - want[c]).abs() < 1e-12, "{m:?}");
+        }
+        assert!(f.mean(-1.5, 86.0).is_none());
     }
 
     #[test]

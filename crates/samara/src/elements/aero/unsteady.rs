@@ -14,11 +14,12 @@
 //! airfoil table. Filtering the downwash (not α) keeps the states continuous where α
 //! wraps at ±180°. The rows are in m/s²; the assembler scales them by 1/(∂ż/∂Δz).
 //!
-//! **Gust response (Küssner).** With `gust_response = "kussner"` the downwash of the
-//! wind's gust component w_g goes through two more states with Sears & Sparks'
-//! approximation of Küssner's function, ψ(s) ≈ 1 − 0.5e^{−0.13s} − 0.5e^{−s}
-//! ([`KUSSNER_A`], [`KUSSNER_B`]), the rest w − w_g through Wagner's (the station kernel,
-//! [`super::station`]).
+//! **Gust response (Küssner).** With `gust_response = "kussner"` the normal velocity w_g
+//! of the wind's disturbance (its gust and a TurbSim box's turbulence about the box's time
+//! mean, [`super::wind::Wind::split`], sampled at the leading edge where ψ's front starts)
+//! goes through two more states with Sears & Sparks' approximation of Küssner's function,
+//! ψ(s) ≈ 1 − 0.5e^{−0.13s} − 0.5e^{−s} ([`KUSSNER_A`], [`KUSSNER_B`]); the rest w − w_g
+//! (motion, mean wind, induction) through Wagner's (the station kernel, [`super::station`]).
 //!
 //! **Dynamic stall (Øye 1991).** The trailing-edge separation point lags its static
 //! value: with Kirchhoff's flow cl = cl_inv ((1 + √f)/2)², cl_inv = c_lα(α − α₀) (α₀ the

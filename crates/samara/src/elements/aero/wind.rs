@@ -14,10 +14,19 @@
 //!
 //! A point outside the box gives NaN and is recorded; the analysis reports it
 //! ([`Wind::outside_sample`]).
+//!
+//! A **gust** g f_g adds to either: uniform, g f_g(t), or convected along ŵ at a speed
+//! U_c (a frozen gust pattern, its front a plane normal to ŵ), g f_g(t − x/U_c), x = p·ŵ.
+//!
+//! **Mean and disturbance** ([`Wind::split`]): the wind is the sum of a mean part — the
+//! sheared wind times its function, or the box's time-mean profile ū(y, z) — and a
+//! disturbance, the gust plus the box's turbulence u − ū. An airfoil with Küssner's gust
+//! response lags the disturbance's normal velocity with Küssner's function and the rest
+//! with Wagner's (Leishman, *Principles of Helicopter Aerodynamics*, 2nd ed., §8.14–8.16).
 
 use super::turbsim::FullField;
 use crate::math::TimeFunction;
-use crate::math::dual::{Scalar, V3};
+use crate::math::dual::{Scalar, V3, add, sub};
 use nalgebra::Vector3;
 use std::sync::Arc;
 
@@ -42,10 +51,30 @@ pub struct Wind {
     pub function: TimeFunction,
     /// A turbulent box replacing the analytic wind (speed, shear and function unused).
     pub turbulence: Option<Arc<FullField>>,
-    /// A uniform gust added to the wind: velocity g (global) times its time function,
-    /// g f_g(t); the part of the wind an unsteady airfoil with Küssner's gust response
-    /// takes through Küssner's function.
-    pub gust: Option<(Vector3<f64>, TimeFunction)>,
+    /// A gust added to the wind (part of the disturbance that an unsteady airfoil with
+    /// Küssner's gust response takes through Küssner's function).
+    pub gust: Option<Gust>,
+}
+
+/// A gust: velocity g (global) times its time function, uniform, g f_g(t), or convected
+/// along the wind's direction ŵ at U_c, g f_g(t − p·ŵ/U_c).
+#[derive(Clone, Debug)]
+pub struct Gust {
+    pub velocity: Vector3<f64>,
+    pub function: TimeFunction,
+    /// Convection speed U_c [m/s] (> 0); `None`: uniform in space.
+    pub convection_speed: Option<f64>,
+}
+
+impl Gust {
+    /// A gust uniform in space.
+    pub fn uniform(velocity: Vector3<f64>, function: TimeFunction) -> Self {
+        Self {
+            velocity,
+            function,
+            convection_speed: None,
+        }
+    }
 }
 
 impl Default for Wind {
@@ -70,28 +99,55 @@ impl Wind {
         let w = self.steady_velocity(p, t);
         match &self.gust {
             None => w,
-            Some(_) => {
-                let g = self.gust_velocity(t);
-                [w[0] + g[0], w[1] + g[1], w[2] + g[2]]
-            }
+            Some(g) => add(&w, &self.gust_velocity(g, p, t)),
         }
     }
 
-    /// The times where the wind's functions (speed and gust) jump or kink.
-    pub fn breakpoints(&self) -> Vec<f64> {
+    /// The wind split into its mean part at p and its disturbance (the gust and the box's
+    /// turbulence) at q: `(W̄(p) + W'(q), W'(q))`. With q = p the sum is
+    /// [`Self::velocity`] (to rounding).
+    pub fn split<S: Scalar>(&self, p: &V3<S>, q: &V3<S>, t: f64) -> (V3<S>, V3<S>) {
+        let zero = S::cst(0.0);
+        let mut dist = match &self.gust {
+            None => [zero; 3],
+            Some(g) => self.gust_velocity(g, q, t),
+        };
+        let mean = match &self.turbulence {
+            None => self.steady_velocity(p, t),
+            Some(field) => {
+                let fluct = sub(&self.turbulent(field, q, t), &self.box_mean(field, q));
+                dist = add(&dist, &fluct);
+                self.box_mean(field, p)
+            }
+        };
+        (add(&mean, &dist), dist)
+    }
+
+    /// The times where the wind's functions (speed and gust) jump or kink, at a point whose
+    /// coordinate along ŵ is x (a convected gust reaches it x/U_c later).
+    pub fn breakpoints(&self, x: f64) -> Vec<f64> {
         let mut v = self.function.breakpoints();
-        if let Some((_, f)) = &self.gust {
-            v.extend(f.breakpoints());
+        if let Some(g) = &self.gust {
+            let shift = g.convection_speed.map_or(0.0, |u| x / u);
+            v.extend(g.function.breakpoints().into_iter().map(|b| b + shift));
         }
         v
     }
 
-    /// The gust g f_g(t) (zero without one).
-    pub fn gust_velocity(&self, t: f64) -> Vector3<f64> {
-        match &self.gust {
-            None => Vector3::zeros(),
-            Some((g, f)) => g * f.eval(t),
-        }
+    /// The gust at p: g f_g(t), or g f_g(t − p·ŵ/U_c) convected.
+    fn gust_velocity<S: Scalar>(&self, g: &Gust, p: &V3<S>, t: f64) -> V3<S> {
+        let f = match g.convection_speed {
+            None => S::cst(g.function.eval(t)),
+            Some(uc) => {
+                let d = self.direction;
+                let x = p[0] * d[0] + p[1] * d[1] + p[2] * d[2];
+                let theta = S::cst(t) - x / uc;
+                let [f, df, _] = g.function.derivatives(theta.re());
+                theta.chain(f, df)
+            }
+        };
+        let v = g.velocity;
+        [f * v[0], f * v[1], f * v[2]]
     }
 
     /// The wind without its gust: the sheared wind times its function, or the box.
@@ -134,6 +190,26 @@ impl Wind {
             if let Some(why) = field.outside(y.re(), z.re(), tau.re()) {
                 field.record_outside(format!(
                     "at t = {t} s a station sampled the wind of TurbSim file '{}' outside its box, at ({:.4}, {:.4}, {:.4}) m: {why}",
+                    field.source,
+                    p[0].re(),
+                    p[1].re(),
+                    p[2].re()
+                ));
+            }
+            return [S::cst(f64::NAN); 3];
+        };
+        let (d, l, h) = (self.direction, self.lateral(), self.vertical);
+        let c = |k: usize| u * d[k] + v * l[k] + w * h[k];
+        [c(0), c(1), c(2)]
+    }
+
+    /// The box's time-mean wind at p (NaN outside the grid, and recorded).
+    fn box_mean<S: Scalar>(&self, field: &FullField, p: &V3<S>) -> V3<S> {
+        let [_, y, z] = self.frame(p);
+        let Some([u, v, w]) = field.mean(y, z) else {
+            if let Some(why) = field.outside(y.re(), z.re(), 0.0) {
+                field.record_outside(format!(
+                    "a station sampled the mean wind of TurbSim file '{}' outside its grid, at ({:.4}, {:.4}, {:.4}) m: {why}",
                     field.source,
                     p[0].re(),
                     p[1].re(),

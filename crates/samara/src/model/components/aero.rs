@@ -9,8 +9,8 @@ use crate::core::NodeRef;
 use crate::elements::aero::RotorDisc;
 use crate::elements::aero::station::Unsteady;
 use crate::elements::aero::{
-    AeroStation, Airfoil, AttachedFlow, Attachment, BemRotor, FullField, Hgm, HgmCoefficients,
-    Inflow, MAX_NODES, OyeStall, Section, Wind,
+    AeroStation, Airfoil, AttachedFlow, Attachment, BemRotor, FullField, Gust, Hgm,
+    HgmCoefficients, Inflow, MAX_NODES, OyeStall, Section, Wind,
 };
 use crate::math::TimeFunction;
 use crate::model::input::TimeFunctionInput;
@@ -75,21 +75,28 @@ pub struct WindInput {
     /// Time function multiplying the speed (a gust); default 1.
     #[serde(default)]
     pub function: Option<Located<TimeFunctionInput>>,
-    /// A uniform gust added to the wind, `{ velocity, function }`: velocity g [m/s,
-    /// global] times the time function f_g(t) (the wind's component that Küssner's gust
-    /// response reads).
+    /// A gust added to the wind, `{ velocity, function, convection_speed }`: velocity g
+    /// [m/s, global] times the time function f_g, uniform (f_g(t)) or convected along
+    /// `direction` (f_g(t − x/U_c)); with a `turbsim` box, added to it (part of the
+    /// disturbance that Küssner's gust response reads).
     #[serde(default)]
     pub gust: Option<Located<GustInput>>,
 }
 
-/// A uniform gust of a line's wind.
+/// A gust of a line's wind.
 #[derive(Clone, Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct GustInput {
     /// Gust velocity g, global [m/s].
     pub velocity: [f64; 3],
-    /// Time function f_g(t) multiplying it.
+    /// Time function f_g multiplying it.
     pub function: Located<TimeFunctionInput>,
+    /// Convection speed U_c [m/s] (> 0): the gust is a frozen pattern advancing along the
+    /// wind's `direction`, g f_g(t − x/U_c) at x = p·ŵ (its front crosses the plane
+    /// x = 0 at the function's times); usually the wind's speed. Omitted: uniform in
+    /// space, g f_g(t).
+    #[serde(default)]
+    pub convection_speed: Option<f64>,
 }
 
 /// How an unsteady airfoil responds to the wind's gust.
@@ -246,7 +253,8 @@ pub struct AeroLineInput {
     /// `reynolds = "interpolate"`).
     #[serde(default)]
     pub kinematic_viscosity: Option<f64>,
-    /// The response to the wind's `gust`: `"wagner"` (default: like the motion) or
+    /// The response to the wind's disturbance (its `gust` and a `turbsim` box's
+    /// turbulence about its time mean): `"wagner"` (default: like the motion) or
     /// `"kussner"` (Küssner's function, two more states; needs `unsteady = "wagner"`).
     #[serde(default)]
     pub gust_response: Option<GustResponseInput>,
@@ -1100,7 +1108,21 @@ impl ComponentKind for AeroLine {
                     let f = cx
                         .time_function(&g.value.function, &what)
                         .unwrap_or_default();
-                    wind.gust = Some((Vector3::from(g.value.velocity), f));
+                    if let Some(uc) = g.value.convection_speed
+                        && !(uc.is_finite() && uc > 0.0)
+                    {
+                        cx.error(
+                            format!("{what}: gust `convection_speed` = {uc} must be finite and > 0"),
+                            cx.key(&ge, "convection_speed"),
+                            Some("the speed the gust pattern advances at along the wind's direction, usually the wind's speed; omit it for a gust uniform in space".into()),
+                        );
+                        ok = false;
+                    }
+                    wind.gust = Some(Gust {
+                        velocity: Vector3::from(g.value.velocity),
+                        function: f,
+                        convection_speed: g.value.convection_speed,
+                    });
                 }
                 wind
             }
@@ -1117,11 +1139,11 @@ impl ComponentKind for AeroLine {
                     );
                     ok = false;
                 }
-                if wind.gust.is_none() {
+                if wind.gust.is_none() && wind.turbulence.is_none() {
                     cx.error(
-                        format!("{what}: `gust_response = \"kussner\"` but the line's wind has no `gust`"),
+                        format!("{what}: `gust_response = \"kussner\"` but the line's wind has no `gust` and no `turbsim` box (nothing for Küssner's function to lag)"),
                         cx.key(&e, "gust_response"),
-                        Some("give the wind a gust: wind = { …, gust = { velocity = [0.0, 0.0, 1.0], function = { type = \"step\", … } } }".into()),
+                        Some("give the wind a gust: wind = { …, gust = { velocity = [0.0, 0.0, 1.0], function = { type = \"step\", … } } }, or a turbsim box".into()),
                     );
                     ok = false;
                 }
@@ -1592,6 +1614,51 @@ impl ComponentKind for AeroLine {
                 vec![node(3020 + k as u64)],
             ));
         }
+        // Küssner's response to the box's turbulence (sampled at the leading edge, about
+        // the time-mean profile at the station) plus a convected sine gust, with none and
+        // BEM inflow, on 1 and 2 nodes.
+        let turbulent_gusty = Arc::new(Wind {
+            gust: Some(Gust {
+                velocity: Vector3::new(0.2, -0.3, 0.9),
+                function: crate::math::TimeFunction::Sine {
+                    amplitude: 1.0,
+                    frequency: 0.8,
+                    phase: 0.3,
+                    offset: 0.2,
+                    start: -10.0,
+                },
+                convection_speed: Some(7.0),
+            }),
+            ..(*turbulent).clone()
+        });
+        for (k, inflow) in [Inflow::None, Inflow::Uniform(Vector3::new(-0.5, 0.3, 0.1))]
+            .into_iter()
+            .enumerate()
+        {
+            let inflow = Arc::new(inflow);
+            for nn in [1usize, 2] {
+                let seed = 3100 + 10 * k as u64 + nn as u64;
+                let nodes: Vec<_> = (0..nn).map(|i| node(seed + 3 * i as u64)).collect();
+                let w = 1.0 / nn as f64;
+                let unsteady = Unsteady {
+                    attached: AttachedFlow::Wagner,
+                    kussner: true,
+                    ..Unsteady::default()
+                };
+                let e = AeroStation::new(
+                    "aero_kussner_turbulent",
+                    (0..nn).collect(),
+                    (0..nn).map(|i| attach(i as f64 - 0.5, w)).collect(),
+                    section.clone(),
+                    1.2,
+                    turbulent_gusty.clone(),
+                    inflow.clone(),
+                )
+                .with_unsteady(unsteady, 0.0, &nodes);
+                let states = vec![(0.3, -0.2), (0.5, 0.1), (0.2, 0.3), (-0.1, 0.2)];
+                cases.push(TangentCase::element(Box::new(e), nodes).with_states(states));
+            }
+        }
         // BEM with Øye's dynamic wake (two states), alone and with Wagner + Øye's stall,
         // on 1, 2 and 5 nodes.
         let bem = Arc::new(Inflow::Bem {
@@ -1773,17 +1840,39 @@ impl ComponentKind for AeroLine {
         // and BEM inflow on 1 and 2 nodes, and all seven states (with Øye's stall and the
         // dynamic wake) on BEM.
         let gusty = Arc::new(Wind {
-            gust: Some((
+            gust: Some(Gust::uniform(
                 Vector3::new(0.4, -0.8, 1.5),
                 crate::math::TimeFunction::Constant(0.7),
             )),
             ..(*wind).clone()
         });
+        // And a sine gust convected along the wind (its phase depends on the station's
+        // leading edge): no inflow, 1 and 2 nodes.
+        let convected = Arc::new(Wind {
+            gust: Some(Gust {
+                velocity: Vector3::new(0.4, -0.8, 1.5),
+                function: crate::math::TimeFunction::Sine {
+                    amplitude: 0.9,
+                    frequency: 1.3,
+                    phase: 0.4,
+                    offset: 0.1,
+                    start: -10.0,
+                },
+                convection_speed: Some(8.0),
+            }),
+            ..(*wind).clone()
+        });
         let uniform = Arc::new(Inflow::Uniform(Vector3::new(-0.5, 0.3, 0.1)));
-        for (k, inflow) in [Arc::new(Inflow::None), uniform, bem.clone()]
-            .into_iter()
-            .enumerate()
+        for (k, inflow) in [
+            Arc::new(Inflow::None),
+            uniform,
+            bem.clone(),
+            Arc::new(Inflow::None),
+        ]
+        .into_iter()
+        .enumerate()
         {
+            let gusty = if k == 3 { &convected } else { &gusty };
             for nn in [1usize, 2] {
                 for full in [false, true] {
                     if full && k != 2 {
