@@ -3,11 +3,11 @@
 //! (spinning at 1 rad/s about z). Models: `examples/bench/chain_{revolute,spherical}_N.toml`.
 //!
 //! `cargo bench -p samara --bench chain [-- N… WORD… t_end=T repeats=R]` prints, per run:
-//! wall time, Newton iterations, tip position at 1 s, energy drift, max constraint
-//! violation; then the fitted growth exponent of wall time with N. Words keep only the
-//! runs whose joint kind, analysis name or Newton variant they name (`revolute rho0.9
-//! full`); `t_end` shortens the runs and `repeats` overrides the repetitions (for
-//! profiling and instruction counts).
+//! wall time, Newton iterations and factorizations per step, tip position at 1 s, energy
+//! drift, max constraint violation; then the fitted growth exponent of wall time with N.
+//! Words keep only the runs whose joint kind, analysis name or Newton variant they name
+//! (`revolute rho0.9 full`); `t_end` shortens the runs and `repeats` overrides the
+//! repetitions (for profiling and instruction counts).
 
 use samara::analysis::{History, run_analysis};
 use samara::model::Model;
@@ -39,13 +39,14 @@ fn main() {
     };
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     println!(
-        "{:<10} {:>5} {:>5} {:<8} {:>9} {:>7} {:>9} {:>30} {:>11} {:>9}",
+        "{:<10} {:>5} {:>5} {:<8} {:>9} {:>7} {:>9} {:>9} {:>30} {:>11} {:>9}",
         "joints",
         "N",
         "ρ∞",
         "newton",
         "wall [s]",
         "it/step",
+        "fact/step",
         "ms/step",
         "tip at 1 s [m]",
         "ΔE/E_ref",
@@ -131,8 +132,9 @@ fn main() {
                     + last.state.nodes[n - 1].r() * nalgebra::Vector3::new(0.05, 0.0, 0.0);
                 let rho = def.name.trim_start_matches("rho");
                 println!(
-                    "{kind:<10} {n:>5} {rho:>5} {newton:<8} {wall:>9.3} {:>7.2} {:>9.3} {:>30} {drift:>11.3e} {:>9.2e}",
+                    "{kind:<10} {n:>5} {rho:>5} {newton:<8} {wall:>9.3} {:>7.2} {:>9.3} {:>9.3} {:>30} {drift:>11.3e} {:>9.2e}",
                     s.newton_iterations as f64 / s.steps as f64,
+                    s.factorizations as f64 / s.steps as f64,
                     1e3 * wall / s.steps as f64,
                     format!("({:.4}, {:.4}, {:.4})", tip.x, tip.y, tip.z),
                     s.max_constraint_violation

@@ -31,8 +31,10 @@
 //! Measured on the shared 2-core machine (load average ≈ 10), CPU time, `-- 10`: 1.96 ms
 //! per step, 5.1× real time (3.1 ms before the BEM warm start and the batched stations;
 //! 9.4 ms before the stations were differentiated over their own kinematics); with
-//! `modified` 0.75 ms, 13×; with `oye` 3.73 ms, 2.7× (`oye modified` 1.28 ms, 7.8×). The
-//! steps and the history are in docs/aerodynamics.md, "Performance".
+//! `modified` 0.75 ms, 13×; with `oye` 3.73 ms, 2.7× (`oye modified` 1.28 ms, 7.8×). After
+//! issue #17's fourth round (load average ≈ 12): 1.62 ms, 6.2× (1.72 ms before, builds
+//! interleaved); `modified` ≈ 0.65 ms, 15.5×. The steps and the history are in
+//! docs/aerodynamics.md, "Performance".
 
 use samara::analysis::{History, run_analysis};
 use samara::core::{ElementInput, EvalContext, LocalTerms, Need};

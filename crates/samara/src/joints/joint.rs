@@ -722,16 +722,25 @@ impl Constraint for Joint {
         passive: &mut [Coordinate],
         rates: bool,
     ) {
-        let f = self.frames_with_rates(nodes);
-        let vel = f.spatial_velocities();
+        // The rates need the frames' velocities and accelerations; the values only the
+        // frames.
+        let f = if rates {
+            self.frames_with_rates(nodes)
+        } else {
+            self.frames(nodes)
+        };
+        let mut vel = Row12::zeros();
         // Spatial accelerations: ẍ, and ω̇ = R Ω̇ (ω × ω = 0).
         let mut acc = Row12::zeros();
-        for (k, s) in self.sides.iter().enumerate() {
-            if let Some(i) = s.node {
-                let (a, wd) = (nodes[i].a, nodes[i].r() * nodes[i].wd);
-                for m in 0..3 {
-                    acc[6 * k + m] = a[m];
-                    acc[6 * k + 3 + m] = wd[m];
+        if rates {
+            vel = f.spatial_velocities();
+            for (k, s) in self.sides.iter().enumerate() {
+                if let Some(i) = s.node {
+                    let (a, wd) = (nodes[i].a, nodes[i].r() * nodes[i].wd);
+                    for m in 0..3 {
+                        acc[6 * k + m] = a[m];
+                        acc[6 * k + 3 + m] = wd[m];
+                    }
                 }
             }
         }

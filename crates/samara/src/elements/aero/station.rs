@@ -767,12 +767,34 @@ impl AeroStation {
         )
     }
 
+    /// The node-frame vectors of the chain rule ([`Self::to_nodes`]) turned to global
+    /// components, once per evaluation: per node Rᵢ, Rᵢdᵢ, Rᵢĉᵢ, Rᵢn̂ᵢ, Rᵢ(Ωᵢ × dᵢ),
+    /// Rᵢ(Ωᵢ × ĉᵢ).
+    fn node_arms(&self, nodes: &[NodeState]) -> [NodeArms; MAX_NODES] {
+        let mut arms = [NodeArms::default(); MAX_NODES];
+        for ((&n, at), a) in self.nodes.iter().zip(&self.attach).zip(&mut arms) {
+            let ns = &nodes[n];
+            let r = ns.r();
+            *a = NodeArms {
+                r: *r,
+                offset: r * at.offset,
+                chord: r * at.chord_dir,
+                normal: r * at.normal_dir,
+                offset_rate: r * ns.w.cross(&at.offset),
+                chord_rate: r * ns.w.cross(&at.chord_dir),
+            };
+        }
+        arms
+    }
+
     /// The chain rule from the station to its nodes: given g = ∂s/∂y of a scalar s over
     /// the kinematic directions, writes ∂s/∂(δxᵢ, δθᵢ) to `kq` and ∂s/∂(vᵢ, Ωᵢ) to `kv`
     /// (6 per node). With Rᵢ ← Rᵢ (I + δθ̃ᵢ) each term wᵢ Rᵢ bᵢ of y moves by
-    /// wᵢ Rᵢ (δθᵢ × bᵢ), so g·δy = wᵢ δθᵢ · (bᵢ × Rᵢᵀ g); Ωᵢ enters ṗ and ė_c the same
-    /// way through Rᵢ (Ωᵢ × dᵢ) and Rᵢ (Ωᵢ × ĉᵢ); xᵢ and vᵢ enter p and ṗ with weight wᵢ.
-    fn to_nodes(&self, nodes: &[NodeState], g: &[f64], kq: &mut [f64], kv: &mut [f64]) {
+    /// wᵢ Rᵢ (δθᵢ × bᵢ), so g·δy = wᵢ δθᵢ · (bᵢ × Rᵢᵀ g) = wᵢ δθᵢ · Rᵢᵀ((Rᵢbᵢ) × g); Ωᵢ
+    /// enters ṗ and ė_c the same way through Rᵢ (Ωᵢ × dᵢ) and Rᵢ (Ωᵢ × ĉᵢ); xᵢ and vᵢ enter
+    /// p and ṗ with weight wᵢ. The cross products are taken in global components with
+    /// the arms of [`Self::node_arms`], then turned by Rᵢᵀ once per column group.
+    fn to_nodes(&self, arms: &[NodeArms], g: &[f64], kq: &mut [f64], kv: &mut [f64]) {
         let block = |b: usize| {
             if g.len() >= 3 * b + 3 {
                 Vector3::new(g[3 * b], g[3 * b + 1], g[3 * b + 2])
@@ -781,20 +803,16 @@ impl AeroStation {
             }
         };
         let (gp, gc, gn, gpd, gcd) = (block(0), block(1), block(2), block(3), block(4));
-        for (i, (&n, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
-            let ns = &nodes[n];
-            let r = ns.r();
+        for (i, (at, a)) in self.attach.iter().zip(arms).enumerate() {
             let w = at.weight;
-            let (lp, lc, ln) = (r.tr_mul(&gp), r.tr_mul(&gc), r.tr_mul(&gn));
-            let (lpd, lcd) = (r.tr_mul(&gpd), r.tr_mul(&gcd));
-            let wd = ns.w.cross(&at.offset);
-            let wc = ns.w.cross(&at.chord_dir);
-            let th = at.offset.cross(&lp)
-                + at.chord_dir.cross(&lc)
-                + at.normal_dir.cross(&ln)
-                + wd.cross(&lpd)
-                + wc.cross(&lcd);
-            let om = at.offset.cross(&lpd) + at.chord_dir.cross(&lcd);
+            let th = a.r.tr_mul(
+                &(a.offset.cross(&gp)
+                    + a.chord.cross(&gc)
+                    + a.normal.cross(&gn)
+                    + a.offset_rate.cross(&gpd)
+                    + a.chord_rate.cross(&gcd)),
+            );
+            let om = a.r.tr_mul(&(a.offset.cross(&gpd) + a.chord.cross(&gcd)));
             for k in 0..3 {
                 kq[6 * i + k] = w * gp[k];
                 kq[6 * i + 3 + k] = w * th[k];
@@ -809,7 +827,7 @@ impl AeroStation {
     /// `ks`.
     fn columns<const M: usize>(
         &self,
-        nodes: &[NodeState],
+        arms: &[NodeArms],
         s: &Dual<M>,
         kq: &mut [f64],
         kv: &mut [f64],
@@ -817,7 +835,7 @@ impl AeroStation {
     ) {
         let ny = self.kinematic_directions();
         let (nq, ns) = (6 * self.nodes.len(), self.unsteady.states());
-        self.to_nodes(nodes, &s.d[..ny], &mut kq[..nq], &mut kv[..nq]);
+        self.to_nodes(arms, &s.d[..ny], &mut kq[..nq], &mut kv[..nq]);
         for j in 0..ns {
             kq[nq + j] = s.d[ny + j];
             kv[nq + j] = s.d[ny + ns + j];
@@ -826,6 +844,18 @@ impl AeroStation {
             *o = s.d[ny + 2 * ns + k];
         }
     }
+}
+
+/// A node's rotation and the station's node-frame vectors in global components
+/// ([`AeroStation::node_arms`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct NodeArms {
+    r: Matrix3<f64>,
+    offset: Vector3<f64>,
+    chord: Vector3<f64>,
+    normal: Vector3<f64>,
+    offset_rate: Vector3<f64>,
+    chord_rate: Vector3<f64>,
 }
 
 /// Rᵀ y, summed in the order of the columns of R.
@@ -907,8 +937,9 @@ impl AeroStation {
         let mut jq = [[0.0; COLUMNS]; 6];
         let mut jv = [[0.0; COLUMNS]; 6];
         let mut js = [[0.0; COLUMNS]; 6];
+        let arms = self.node_arms(x.nodes);
         for (o, s) in r.force.iter().chain(&r.moment).enumerate() {
-            self.columns(x.nodes, s, &mut jq[o], &mut jv[o], &mut js[o]);
+            self.columns(&arms, s, &mut jq[o], &mut jv[o], &mut js[o]);
         }
         let f = r.force.map(|s| s.v);
         let m = r.moment.map(|s| s.v);
@@ -1015,7 +1046,7 @@ impl AeroStation {
         for (s, zr) in zrows.iter().take(ns).enumerate() {
             let ri = nq + s;
             out.r[ri] += zr.v;
-            self.columns(x.nodes, zr, &mut kq, &mut kv, &mut ks);
+            self.columns(&arms, zr, &mut kq, &mut kv, &mut ks);
             for j in 0..n {
                 out.k[(ri, j)] += kq[j];
                 out.c[(ri, j)] += kv[j];
@@ -1042,9 +1073,10 @@ impl AeroStation {
         let mut kq = [0.0; COLUMNS];
         let mut kv = [0.0; COLUMNS];
         let mut ks = [0.0; 3];
+        let arms = self.node_arms(x.nodes);
         for (o, f) in r.rotor_forcing.iter().enumerate() {
             out.values[o] = lf * f.v;
-            self.columns(x.nodes, f, &mut kq, &mut kv, &mut ks);
+            self.columns(&arms, f, &mut kq, &mut kv, &mut ks);
             for j in 0..n {
                 out.k[(o, j)] = lf * kq[j];
                 out.c[(o, j)] = lf * kv[j];
