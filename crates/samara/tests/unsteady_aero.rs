@@ -515,16 +515,19 @@ fn kussner_states_give_the_sharp_edged_gust_response() {
     // sharp-edged gust w_g = 0.5 m/s at t₀: its lift builds as Küssner's function,
     // cl = π sin 2α_E, α_E = atan2(w_g ψ(s), V), s = 2|U|(t − t₀)/c, with ψ the model's
     // Sears–Sparks exponentials 1 − ½e^{−0.13s} − ½e^{−s} (their closed form; the motion
-    // part, zero here, goes through Wagner's states). The gust arrives between two steps:
-    // the error is first order in h; at h = 0.01 and 0.005 semichords it must stay below
-    // 2e-3 of the final lift and shrink under halving.
+    // part, zero here, goes through Wagner's states). The gust arrives between two grid
+    // points; the fixed steps land on it (a breakpoint) and restart there, so the error is
+    // second order in h until it meets a floor of 1e-5 … 3e-5 (the lift is
+    // compared at the records' times, the nearest to the sample points): at h = 0.1, 0.05
+    // and 0.025 semichords it must stay below 2e-3 of the final lift and fall under
+    // halving by at least 2× while above 1e-4.
     let dir = tempfile::tempdir().unwrap();
     let (v, wg) = (50.0f64, 0.5f64);
     let speed = (v * v + wg * wg).sqrt();
     let t0 = 0.009975;
     let cl_inf = PI * (2.0 * wg.atan2(v)).sin();
     let mut worst = Vec::new();
-    for h in [1e-4, 5e-5] {
+    for h in [1e-3, 5e-4, 2.5e-4] {
         let text = gust_model(dir.path(), v, wg, t0, t0 + 0.21, h);
         let (t, outs, names, states) = run(&text, dir.path());
         let icl = names.iter().position(|n| n == "plate.0.cl").unwrap();
@@ -555,7 +558,12 @@ fn kussner_states_give_the_sharp_edged_gust_response() {
         assert!(err < 2e-3, "h = {h}: {err}");
         worst.push(err);
     }
-    assert!(worst[1] < 0.75 * worst[0], "no convergence: {worst:?}");
+    for w in worst.windows(2) {
+        assert!(
+            w[1] < 0.5 * w[0] || w[0] < 1e-4,
+            "no convergence: {worst:?}"
+        );
+    }
 }
 
 #[test]
@@ -818,7 +826,7 @@ fn a_convected_gust_front_reaches_two_stations_delta_x_over_u_apart() {
         )
     };
     let mut worst = Vec::new();
-    for h in [1e-4, 5e-5] {
+    for h in [1e-3, 5e-4, 2.5e-4] {
         let text = two_plates(kussner_model(dir.path(), v, &gust(true), t0 + 0.25, h));
         assert_eq!(text.matches("[[aero_lines]]").count(), 2, "{text}");
         let (t, outs, names, _) = run(&text, dir.path());
@@ -846,7 +854,12 @@ fn a_convected_gust_front_reaches_two_stations_delta_x_over_u_apart() {
         assert!(err < 2e-3, "h = {h}: {err}");
         worst.push(err);
     }
-    assert!(worst[1] < 0.75 * worst[0], "no convergence: {worst:?}");
+    for w in worst.windows(2) {
+        assert!(
+            w[1] < 0.5 * w[0] || w[0] < 1e-4,
+            "no convergence: {worst:?}"
+        );
+    }
     // A uniform gust (no convection speed) lifts both plates at once.
     let text = two_plates(kussner_model(dir.path(), v, &gust(false), t0 + 0.05, 1e-4));
     let (_, outs, names, _) = run(&text, dir.path());
