@@ -248,3 +248,23 @@ fn bad_user_property_input_is_a_located_error() {
     let e = model_error(d, &bad);
     assert!(e.contains("single table") && e.contains(&at(&bad)), "{e}");
 }
+
+#[test]
+fn a_signal_beyond_the_user_property_range_reads_the_end_table() {
+    // The flap command ramps 0 → 20 over 1 s, past the tables' UserProp range [0, 10]:
+    // beyond 10 the last table is read (clamped, as the tables' end), c_l = table 2's.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("flap.dat"), flap_file(Some(10.0))).unwrap();
+    let signals = "[[signals]]\nname = \"flap\"\nfunction = { type = \"ramp\", start = 0.0, end = 1.0, from = 0.0, to = 20.0 }";
+    let text = wing(dir.path(), "user_property = \"flap\"", signals);
+    let (t, outs, names, _) = airfoil_run::run(&text, dir.path());
+    let col = |n: &str| names.iter().position(|x| x == n).unwrap();
+    let af = Airfoil::parse(&flap_file(Some(10.0)), false).unwrap();
+    let alpha = 4f64.to_radians();
+    let (c1, c2) = (af.table(0).eval(alpha), af.table(1).eval(alpha));
+    for (ti, o) in t.iter().zip(&outs) {
+        let u = (20.0 * ti).min(10.0);
+        let want = c1.cl + (c2.cl - c1.cl) * u / 10.0;
+        assert!((o[col("wing.0.cl")] - want).abs() < 1e-12, "t = {ti}");
+    }
+}

@@ -200,9 +200,9 @@ pub struct AeroStation {
 pub enum UserProperty {
     /// A constant value.
     Value(f64),
-    /// A signal (the station's last input signal), with the tables' range [u_first,
-    /// u_last]: outside it the analysis stops ([`Element::range_violation`]).
-    Signal { name: String, range: (f64, f64) },
+    /// A signal (the station's last input signal); outside the tables' range the first
+    /// or last table is read (clamped, ∂c/∂u = 0).
+    Signal(String),
 }
 
 /// Most input signals of a station: Pitt–Peters' three and a user property.
@@ -318,7 +318,7 @@ impl AeroStation {
     /// section's airfoil must be [`Airfoil::by_user_property`]); a signal is read as the
     /// station's last input.
     pub fn with_user_property(mut self, u: UserProperty) -> Self {
-        if let UserProperty::Signal { name, .. } = &u {
+        if let UserProperty::Signal(name) = &u {
             self.inputs.push(name.clone());
         }
         self.user_property = Some(u);
@@ -640,7 +640,7 @@ impl AeroStation {
         // With a user property, it takes Re's place (the tables' parameter).
         let re = match &self.user_property {
             Some(UserProperty::Value(u)) => Some(S::cst(*u)),
-            Some(UserProperty::Signal { .. }) => {
+            Some(UserProperty::Signal(_)) => {
                 // The signal is the last input (absent: a station evaluated alone, the
                 // first table).
                 (sig.len() == self.inputs.len()).then(|| sig[sig.len() - 1])
@@ -1268,19 +1268,6 @@ impl Element for AeroStation {
             self.span,
         ];
         out[..vals.len()].copy_from_slice(&vals);
-    }
-
-    fn range_violation(&self, x: &ElementInput) -> Option<String> {
-        let Some(UserProperty::Signal { name, range }) = &self.user_property else {
-            return None;
-        };
-        let u = *x.signals.get(self.inputs.len() - 1)?;
-        (!(range.0..=range.1).contains(&u)).then(|| {
-            format!(
-                "its user property, the signal '{name}' = {u}, left the airfoil tables' UserProp range [{}, {}]",
-                range.0, range.1
-            )
-        })
     }
 
     fn breakpoints(&self, out: &mut Vec<f64>) {

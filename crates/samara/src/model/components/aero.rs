@@ -771,7 +771,7 @@ impl ComponentKind for AeroLine {
             });
         }
         // Tables interpolated in a user property (AeroDyn's AFTabMod = 3): every airfoil
-        // of the line read by UserProp, the value (or the signal's range) inside all of
+        // of the line read by UserProp, a constant value inside all of
         // their ranges.
         let mut user_property = None;
         if let Some(up) = &li.user_property {
@@ -853,10 +853,7 @@ impl ComponentKind for AeroLine {
                         );
                         ok = false;
                     }
-                    user_property = Some(UserProperty::Signal {
-                        name: name.clone(),
-                        range,
-                    });
+                    user_property = Some(UserProperty::Signal(name.clone()));
                 }
             }
         }
@@ -1984,10 +1981,7 @@ impl ComponentKind for AeroLine {
                 wind.clone(),
                 Arc::new(Inflow::None),
             )
-            .with_user_property(UserProperty::Signal {
-                name: "flap".into(),
-                range: (0.0, 10.0),
-            })
+            .with_user_property(UserProperty::Signal("flap".into()))
             .with_unsteady(unsteady, 0.0, &nodes);
             let mut z = [0.0; 4];
             crate::core::Element::initial_states(&e, &mut z);
