@@ -81,9 +81,25 @@ pub struct Airfoil {
     /// increasing with several tables, and their logarithms.
     reynolds: Vec<f64>,
     log_reynolds: Vec<f64>,
-    /// The unsteady-aerodynamics block of an AeroDyn file (`InclUAdata = True`), read
-    /// for the Beddoes–Leishman (HGM) model; its error is reported only where it is used.
-    ua: Option<Result<super::hgm::HgmCoefficients, AirfoilError>>,
+    /// The unsteady-aerodynamics block of each table of an AeroDyn file (`InclUAdata =
+    /// True`), read for the Beddoes–Leishman (HGM) model; an error is reported only where
+    /// the block is used.
+    ua: Vec<Option<Result<super::hgm::HgmCoefficients, AirfoilError>>>,
+    /// Each table's `UserProp` (or `Ctrl`) of an AeroDyn file and its 1-based line (NaN,
+    /// 0 where absent).
+    user_props: Vec<(f64, usize)>,
+    /// Whether the tables are interpolated in `UserProp` (AeroDyn's AFTabMod = 3,
+    /// [`Self::by_user_property`]) rather than in the Reynolds number.
+    by_user: bool,
+}
+
+/// Which tables a Reynolds number (or a user property) reads ([`Airfoil::reynolds_weight`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TableWeight {
+    /// One table, unchanged (a single table, or Re outside the tables' range).
+    One(usize),
+    /// Tables k and k + 1 mixed as (1 − t) c_k + t c_{k+1}, with dt/dRe.
+    Two { k: usize, t: f64, dt: f64 },
 }
 
 /// One table as read: its Reynolds number (NaN if none is given), the 1-based line where
@@ -102,7 +118,9 @@ impl Airfoil {
             tables: vec![Table::from_rows(rows)?],
             reynolds: vec![f64::NAN],
             log_reynolds: vec![f64::NAN],
-            ua: None,
+            ua: vec![None],
+            user_props: vec![(f64::NAN, 0)],
+            by_user: false,
         })
     }
 
@@ -110,6 +128,11 @@ impl Airfoil {
     /// increasing from table to table) and each covering −180° … 180° (its own α grid).
     /// A single table may have no Reynolds number (NaN).
     pub fn from_tables(tables: &[TableRows]) -> Result<Self, AirfoilError> {
+        Self::build(tables, true)
+    }
+
+    /// [`Self::from_tables`], the Reynolds numbers' order checked only if `check_re`.
+    fn build(tables: &[TableRows], check_re: bool) -> Result<Self, AirfoilError> {
         let Some(first) = tables.first() else {
             return Err(AirfoilError::at(0, 0, "the file has no table", ""));
         };
@@ -128,7 +151,7 @@ impl Airfoil {
                 }
             }
             for (k, w) in tables.windows(2).enumerate() {
-                if w[1].0 <= w[0].0 {
+                if check_re && w[1].0 <= w[0].0 {
                     return Err(AirfoilError::at(
                         w[1].1,
                         1,
@@ -139,7 +162,7 @@ impl Airfoil {
                             k + 1,
                             w[0].0
                         ),
-                        "order the tables by Reynolds number; tables that differ only in UserProp/Ctrl (AeroDyn's AFTabMod = 3) are not read",
+                        "order the tables by Reynolds number; tables of one Reynolds number with increasing UserProp (AeroDyn's AFTabMod = 3) are read for a line's `user_property`",
                     ));
                 }
             }
@@ -154,10 +177,12 @@ impl Airfoil {
             tables.iter().map(|t| t.0).collect()
         };
         Ok(Self {
+            ua: vec![None; built.len()],
+            user_props: vec![(f64::NAN, 0); built.len()],
+            by_user: false,
             tables: built,
             log_reynolds: reynolds.iter().map(|r| r.ln()).collect(),
             reynolds,
-            ua: None,
         })
     }
 
@@ -169,6 +194,127 @@ impl Airfoil {
     /// The tables' Reynolds numbers (NaN for a single table without one).
     pub fn reynolds_numbers(&self) -> &[f64] {
         &self.reynolds
+    }
+
+    /// Table k alone, as a single-table airfoil (with its own unsteady-aerodynamics block).
+    pub fn table(&self, k: usize) -> Self {
+        Self {
+            tables: vec![self.tables[k].clone()],
+            reynolds: vec![self.reynolds[k]],
+            log_reynolds: vec![self.log_reynolds[k]],
+            ua: vec![self.ua[k].clone()],
+            user_props: vec![self.user_props[k]],
+            by_user: false,
+        }
+    }
+
+    /// Whether the tables are sorted by strictly increasing Reynolds number (as
+    /// `reynolds = "interpolate"` needs).
+    pub fn sorted_by_reynolds(&self) -> bool {
+        self.tables.len() == 1 || self.reynolds.windows(2).all(|w| w[1] > w[0])
+    }
+
+    /// The tables' user properties (`UserProp`/`Ctrl` of an AeroDyn file; NaN where absent).
+    pub fn user_properties(&self) -> Vec<f64> {
+        self.user_props.iter().map(|u| u.0).collect()
+    }
+
+    /// The airfoil with its tables interpolated linearly in their `UserProp` (AeroDyn's
+    /// AFTabMod = 3): [`Self::eval_re`], [`Self::coefficients`] and
+    /// [`Self::reynolds_weight`] then take the user property u in place of Re,
+    /// c = (1 − t) c_k + t c_{k+1}, t = (u − u_k)/(u_{k+1} − u_k), the first or last table
+    /// beyond the range. An error (at the file's line) unless there are several tables,
+    /// each with a `UserProp`, strictly increasing.
+    pub fn by_user_property(&self) -> Result<Self, AirfoilError> {
+        if self.tables.len() < 2 {
+            return Err(AirfoilError::at(
+                0,
+                0,
+                "the airfoil has a single table: interpolating on a user property needs several tables, each with its `UserProp`",
+                "give an AeroDyn file with NumTabs > 1 and a `UserProp` line per table",
+            ));
+        }
+        for (k, &(u, line)) in self.user_props.iter().enumerate() {
+            if !u.is_finite() {
+                return Err(AirfoilError::at(
+                    line,
+                    1,
+                    format!("table {} has no `UserProp` (or `Ctrl`) value", k + 1),
+                    "give each table a line `<value>  UserProp` before its `NumAlf` line",
+                ));
+            }
+        }
+        for (k, w) in self.user_props.windows(2).enumerate() {
+            if w[1].0 <= w[0].0 {
+                return Err(AirfoilError::at(
+                    w[1].1,
+                    1,
+                    format!(
+                        "the UserProp of table {} ({}) does not exceed that of table {} ({}): tables must be sorted by strictly increasing UserProp",
+                        k + 2,
+                        w[1].0,
+                        k + 1,
+                        w[0].0
+                    ),
+                    "order the tables by UserProp",
+                ));
+            }
+        }
+        let mut a = self.clone();
+        a.by_user = true;
+        Ok(a)
+    }
+
+    /// The airfoil with the tables' user properties set to `u` (one per table; tables
+    /// built in code, which have none).
+    pub fn with_user_properties(mut self, u: &[f64]) -> Self {
+        for (p, &v) in self.user_props.iter_mut().zip(u) {
+            *p = (v, 0);
+        }
+        self
+    }
+
+    /// Whether the tables are interpolated in the user property ([`Self::by_user_property`]).
+    pub fn interpolates_user_property(&self) -> bool {
+        self.by_user
+    }
+
+    /// The tables Re reads: linear in ln Re between the two around it,
+    /// t = (ln Re − ln Re_k)/(ln Re_{k+1} − ln Re_k) (AeroDyn's AFTabMod = 2); the first
+    /// or last table alone outside their range (and for a single table, or Re = NaN).
+    pub fn reynolds_weight(&self, re: f64) -> TableWeight {
+        let n = self.tables.len();
+        if self.by_user {
+            // Linear in the user property u.
+            let u = re;
+            let up = &self.user_props;
+            if u.is_nan() || u <= up[0].0 {
+                return TableWeight::One(0);
+            }
+            if u >= up[n - 1].0 {
+                return TableWeight::One(n - 1);
+            }
+            let k = up.partition_point(|p| p.0 <= u) - 1;
+            let span = up[k + 1].0 - up[k].0;
+            return TableWeight::Two {
+                k,
+                t: (u - up[k].0) / span,
+                dt: 1.0 / span,
+            };
+        }
+        if n == 1 || re.is_nan() || re <= self.reynolds[0] {
+            return TableWeight::One(0);
+        }
+        if re >= self.reynolds[n - 1] {
+            return TableWeight::One(n - 1);
+        }
+        let k = self.reynolds.partition_point(|&r| r <= re) - 1;
+        let span = self.log_reynolds[k + 1] - self.log_reynolds[k];
+        TableWeight::Two {
+            k,
+            t: (re.ln() - self.log_reynolds[k]) / span,
+            dt: 1.0 / (re * span),
+        }
     }
 }
 
@@ -322,17 +468,10 @@ impl Airfoil {
     /// table's Re the first table, above the last the last (∂/∂Re = 0 there). A single
     /// table: its coefficients whatever Re.
     pub fn eval_re(&self, alpha: f64, re: f64) -> (Coefficients, [f64; 3]) {
-        let n = self.tables.len();
-        if n == 1 || re.is_nan() || re <= self.reynolds[0] {
-            return (self.tables[0].eval(alpha), [0.0; 3]);
-        }
-        if re >= self.reynolds[n - 1] {
-            return (self.tables[n - 1].eval(alpha), [0.0; 3]);
-        }
-        let k = self.reynolds.partition_point(|&r| r <= re) - 1;
-        let span = self.log_reynolds[k + 1] - self.log_reynolds[k];
-        let t = (re.ln() - self.log_reynolds[k]) / span;
-        let dt = 1.0 / (re * span);
+        let (k, t, dt) = match self.reynolds_weight(re) {
+            TableWeight::One(k) => return (self.tables[k].eval(alpha), [0.0; 3]),
+            TableWeight::Two { k, t, dt } => (k, t, dt),
+        };
         let (a, b) = (self.tables[k].eval(alpha), self.tables[k + 1].eval(alpha));
         let mix = |x: f64, y: f64| (1.0 - t) * x + t * y;
         (
@@ -399,22 +538,46 @@ impl Airfoil {
     /// (AirfoilInfo v1.01: `NumTabs` tables, each with its `Re` line [millions] and the
     /// `NumAlf` rows of α [deg], cl, cd[, cm] after its `NumAlf` line; `!` comments).
     pub fn parse(text: &str, csv: bool) -> Result<Self, AirfoilError> {
-        let tables = if csv {
-            parse_csv(text)?
+        let (tables, user_props) = if csv {
+            (parse_csv(text)?, Vec::new())
         } else {
             parse_aerodyn(text)?
         };
-        let mut a = Self::from_tables(&tables)?;
+        // Tables of one Reynolds number told apart by their UserProp (AeroDyn's
+        // AFTabMod = 3) are read unsorted in Re (their order is checked where they are
+        // interpolated); otherwise the Reynolds numbers must increase.
+        let by_user_prop = tables.len() > 1
+            && user_props.len() == tables.len()
+            && user_props.iter().all(|u: &(f64, usize)| u.0.is_finite())
+            && user_props.windows(2).all(|w| w[1].0 > w[0].0);
+        let mut a = Self::build(&tables, !by_user_prop)?;
+        if !user_props.is_empty() {
+            a.user_props = user_props;
+        }
         if !csv {
-            a.ua = super::hgm::HgmCoefficients::from_aerodyn(text);
+            // Table k's header runs from the end of table k − 1's rows (its NumAlf line)
+            // to its own NumAlf line.
+            let starts = keyed_all(text, "NumAlf");
+            for k in 0..a.ua.len() {
+                let from = if k == 0 { 0 } else { starts[k - 1].0 };
+                a.ua[k] = super::hgm::HgmCoefficients::from_aerodyn(text, from..starts[k].0);
+            }
         }
         Ok(a)
     }
 
-    /// The unsteady-aerodynamics coefficients of an AeroDyn file, if it has them (or
-    /// the error in them).
+    /// The unsteady-aerodynamics coefficients of an AeroDyn file's first table, if it has
+    /// them (or the error in them).
     pub fn ua_coefficients(&self) -> Option<&Result<super::hgm::HgmCoefficients, AirfoilError>> {
-        self.ua.as_ref()
+        self.ua[0].as_ref()
+    }
+
+    /// Those of table k.
+    pub fn ua_coefficients_of(
+        &self,
+        k: usize,
+    ) -> Option<&Result<super::hgm::HgmCoefficients, AirfoilError>> {
+        self.ua[k].as_ref()
     }
 }
 
@@ -569,7 +732,11 @@ fn keyed_all<'a>(text: &'a str, key: &str) -> Vec<(usize, &'a str)> {
         .collect()
 }
 
-fn parse_aerodyn(text: &str) -> Result<Vec<TableRows>, AirfoilError> {
+/// The tables of an AeroDyn file and each table's `UserProp` (or `Ctrl`) with its line
+/// (NaN, 0 where absent).
+type AeroDynTables = (Vec<TableRows>, Vec<(f64, usize)>);
+
+fn parse_aerodyn(text: &str) -> Result<AeroDynTables, AirfoilError> {
     let ntabs = match keyed(text, "NumTabs") {
         Some((line, v)) => {
             let n = number(v, line, 1, "NumTabs")?;
@@ -620,6 +787,7 @@ fn parse_aerodyn(text: &str) -> Result<Vec<TableRows>, AirfoilError> {
         ));
     }
     let mut tables = Vec::with_capacity(n_tabs);
+    let mut user_props = Vec::with_capacity(n_tabs);
     for (t, &(line0, v)) in counts.iter().take(n_tabs).enumerate() {
         // The table's Reynolds number [millions], on a line before its NumAlf (and after
         // the previous table's).
@@ -686,8 +854,22 @@ fn parse_aerodyn(text: &str) -> Result<Vec<TableRows>, AirfoilError> {
             ));
         }
         tables.push((re.0, re.1, rows));
+        // The table's UserProp (or Ctrl), between the previous table's NumAlf line and
+        // its own (its line, for messages: the NumAlf line where absent).
+        let prev = if t > 0 { counts[t - 1].0 } else { 0 };
+        let mut up = (f64::NAN, line0);
+        for key in ["UserProp", "Ctrl"] {
+            if let Some(&(ul, uv)) = keyed_all(text, key)
+                .iter()
+                .find(|(ul, _)| *ul > prev && *ul < line0)
+            {
+                up = (number(uv, ul, 1, key)?, ul);
+                break;
+            }
+        }
+        user_props.push(up);
     }
-    Ok(tables)
+    Ok((tables, user_props))
 }
 
 #[cfg(test)]

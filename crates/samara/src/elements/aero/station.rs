@@ -195,7 +195,23 @@ pub struct AeroStation {
     /// samples a gust (the leading edge with Küssner's response, else p): a convected
     /// gust's breakpoints reach it x/U_c later.
     gust_x: f64,
+    /// The user property the airfoil's tables are interpolated in (AeroDyn's AFTabMod
+    /// = 3), if any.
+    user_property: Option<UserProperty>,
 }
+
+/// Where a station's user property (e.g. a flap angle) comes from, AeroDyn's `UserProp`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum UserProperty {
+    /// A constant value.
+    Value(f64),
+    /// A signal (the station's last input signal); outside the tables' range the first
+    /// or last table is read (clamped, ∂c/∂u = 0).
+    Signal(String),
+}
+
+/// Most input signals of a station: Pitt–Peters' three and a user property.
+const MAX_INPUTS: usize = 4;
 
 /// Øye's lead factor k of the dynamic wake's first filter (Snel & Schepers 1995).
 const OYE_LEAD: f64 = 0.6;
@@ -300,7 +316,19 @@ impl AeroStation {
             root_hint: RootHint::new(),
             span: 0.0,
             gust_x: 0.0,
+            user_property: None,
         }
+    }
+
+    /// The station with its airfoil's tables interpolated in a user property (the
+    /// section's airfoil must be [`Airfoil::by_user_property`]); a signal is read as the
+    /// station's last input.
+    pub fn with_user_property(mut self, u: UserProperty) -> Self {
+        if let UserProperty::Signal(name) = &u {
+            self.inputs.push(name.clone());
+        }
+        self.user_property = Some(u);
+        self
     }
 
     /// The station at `span` [m] from its line's root (written as the output `span`).
@@ -343,10 +371,15 @@ impl AeroStation {
             out[3] = KUSSNER_A[1] * r.un_gust;
         }
         if let Some((stall, _)) = &self.unsteady.stall {
-            out[nw + nk] = stall.eval(r.un.atan2(r.uc)).f;
+            let alpha = r.un.atan2(r.uc);
+            out[nw + nk] = if stall.by_reynolds() && !r.reynolds.is_nan() {
+                stall.eval_re(alpha, r.reynolds).f
+            } else {
+                stall.eval(alpha).f
+            };
         }
         if let Some(h) = &self.unsteady.hgm {
-            out[..4].copy_from_slice(&h.steady_states(r.un.atan2(r.uc)));
+            out[..4].copy_from_slice(&h.steady_states(r.un.atan2(r.uc), r.reynolds));
         }
         if self.unsteady.dynamic_wake {
             let iw = self.unsteady.airfoil_states();
@@ -564,7 +597,7 @@ impl AeroStation {
             }
             Inflow::PittPeters { disc, .. } => {
                 // Signals missing (a station evaluated alone): no induced velocity.
-                let v = if sig.len() == 3 {
+                let v = if sig.len() >= 3 {
                     let (hs, hc) = disc.harmonics(&p);
                     sig[0] + sig[1] * hs + sig[2] * hc
                 } else {
@@ -625,22 +658,40 @@ impl AeroStation {
             alpha
         };
         // Re = W c/ν at the speed the airfoil sees (W₀ with BEM).
-        let re = self
-            .section
-            .viscosity
-            .map(|nu| re_bem.unwrap_or(speed * (ch / nu)));
+        // With a user property, it takes Re's place (the tables' parameter).
+        let re = match &self.user_property {
+            Some(UserProperty::Value(u)) => Some(S::cst(*u)),
+            Some(UserProperty::Signal(_)) => {
+                // The signal is the last input (absent: a station evaluated alone, the
+                // first table).
+                (sig.len() == self.inputs.len()).then(|| sig[sig.len() - 1])
+            }
+            None => self
+                .section
+                .viscosity
+                .map(|nu| re_bem.unwrap_or(speed * (ch / nu))),
+        };
         res.reynolds = re.map_or(f64::NAN, |r| r.re());
         let ([cl, cd, cm], c) = self.section.airfoil.coefficients(alpha_e, re);
         let (mut cl, mut cd, mut cm) = (cl, cd, cm);
         let mut cl_out = c.cl;
         if let Some((stall, a_tau)) = &self.unsteady.stall {
-            // Øye: cl = f cl_inv + (1 − f) cl_fs, τ ḟ = f_st − f.
-            let sc = stall.eval(alpha_e.re());
-            let (fst, fs, inv) = (
-                alpha_e.chain(sc.f, sc.df),
-                alpha_e.chain(sc.fs, sc.dfs),
-                alpha_e.chain(sc.inv, sc.dinv),
-            );
+            // Øye: cl = f cl_inv + (1 − f) cl_fs, τ ḟ = f_st − f; with Re tables the
+            // curves of the polar interpolated at Re.
+            let (fst, fs, inv) = match re.filter(|_| stall.by_reynolds()) {
+                Some(re) => {
+                    let sc = stall.eval_re(alpha_e, re);
+                    (sc.f, sc.fs, sc.inv)
+                }
+                None => {
+                    let sc = stall.eval(alpha_e.re());
+                    (
+                        alpha_e.chain(sc.f, sc.df),
+                        alpha_e.chain(sc.fs, sc.dfs),
+                        alpha_e.chain(sc.inv, sc.dinv),
+                    )
+                }
+            };
             let f = z[nw + nk];
             zrows[nw + nk] = zd[nw + nk] + speed * (1.0 / (a_tau * ch)) * (f - fst);
             cl = f * inv + (S::cst(1.0) - f) * fs;
@@ -661,11 +712,10 @@ impl AeroStation {
                 let omega = -dot(&ecd, &en);
                 let flow = HgmFlow {
                     speed: speed_ac,
-                    alpha_ac: un_ac.atan2(uc_ac),
                     alpha_34: alpha,
                     omega,
                 };
-                let o = h.eval(ch, &flow, &z[..4], &zd[..4]);
+                let o = h.eval(ch, &flow, &z[..4], &zd[..4], re);
                 zrows[..4].copy_from_slice(&o.rows);
                 (cl, cd, cm) = (o.cl, o.cd, o.cm);
                 cl_out = cl.re();
@@ -884,8 +934,8 @@ impl AeroStation {
     }
 
     /// The input signals (the rotor's inflow states) as f64, zero where absent.
-    fn signal_values(&self, x: &ElementInput) -> [f64; 3] {
-        let mut s = [0.0; 3];
+    fn signal_values(&self, x: &ElementInput) -> [f64; MAX_INPUTS] {
+        let mut s = [0.0; MAX_INPUTS];
         for (k, v) in x.signals.iter().take(self.inputs.len()).enumerate() {
             s[k] = *v;
         }
@@ -911,7 +961,7 @@ impl AeroStation {
             zd[j] = Dual::var(st.zd, ny + ns + j);
         }
         let sv = self.signal_values(x);
-        let sig: [Dual<M>; 3] = std::array::from_fn(|k| {
+        let sig: [Dual<M>; MAX_INPUTS] = std::array::from_fn(|k| {
             if k < ni {
                 Dual::var(sv[k], ny + 2 * ns + k)
             } else {
@@ -1042,7 +1092,7 @@ impl AeroStation {
         // State rows: not loads, not scaled by the load factor.
         let mut kq = [0.0; COLUMNS];
         let mut kv = [0.0; COLUMNS];
-        let mut ks = [0.0; 3];
+        let mut ks = [0.0; MAX_INPUTS];
         for (s, zr) in zrows.iter().take(ns).enumerate() {
             let ri = nq + s;
             out.r[ri] += zr.v;
@@ -1072,7 +1122,7 @@ impl AeroStation {
         let r = self.dual_pass::<M>(ctx, x, &mut zrows);
         let mut kq = [0.0; COLUMNS];
         let mut kv = [0.0; COLUMNS];
-        let mut ks = [0.0; 3];
+        let mut ks = [0.0; MAX_INPUTS];
         let arms = self.node_arms(x.nodes);
         for (o, f) in r.rotor_forcing.iter().enumerate() {
             out.values[o] = lf * f.v;
@@ -1166,7 +1216,7 @@ impl Element for AeroStation {
             13..=16 => self.tangents::<16>(ctx, x, out),
             17..=20 => self.tangents::<20>(ctx, x, out),
             21..=28 => self.tangents::<28>(ctx, x, out),
-            _ => self.tangents::<{ KINEMATICS + 2 * MAX_STATES + 3 }>(ctx, x, out),
+            _ => self.tangents::<{ KINEMATICS + 2 * MAX_STATES + MAX_INPUTS }>(ctx, x, out),
         }
     }
 
@@ -1191,7 +1241,7 @@ impl Element for AeroStation {
             13..=16 => self.signal_terms::<16>(ctx, x, out),
             17..=20 => self.signal_terms::<20>(ctx, x, out),
             21..=28 => self.signal_terms::<28>(ctx, x, out),
-            _ => self.signal_terms::<{ KINEMATICS + 2 * MAX_STATES + 3 }>(ctx, x, out),
+            _ => self.signal_terms::<{ KINEMATICS + 2 * MAX_STATES + MAX_INPUTS }>(ctx, x, out),
         }
     }
 
@@ -1227,7 +1277,9 @@ impl Element for AeroStation {
         if self.unsteady.wagner_states() == 2 || self.unsteady.hgm.is_some() {
             v.push(("effective_alpha".into(), "rad"));
         }
-        if self.section.viscosity.is_some() {
+        if self.user_property.is_some() {
+            v.push(("user_property".into(), "1"));
+        } else if self.section.viscosity.is_some() {
             v.push(("reynolds".into(), "1"));
         }
         v
@@ -1253,7 +1305,7 @@ impl Element for AeroStation {
             out[k] = r.alpha_effective;
             k += 1;
         }
-        if self.section.viscosity.is_some() {
+        if self.user_property.is_some() || self.section.viscosity.is_some() {
             out[k] = r.reynolds;
         }
         let vals = [

@@ -35,7 +35,8 @@
 //! static table is recovered exactly. The row is written `ḟ + (V/(A_τ c)) (f − f_st)`
 //! (units 1/s), so it stays finite as V → 0.
 
-use super::airfoil::Airfoil;
+use super::airfoil::{Airfoil, TableWeight};
+use crate::math::dual::Scalar;
 
 /// R. T. Jones' (1940) coefficients of the Wagner function's exponential approximation.
 pub const JONES_A: [f64; 2] = [0.165, 0.335];
@@ -67,6 +68,17 @@ pub struct OyeStall {
     /// The range α₀ … where f_st > 0: beyond it the flow is fully separated.
     pub attached_range: (f64, f64),
     airfoil: Airfoil,
+    /// With several Reynolds-number tables: each table's (α₀, c_lα, attached range)
+    /// ([`Self::with_tables`]); empty otherwise.
+    tables: Vec<AttachedFlowLine>,
+}
+
+/// The attached-flow line of one table: α₀ [rad], c_lα [1/rad] and the attached range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AttachedFlowLine {
+    pub zero_lift: f64,
+    pub lift_slope: f64,
+    pub attached_range: (f64, f64),
 }
 
 /// Angular range where α₀ is sought [deg].
@@ -146,7 +158,64 @@ impl OyeStall {
             zero_lift,
             attached_range,
             airfoil: airfoil.clone(),
+            tables: Vec::new(),
         })
+    }
+
+    /// The curves of an airfoil with several Reynolds-number tables, each table with its
+    /// own attached-flow line `lines[k]` (from [`Self::new`] or [`Self::with_attached`] of
+    /// that table alone); read at a Reynolds number by [`Self::eval_re`]. `None` if there
+    /// is not one line per table or the first gives no curves.
+    pub fn with_tables(airfoil: &Airfoil, lines: &[AttachedFlowLine]) -> Option<Self> {
+        if lines.len() != airfoil.tables() {
+            return None;
+        }
+        let first = lines.first()?;
+        let mut s = Self::with_attached(airfoil, first.zero_lift, first.lift_slope)?;
+        s.tables = lines.to_vec();
+        Some(s)
+    }
+
+    /// This curve's attached-flow line.
+    pub fn line(&self) -> AttachedFlowLine {
+        AttachedFlowLine {
+            zero_lift: self.zero_lift,
+            lift_slope: self.lift_slope,
+            attached_range: self.attached_range,
+        }
+    }
+
+    /// Whether the curves follow the Reynolds number ([`Self::with_tables`]).
+    pub fn by_reynolds(&self) -> bool {
+        self.tables.len() > 1
+    }
+
+    /// f_st, cl_fs, cl_inv at α and Reynolds number Re, as functions of both (dual
+    /// numbers): Kirchhoff's decomposition ([`kirchhoff`]) of the interpolated static
+    /// lift cl(α, Re) ([`Airfoil::coefficients`]) with α₀, c_lα mixed between the two
+    /// tables' lines with the tables' weight t(Re), and the attached range the wider of
+    /// the two. So f_st cl_inv + (1 − f_st) cl_fs = cl(α, Re) wherever the single-table
+    /// curves reproduce their table; at a table's own Re, that table's curves.
+    pub fn eval_re<S: Scalar>(&self, alpha: S, re: S) -> Curves<S> {
+        let ([cl, _, _], c) = self.airfoil.coefficients(alpha, Some(re));
+        let line = |k: usize| {
+            let l = self.tables.get(k).copied().unwrap_or_else(|| self.line());
+            (S::cst(l.zero_lift), S::cst(l.lift_slope), l.attached_range)
+        };
+        let (zero_lift, lift_slope, range) = match self.airfoil.reynolds_weight(re.re()) {
+            TableWeight::One(k) => line(k),
+            TableWeight::Two { k, t, dt } => {
+                let w = re.chain(t, dt);
+                let (a0, s0, r0) = line(k);
+                let (a1, s1, r1) = line(k + 1);
+                (
+                    a0 + (a1 - a0) * w,
+                    s0 + (s1 - s0) * w,
+                    (r0.0.min(r1.0), r0.1.max(r1.1)),
+                )
+            }
+        };
+        kirchhoff(alpha, cl, c.dcl, zero_lift, lift_slope, range)
     }
 
     /// f_st, cl_fs, cl_inv and their derivatives with respect to α. With g = √f_st =
@@ -206,6 +275,65 @@ impl OyeStall {
             inv,
             dinv: self.lift_slope,
         }
+    }
+}
+
+/// f_st, cl_fs, cl_inv as dual numbers ([`OyeStall::eval_re`], [`kirchhoff`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Curves<S> {
+    pub f: S,
+    pub fs: S,
+    pub inv: S,
+}
+
+/// Kirchhoff's decomposition of a static lift `cl` at the angle `alpha` (both dual
+/// numbers; `dcl` = dcl/dα, used only at α₀ where cl/cl_inv is 0/0) for the attached line
+/// cl_inv = c_lα (α − α₀) and the attached `range`, as [`OyeStall::eval`] does for one
+/// table: r = cl/cl_inv, f_st = (2√r − 1)² for ¼ < r < 1, cl_fs = cl_inv (1 + 3g)/(4(1 + g))
+/// (g = √f_st); f_st = 1, cl_fs = cl/2, cl_inv = cl where r ∉ [0, 1); f_st = 0, cl_fs = cl
+/// where r ≤ ¼ or outside the range.
+pub fn kirchhoff<S: Scalar>(
+    alpha: S,
+    cl: S,
+    dcl: f64,
+    zero_lift: S,
+    lift_slope: S,
+    range: (f64, f64),
+) -> Curves<S> {
+    let a = super::airfoil::wrap(alpha.re());
+    // α wrapped to −π … π (a shift by whole turns: the same derivatives).
+    let alpha = alpha + (a - alpha.re());
+    let d = alpha - zero_lift;
+    let inv = lift_slope * d;
+    let separated = Curves {
+        f: S::cst(0.0),
+        fs: cl,
+        inv,
+    };
+    if a <= range.0 || a >= range.1 {
+        return separated;
+    }
+    let r = if d.re().abs() < 1e-9 {
+        S::cst(dcl / lift_slope.re())
+    } else {
+        cl / inv
+    };
+    if !(0.0..1.0).contains(&r.re()) {
+        return Curves {
+            f: S::cst(1.0),
+            fs: cl * 0.5,
+            inv: cl,
+        };
+    }
+    if r.re() <= 0.25 {
+        return separated;
+    }
+    let g = r.sqrt() * 2.0 - 1.0;
+    let one = S::cst(1.0);
+    Curves {
+        f: g * g,
+        fs: inv * (one + g * 3.0) / ((one + g) * 4.0),
+        inv,
     }
 }
 

@@ -7,7 +7,7 @@
 use super::{Build, ComponentKind};
 use crate::core::NodeRef;
 use crate::elements::aero::RotorDisc;
-use crate::elements::aero::station::Unsteady;
+use crate::elements::aero::station::{Unsteady, UserProperty};
 use crate::elements::aero::{
     AeroStation, Airfoil, AttachedFlow, Attachment, BemRotor, FullField, Gust, Hgm,
     HgmCoefficients, Inflow, MAX_NODES, OyeStall, Section, Wind,
@@ -253,6 +253,11 @@ pub struct AeroLineInput {
     /// `reynolds = "interpolate"`).
     #[serde(default)]
     pub kinematic_viscosity: Option<f64>,
+    /// Interpolate every airfoil's tables linearly in their `UserProp` (AeroDyn's
+    /// AFTabMod = 3) at this value: a number, or the name of a signal (a flap command
+    /// from a controller, a `[[signals]]` entry, a sensor).
+    #[serde(default)]
+    pub user_property: Option<Located<UserPropertyInput>>,
     /// The response to the wind's disturbance (its `gust` and a `turbsim` box's
     /// turbulence about its time mean): `"wagner"` (default: like the motion) or
     /// `"kussner"` (Küssner's function, two more states; needs `unsteady = "wagner"`).
@@ -268,6 +273,14 @@ pub enum ReynoldsInput {
     First,
     /// Linear interpolation in ln Re between the tables around the station's Re.
     Interpolate,
+}
+
+/// A line's user property: a constant or a signal's name.
+#[derive(Clone, Debug, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum UserPropertyInput {
+    Value(f64),
+    Signal(String),
 }
 
 /// The default kinematic viscosity of air [m²/s] (AeroDyn's `KinVisc` of the NREL
@@ -367,6 +380,8 @@ pub struct AeroLineDef {
     pub dynamic_wake: bool,
     /// Kinematic viscosity ν when the airfoils' tables are interpolated in Re.
     pub viscosity: Option<f64>,
+    /// The user property the tables are interpolated in (AFTabMod = 3), if any.
+    pub user_property: Option<UserProperty>,
     /// Küssner's gust response (with Wagner's states).
     pub kussner: bool,
     /// The TurbSim file of a turbulent wind and where its key is (the box's coverage of
@@ -763,6 +778,93 @@ impl ComponentKind for AeroLine {
                 hgm: None,
             });
         }
+        // Tables interpolated in a user property (AeroDyn's AFTabMod = 3): every airfoil
+        // of the line read by UserProp, a constant value inside all of
+        // their ranges.
+        let mut user_property = None;
+        if let Some(up) = &li.user_property {
+            if matches!(li.reynolds, Some(ReynoldsInput::Interpolate)) {
+                cx.error(
+                    format!("{what}: `user_property` with `reynolds = \"interpolate\"`: the tables are interpolated in one parameter (AeroDyn's AFTabMod is 2 or 3)"),
+                    up.span.clone(),
+                    Some("remove `reynolds` or `user_property`".into()),
+                );
+                ok = false;
+            }
+            let mut range = (f64::NEG_INFINITY, f64::INFINITY);
+            let mut by_user: HashMap<*const Airfoil, Arc<Airfoil>> = HashMap::new();
+            for d in &mut defs {
+                let key = Arc::as_ptr(&d.airfoil);
+                if let Some(a) = by_user.get(&key) {
+                    d.airfoil = a.clone();
+                    continue;
+                }
+                match d.airfoil.by_user_property() {
+                    Ok(a) => {
+                        let u = a.user_properties();
+                        range = (range.0.max(u[0]), range.1.min(u[u.len() - 1]));
+                        let a = Arc::new(a);
+                        by_user.insert(key, a.clone());
+                        d.airfoil = a;
+                    }
+                    Err(err) => {
+                        cx.error(
+                            format!(
+                                "{what}: `user_property`: the airfoil file of the station at span {} m, {err}",
+                                d.span
+                            ),
+                            up.span.clone(),
+                            err.hint.clone(),
+                        );
+                        ok = false;
+                        break;
+                    }
+                }
+            }
+            if ok && range.0 > range.1 {
+                cx.error(
+                    format!("{what}: `user_property`: the UserProp ranges of the line's airfoils do not overlap"),
+                    up.span.clone(),
+                    Some("give every airfoil of the line tables over a common UserProp range".into()),
+                );
+                ok = false;
+            }
+            match &up.value {
+                UserPropertyInput::Value(v) => {
+                    if ok && !(v.is_finite() && range.0 <= *v && *v <= range.1) {
+                        cx.error(
+                            format!(
+                                "{what}: `user_property` = {v} is outside the tables' UserProp range [{}, {}]",
+                                range.0, range.1
+                            ),
+                            up.span.clone(),
+                            Some("AeroDyn's AFTabMod = 3 interpolates between the tables; add a table at this UserProp".into()),
+                        );
+                        ok = false;
+                    }
+                    user_property = Some(UserProperty::Value(*v));
+                }
+                UserPropertyInput::Signal(name) => {
+                    if !cx.signal_names.contains_key(name) {
+                        let known: Vec<String> = cx.signal_names.keys().cloned().collect();
+                        let hint = match cx.suggest(name, known.iter().map(|s| s.as_str())) {
+                            Some(b) => format!("did you mean '{b}'?"),
+                            None => {
+                                "a number, or a signal from [[signals]], a sensor or a controller"
+                                    .into()
+                            }
+                        };
+                        cx.error(
+                            format!("{what}: unknown signal '{name}' as `user_property`"),
+                            up.span.clone(),
+                            Some(hint),
+                        );
+                        ok = false;
+                    }
+                    user_property = Some(UserProperty::Signal(name.clone()));
+                }
+            }
+        }
         // Unsteady airfoil and dynamic stall.
         let unsteady = match li.unsteady {
             None | Some(UnsteadyInput::QuasiSteady) => AttachedFlow::QuasiSteady,
@@ -776,6 +878,10 @@ impl ComponentKind for AeroLine {
             );
             ok = false;
         }
+        // Reynolds-number (or user-property) interpolation: the stall models follow the
+        // station's Re (or user property).
+        let by_re =
+            matches!(li.reynolds, Some(ReynoldsInput::Interpolate)) || user_property.is_some();
         let stall_time_constant = match li.dynamic_stall {
             None | Some(DynamicStallInput::None) => {
                 if li.stall_time_constant.is_some() {
@@ -805,7 +911,17 @@ impl ComponentKind for AeroLine {
                         d.stall = Some(c.clone());
                         continue;
                     }
-                    match OyeStall::new(&d.airfoil) {
+                    // With Re interpolation, each table's attached-flow line (the curves
+                    // are then Kirchhoff's of the polar interpolated at the station's Re).
+                    let built = if by_re && d.airfoil.tables() > 1 {
+                        (0..d.airfoil.tables())
+                            .map(|k| OyeStall::new(&d.airfoil.table(k)).map(|c| c.line()))
+                            .collect::<Option<Vec<_>>>()
+                            .and_then(|lines| OyeStall::with_tables(&d.airfoil, &lines))
+                    } else {
+                        OyeStall::new(&d.airfoil)
+                    };
+                    match built {
                         Some(c) => {
                             let c = Arc::new(c);
                             curves.insert(key, c.clone());
@@ -813,7 +929,7 @@ impl ComponentKind for AeroLine {
                         }
                         None => {
                             cx.error(
-                                format!("{what}: the airfoil of the station at span {} m has no zero-lift angle with a positive lift slope within ±20°: Øye's dynamic stall needs an attached-flow lift curve", d.span),
+                                format!("{what}: the airfoil of the station at span {} m has no zero-lift angle with a positive lift slope within ±20°{}: Øye's dynamic stall needs an attached-flow lift curve", d.span, if by_re { " (in one of its Reynolds-number tables)" } else { "" }),
                                 cx.key(&e, "dynamic_stall"),
                                 Some("use `dynamic_stall = \"none\"` for non-lifting sections (cylinders)".into()),
                             );
@@ -875,40 +991,53 @@ impl ComponentKind for AeroLine {
                         d.hgm = Some(h.clone());
                         continue;
                     }
-                    let from_file = match d.airfoil.ua_coefficients() {
-                        None => HgmCoefficients::DEFAULT,
-                        Some(Ok(c)) => *c,
-                        Some(Err(err)) => {
+                    // Each table's UA block with Re interpolation, the first's otherwise.
+                    let n_tab = if by_re { d.airfoil.tables() } else { 1 };
+                    let mut per_table = Vec::with_capacity(n_tab);
+                    for k in 0..n_tab {
+                        let from_file = match d.airfoil.ua_coefficients_of(k) {
+                            None => HgmCoefficients::DEFAULT,
+                            Some(Ok(c)) => *c,
+                            Some(Err(err)) => {
+                                cx.error(
+                                    format!(
+                                        "{what}: the airfoil file of the station at span {} m, {err}",
+                                        d.span
+                                    ),
+                                    cx.key(&e, "dynamic_stall"),
+                                    err.hint.clone(),
+                                );
+                                break;
+                            }
+                        };
+                        let coefficients = li
+                            .hgm
+                            .as_ref()
+                            .map_or(from_file, |h| h.value.apply(from_file));
+                        let sum = coefficients.a[0] + coefficients.a[1];
+                        if sum > 1.0 {
                             cx.error(
                                 format!(
-                                    "{what}: the airfoil file of the station at span {} m, {err}",
+                                    "{what}: HGM A₁ + A₂ = {sum} for the station at span {} m: the circulatory response 1 − A₁e^(−b₁s) − A₂e^(−b₂s) must start at or above 0",
                                     d.span
                                 ),
-                                cx.key(&e, "dynamic_stall"),
-                                err.hint.clone(),
+                                li.hgm.as_ref().map_or_else(|| cx.key(&e, "dynamic_stall"), |h| h.span.clone()),
+                                Some("A₁ + A₂ ≤ 1 (Jones' flat plate: 0.165 + 0.335)".into()),
                             );
-                            ok = false;
                             break;
                         }
-                    };
-                    let coefficients = li
-                        .hgm
-                        .as_ref()
-                        .map_or(from_file, |h| h.value.apply(from_file));
-                    let sum = coefficients.a[0] + coefficients.a[1];
-                    if sum > 1.0 {
-                        cx.error(
-                            format!(
-                                "{what}: HGM A₁ + A₂ = {sum} for the station at span {} m: the circulatory response 1 − A₁e^(−b₁s) − A₂e^(−b₂s) must start at or above 0",
-                                d.span
-                            ),
-                            li.hgm.as_ref().map_or_else(|| cx.key(&e, "dynamic_stall"), |h| h.span.clone()),
-                            Some("A₁ + A₂ ≤ 1 (Jones' flat plate: 0.165 + 0.335)".into()),
-                        );
+                        per_table.push(coefficients);
+                    }
+                    if per_table.len() < n_tab {
                         ok = false;
                         break;
                     }
-                    match Hgm::new(&d.airfoil, &coefficients) {
+                    let built = if n_tab > 1 {
+                        Hgm::with_tables(&d.airfoil, &per_table)
+                    } else {
+                        Hgm::new(&d.airfoil, &per_table[0])
+                    };
+                    match built {
                         Some(h) => {
                             let h = Arc::new(h);
                             models.insert(key, h.clone());
@@ -953,19 +1082,19 @@ impl ComponentKind for AeroLine {
                     );
                     ok = false;
                 }
+                if let Some(d) = defs.iter().find(|d| !d.airfoil.sorted_by_reynolds()) {
+                    cx.error(
+                        format!("{what}: `reynolds = \"interpolate\"` but the airfoil of the station at span {} m has tables not sorted by increasing Reynolds number (tables told apart by UserProp: AeroDyn's AFTabMod = 3)", d.span),
+                        cx.key(&e, "reynolds"),
+                        Some("interpolate them with `user_property`, or give tables of increasing Re".into()),
+                    );
+                    ok = false;
+                }
                 if !defs.is_empty() && defs.iter().all(|d| d.airfoil.tables() < 2) {
                     cx.error(
                         format!("{what}: `reynolds = \"interpolate\"` but every airfoil of the line has a single table"),
                         cx.key(&e, "reynolds"),
                         Some("give airfoil files with several Reynolds-number tables (AeroDyn NumTabs > 1, or a CSV with a `re` column), or remove `reynolds`".into()),
-                    );
-                    ok = false;
-                }
-                if !matches!(li.dynamic_stall, None | Some(DynamicStallInput::None)) {
-                    cx.error(
-                        format!("{what}: `reynolds = \"interpolate\"` with a dynamic-stall model: the stall models are built on one table and do not interpolate in Re"),
-                        cx.key(&e, "reynolds"),
-                        Some("use `reynolds = \"first\"` (or no `reynolds`) with dynamic stall".into()),
                     );
                     ok = false;
                 }
@@ -1253,6 +1382,7 @@ impl ComponentKind for AeroLine {
             turbsim,
             rotor: li.rotor.as_ref().map(|r| (r.value.clone(), r.span.clone())),
             viscosity,
+            user_property,
             kussner,
         })
     }
@@ -1793,6 +1923,151 @@ impl ComponentKind for AeroLine {
                 }
             }
         }
+        // Dynamic stall with Re interpolation: Øye's curves and the HGM model of the
+        // polar interpolated at the station's Re (∂/∂Re through f_st, cl_fs, α₀, c_lα and
+        // every HGM coefficient, the tables' own α₀ and c_lα fitted per table), no inflow
+        // and BEM, 1 and 2 nodes; states a little off their steady values.
+        let lines: Vec<_> = (0..2)
+            .map(|k| {
+                OyeStall::new(&re_section.airfoil.table(k))
+                    .unwrap_or_else(|| unreachable!())
+                    .line()
+            })
+            .collect();
+        let oye_re = Arc::new(
+            OyeStall::with_tables(&re_section.airfoil, &lines).unwrap_or_else(|| unreachable!()),
+        );
+        let hgm_re = Arc::new(
+            Hgm::with_tables(
+                &re_section.airfoil,
+                &[HgmCoefficients::DEFAULT, HgmCoefficients::DEFAULT],
+            )
+            .unwrap_or_else(|| unreachable!()),
+        );
+        for (k, inflow) in [Arc::new(Inflow::None), bem.clone()]
+            .into_iter()
+            .enumerate()
+        {
+            for nn in [1usize, 2] {
+                for with_hgm in [false, true] {
+                    let seed = 4200 + 40 * k as u64 + 10 * u64::from(with_hgm) + nn as u64;
+                    let nodes: Vec<_> = (0..nn).map(|i| node(seed + 3 * i as u64)).collect();
+                    let w = 1.0 / nn as f64;
+                    let unsteady = if with_hgm {
+                        Unsteady {
+                            hgm: Some(hgm_re.clone()),
+                            ..Unsteady::default()
+                        }
+                    } else {
+                        Unsteady {
+                            stall: Some((oye_re.clone(), 4.0)),
+                            ..Unsteady::default()
+                        }
+                    };
+                    let e = AeroStation::new(
+                        "aero_reynolds_stall",
+                        (0..nn).collect(),
+                        (0..nn).map(|i| attach(i as f64 - 0.5, w)).collect(),
+                        re_section.clone(),
+                        1.2,
+                        wind.clone(),
+                        inflow.clone(),
+                    )
+                    .with_unsteady(unsteady, 0.0, &nodes);
+                    let mut z = [0.0; 4];
+                    crate::core::Element::initial_states(&e, &mut z);
+                    let states = if with_hgm {
+                        vec![
+                            (z[0] + 0.01, 0.02),
+                            (z[1] - 0.01, -0.01),
+                            (z[2] + 0.05, 0.1),
+                            (0.7, 0.05),
+                        ]
+                    } else {
+                        vec![(0.6, 0.05)]
+                    };
+                    cases.push(TangentCase::element(Box::new(e), nodes).with_states(states));
+                }
+            }
+        }
+        // Tables interpolated in a user property read from a signal (AFTabMod = 3): the
+        // two tables above at UserProp 0 and 10, the signal at 3; quasi-steady, Øye's
+        // stall and HGM on the interpolated polar (∂r/∂s through the weight).
+        let by_user = Arc::new(
+            re_section
+                .airfoil
+                .as_ref()
+                .clone()
+                .with_user_properties(&[0.0, 10.0])
+                .by_user_property()
+                .unwrap_or_else(|_| unreachable!()),
+        );
+        let user_section = Section {
+            airfoil: by_user.clone(),
+            viscosity: None,
+            ..section.clone()
+        };
+        let lines: Vec<_> = (0..2)
+            .map(|k| {
+                OyeStall::new(&by_user.table(k))
+                    .unwrap_or_else(|| unreachable!())
+                    .line()
+            })
+            .collect();
+        let oye_user =
+            Arc::new(OyeStall::with_tables(&by_user, &lines).unwrap_or_else(|| unreachable!()));
+        let hgm_user = Arc::new(
+            Hgm::with_tables(
+                &by_user,
+                &[HgmCoefficients::DEFAULT, HgmCoefficients::DEFAULT],
+            )
+            .unwrap_or_else(|| unreachable!()),
+        );
+        for (m, unsteady) in [
+            Unsteady::default(),
+            Unsteady {
+                stall: Some((oye_user, 4.0)),
+                ..Unsteady::default()
+            },
+            Unsteady {
+                hgm: Some(hgm_user),
+                ..Unsteady::default()
+            },
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let nodes = vec![node(4400 + m as u64)];
+            let ns = unsteady.states();
+            let e = AeroStation::new(
+                "aero_user_property",
+                vec![0],
+                vec![attach(0.0, 1.0)],
+                user_section.clone(),
+                1.2,
+                wind.clone(),
+                Arc::new(Inflow::None),
+            )
+            .with_user_property(UserProperty::Signal("flap".into()))
+            .with_unsteady(unsteady, 0.0, &nodes);
+            let mut z = [0.0; 4];
+            crate::core::Element::initial_states(&e, &mut z);
+            let states = match ns {
+                0 => Vec::new(),
+                1 => vec![(0.6, 0.05)],
+                _ => vec![
+                    (z[0] + 0.01, 0.02),
+                    (z[1] - 0.01, -0.01),
+                    (z[2] + 0.05, 0.1),
+                    (0.7, 0.05),
+                ],
+            };
+            cases.push(
+                TangentCase::element(Box::new(e), nodes)
+                    .with_states(states)
+                    .with_signals(vec![3.0]),
+            );
+        }
         // The skewed-wake correction: BEM in the tangent cases' wind (about 13° off the
         // axis), quasi-steady and with the dynamic wake, on 1 and 2 nodes.
         let skewed = Arc::new(Inflow::Bem {
@@ -1963,7 +2238,11 @@ pub(crate) fn line_stations(def: &AeroLineDef, parts: &Build) -> Vec<AeroStation
             def.density,
             wind.clone(),
             inflow.clone(),
-        )
+        );
+        let station = match &def.user_property {
+            Some(u) => station.with_user_property(u.clone()),
+            None => station,
+        }
         .with_unsteady(unsteady, 0.0, parts.initial)
         .with_span(s.span);
         out.push(station);
