@@ -848,7 +848,12 @@ fn a_convected_gust_front_reaches_two_stations_delta_x_over_u_apart() {
             }
             // Nothing before the front arrives.
             let before = t.iter().position(|&x| x > arrival).unwrap() - 1;
-            assert!(outs[before][icl].abs() < 1e-12, "{line}");
+            assert!(
+                outs[before][icl].abs() < 1e-12,
+                "{line}: cl = {} at t = {} (arrival {arrival})",
+                outs[before][icl],
+                t[before]
+            );
         }
         println!("h = {h}: worst |cl − cl_K(t − x_LE/V)|/cl∞ over both plates = {err:.2e}");
         assert!(err < 2e-3, "h = {h}: {err}");

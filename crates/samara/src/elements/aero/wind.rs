@@ -129,7 +129,12 @@ impl Wind {
         let mut v = self.function.breakpoints();
         if let Some(g) = &self.gust {
             let shift = g.convection_speed.map_or(0.0, |u| x / u);
-            v.extend(g.function.breakpoints().into_iter().map(|b| b + shift));
+            v.extend(
+                g.function
+                    .breakpoints()
+                    .into_iter()
+                    .map(|b| shifted_breakpoint(b, shift)),
+            );
         }
         v
     }
@@ -227,4 +232,23 @@ impl Wind {
     pub fn outside_sample(&self) -> Option<&str> {
         self.turbulence.as_ref().and_then(|f| f.outside_sample())
     }
+}
+
+/// The time t at which a gust breakpoint b reaches a point `shift` = x/U_c downstream,
+/// chosen in floating point so that the gust's argument t − shift is ≥ b at t and < b
+/// at the next float below: a step ending on t sees the left limit there (it is
+/// evaluated at t's predecessor) and the restart the right limit, as for a breakpoint of
+/// an unshifted function. b + shift alone may round to either side.
+fn shifted_breakpoint(b: f64, shift: f64) -> f64 {
+    let mut t = b + shift;
+    for _ in 0..4 {
+        if t.next_down() - shift >= b {
+            t = t.next_down();
+        } else if t - shift < b {
+            t = t.next_up();
+        } else {
+            break;
+        }
+    }
+    t
 }
