@@ -16,13 +16,14 @@
 //! Newton iterations per step, CPU and wall time per step (CPU from /proc/self/stat: the
 //! machine may be shared), candidate and touching pairs, pattern rebuilds, the largest
 //! speed at the end and the time of the broad phase alone (grid against all pairs); then
-//! the growth exponents d log(time)/d log N.
+//! the growth exponents d log(time)/d log N (`nobroad`: without the broad phase alone on
+//! larger columns, for profiles; `GRANULAR_PROGRESS=1` prints each chunk to stderr).
 
 use samara::analysis::{History, run_analysis};
 use samara::elements::{GranularSet, NormalLaw};
 use samara::model::{AnalysisKind, Model};
-use samara::system::NodeState;
-use samara::system::System;
+use samara::solve::BlockLuSymbolic;
+use samara::system::{Assembler, Formulation, NodeState, System};
 use std::time::Instant;
 
 /// Largest speed of a sphere at rest [m/s].
@@ -195,6 +196,13 @@ fn main() {
             state = s.final_state;
             t = state.time;
             vmax = state.nodes.iter().map(|x| x.v.norm()).fold(0.0, f64::max);
+            if std::env::var_os("GRANULAR_PROGRESS").is_some() {
+                eprintln!(
+                    "N = {n}: t = {t:.3} s, max speed {vmax:.2e} m/s, {steps} steps ({rejected} rejected), {:.2} it./step, {:.1} s CPU",
+                    iterations as f64 / steps as f64,
+                    cpu_time() - cpu0
+                );
+            }
         }
         let wall = clock.elapsed().as_secs_f64();
         let cpu = cpu_time() - cpu0;
@@ -213,6 +221,18 @@ fn main() {
         let brute = clock.elapsed().as_secs_f64();
         assert_eq!(all, pairs);
         let per_step = cpu / steps as f64;
+        // The block LU's size for the final candidate pairs: the Schur updates (6 × 6
+        // block products, most of them) one factorization makes.
+        let elements = pairs.iter().map(|&(i, j)| set.pair(i, j)).collect();
+        let asm = Assembler::with_pairs(&sys, Formulation::Index3, elements);
+        let lu = BlockLuSymbolic::new(asm.structure()).unwrap();
+        println!(
+            "N = {n:5}: block LU of the final pattern: {} blocks, {} factor values, {} Schur updates ({:.0} per sphere)",
+            asm.structure().n_blocks(),
+            lu.n_factor_values(),
+            lu.n_updates(),
+            lu.n_updates() as f64 / n as f64
+        );
         if std::env::var_os("GRANULAR_FASTEST").is_some() {
             let mut order: Vec<usize> = (0..last.len()).collect();
             order.sort_by(|&a, &b| last[b].v.norm().total_cmp(&last[a].v.norm()));
@@ -242,6 +262,21 @@ fn main() {
             1e3 * brute
         );
         rows.push((n as f64, per_step, grid, brute));
+    }
+    for w in rows.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let e = |x: f64, y: f64| (y / x).ln() / (b.0 / a.0).ln();
+        println!(
+            "N {} → {}: growth exponent CPU time/step {:.2}, broad phase {:.2}, all pairs {:.2}",
+            a.0,
+            b.0,
+            e(a.1, b.1),
+            e(a.2, b.2),
+            e(a.3, b.3)
+        );
+    }
+    if std::env::args().any(|a| a == "nobroad") {
+        return;
     }
     // The broad phase alone on larger columns (5 × 5 spheres per layer, the same lattice,
     // no simulation): grid against all pairs.
@@ -307,18 +342,6 @@ fn main() {
             w[1].0,
             e(w[0].1, w[1].1),
             e(w[0].2, w[1].2)
-        );
-    }
-    for w in rows.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        let e = |x: f64, y: f64| (y / x).ln() / (b.0 / a.0).ln();
-        println!(
-            "N {} → {}: growth exponent CPU time/step {:.2}, broad phase {:.2}, all pairs {:.2}",
-            a.0,
-            b.0,
-            e(a.1, b.1),
-            e(a.2, b.2),
-            e(a.3, b.3)
         );
     }
 }

@@ -382,6 +382,18 @@ impl Contact {
         }
     }
 
+    /// The penetration δ = −n·(p − p₀) into the plane.
+    fn plane_penetration(&self, x: &ElementInput) -> f64 {
+        let nd = &x.nodes[self.node[0]];
+        let n = self.plane.normal;
+        let p = match self.shape {
+            ContactShape::Sphere { radius } => nd.x - n * radius,
+            ContactShape::Point { offset } => nd.x + nd.r() * offset,
+            ContactShape::OffsetSphere { radius, offset } => nd.x + nd.r() * offset - n * radius,
+        };
+        -n.dot(&(p - self.plane.point))
+    }
+
     /// The rolling/twisting moment (global) on a sphere against the plane, over any
     /// scalar: directions 0..6 the node's (δx, δθ), 6..12 its (v, Ω). Zero without
     /// resistance or for a point.
@@ -643,21 +655,26 @@ impl Element for Contact {
             }
             return;
         }
+        if self.friction.is_none() && self.plane_penetration(x) < 0.0 {
+            // Apart, a contact without bristle states gives nothing, in a neighbourhood
+            // (exact tangents 0): the walls of a granular box, most of the time.
+            return;
+        }
         if self.rolling.is_some() {
             // The rolling/twisting moment: node moment rows −Rᵀ M.
             let r = x.nodes[self.node[0]].r();
             if need == Need::Residual {
                 let m = rot_t(0, r, &self.plane_rolling::<f64>(x));
-                for i in 0..3 {
-                    out.r[3 + i] -= m[i];
+                for (i, mi) in m.iter().enumerate() {
+                    out.r[3 + i] -= mi;
                 }
             } else {
                 let m = rot_t(0, r, &self.plane_rolling::<Dual<12>>(x));
-                for i in 0..3 {
-                    out.r[3 + i] -= m[i].v;
+                for (i, mi) in m.iter().enumerate() {
+                    out.r[3 + i] -= mi.v;
                     for j in 0..6 {
-                        out.k[(3 + i, j)] -= m[i].d[j];
-                        out.c[(3 + i, j)] -= m[i].d[6 + j];
+                        out.k[(3 + i, j)] -= mi.d[j];
+                        out.c[(3 + i, j)] -= mi.d[6 + j];
                     }
                 }
             }
