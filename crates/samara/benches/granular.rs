@@ -1,39 +1,85 @@
-//! Granular column benchmark (issue #16): N spheres (radius 5 cm, 1 kg) in a loose lattice
-//! of 5 × 5 spheres per layer (pitch 10.5 cm, deterministic offsets of ±2 mm), N/25 layers
-//! high, starting 2 mm above the ground and on each other, in a frictionless box, settling
-//! under gravity with the contact laws of examples/contact/granular_column.toml
-//! ([[granular]]: Hunt–Crossley, LuGre on the ground and between spheres, margin 1 cm).
+//! Granular column benchmark (issue #16): N spheres (radius 5 cm, 1 kg) stacked in a
+//! frictionless box 0.54 m wide, in alternating square layers — 5 × 5 at a pitch of
+//! 10.5 cm, then 4 × 4 in the hollows of the layer below (a body-centred stacking, each
+//! sphere of a hollow layer resting on four: stable, unlike a simple-cubic stack) — each
+//! layer 2 mm above its seat (deterministic horizontal offsets of ±0.5 mm), the last layer
+//! filled in part; released under gravity, the column settles onto the ground with the
+//! contact laws of examples/contact/granular_column.toml ([[granular]]: Hunt–Crossley,
+//! LuGre on the ground and between spheres, rolling and twisting resistance, margin 1 cm).
 //!
-//! `cargo bench -p samara --bench granular [-- T] [N…] [regularized]` (default T = 0.4 s
-//! simulated at h = 1 ms, N = 125 250 500 1000; `regularized`: the stateless
-//! sphere–sphere friction, v_r = 1 mm/s, instead of the bristles) prints per N the CPU
-//! and wall time per step (CPU from /proc/self/stat: the machine may be shared), Newton
-//! iterations per step, steps rejected (Newton failures), candidate and touching pairs,
-//! pattern rebuilds, the largest speed at the end and the time of the broad phase alone
-//! (grid against all pairs); then the growth exponents d log(time)/d log N.
+//! `cargo bench -p samara --bench granular [-- T] [N…] [regularized] [lattice]` runs each
+//! column until the largest speed of a sphere falls below 1e-3 m/s (checked every 25 ms
+//! of simulated time; at most T = 3 s simulated, h = 1 ms; N = 125 250 500 1000 by
+//! default; `regularized`: the stateless sphere–sphere friction, v_r = 1 mm/s, instead of
+//! the bristles; `lattice`: the former simple-cubic start, 2 mm apart, that collapses)
+//! and prints per N the simulated time to rest, steps (rejected: Newton failures),
+//! Newton iterations per step, CPU and wall time per step (CPU from /proc/self/stat: the
+//! machine may be shared), candidate and touching pairs, pattern rebuilds, the largest
+//! speed at the end and the time of the broad phase alone (grid against all pairs); then
+//! the growth exponents d log(time)/d log N (`nobroad`: without the broad phase alone on
+//! larger columns, for profiles; `GRANULAR_PROGRESS=1` prints each chunk to stderr).
 
 use samara::analysis::{History, run_analysis};
 use samara::elements::{GranularSet, NormalLaw};
-use samara::model::Model;
-use samara::system::NodeState;
-use samara::system::System;
+use samara::model::{AnalysisKind, Model};
+use samara::solve::BlockLuSymbolic;
+use samara::system::{Assembler, Formulation, NodeState, System};
 use std::time::Instant;
 
-/// The model text of a column of `n` spheres (n a multiple of 25), simulated for `t_end`.
-pub fn column(n: usize, t_end: f64, regularized: bool) -> String {
-    let (r, pitch) = (0.05, 0.105);
-    let inertia = 0.4 * r * r;
-    let off = |i: usize, k: usize| {
+/// Largest speed of a sphere at rest [m/s].
+const AT_REST: f64 = 1e-3;
+/// Simulated time between the checks of the largest speed [s].
+const CHUNK: f64 = 0.025;
+
+/// The spheres' centres: alternating 5 × 5 and 4 × 4 square layers (body-centred), each
+/// 2 mm above its seat, or (`lattice`) the simple-cubic 5 × 5 stack 2 mm apart.
+pub fn centres(n: usize, lattice: bool) -> Vec<[f64; 3]> {
+    let (r, pitch, gap) = (0.05, 0.105, 0.002);
+    let off = |i: usize, k: usize, size: f64| {
         let x = ((12.9898 * i as f64 + 78.233 * k as f64).sin() * 43758.5453).fract();
-        (x.abs() - 0.5) * 0.004
+        (x.abs() - 0.5) * size
     };
+    let mut out = Vec::with_capacity(n);
+    if lattice {
+        for k in 0..n {
+            let (lx, ly, lz) = (k % 5, (k / 5) % 5, k / 25);
+            out.push([
+                (lx as f64 - 2.0) * pitch + off(k, 1, 0.004),
+                (ly as f64 - 2.0) * pitch + off(k, 2, 0.004),
+                r + gap + lz as f64 * (2.0 * r + gap),
+            ]);
+        }
+        return out;
+    }
+    // A sphere of a hollow layer touches its four seats at the horizontal distance
+    // pitch/√2: the layers are dz = √((2r + gap)² − pitch²/2) apart.
+    let dz = ((2.0 * r + gap).powi(2) - 0.5 * pitch * pitch).sqrt();
+    let mut layer = 0;
+    while out.len() < n {
+        let (m, shift) = if layer % 2 == 0 { (5, 2.0) } else { (4, 1.5) };
+        for k in 0..m * m {
+            if out.len() == n {
+                break;
+            }
+            let i = out.len();
+            out.push([
+                ((k % m) as f64 - shift) * pitch + off(i, 1, 0.001),
+                ((k / m) as f64 - shift) * pitch + off(i, 2, 0.001),
+                r + gap + layer as f64 * dz,
+            ]);
+        }
+        layer += 1;
+    }
+    out
+}
+
+/// The model text of a column of `n` spheres, simulated for `t_end`.
+pub fn column(n: usize, t_end: f64, regularized: bool, lattice: bool) -> String {
+    let r = 0.05;
+    let inertia = 0.4 * r * r;
     let mut s =
         String::from("[model]\nname = \"granular_column\"\ngravity = [0.0, 0.0, -9.81]\n\n");
-    for k in 0..n {
-        let (lx, ly, lz) = (k % 5, (k / 5) % 5, k / 25);
-        let x = (lx as f64 - 2.0) * pitch + off(k, 1);
-        let y = (ly as f64 - 2.0) * pitch + off(k, 2);
-        let z = r + 0.002 + lz as f64 * pitch;
+    for (k, [x, y, z]) in centres(n, lattice).into_iter().enumerate() {
         s += &format!("[[nodes]]\nname = \"s{k}\"\nposition = [{x}, {y}, {z}]\n\n");
     }
     for k in 0..n {
@@ -67,6 +113,8 @@ dynamic_friction = 0.4
 stribeck_velocity = 0.01
 bristle_stiffness = 1e4
 bristle_damping = 60.0
+rolling_friction = 0.05
+twisting_friction = 0.3
 {regularization}
 
 [[analyses]]
@@ -103,7 +151,8 @@ fn main() {
         .filter_map(|a| a.parse().ok())
         .collect();
     let regularized = std::env::args().any(|a| a == "regularized");
-    let t_end = args.first().copied().unwrap_or(0.4);
+    let lattice = std::env::args().any(|a| a == "lattice");
+    let t_max = args.first().copied().unwrap_or(3.0);
     let sizes: Vec<usize> = if args.len() > 1 {
         args[1..].iter().map(|&x| x as usize).collect()
     } else {
@@ -111,7 +160,7 @@ fn main() {
     };
     let mut rows = Vec::new();
     for &n in &sizes {
-        let mut text = column(n, t_end, regularized);
+        let mut text = column(n, CHUNK, regularized, lattice);
         // Experiments: GRANULAR_EDIT="from=>to;from=>to" edits the model text.
         if let Ok(edits) = std::env::var("GRANULAR_EDIT") {
             for e in edits.split(';').filter(|e| !e.is_empty()) {
@@ -120,24 +169,45 @@ fn main() {
                 text = text.replace(from, to);
             }
         }
-        let m = Model::from_toml_str(&text, "column.toml").unwrap().model;
+        let mut m = Model::from_toml_str(&text, "column.toml").unwrap().model;
         let sys = System::new(&m);
-        let mut h = History::default();
+        let mut state = sys.initial_state();
+        let (mut steps, mut rejected, mut iterations, mut redos, mut rebuilds, mut most) =
+            (0, 0, 0, 0, 0, 0);
+        let (mut vmax, mut t) = (f64::INFINITY, 0.0);
         let cpu0 = cpu_time();
         let clock = Instant::now();
-        let s = run_analysis(
-            &sys,
-            &m.analyses[0],
-            sys.initial_state(),
-            &mut h,
-            &mut |_| {},
-        )
-        .unwrap();
+        // Chunks of CHUNK simulated seconds, each from the state the last one reached,
+        // until the largest speed is below AT_REST (or t_max).
+        while vmax >= AT_REST && t < t_max - 1e-9 {
+            if let AnalysisKind::Dynamic(d) = &mut m.analyses[0].kind {
+                d.t_start = t;
+                d.t_end = t + CHUNK;
+            }
+            let mut h = History::default();
+            let s = run_analysis(&sys, &m.analyses[0], state, &mut h, &mut |_| {}).unwrap();
+            assert!(s.failure.is_none(), "{:?}", s.failure);
+            steps += s.steps;
+            rejected += s.rejected_steps;
+            iterations += s.newton_iterations;
+            redos += s.contact_redos;
+            rebuilds += s.pattern_rebuilds;
+            most = most.max(s.max_candidate_pairs);
+            state = s.final_state;
+            t = state.time;
+            vmax = state.nodes.iter().map(|x| x.v.norm()).fold(0.0, f64::max);
+            if std::env::var_os("GRANULAR_PROGRESS").is_some() {
+                eprintln!(
+                    "N = {n}: t = {t:.3} s, max speed {vmax:.2e} m/s, {steps} steps ({rejected} rejected), {:.2} it./step, {:.1} s CPU",
+                    iterations as f64 / steps as f64,
+                    cpu_time() - cpu0
+                );
+            }
+        }
         let wall = clock.elapsed().as_secs_f64();
         let cpu = cpu_time() - cpu0;
-        assert!(s.failure.is_none(), "{:?}", s.failure);
         let set = &sys.granular[0];
-        let last = &s.final_state.nodes;
+        let last = &state.nodes;
         // The broad phase alone, at the final state: grid against all pairs.
         let mut pairs = Vec::new();
         let clock = Instant::now();
@@ -150,8 +220,19 @@ fn main() {
         let all = set.all_pairs(last, set.margin);
         let brute = clock.elapsed().as_secs_f64();
         assert_eq!(all, pairs);
-        let per_step = cpu / s.steps as f64;
-        let vmax = last.iter().map(|x| x.v.norm()).fold(0.0, f64::max);
+        let per_step = cpu / steps as f64;
+        // The block LU's size for the final candidate pairs: the Schur updates (6 × 6
+        // block products, most of them) one factorization makes.
+        let elements = pairs.iter().map(|&(i, j)| set.pair(i, j)).collect();
+        let asm = Assembler::with_pairs(&sys, Formulation::Index3, elements);
+        let lu = BlockLuSymbolic::new(asm.structure()).unwrap();
+        println!(
+            "N = {n:5}: block LU of the final pattern: {} blocks, {} factor values, {} Schur updates ({:.0} per sphere)",
+            asm.structure().n_blocks(),
+            lu.n_factor_values(),
+            lu.n_updates(),
+            lu.n_updates() as f64 / n as f64
+        );
         if std::env::var_os("GRANULAR_FASTEST").is_some() {
             let mut order: Vec<usize> = (0..last.len()).collect();
             order.sort_by(|&a, &b| last[b].v.norm().total_cmp(&last[a].v.norm()));
@@ -164,23 +245,38 @@ fn main() {
                 );
             }
         }
+        let rest = if vmax < AT_REST {
+            format!("at rest (max speed < {AT_REST:.0e} m/s) at t = {t:.3} s")
+        } else {
+            format!("NOT at rest at t = {t:.3} s")
+        };
         println!(
-            "N = {n:5}: {t_end} s simulated, {:.1} s CPU, {:.3} ms CPU/step, {:.3} ms wall/step ({} steps, {} rejected, {:.2} Newton it./step, {} redos), max speed at the end {vmax:.2e} m/s, {} candidate pairs (max {}), {} touching, {} pattern rebuilds; broad phase {:.3} ms (all pairs {:.3} ms)",
+            "N = {n:5}: {rest}, {:.1} s CPU, {:.3} ms CPU/step, {:.3} ms wall/step ({steps} steps, {rejected} rejected, {:.2} Newton it./step, {redos} redos), max speed at the end {vmax:.2e} m/s, {} candidate pairs (max {most}), {} touching, {rebuilds} pattern rebuilds; broad phase {:.3} ms (all pairs {:.3} ms)",
             cpu,
             1e3 * per_step,
-            1e3 * wall / s.steps as f64,
-            s.steps,
-            s.rejected_steps,
-            s.newton_iterations as f64 / s.steps as f64,
-            s.contact_redos,
+            1e3 * wall / steps as f64,
+            iterations as f64 / steps as f64,
             pairs.len(),
-            s.max_candidate_pairs,
             set.contacts(last),
-            s.pattern_rebuilds,
             1e3 * grid,
             1e3 * brute
         );
         rows.push((n as f64, per_step, grid, brute));
+    }
+    for w in rows.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let e = |x: f64, y: f64| (y / x).ln() / (b.0 / a.0).ln();
+        println!(
+            "N {} → {}: growth exponent CPU time/step {:.2}, broad phase {:.2}, all pairs {:.2}",
+            a.0,
+            b.0,
+            e(a.1, b.1),
+            e(a.2, b.2),
+            e(a.3, b.3)
+        );
+    }
+    if std::env::args().any(|a| a == "nobroad") {
+        return;
     }
     // The broad phase alone on larger columns (5 × 5 spheres per layer, the same lattice,
     // no simulation): grid against all pairs.
@@ -211,6 +307,7 @@ fn main() {
             },
             friction: None,
             margin: 0.01,
+            rolling: None,
         };
         let mut pairs = Vec::new();
         let reps = (64000 / n).max(1);
@@ -245,18 +342,6 @@ fn main() {
             w[1].0,
             e(w[0].1, w[1].1),
             e(w[0].2, w[1].2)
-        );
-    }
-    for w in rows.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        let e = |x: f64, y: f64| (y / x).ln() / (b.0 / a.0).ln();
-        println!(
-            "N {} → {}: growth exponent CPU time/step {:.2}, broad phase {:.2}, all pairs {:.2}",
-            a.0,
-            b.0,
-            e(a.1, b.1),
-            e(a.2, b.2),
-            e(a.3, b.3)
         );
     }
 }

@@ -52,15 +52,20 @@
 //! the turning of n through the Hessian. A converged state whose foot point is outside the
 //! table is an error ([`Element::range_violation`]).
 //!
+//! **Rolling and twisting resistance** (optional, spheres only, [`super::rolling`]): the
+//! moment `M(ω)` of the sphere's angular velocity against the (non-rotating) ground, with
+//! `R_eff = ρ`, added to the node's moment rows; its power `M·ω` is dissipated.
+//!
 //! Energies: potential `∫N_el dδ` of the elastic part, dissipated power
 //! `(N − N_el) δ̇ − F_t·w` (the LuGre bristle's small elastic store counts as dissipated),
 //! external power `F·v_g` (the work of a moving surface).
 
 use super::node_dual::{omega, rot, rot_t, var3};
+use super::rolling::{RollingResistance, resisting_moment};
 use super::terrain::{normal, surface, tangents};
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
 use crate::core::ElementInput;
-use crate::math::dual::{Dual, Scalar, V3, add, cross, dot, scale, sub};
+use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
 use crate::math::height_field::{Height, HeightField};
 use crate::math::skew;
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -299,6 +304,8 @@ pub struct Contact {
     friction: Option<Friction>,
     /// A height-field ground instead of the plane.
     terrain: Option<Arc<HeightField>>,
+    /// Rolling and twisting resistance (spheres).
+    rolling: Option<RollingResistance>,
 }
 
 /// Local unknowns of the height-field kernel: 6 node unknowns and 2 bristle states;
@@ -321,6 +328,9 @@ struct TerrainTerms<S> {
     slip: Vector3<f64>,
     /// The foot point of the centre on the terrain.
     foot: Vector3<f64>,
+    /// The rolling/twisting moment (global) and the angular velocity.
+    rolling: Vector3<f64>,
+    omega: Vector3<f64>,
 }
 
 impl Contact {
@@ -351,7 +361,63 @@ impl Contact {
             law,
             friction,
             terrain: None,
+            rolling: None,
         }
+    }
+
+    /// The contact with rolling and twisting resistance (None: without; a sphere's only,
+    /// a point has no radius and carries none).
+    pub fn with_rolling(mut self, rolling: Option<RollingResistance>) -> Self {
+        self.rolling = rolling;
+        self
+    }
+
+    /// The sphere's radius (None for a point).
+    fn sphere_radius(&self) -> Option<f64> {
+        match self.shape {
+            ContactShape::Sphere { radius } | ContactShape::OffsetSphere { radius, .. } => {
+                Some(radius)
+            }
+            ContactShape::Point { .. } => None,
+        }
+    }
+
+    /// The penetration δ = −n·(p − p₀) into the plane.
+    fn plane_penetration(&self, x: &ElementInput) -> f64 {
+        let nd = &x.nodes[self.node[0]];
+        let n = self.plane.normal;
+        let p = match self.shape {
+            ContactShape::Sphere { radius } => nd.x - n * radius,
+            ContactShape::Point { offset } => nd.x + nd.r() * offset,
+            ContactShape::OffsetSphere { radius, offset } => nd.x + nd.r() * offset - n * radius,
+        };
+        -n.dot(&(p - self.plane.point))
+    }
+
+    /// The rolling/twisting moment (global) on a sphere against the plane, over any
+    /// scalar: directions 0..6 the node's (δx, δθ), 6..12 its (v, Ω). Zero without
+    /// resistance or for a point.
+    fn plane_rolling<S: Scalar>(&self, x: &ElementInput) -> V3<S> {
+        let zero = [S::cst(0.0); 3];
+        let (Some(res), Some(rho)) = (&self.rolling, self.sphere_radius()) else {
+            return zero;
+        };
+        let nd = &x.nodes[self.node[0]];
+        let r = nd.r();
+        let xs = var3::<S>(&nd.x, 0);
+        let c = match self.shape {
+            ContactShape::OffsetSphere { offset, .. } => add(&xs, &rot::<S>(0, r, &offset)),
+            _ => xs,
+        };
+        let n = cst3::<S>(&self.plane.normal);
+        let delta = -dot(&n, &sub(&c, &cst3(&self.plane.point))) + rho;
+        let om = omega::<S>(0, r, &nd.w, 6);
+        let a = sub(&sub(&c, &xs), &scale(&n, S::cst(rho)));
+        let u = add(&var3::<S>(&nd.v, 6), &cross(&om, &a));
+        let delta_dot = -dot(&n, &u);
+        let nf = normal_force(&self.law, delta.re(), delta_dot.re());
+        let nn = (delta - delta.re()) * nf[1] + (delta_dot - delta_dot.re()) * nf[2] + nf[0];
+        resisting_moment(res, &n, &om, nn, delta, rho)
     }
 
     /// A contact with the height-field ground `terrain` (fixed).
@@ -452,7 +518,13 @@ impl Contact {
         };
         let ft = scale(&add(&scale(&t[0], phi[0]), &scale(&t[1], phi[1])), -nn);
         let force = add(&scale(&n, nn), &ft);
-        let moment = rot_t(0, r, &cross(&a, &force));
+        let rolling = match (&self.rolling, self.shape) {
+            (Some(res), ContactShape::Sphere { .. } | ContactShape::OffsetSphere { .. }) => {
+                resisting_moment(res, &n, &om, nn, delta, rho)
+            }
+            _ => [zero; 3],
+        };
+        let moment = rot_t(0, r, &add(&cross(&a, &force), &rolling));
         let re3 = |y: &V3<S>| Vector3::new(y[0].re(), y[1].re(), y[2].re());
         let wv = [w[0].re(), w[1].re()];
         TerrainTerms {
@@ -465,6 +537,8 @@ impl Contact {
             w: wv,
             slip: re3(&t[0]) * wv[0] + re3(&t[1]) * wv[1],
             foot: re3(&q),
+            rolling: re3(&rolling),
+            omega: re3(&om),
         }
     }
 
@@ -581,6 +655,30 @@ impl Element for Contact {
             }
             return;
         }
+        if self.friction.is_none() && self.plane_penetration(x) < 0.0 {
+            // Apart, a contact without bristle states gives nothing, in a neighbourhood
+            // (exact tangents 0): the walls of a granular box, most of the time.
+            return;
+        }
+        if self.rolling.is_some() {
+            // The rolling/twisting moment: node moment rows −Rᵀ M.
+            let r = x.nodes[self.node[0]].r();
+            if need == Need::Residual {
+                let m = rot_t(0, r, &self.plane_rolling::<f64>(x));
+                for (i, mi) in m.iter().enumerate() {
+                    out.r[3 + i] -= mi;
+                }
+            } else {
+                let m = rot_t(0, r, &self.plane_rolling::<Dual<12>>(x));
+                for (i, mi) in m.iter().enumerate() {
+                    out.r[3 + i] -= mi.v;
+                    for j in 0..6 {
+                        out.k[(3 + i, j)] -= mi.d[j];
+                        out.c[(3 + i, j)] -= mi.d[6 + j];
+                    }
+                }
+            }
+        }
         let kin = self.kinematics(x);
         let n = self.plane.normal;
         let (nf, ft) = self.forces(x, &kin);
@@ -690,12 +788,20 @@ impl Element for Contact {
     fn dissipated_power(&self, x: &ElementInput) -> f64 {
         if let Some(hf) = &self.terrain {
             let t = self.terrain_terms::<f64>(hf, x);
-            return (t.nf[0] - t.nf[3]) * t.delta_dot - t.friction.dot(&t.slip);
+            return (t.nf[0] - t.nf[3]) * t.delta_dot
+                - t.friction.dot(&t.slip)
+                - t.rolling.dot(&t.omega);
         }
         let kin = self.kinematics(x);
         let (nf, ft) = self.forces(x, &kin);
         let ut = self.tangents[0] * kin.w[0] + self.tangents[1] * kin.w[1];
-        (nf[0] - nf[3]) * kin.delta_dot - ft.dot(&ut)
+        let rolling = if self.rolling.is_some() {
+            let nd = &x.nodes[self.node[0]];
+            -Vector3::from(self.plane_rolling::<f64>(x)).dot(&(nd.r() * nd.w))
+        } else {
+            0.0
+        };
+        (nf[0] - nf[3]) * kin.delta_dot - ft.dot(&ut) + rolling
     }
 
     fn external_power(&self, _ctx: &EvalContext, x: &ElementInput) -> f64 {

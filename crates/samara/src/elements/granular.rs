@@ -16,6 +16,9 @@
 //! when it fails; a step that ends with a pair in contact that was not a candidate is
 //! redone with it (see `analysis::dynamic`).
 //!
+//! Rolling and twisting resistance, when on, act on every pair ([`super::rolling`],
+//! stateless: nothing to carry over).
+//!
 //! Pair friction, when on, is LuGre with the bristle deflection as a history variable of
 //! the pair ([`SpherePair::with_bristle`]: backward Euler, condensed, so the pair has no
 //! unknowns of its own and the Newton unknowns do not change when pairs come and go); the
@@ -25,7 +28,7 @@
 //! ([`PairFriction::Regularized`]) is the alternative without stick.
 
 use super::contact::NormalLaw;
-use super::{Element, EvalContext, PairFriction, SpherePair};
+use super::{Element, EvalContext, PairFriction, RollingResistance, SpherePair};
 use crate::core::{ElementInput, NodeState, PairBristle};
 use nalgebra::Vector3;
 
@@ -41,6 +44,8 @@ pub struct GranularSet {
     pub friction: Option<PairFriction>,
     /// Verlet margin m [m] > 0.
     pub margin: f64,
+    /// Rolling and twisting resistance of the pairs ([`super::rolling`]).
+    pub rolling: Option<RollingResistance>,
 }
 
 impl GranularSet {
@@ -53,6 +58,7 @@ impl GranularSet {
             self.law,
         )
         .with_friction(self.friction)
+        .with_rolling(self.rolling)
         .with_bristle(Vector3::zeros(), 0.0)
     }
 

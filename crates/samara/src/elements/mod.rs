@@ -13,6 +13,7 @@ mod low_pass;
 mod maxwell;
 mod node_dual;
 mod rigid_body;
+mod rolling;
 mod sphere_pair;
 mod spring_damper;
 pub mod terrain;
@@ -33,6 +34,7 @@ pub use hydraulic::{
 pub use low_pass::{LowPassSensor, NodeQuantity, SensorInput};
 pub use maxwell::Maxwell;
 pub use rigid_body::RigidBody;
+pub use rolling::RollingResistance;
 pub use sphere_pair::{PairFriction, SpherePair};
 pub use spring_damper::SpringDamper;
 pub use time_signal::TimeSignal;

@@ -39,11 +39,15 @@
 //!   |F_t| → g N when |w| ≫ v_r; below v_r it is a viscous law (creep at speed
 //!   ≈ v_r F_t/(μ N) under a load below μ_s N, no true stick).
 //!
+//! **Rolling and twisting resistance** (optional, [`super::rolling`]): the couple
+//! `M(ω_B − ω_A)` on B and `−M` on A, with `R_eff = ρ_A ρ_B/(ρ_A + ρ_B)`.
+//!
 //! Tangents: exact, by forward-mode differentiation of the one kernel
 //! ([`crate::math::dual`]): directions 0..12 the nodes' (δx, δθ), 12..15 the states, then
 //! the same for the rates.
 
 use super::contact::{Friction, NormalLaw, normal_event, normal_potential};
+use super::rolling::{RollingResistance, resisting_moment};
 use super::{Element, EvalContext, LocalTerms, Need};
 use crate::core::{ElementInput, ElementState, NodeState};
 use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
@@ -80,6 +84,9 @@ struct PairResult<S> {
     slip: Vector3<f64>,
     /// The bristle deflection z (LuGre).
     bristle: Vector3<f64>,
+    /// The rolling/twisting moment on B and the relative angular velocity ω_B − ω_A.
+    rolling: Vector3<f64>,
+    omega_rel: Vector3<f64>,
 }
 
 /// The condensed LuGre bristle of a pair in a granular set: its deflection at the start
@@ -100,6 +107,8 @@ pub struct SpherePair {
     friction: Option<PairFriction>,
     /// LuGre as a history variable instead of states (pairs of a granular set).
     bristle: Option<Bristle>,
+    /// Rolling and twisting resistance.
+    rolling: Option<RollingResistance>,
 }
 
 /// `[N, N_el]` of a normal law over any scalar (zero out of contact and when it would
@@ -185,7 +194,14 @@ impl SpherePair {
             law,
             friction: None,
             bristle: None,
+            rolling: None,
         }
+    }
+
+    /// The pair with rolling and twisting resistance (None: without).
+    pub fn with_rolling(mut self, rolling: Option<RollingResistance>) -> Self {
+        self.rolling = rolling;
+        self
     }
 
     /// The pair with its LuGre bristle condensed into a history variable (no states):
@@ -342,8 +358,15 @@ impl SpherePair {
         }
         let f_b = add(&scale(&n, nf), &ft);
         let f_a = scale(&f_b, S::cst(-1.0));
-        let m_b = cross(&arm_b, &ft);
-        let m_a = cross(&arm_a, &scale(&ft, S::cst(-1.0)));
+        let mut m_b = cross(&arm_b, &ft);
+        let mut m_a = cross(&arm_a, &scale(&ft, S::cst(-1.0)));
+        let omega_rel = sub(&wb, &wa);
+        let mut rolling = [zero; 3];
+        if let Some(res) = &self.rolling {
+            rolling = resisting_moment(res, &n, &omega_rel, nf, delta, ra * rb / (ra + rb));
+            m_b = add(&m_b, &rolling);
+            m_a = sub(&m_a, &rolling);
+        }
         PairResult {
             rows: [f_a, rot_t(0, na.r(), &m_a), f_b, rot_t(1, nb.r(), &m_b)],
             state_rows,
@@ -354,6 +377,8 @@ impl SpherePair {
             friction: re3(&ft),
             slip: re3(&w),
             bristle: z_end,
+            rolling: re3(&rolling),
+            omega_rel: re3(&omega_rel),
         }
     }
 }
@@ -434,7 +459,7 @@ impl Element for SpherePair {
         )
     }
 
-    /// `(N − N_el) δ̇ − F_t·w` (the LuGre bristle's small elastic store counts as
+    /// `(N − N_el) δ̇ − F_t·w − M·(ω_B − ω_A)` (the LuGre bristle's small elastic store counts as
     /// dissipated, as for the ground contact).
     fn dissipated_power(&self, x: &ElementInput) -> f64 {
         let t = self.compute::<f64>(x.nodes, x.states);
@@ -443,7 +468,7 @@ impl Element for SpherePair {
         } else {
             0.0
         };
-        normal - t.friction.dot(&t.slip)
+        normal - t.friction.dot(&t.slip) - t.rolling.dot(&t.omega_rel)
     }
 
     fn n_events(&self) -> usize {

@@ -24,6 +24,9 @@
 //! bristle_stiffness = 1e5        # σ₀ [1/m]
 //! bristle_damping = 100.0        # σ₁ [s/m]
 //! # viscous_friction = 0.0       # σ₂ [s/m]
+//! # rolling_friction = 0.05      # μ_r: rolling resistance torque ≤ μ_r ρ N (spheres)
+//! # twisting_friction = 0.4      # μ_t: drilling torque ≤ (3π/16) μ_t √(ρ δ) N (spheres)
+//! # rolling_regularization = 0.01 # ω_ε [rad/s]: both viscous below it (default 0.01)
 //! ```
 //!
 //! Capsule: `shape = "capsule"`, `radius` and `segment = [[…], […]]` (the ends of its
@@ -37,7 +40,8 @@ use super::ground::{GroundInput, height_field};
 use super::{Build, ComponentKind, ModelInput};
 use crate::core::NodeRef;
 use crate::elements::{
-    Contact, ContactShape, Friction, GroundPlane, NormalLaw, PairFriction, SpherePair,
+    Contact, ContactShape, Friction, GroundPlane, NormalLaw, PairFriction, RollingResistance,
+    SpherePair,
 };
 use crate::math::height_field::HeightField;
 use crate::model::input::AnalysisType;
@@ -141,6 +145,18 @@ pub struct ContactInput {
     /// Viscous friction σ₂ per unit normal force [s/m], ≥ 0 (default 0).
     #[serde(default)]
     pub viscous_friction: Option<f64>,
+    /// Rolling resistance μ_r ≥ 0 of a sphere (docs/multi-field.md): a torque up to
+    /// μ_r R_eff N against the rolling; default none.
+    #[serde(default)]
+    pub rolling_friction: Option<f64>,
+    /// Twisting (drilling) resistance μ_t ≥ 0 of a sphere: a torque up to
+    /// (3π/16) μ_t a N against the spin about the normal, a = √(R_eff δ); default none.
+    #[serde(default)]
+    pub twisting_friction: Option<f64>,
+    /// ω_ε [rad/s] > 0: the rolling and twisting torques are viscous below it
+    /// (default 0.01).
+    #[serde(default)]
+    pub rolling_regularization: Option<f64>,
     /// Capsule: the ends of its axis segment, global, initial configuration [m].
     #[serde(default)]
     pub segment: Option<[[f64; 3]; 2]>,
@@ -168,6 +184,8 @@ pub struct ContactDef {
     pub terrain: Option<Arc<HeightField>>,
     pub law: NormalLaw,
     pub friction: Option<Friction>,
+    /// Rolling and twisting resistance (spheres).
+    pub rolling: Option<RollingResistance>,
     /// Body–body: the second sphere's node and radius.
     pub other: Option<(usize, f64)>,
     /// Capsule: the ends of its segment (global, initial configuration).
@@ -190,7 +208,13 @@ pub struct LawKeys {
     pub bristle_stiffness: Option<f64>,
     pub bristle_damping: Option<f64>,
     pub viscous_friction: Option<f64>,
+    pub rolling_friction: Option<f64>,
+    pub twisting_friction: Option<f64>,
+    pub rolling_regularization: Option<f64>,
 }
+
+/// The default ω_ε of the rolling and twisting laws [rad/s].
+pub const ROLLING_REGULARIZATION: f64 = 0.01;
 
 impl ContactInput {
     pub fn law_keys(&self) -> LawKeys {
@@ -208,8 +232,65 @@ impl ContactInput {
             bristle_stiffness: self.bristle_stiffness,
             bristle_damping: self.bristle_damping,
             viscous_friction: self.viscous_friction,
+            rolling_friction: self.rolling_friction,
+            twisting_friction: self.twisting_friction,
+            rolling_regularization: self.rolling_regularization,
         }
     }
+}
+
+/// Validates the rolling and twisting keys: `(resistance, ok)` (None when neither
+/// `rolling_friction` nor `twisting_friction` is given), each error at its key.
+pub fn validate_rolling(
+    cx: &mut Checker,
+    e: &Entry,
+    what: &str,
+    k: &LawKeys,
+) -> (Option<RollingResistance>, bool) {
+    if k.rolling_friction.is_none() && k.twisting_friction.is_none() {
+        let ok = unused(
+            cx,
+            e,
+            what,
+            "rolling_regularization",
+            k.rolling_regularization.is_some(),
+            "ω_ε regularizes `rolling_friction` and `twisting_friction`; give one of them",
+        );
+        return (None, ok);
+    }
+    let mut ok = true;
+    for (key, v, hint) in [
+        (
+            "rolling_friction",
+            k.rolling_friction,
+            "μ_r ≥ 0: the rolling torque is at most μ_r R_eff N (0.001–0.1 for most grains)",
+        ),
+        (
+            "twisting_friction",
+            k.twisting_friction,
+            "μ_t ≥ 0: the drilling torque is at most (3π/16) μ_t √(R_eff δ) N (μ_t is a sliding friction coefficient)",
+        ),
+    ] {
+        if let Some(v) = v {
+            ok &= check(cx, e, what, (key, v), |x| x >= 0.0, "non-negative", hint);
+        }
+    }
+    let reg = k.rolling_regularization.unwrap_or(ROLLING_REGULARIZATION);
+    ok &= check(
+        cx,
+        e,
+        what,
+        ("rolling_regularization", reg),
+        |x| x > 0.0,
+        "positive",
+        "ω_ε [rad/s]: below it the rolling and twisting torques are viscous (a sphere under a torque below the limit creeps at about ω_ε)",
+    );
+    let res = RollingResistance {
+        rolling: k.rolling_friction.unwrap_or(0.0),
+        twisting: k.twisting_friction.unwrap_or(0.0),
+        regularization: reg,
+    };
+    (ok.then_some(res), ok)
 }
 
 /// Validates the normal law and the LuGre friction keys: `(law, friction, ok)`, each
@@ -456,6 +537,7 @@ fn contact(def: &ContactDef, name: String, shape: ContactShape) -> Contact {
         }
         None => Contact::new(name, def.node, shape, def.plane, def.law, def.friction),
     }
+    .with_rolling(def.rolling)
 }
 
 /// A curved terrain for tangent checks, z = 0.3 sin(1.1 x) cos(0.8 y) + 0.1 x y + 0.2 x
@@ -720,6 +802,24 @@ impl ComponentKind for ContactKind {
         }
         let (law, friction, law_ok) = validate_law(cx, &e, &what, &ci.law_keys());
         ok &= law_ok;
+        let (rolling, rolling_ok) = validate_rolling(cx, &e, &what, &ci.law_keys());
+        ok &= rolling_ok;
+        if rolling.is_some() && ci.shape == ShapeInput::Point {
+            let key = if ci.rolling_friction.is_some() {
+                "rolling_friction"
+            } else {
+                "twisting_friction"
+            };
+            cx.error(
+                format!("{what}: `{key}` needs a sphere (a point has no contact patch)"),
+                cx.key(&e, key),
+                Some(
+                    "rolling and twisting resistance act on shape = \"sphere\" or \"capsule\""
+                        .into(),
+                ),
+            );
+            ok = false;
+        }
         // Body–body.
         let mut other = None;
         if let Some(on) = &ci.other_node {
@@ -801,6 +901,7 @@ impl ComponentKind for ContactKind {
             terrain: terrain.clone(),
             law,
             friction,
+            rolling,
             other: other.zip(ci.other_radius),
             segment,
         })
@@ -809,11 +910,12 @@ impl ComponentKind for ContactKind {
     /// Friction contacts have no static equilibrium of their own (the bristle row is
     /// 0 = 0 at rest): a static analysis of a model with one is rejected.
     fn finish(input: &ModelInput, cx: &mut Checker, _model: &Model) {
-        let Some(c) = input
-            .contacts
-            .iter()
-            .find(|c| c.value.static_friction.is_some())
-        else {
+        let Some(c) = input.contacts.iter().find(|c| {
+            let c = &c.value;
+            c.static_friction.is_some()
+                || c.rolling_friction.is_some()
+                || c.twisting_friction.is_some()
+        }) else {
             return;
         };
         for a in &input.analyses {
@@ -824,7 +926,7 @@ impl ComponentKind for ContactKind {
                         a.value.name.value, c.value.name.value
                     ),
                     a.value.kind.span.clone(),
-                    Some("static friction is indeterminate at rest (the LuGre bristle row vanishes); run a dynamic analysis and let it settle, or leave out the friction keys".into()),
+                    Some("static friction is indeterminate at rest (the LuGre bristle row vanishes; rolling and twisting resistance vanish too); run a dynamic analysis and let it settle, or leave out the friction keys".into()),
                 );
             }
         }
@@ -840,7 +942,8 @@ impl ComponentKind for ContactKind {
         if let (Some((j, rb)), ContactShape::Sphere { radius }) = (def.other, def.shape) {
             parts.elements.push(Box::new(
                 SpherePair::new(&def.name, [def.node, j], [radius, rb], def.law)
-                    .with_friction(def.friction.map(PairFriction::LuGre)),
+                    .with_friction(def.friction.map(PairFriction::LuGre))
+                    .with_rolling(def.rolling),
             ));
             return;
         }
@@ -1026,6 +1129,65 @@ impl ComponentKind for ContactKind {
             } else {
                 case
             });
+        }
+        // Rolling and twisting resistance (spinning nodes, ω_ε comparable to |ω| so the
+        // regularized part is tested): on the plane (sphere, capsule end), on the height
+        // field, and between spheres (with and without LuGre).
+        let res = RollingResistance {
+            rolling: 0.15,
+            twisting: 0.4,
+            regularization: 0.7,
+        };
+        for k in 0..5u64 {
+            let node = random_node(1010 + k);
+            let normal = Vector3::new(0.2, -0.3, 1.0).normalize();
+            let (shape, a) = match k {
+                1 => {
+                    let offset = Vector3::new(0.3, -0.1, 0.2);
+                    (
+                        ContactShape::OffsetSphere {
+                            radius: 0.25,
+                            offset,
+                        },
+                        node.r() * offset - normal * 0.25,
+                    )
+                }
+                _ => (ContactShape::Sphere { radius: 0.4 }, -normal * 0.4),
+            };
+            let plane = GroundPlane {
+                point: node.x + a + normal * 0.1,
+                normal,
+                velocity: Vector3::zeros(),
+            };
+            let law = if k == 0 { hc } else { lin };
+            let case = match k {
+                0 | 1 => {
+                    let e = Contact::new("r", 0, shape, plane, law, Some(friction))
+                        .with_rolling(Some(res));
+                    TangentCase::element(Box::new(e), vec![node])
+                        .with_states(vec![(0.004, -0.3), (-0.002, 0.5)])
+                }
+                2 => {
+                    let hf = curved_terrain_through(node.x, 0.3);
+                    let e = Contact::on_height_field("r", 0, shape, hf, hc, None)
+                        .with_rolling(Some(res));
+                    TangentCase::element(Box::new(e), vec![node])
+                }
+                _ => {
+                    let b = random_node(1020 + k);
+                    let dist = (b.x - node.x).norm();
+                    let e = SpherePair::new("rp", [0, 1], [0.6 * dist, 0.5 * dist], law)
+                        .with_friction((k == 4).then_some(PairFriction::LuGre(friction)))
+                        .with_rolling(Some(res));
+                    let case = TangentCase::element(Box::new(e), vec![node, b]);
+                    if k == 4 {
+                        case.with_states(vec![(0.004, -0.3), (-0.002, 0.5), (0.001, 0.2)])
+                    } else {
+                        case
+                    }
+                }
+            };
+            out.push(case);
         }
         out
     }

@@ -25,13 +25,17 @@
 //! bristle_stiffness = 1e4
 //! bristle_damping = 50.0
 //! # regularization_velocity = 1e-3 # stateless regularized Coulomb between spheres instead
+//! rolling_friction = 0.05        # μ_r (optional): rolling resistance ≤ μ_r R_eff N, on the
+//! twisting_friction = 0.4        # ground and between spheres; μ_t: drilling resistance
+//! # rolling_regularization = 0.01 # ω_ε [rad/s] (default 0.01), as [[contacts]]
 //! ```
 
-use super::contact::{LawKeys, NormalInput, validate_law};
+use super::contact::{LawKeys, NormalInput, validate_law, validate_rolling};
 use super::{Build, ComponentKind, ModelInput};
 use crate::core::NodeRef;
 use crate::elements::{
-    Contact, ContactShape, Friction, GranularSet, GroundPlane, NormalLaw, PairFriction, SpherePair,
+    Contact, ContactShape, Friction, GranularSet, GroundPlane, NormalLaw, PairFriction,
+    RollingResistance, SpherePair,
 };
 use crate::model::input::AnalysisType;
 use crate::model::validate::{Checker, Entry};
@@ -114,6 +118,16 @@ pub struct GranularInput {
     /// ≈ v_r below the friction limit).
     #[serde(default)]
     pub regularization_velocity: Option<f64>,
+    /// Rolling resistance μ_r ≥ 0 on the ground and between spheres (as `[[contacts]]`;
+    /// R_eff = ρ_A ρ_B/(ρ_A + ρ_B) between spheres); default none.
+    #[serde(default)]
+    pub rolling_friction: Option<f64>,
+    /// Twisting (drilling) resistance μ_t ≥ 0 (as `[[contacts]]`); default none.
+    #[serde(default)]
+    pub twisting_friction: Option<f64>,
+    /// ω_ε [rad/s] > 0 of both (default 0.01).
+    #[serde(default)]
+    pub rolling_regularization: Option<f64>,
 }
 
 /// A frictionless confining plane of a granular set.
@@ -142,6 +156,8 @@ pub struct GranularDef {
     pub friction: Option<Friction>,
     /// The stateless pair law instead of LuGre bristles.
     pub regularization_velocity: Option<f64>,
+    /// Rolling and twisting resistance (ground and pairs).
+    pub rolling: Option<RollingResistance>,
 }
 
 pub struct GranularKind;
@@ -352,9 +368,14 @@ impl ComponentKind for GranularKind {
             bristle_stiffness: gi.bristle_stiffness,
             bristle_damping: gi.bristle_damping,
             viscous_friction: gi.viscous_friction,
+            rolling_friction: gi.rolling_friction,
+            twisting_friction: gi.twisting_friction,
+            rolling_regularization: gi.rolling_regularization,
         };
         let (law, friction, law_ok) = validate_law(cx, &e, &what, &keys);
         ok &= law_ok;
+        let (rolling, rolling_ok) = validate_rolling(cx, &e, &what, &keys);
+        ok &= rolling_ok;
         let vr = match (gi.static_friction.is_some(), gi.regularization_velocity) {
             (true, Some(v)) if v.is_finite() && v > 0.0 => Some(v),
             (true, Some(v)) => {
@@ -393,6 +414,7 @@ impl ComponentKind for GranularKind {
             law,
             friction,
             regularization_velocity: vr,
+            rolling,
         })
     }
 
@@ -422,14 +444,17 @@ impl ComponentKind for GranularKind {
 
     fn build(def: &GranularDef, parts: &mut Build) {
         for ((&node, &radius), node_name) in def.nodes.iter().zip(&def.radii).zip(&def.node_names) {
-            parts.elements.push(Box::new(Contact::new(
-                format!("{}.ground.{node_name}", def.name),
-                node,
-                ContactShape::Sphere { radius },
-                def.plane,
-                def.law,
-                def.friction,
-            )));
+            parts.elements.push(Box::new(
+                Contact::new(
+                    format!("{}.ground.{node_name}", def.name),
+                    node,
+                    ContactShape::Sphere { radius },
+                    def.plane,
+                    def.law,
+                    def.friction,
+                )
+                .with_rolling(def.rolling),
+            ));
             for (k, wall) in def.walls.iter().enumerate() {
                 parts.elements.push(Box::new(Contact::new(
                     format!("{}.wall{}.{node_name}", def.name, k + 1),
@@ -456,6 +481,7 @@ impl ComponentKind for GranularKind {
                     None => PairFriction::LuGre(friction),
                 }),
             margin: def.margin,
+            rolling: def.rolling,
         });
     }
 
@@ -476,7 +502,7 @@ impl ComponentKind for GranularKind {
             exponent: 1.5,
             damping_factor: 0.2,
         };
-        (0..4u64)
+        (0..5u64)
             .map(|k| {
                 let a = random_node(980 + k);
                 let b = random_node(985 + k);
@@ -495,9 +521,15 @@ impl ComponentKind for GranularKind {
                         _ => Some(PairFriction::LuGre(friction)),
                     },
                     margin: 0.01,
+                    // k = 4: with rolling and twisting resistance.
+                    rolling: (k == 4).then_some(RollingResistance {
+                        rolling: 0.1,
+                        twisting: 0.3,
+                        regularization: 0.5,
+                    }),
                 };
                 let mut e: SpherePair = set.pair(0, 1);
-                let step = if k == 2 { 0.05 } else { 0.0 };
+                let step = if k >= 2 { 0.05 } else { 0.0 };
                 e.set_bristle(Vector3::new(0.004, -0.007, 0.002), step);
                 TangentCase::element(Box::new(e), vec![a, b])
             })
