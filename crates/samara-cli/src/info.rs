@@ -62,8 +62,12 @@ pub fn info(reader: &mut ResultsReader) -> Result<(), samara::output::ReadError>
                 .attr_f64("max_constraint_violation")
                 .unwrap_or(f64::NAN),
         );
-        let counts = ["line_search_backtracks", "contact_redos", "pattern_rebuilds"]
-            .map(|a| reader.attr_i64(a).unwrap_or(0));
+        let counts = [
+            "line_search_backtracks",
+            "contact_redos",
+            "pattern_rebuilds",
+        ]
+        .map(|a| reader.attr_i64(a).unwrap_or(0));
         if counts.iter().any(|&c| c > 0) {
             println!(
                 "  contact   line search halved {} corrections, {} steps redone for new contacts, pattern rebuilt {} times",

@@ -722,8 +722,8 @@ fn walk(dir: &Path) -> Vec<String> {
 /// the line search; the per-step values must add up to the total.
 #[test]
 fn granular_runs_report_line_search_and_contact_counts() {
-    let text = std::fs::read_to_string(root().join("examples/contact/granular_column.toml"))
-        .unwrap();
+    let text =
+        std::fs::read_to_string(root().join("examples/contact/granular_column.toml")).unwrap();
     assert!(text.contains("t_end = 3.0\n"));
     let text = text.replace("t_end = 3.0\n", "t_end = 0.25\ndiagnostics = true\n");
     let dir = tempfile::tempdir().unwrap();

@@ -70,5 +70,8 @@ fn fixed_steps_land_on_an_off_grid_step_at_second_order() {
     }
     let p = orders(&errors);
     println!("orders {p:?}");
-    assert!(p.iter().all(|&o| o > 1.8), "orders {p:?}, errors {errors:?}");
+    assert!(
+        p.iter().all(|&o| o > 1.8),
+        "orders {p:?}, errors {errors:?}"
+    );
 }

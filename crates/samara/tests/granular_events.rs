@@ -78,7 +78,12 @@ fn adaptive_steps_land_on_granular_pairs_closing_and_opening() {
         let delta: Vec<(f64, f64)> = h
             .frames
             .iter()
-            .map(|f| (f.time, 0.2 - (f.state.nodes[1].x - f.state.nodes[0].x).norm()))
+            .map(|f| {
+                (
+                    f.time,
+                    0.2 - (f.state.nodes[1].x - f.state.nodes[0].x).norm(),
+                )
+            })
             .collect();
         let crossings: Vec<(f64, f64)> = delta
             .windows(2)
@@ -92,11 +97,25 @@ fn adaptive_steps_land_on_granular_pairs_closing_and_opening() {
     println!("located: crossings {crossings:?}, exit velocities {va:.6} {vb:.6}");
     assert_eq!(crossings.len(), 2, "{crossings:?}");
     for &(t, d) in &crossings {
-        assert!(d < 6e-6, "a step ends {d:.2e} m from the pair's edge (t = {t})");
+        assert!(
+            d < 6e-6,
+            "a step ends {d:.2e} m from the pair's edge (t = {t})"
+        );
     }
-    assert!((crossings[0].0 - t_c).abs() < 2e-5, "{} vs {t_c}", crossings[0].0);
-    assert!((crossings[1].0 - t_s).abs() < 2e-5, "{} vs {t_s}", crossings[1].0);
-    assert!((va + 3.0).abs() < 1e-3 && (vb - 3.0).abs() < 1e-3, "{va} {vb}");
+    assert!(
+        (crossings[0].0 - t_c).abs() < 2e-5,
+        "{} vs {t_c}",
+        crossings[0].0
+    );
+    assert!(
+        (crossings[1].0 - t_s).abs() < 2e-5,
+        "{} vs {t_s}",
+        crossings[1].0
+    );
+    assert!(
+        (va + 3.0).abs() < 1e-3 && (vb - 3.0).abs() < 1e-3,
+        "{va} {vb}"
+    );
     let (unlocated, _, _) = run_with(false);
     println!("not located: crossings {unlocated:?}");
     let worst = unlocated.iter().map(|c| c.1).fold(0.0, f64::max);

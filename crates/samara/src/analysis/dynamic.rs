@@ -1305,7 +1305,12 @@ struct EventWork {
 
 /// The event functions of the granular candidate `pairs` at `s`
 /// ([`crate::elements::GranularSet::pair_event`]).
-fn pair_events(sys: &System, pairs: &[(usize, usize, usize)], s: &State, out: &mut Vec<(f64, f64)>) {
+fn pair_events(
+    sys: &System,
+    pairs: &[(usize, usize, usize)],
+    s: &State,
+    out: &mut Vec<(f64, f64)>,
+) {
     out.clear();
     out.extend(
         pairs
