@@ -724,8 +724,10 @@ fn walk(dir: &Path) -> Vec<String> {
 fn granular_runs_report_line_search_and_contact_counts() {
     let text =
         std::fs::read_to_string(root().join("examples/contact/granular_column.toml")).unwrap();
-    assert!(text.contains("t_end = 3.0\n"));
-    let text = text.replace("t_end = 3.0\n", "t_end = 0.25\ndiagnostics = true\n");
+    assert!(text.contains("t_end = 3.0\n") && text.contains("output_every = 10\n"));
+    let text = text
+        .replace("t_end = 3.0\n", "t_end = 0.25\ndiagnostics = true\n")
+        .replace("output_every = 10\n", "output_every = 1\n");
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("column.toml");
     std::fs::write(&model, text).unwrap();
