@@ -23,12 +23,6 @@ use std::time::Instant;
 /// Consecutive successful steps after a cut before the step is doubled again.
 const REGROW_AFTER: usize = 4;
 
-/// Whether the `Trend` predictor is offered. Off: with it, modified Newton on the
-/// pendulum of tests/options.rs ended 2.6e-5 m from full Newton's answer at tolerance
-/// 1e-10 (3.5e-7 m without) and took 136 factorizations instead of 48 — not understood
-/// yet, so the predictor stays out of the choice until it is (docs/integrators.md).
-const TREND_PREDICTOR: bool = false;
-
 /// How a step's first Newton iterate is predicted (λ_{n+1} = λ_n always).
 ///
 /// - `Extrapolate`: v̇_{n+1} = v̇_n, exact for constant accelerations — the best guess for
@@ -37,8 +31,12 @@ const TREND_PREDICTOR: bool = false;
 ///   extrapolation of the accelerations from the last two steps, exact for linearly
 ///   varying accelerations. For motion the step resolves (ω h ≪ 1) its error in hΔq is
 ///   O(h⁴ q⁗) against O(h³ q⃛) for `Extrapolate`, so the first correction starts smaller
-///   by about ω h. (Extrapolating λ the same way was tried: no gain in the chain
-///   benchmark.)
+///   by about ω h. (With λ held, a reused matrix's first correction leaves an error of the
+///   size of λ's change over the step, which the second removes; modified Newton reads
+///   that as slow contraction and refactorizes: the pendulum of tests/options.rs takes
+///   152 factorizations instead of 48 at tolerance 1e-10. Extrapolating λ like the
+///   accelerations restores the 48, but costs the chain benchmark 4 % and broke the
+///   landing gear's last, 1.6e-12 s step; not used.)
 /// - `Repeat`: the configuration increment of the previous step again (scaled by the step
 ///   ratio), i.e. a velocity taken from positions.
 /// - `Hold`: q_{n+1} = q_n.
@@ -722,11 +720,7 @@ impl Integrator<'_> {
             extrapolated = extrapolated.max((q - e).abs());
             trended = trended.max((q - t).abs());
         }
-        self.predictor = if TREND_PREDICTOR
-            && self.trended_valid
-            && trended < extrapolated
-            && trended <= repeated
-        {
+        self.predictor = if self.trended_valid && trended < extrapolated && trended <= repeated {
             Predictor::Trend
         } else if extrapolated <= repeated {
             Predictor::Extrapolate
