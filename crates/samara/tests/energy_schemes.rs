@@ -439,7 +439,11 @@ fn energy_steps_land_on_the_load_knots() {
 /// The decaying scheme never increases the heavy top's discrete energy Ẽ (ρ∞ = 0.5, 10
 /// precession periods at 100 steps per period: only the kinematic dissipation acts, the
 /// top has no elastic element); tolerance 1e-10 of m g l, the Newton tolerance (1e-12 on
-/// the increments) times the moments.
+/// the increments) times the moments. The vertical angular momentum about the pivot
+/// (constant in the exact motion) is printed, not checked: it drifts by O(h²) in the
+/// preserving scheme as well (1.37e-2 and 1.36e-2 over two periods in the two schemes),
+/// because the spherical joint's Gonzalez-corrected rows are not moment-free
+/// (docs/integrators.md, joint rows); the decaying scheme's dissipation adds no moment.
 #[test]
 fn decaying_heavy_top_never_gains_energy() {
     let m = example_with(
@@ -450,40 +454,95 @@ fn decaying_heavy_top_never_gains_energy() {
             TOP_PERIOD / 100.0
         ),
     );
-    let (e, _) = step_by_hand(&m, 1000, 1000);
+    let sys = System::new(&m);
+    let (e, states) = step_by_hand(&m, 1000, 1);
     let rise = largest_rise(&e);
     let lost = e[0] - e[e.len() - 1];
-    eprintln!("decaying heavy top: largest one-step rise of Ẽ {rise:.2e} J, lost {lost:.3e} J");
+    let lz0 = sys.momenta(&states[0]).1.z;
+    let dlz = states
+        .iter()
+        .map(|s| (sys.momenta(s).1.z - lz0).abs())
+        .fold(0.0, f64::max);
+    eprintln!(
+        "decaying heavy top: largest one-step rise of Ẽ {rise:.2e} J, lost {lost:.3e} J, L_z {lz0:.6} kg m²/s, max |ΔL_z| {dlz:.2e}"
+    );
     assert!(rise < 1e-10 * 4.905, "{rise:e}");
     assert!(lost > 0.0, "{lost:e}");
+}
+
+/// A free asymmetric top (principal inertias 0.02, 0.03, 0.04 kg m², no gravity, no
+/// joint) tumbling about an axis near its intermediate one while its node translates:
+/// the rotational kinematic dissipation acts at every step (the body-frame angular
+/// velocity changes by O(1) per period), so the decaying scheme (ρ∞ = 0.5) must lower Ẽ
+/// (by more than 1e-8 J, 10⁴ times what the Newton tolerance leaves the preserving
+/// scheme; measured 3e-6 J: the rotation is resolved, 0.06 rad per step, and the loss is
+/// of high order) and never raise it (1e-12 J: the Newton tolerance times the moments),
+/// while the
+/// linear and the spatial angular momentum stay exactly what they were (Simo & Wong's
+/// balance holds for any ψ; the translational dissipation is moment-free): tolerance
+/// 1e-12 of |L|, the Newton tolerance (1e-13 on increments) over 2,000 steps.
+#[test]
+fn decaying_free_top_keeps_its_momenta() {
+    let m = model(
+        "[model]\nname = \"free_top\"\n[[nodes]]\nname = \"top\"\nposition = [0.3, -0.2, 0.1]\nvelocity = [1.0, 0.5, -0.2]\nangular_velocity = [0.3, 6.0, 0.4]\n[[bodies]]\nname = \"top\"\nnode = \"top\"\nmass = 2.0\ninertia = [[0.02, 0.0, 0.0], [0.0, 0.03, 0.0], [0.0, 0.0, 0.04]]\n[[analyses]]\nname = \"p\"\ntype = \"dynamic\"\nintegrator = \"energy_decaying\"\nrho_inf = 0.5\nt_end = 20.0\nstep = 0.01\ntolerance = 1e-13\nrelative_tolerance = 1e-14\n",
+    );
+    let sys = System::new(&m);
+    let (e, states) = step_by_hand(&m, 2000, 1);
+    let (p0, l0) = sys.momenta(&states[0]);
+    let (mut dp, mut dl): (f64, f64) = (0.0, 0.0);
+    for s in &states {
+        let (p, l) = sys.momenta(s);
+        dp = dp.max((p - p0).norm());
+        dl = dl.max((l - l0).norm());
+    }
+    let rise = largest_rise(&e);
+    eprintln!(
+        "decaying free top: Ẽ {:.6} → {:.6} J, largest one-step rise {rise:.2e} J, |Δp| {dp:.2e}, |ΔL| {dl:.2e} of |L| {:.4}",
+        e[0],
+        e[e.len() - 1],
+        l0.norm()
+    );
+    assert!(rise < 1e-12, "{rise:e}");
+    assert!(e[e.len() - 1] < e[0] - 1e-8, "no dissipation: {e:?}");
+    assert!(dp < 1e-12 * p0.norm(), "{dp:e}");
+    assert!(dl < 1e-12 * l0.norm(), "{dl:e}");
 }
 
 /// The decaying scheme on the flying spaghetti (ρ∞ = 0.5): once the load is gone (5 s) the
 /// discrete energy Ẽ falls in every step (1e-9 J: the Newton tolerance times the beam's
 /// forces), the linear momentum stays the load's impulse exactly (all forces internal).
-/// The angular momentum is conserved only to the scheme's order (the translations'
-/// kinematic dissipation leaves `h c (Δv − sΔv_prev) × M v̄` per node and step): its
-/// change over the free flight must fall ≥ 3× per halving of h (second order: 4).
-/// Positions at 3 s with h = 0.05, 0.025, 0.0125 s against 0.00625 s: second order,
+/// The angular momentum too stays what it was at 5 s (the dissipation is moment-free;
+/// before the projection it drifted 0.152 and 0.0172 at h = 0.05 and 0.025 s). These runs
+/// take a Newton tolerance of 1e-12 on the increments (the example's 1e-10 leaves
+/// |Δp| 5.6e-11, |ΔL| 7.5e-9 at h = 0.025 s: the projection makes the momenta nonlinear
+/// in the increments, so the reused Newton matrix no longer zeroes them exactly in each
+/// correction); tolerances 1e-11 of |p| and 1e-12 of |L| (measured 1.6e-12 and 5.5e-11
+/// absolute, of |p| = 50 and |L| = 710).
+/// Positions at 3 s with h = 0.05, 0.025, 0.0125 s against 0.00625 s, at ρ∞ = 0.5 and
+/// 1/3 (the strongest dissipation): second order,
 /// error ratios in [3, 6.5] (4.2 and 5 expected against a reference at h/8; at h = 0.1 s
 /// the dissipation of the partly resolved modes is not yet asymptotic: ratio 1.7 from
 /// 0.1 to 0.05; the θ-method gave 1.8 and 3.1 from h = 0.1).
 #[test]
 fn decaying_scheme_on_the_flying_spaghetti() {
-    let decaying = |step: f64, t_end: f64, every: usize| {
+    let decaying_at = |rho: f64, step: f64, t_end: f64, every: usize| {
         let mut m = with_run(model_file(SPAGHETTI), step, t_end, every);
         if let AnalysisKind::Dynamic(d) = &mut m.analyses[0].kind {
             d.integrator = IntegratorType::EnergyDecaying;
-            d.rho_inf = 0.5;
+            d.rho_inf = rho;
         }
         m
     };
+    let decaying = |step: f64, t_end: f64, every: usize| decaying_at(0.5, step, t_end, every);
     let sys = System::new(&decaying(0.05, 10.0, 1));
-    let mut dls = Vec::new();
     for step in [0.05, 0.025] {
         let n = (10.0 / step) as usize;
         let n5 = (5.0 / step) as usize;
-        let (e, states) = step_by_hand(&decaying(step, 10.0, 1), n, 1);
+        let mut m = decaying(step, 10.0, 1);
+        if let AnalysisKind::Dynamic(d) = &mut m.analyses[0].kind {
+            d.solver.tolerance = 1e-12;
+        }
+        let (e, states) = step_by_hand(&m, n, 1);
         let (p5, l5) = sys.momenta(&states[n5]);
         let rise = largest_rise(&e[n5..]);
         let dp = states[n5..]
@@ -499,29 +558,32 @@ fn decaying_scheme_on_the_flying_spaghetti() {
         );
         assert!(rise < 1e-9, "{rise:e}");
         assert!(e[n] < e[n5]);
-        assert!(dp < 1e-9 * p5.norm(), "{dp:e}");
-        dls.push(dl);
+        assert!(dp < 1e-11 * p5.norm(), "{dp:e}");
+        assert!(dl < 1e-12 * l5.norm(), "{dl:e}");
     }
-    assert!(dls[0] / dls[1] > 3.0, "angular momentum drifts {dls:?}");
-    let nodes = |step: f64| {
-        let (s, h) = run(&decaying(step, 3.0, 1_000_000));
-        assert!(s.failure.is_none(), "{:?}", s.failure);
-        h.last().unwrap().state.nodes.clone()
-    };
-    let reference = nodes(0.00625);
-    let errors: Vec<f64> = [0.05, 0.025, 0.0125]
-        .iter()
-        .map(|&st| {
-            nodes(st)
-                .iter()
-                .zip(&reference)
-                .map(|(a, b)| (a.x - b.x).norm())
-                .fold(0.0, f64::max)
-        })
-        .collect();
-    let ratios = [errors[0] / errors[1], errors[1] / errors[2]];
-    eprintln!("decaying spaghetti: position errors {errors:?}, ratios {ratios:?}");
-    assert!(ratios.iter().all(|r| (3.0..6.5).contains(r)), "{ratios:?}");
+    for rho in [0.5, 1.0 / 3.0] {
+        let nodes = |step: f64| {
+            let (s, h) = run(&decaying_at(rho, step, 3.0, 1_000_000));
+            assert!(s.failure.is_none(), "{:?}", s.failure);
+            h.last().unwrap().state.nodes.clone()
+        };
+        let reference = nodes(0.00625);
+        let errors: Vec<f64> = [0.05, 0.025, 0.0125]
+            .iter()
+            .map(|&st| {
+                nodes(st)
+                    .iter()
+                    .zip(&reference)
+                    .map(|(a, b)| (a.x - b.x).norm())
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        let ratios = [errors[0] / errors[1], errors[1] / errors[2]];
+        eprintln!(
+            "decaying spaghetti, ρ∞ = {rho:.3}: position errors {errors:?}, ratios {ratios:?}"
+        );
+        assert!(ratios.iter().all(|r| (3.0..6.5).contains(r)), "{ratios:?}");
+    }
 }
 
 /// A stiff cantilever (L = 2, EI = 500, EA = GA = 10⁴, ρA = 1) hit at the tip by a 10 ms
@@ -602,16 +664,19 @@ fn stiff_beam_hit_by_an_impulse_loses_its_high_frequencies() {
 /// The example's second analysis: the decaying scheme (ρ∞ = 0.5) removes the chain's
 /// vibration energy; its discrete energy Ẽ falls in every step (1e-11 J: the Newton
 /// tolerance times the spring forces), the linear momentum stays exact (the springs'
-/// dissipative tension is internal), and the angular momentum's drift over 20 s is of
-/// second order: ≥ 3× smaller at h/2 (4 in theory).
+/// dissipative tension is internal), and so does the angular momentum (the kinematic
+/// dissipation is moment-free; before the projection it drifted 7.5e-4 and 5.0e-5 of
+/// |L| = 4.5 at h = 0.01 and 0.005 s). Newton tolerance 1e-14 on the increments (at 1e-12
+/// the momenta wander by 2e-10 and 4e-10 over the run, with the tolerance: the Newton
+/// matrix is reused across steps and the last correction leaves that much); tolerances
+/// 1e-11 for |Δp| and 5e-11 for |ΔL| (measured 1.5e-12 and 8e-12 over 4,000 steps).
 #[test]
 fn decaying_chain_loses_vibration_energy_and_keeps_its_momentum() {
-    let mut dls = Vec::new();
     for step in [0.01, 0.005] {
         let m = example_with(
             CHAIN,
             &format!(
-                "[[analyses]]\nname = \"p\"\ntype = \"dynamic\"\nintegrator = \"energy_decaying\"\nrho_inf = 0.5\nt_end = 20.0\nstep = {step}\ntolerance = 1e-12\nrelative_tolerance = 1e-14\n"
+                "[[analyses]]\nname = \"p\"\ntype = \"dynamic\"\nintegrator = \"energy_decaying\"\nrho_inf = 0.5\nt_end = 20.0\nstep = {step}\ntolerance = 1e-14\nrelative_tolerance = 1e-14\n"
             ),
         );
         let sys = System::new(&m);
@@ -631,11 +696,10 @@ fn decaying_chain_loses_vibration_energy_and_keeps_its_momentum() {
             l0.norm()
         );
         assert!(rise < 1e-11, "{rise:e}");
-        assert!(dp < 1e-10, "{dp:e}");
+        assert!(dp < 1e-11, "{dp:e}");
         assert!(e[n] < e[0]);
-        dls.push(dl);
+        assert!(dl < 5e-11, "{dl:e}");
     }
-    assert!(dls[0] / dls[1] > 3.0, "{dls:?}");
 }
 
 /// Pendulum (1 m, released horizontal at rest): after a quarter of the closed-form period

@@ -6,11 +6,13 @@
 //! (Cayley update; Simo & Wong 1991) and the kinematics
 //!
 //! ```text
-//! Δx/h = (v₀ + v₁)/2 + c (Δv − s Δv_prev),     ψ/h = (Ω₀ + Ω₁)/2 + c (ΔΩ − s ΔΩ_prev)
+//! Δx/h = (v₀ + v₁)/2 + c P(Δv − s b),     ψ/h = (Ω₀ + Ω₁)/2 + c (ΔΩ − s ΔΩ_prev)
 //! ```
 //!
-//! with `Δv = v₁ − v₀`, `Δv_prev` that of the previous step and `s = min(h/h_prev, 1)`
-//! (0 on the first step). Equilibrium is imposed in the discrete form of every element
+//! with `Δv = v₁ − v₀`, `ΔΩ_prev` the previous step's, `s = min(h/h_prev, 1)` (0 on the
+//! first step), P the M-orthogonal projector that makes the translations' dissipation
+//! moment-free ([`super::moment_neutral`]: `Σ m_i (Pδ)_i × Δx_i = 0`) and `b` the
+//! previous step's `PΔv`. Equilibrium is imposed in the discrete form of every element
 //! ([`crate::core::DiscreteStep`]; a discrete gradient of its energy) plus the constraint
 //! forces `B̄ᵀλ`, with the constraints enforced at the end of the step, `Φ(q₁, t₁) = 0`.
 //! `B̄` is the mid-point Jacobian corrected row by row after Gonzalez (1996),
@@ -22,32 +24,36 @@
 //! potential adds the dissipative stress `c C (e − s e_prev)` on its strain increments
 //! e over the step (a spring's Δl, a beam's Δε at its elastic points, a joint
 //! coordinate's Δν), also against the previous step's. Dotting the step's equations with
-//! Δ (the inertia rows give `ΔT + c Δvᵀ M (Δv − s Δv_prev)`) and using
-//! `a(a − s b) ≥ (a² − b²)/2` for s ≤ 1:
+//! Δ (the inertia rows give `ΔT + c ⟨PΔv, PΔv − s Pb⟩_M + c ΔΩᵀJ(ΔΩ − sΔΩ_prev)`: MP is
+//! symmetric and P² = P) and using `a(a − s b) ≥ (a² − b²)/2` for s ≤ 1 and
+//! `‖Pb‖_M ≤ ‖b‖_M`:
 //!
 //! ```text
-//! Ẽ₁ − Ẽ₀ ≤ W − D − (c/2)(‖Δv − sΔv_prev‖²_M + Σ‖e − s e_prev‖²_C) ≤ W − D,
-//! Ẽ = E + (c/2)(‖Δv_last‖²_M + Σ_e ‖e_last‖²_C),
+//! Ẽ₁ − Ẽ₀ ≤ W − D − (c/2)(‖PΔv − sPb‖²_M + ‖ΔΩ − sΔΩ_prev‖²_J + Σ‖e − s e_prev‖²_C) ≤ W − D,
+//! Ẽ = E + (c/2)(‖b_last‖²_M + ‖ΔΩ_last‖²_J + Σ_e ‖e_last‖²_C),
 //! ```
 //!
 //! the discrete energy Ẽ, which differs from E by O(h²), never increases without applied
-//! loads (D ≥ 0 the dampers' dissipation). Both dissipative terms are second differences
-//! (O(h²) on a smooth motion), so the scheme is second order; on a linear oscillator
+//! loads (D ≥ 0 the dampers' dissipation). All dissipative terms are second differences
+//! (O(h²) on a smooth motion; P depends on the directions of the increments only, so it
+//! varies smoothly), so the scheme is second order; on a linear oscillator (where P = I)
 //! its high-frequency spectral radius is the ρ∞ with `c = ρ∞(1 − ρ∞)/(2(1 + ρ∞)²)`,
-//! ρ∞ ∈ [1/3, 1] (the minimum, c = 1/16, is a double root). The dissipation on the
-//! strains is internal (no resultant, no moment): linear momentum is conserved exactly;
-//! the kinematic term `c(Δv − sΔv_prev)` of the translations leaves the angular momentum
-//! balance a defect `h c (Δv − sΔv_prev) × M v̄` per node, O(h³) per step (an O(h²)
-//! drift), which the rotations do not have (Simo & Wong's balance holds for any ψ).
-//! The construction is a two-step relative of the θ-method's dissipation with second
-//! differences in place of first ones, in the spirit of the G-stability of BDF2 (Dahlquist
-//! 1978); it is not one of Bauchau, Bottasso & Trainelli's (2003) time-discontinuous
-//! schemes nor Armero & Romero's (2001) ED methods, which reach exact angular momentum
-//! by other means.
+//! ρ∞ ∈ [1/3, 1] (the minimum, c = 1/16, is a double root). Momenta: the dissipation on
+//! the strains is internal (no resultant, no moment); linear momentum never depends on
+//! the kinematics (`Σ m Δv = h Σ f̄`); the translations' kinematic term would leave the
+//! angular momentum `Σ Δx_i × m v̄_i = c Σ m (Pδ)_i × Δx_i`, which P zeroes; and the
+//! rotations' Simo–Wong balance holds for any ψ. So linear and angular momentum are exact
+//! (to the Newton tolerance) where no external load acts (joints aside: their
+//! Gonzalez-corrected rows keep the momenta to O(h²) in both schemes). Bauchau, Bottasso & Trainelli
+//! (2003, time-discontinuous two-stage steps) and Armero & Romero (2001, EDMC methods)
+//! reach the same statements by other constructions; this one (second differences with a
+//! two-step memory, in the spirit of the G-stability of BDF2, Dahlquist 1978, plus the
+//! projector) is samara's own.
 //!
 //! The Newton matrix is formed by forward differences of the step residual (dense LU):
 //! meant for models of a few hundred unknowns.
 
+use super::moment_neutral;
 use super::{AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure};
 use crate::core::{Coordinate, DiscreteStep, NodeState, gonzalez_correction};
 use crate::math::cayley::cayley;
@@ -103,7 +109,7 @@ pub struct EnergyStepper<'a> {
     /// across steps while the iteration contracts).
     lu: Option<nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>>,
     lu_h: f64,
-    /// Decaying scheme's memory: the last step's Δv, ΔΩ per node (6 per node), the
+    /// Decaying scheme's memory: the last step's PΔv, ΔΩ per node (6 per node), the
     /// elements' strain increments (offsets `mem_offsets`), the joint coordinates' Δν;
     /// `*_scaled` the same times s for the step being taken.
     dv_last: Vec<f64>,
@@ -113,6 +119,10 @@ pub struct EnergyStepper<'a> {
     mem_scaled: Vec<f64>,
     dnu_last: Vec<f64>,
     dnu_scaled: Vec<f64>,
+    /// Translational mass of every node (the projector's M).
+    node_mass: Vec<f64>,
+    /// PΔv of every node at the last configured iterate (the translations' memory).
+    projected_dv: Vec<Vector3<f64>>,
     /// Weights of the joint coordinates' dissipation: |∂f/∂ν| of their springs at the
     /// start (constant, so that the energy statement telescopes).
     coord_stiffness: Vec<f64>,
@@ -216,6 +226,8 @@ impl<'a> EnergyStepper<'a> {
             mem_offsets,
             dnu_last: vec![0.0; n_coord],
             dnu_scaled: vec![0.0; n_coord],
+            node_mass: sys.discrete_node_masses(),
+            projected_dv: vec![Vector3::zeros(); sys.n_nodes()],
             coord_stiffness,
             h_last: f64::NAN,
             tolerance,
@@ -252,15 +264,15 @@ impl<'a> EnergyStepper<'a> {
     }
 
     /// The discrete energy of the decaying scheme,
-    /// `Ẽ = E + (c/2)(‖Δv_last‖²_M + Σ_e ‖e_last‖²_C + Σ k_ν Δν_last²)`, which never
-    /// increases in a step without applied loads (the module's documentation); E for the
-    /// preserving scheme.
+    /// `Ẽ = E + (c/2)(‖PΔv_last‖²_M + ‖ΔΩ_last‖²_J + Σ_e ‖e_last‖²_C + Σ k_ν Δν_last²)`,
+    /// which never increases in a step without applied loads (the module's
+    /// documentation); E for the preserving scheme.
     pub fn decaying_energy(&self) -> f64 {
         let e = self.energy();
         if self.xi == 0.0 {
             return e;
         }
-        // ‖Δv‖²_M = 2 T(Δv): the kinetic energy of the state moving with the increments.
+        // The memory's norm is 2 T(PΔv, ΔΩ): the kinetic energy of the state moving with it.
         let mut moving = self.state.clone();
         for (i, n) in moving.nodes.iter_mut().enumerate() {
             let d = &self.dv_last[6 * i..6 * i + 6];
@@ -294,15 +306,40 @@ impl<'a> EnergyStepper<'a> {
 
     /// Sets node, coordinate and scratch states for the unknowns `u`.
     fn configure(&mut self, h: f64, u: &[f64]) {
-        // Δx/h = (v₀ + v₁)/2 + c(v₁ − v₀ − s Δv_prev), solved for v₁ (and the same for Ω).
+        // Rotations: ψ/h = (Ω₀ + Ω₁)/2 + c(Ω₁ − Ω₀ − s ΔΩ_prev), solved for Ω₁.
+        // Translations: Δx/h = v̄ + c P(Δv − s b) with P the moment-free projector of
+        // the increments (`moment_neutral`) and b the last step's PΔv. With y = Δx/h − v₀
+        // + c P(s b) and P² = P: Δv = (½ + cP)⁻¹ y = 2(I − P)y + P y/(½ + c).
         let xi = self.xi;
         let (c0, c1) = (0.5 - xi, 0.5 + xi);
+        let dx_of = |i: usize| Vector3::new(u[6 * i], u[6 * i + 1], u[6 * i + 2]);
+        let sb_of = |i: usize| {
+            let p = &self.dv_scaled[6 * i..6 * i + 3];
+            Vector3::new(p[0], p[1], p[2])
+        };
+        let nodes0 = &self.state.nodes;
+        let w_of = |i: usize| dx_of(i) / h - nodes0[i].v;
+        let (zw, zb) = if xi > 0.0 {
+            let pinv = moment_neutral::increment_inertia_pinv(&self.node_mass, dx_of);
+            (
+                moment_neutral::removed_rotation(&self.node_mass, &pinv, dx_of, w_of),
+                moment_neutral::removed_rotation(&self.node_mass, &pinv, dx_of, sb_of),
+            )
+        } else {
+            (Vector3::zeros(), Vector3::zeros())
+        };
         for (i, n0) in self.state.nodes.iter().enumerate() {
             let d = &u[6 * i..6 * i + 6];
             let dx = Vector3::new(d[0], d[1], d[2]);
             let psi = Vector3::new(d[3], d[4], d[5]);
             let p = &self.dv_scaled[6 * i..6 * i + 6];
-            let v1 = (dx / h + Vector3::new(p[0], p[1], p[2]) * xi - n0.v * c0) / c1;
+            let w = w_of(i);
+            let mi = self.node_mass[i];
+            let pw = moment_neutral::project(mi, &dx, &w, &zw);
+            let psb = moment_neutral::project(mi, &dx, &sb_of(i), &zb);
+            let pdv = (pw + psb * xi) / c1;
+            self.projected_dv[i] = pdv;
+            let v1 = n0.v + (w - pw) * 2.0 + pdv;
             let w1 = (psi / h + Vector3::new(p[3], p[4], p[5]) * xi - n0.w * c0) / c1;
             let a = (v1 - n0.v) / h;
             let wd = (w1 - n0.w) / h;
@@ -628,7 +665,8 @@ impl EnergyStepper<'_> {
     /// decaying scheme.
     fn update_memory(&mut self, h: f64, u: &[f64]) {
         for (i, (n0, n1)) in self.state.nodes.iter().zip(&self.end).enumerate() {
-            let dv = n1.v - n0.v;
+            // The translations keep PΔv (`configure`), the rotations ΔΩ.
+            let dv = self.projected_dv[i];
             let dw = n1.w - n0.w;
             self.dv_last[6 * i..6 * i + 3].copy_from_slice(dv.as_slice());
             self.dv_last[6 * i + 3..6 * i + 6].copy_from_slice(dw.as_slice());

@@ -14,6 +14,7 @@ pub mod generalized_alpha;
 mod history;
 mod initial;
 pub mod modal;
+mod moment_neutral;
 mod stage;
 mod statics;
 

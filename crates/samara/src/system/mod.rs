@@ -818,6 +818,22 @@ impl System {
         (p, h)
     }
 
+    /// Translational mass of every node as the energy-consistent integrators take it: the
+    /// rigid bodies' at their node (the CG there: offsets are refused), the beams' inertia
+    /// lumped to their nodes.
+    pub fn discrete_node_masses(&self) -> Vec<f64> {
+        let mut m = vec![0.0; self.n_nodes()];
+        for b in &self.bodies {
+            m[b.nodes()[0]] += b.mass();
+        }
+        for e in self.beams.iter().flat_map(|b| &b.elements) {
+            for (i, mk) in e.lumped_node_masses() {
+                m[i] += mk;
+            }
+        }
+        m
+    }
+
     /// Kinetic and potential energy as the energy-consistent integrators state their
     /// balance ([`Element::discrete_kinetic_energy`]: a beam's inertia lumped at its nodes).
     pub fn discrete_energies(&self, ctx: &EvalContext, s: &State) -> (f64, f64) {

@@ -70,6 +70,14 @@ impl BeamElement {
             .sum::<f64>()
     }
 
+    /// `(node, mass)` of the lumped inertia.
+    pub fn lumped_node_masses(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.nodes
+            .iter()
+            .zip(&self.lumped)
+            .map(|(&i, l)| (i, l.mass))
+    }
+
     /// Linear and angular momentum (about the origin) of the lumped inertia.
     pub fn lumped_momenta(&self, nodes: &[NodeState]) -> (Vector3<f64>, Vector3<f64>) {
         let mut p = Vector3::zeros();
