@@ -1606,6 +1606,12 @@ mod tests {
         };
         let (b100, u100) = count(100);
         let (b1000, u1000) = count(1000);
+        // No more fill than AMD alone.
+        for nn in [100, 1000] {
+            let (s, _) = kkt_tree(&chain_parent(nn), &[5], false);
+            let sym = BlockLuSymbolic::new(&s).unwrap();
+            assert!(sym.n_updates() <= amd_updates(&s), "{nn}");
+        }
         let rb = b1000 as f64 / b100 as f64;
         let ru = u1000 as f64 / u100 as f64;
         eprintln!("fill: N=100 {b100} blocks/{u100} updates, N=1000 {b1000}/{u1000}");

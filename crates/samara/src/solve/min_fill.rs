@@ -10,7 +10,10 @@
 //! of one layer's width.
 //!
 //! The elimination graph is kept explicitly (sorted adjacency lists), so the cost grows
-//! with the fill; the caller gives a work budget and gets `None` if it is exceeded.
+//! with the fill; the caller gives a work budget and gets `None` if it is exceeded. After
+//! an elimination the deficiencies of the eliminated vertex's neighbours are recounted;
+//! those of the vertices one further out only fall by the pairs of their neighbours that
+//! the new clique joins.
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -73,8 +76,10 @@ pub(crate) fn min_fill_order(
     }
     let mut alive = vec![true; n];
     let mut order = Vec::with_capacity(n);
-    let mut touched: Vec<usize> = Vec::new();
     let mut merged: Vec<usize> = Vec::new();
+    // (vertex outside N(v), its neighbour in N(v)); (vertex, deficiency decrease).
+    let mut outer: Vec<(usize, usize)> = Vec::new();
+    let mut joined: Vec<(usize, usize)> = Vec::new();
     while let Some(Reverse((d, deg, v))) = heap.pop() {
         if !alive[v] || (d, deg) != score[v] || waiting[v] > 0 {
             continue;
@@ -85,6 +90,37 @@ pub(crate) fn min_fill_order(
         alive[v] = false;
         order.push(v);
         let nb = std::mem::take(&mut g[v]);
+        // A vertex u outside N(v) keeps its neighbours; its deficiency falls by the pairs
+        // of its neighbours in N(v) that the clique N(v) joins (found before the merge).
+        stamp += 1;
+        for &a in &nb {
+            mark[a] = stamp;
+        }
+        outer.clear();
+        for &a in &nb {
+            work += g[a].len();
+            outer.extend(
+                g[a].iter()
+                    .filter(|&&u| u != v && mark[u] != stamp)
+                    .map(|&u| (u, a)),
+            );
+        }
+        outer.sort_unstable();
+        joined.clear();
+        for group in outer.chunk_by(|x, y| x.0 == y.0) {
+            let mut new_edges = 0;
+            for (i, &(_, a)) in group.iter().enumerate() {
+                for &(_, b) in &group[i + 1..] {
+                    work += 1;
+                    if g[a].binary_search(&b).is_err() {
+                        new_edges += 1;
+                    }
+                }
+            }
+            if new_edges > 0 {
+                joined.push((group[0].0, new_edges));
+            }
+        }
         // Each neighbour loses v and gains the other neighbours of v (a clique).
         for &a in &nb {
             merged.clear();
@@ -112,28 +148,19 @@ pub(crate) fn min_fill_order(
         for &w in &gated_by[v] {
             waiting[w] -= 1;
         }
-        // The deficiencies that can change: of v's neighbours and of their neighbours.
-        touched.clear();
-        stamp += 1;
-        for &a in &nb {
-            for &u in std::iter::once(&a).chain(&g[a]) {
-                if alive[u] && mark[u] != stamp {
-                    mark[u] = stamp;
-                    touched.push(u);
-                }
+        for &(u, fewer) in &joined {
+            score[u].0 -= fewer;
+            if waiting[u] == 0 {
+                heap.push(Reverse((score[u].0, score[u].1, u)));
             }
         }
-        for &w in &gated_by[v] {
-            if alive[w] && waiting[w] == 0 && mark[w] != stamp {
-                mark[w] = stamp;
-                touched.push(w);
-            }
-        }
-        for &u in &touched {
+        // The neighbours of v: recounted (their neighbourhoods changed). A vertex gated
+        // by v is one of them.
+        for &u in &nb {
             let (d, ops) = deficiency(&g, u, &mut mark, &mut stamp);
             work += ops;
             let s = (d, g[u].len());
-            let newly_eligible = gated_by[v].contains(&u) && waiting[u] == 0;
+            let newly_eligible = waiting[u] == 0 && gated_by[v].contains(&u);
             if s != score[u] || newly_eligible {
                 score[u] = s;
                 if waiting[u] == 0 {
