@@ -7,7 +7,9 @@
 //! contact laws of examples/contact/granular_column.toml ([[granular]]: Hunt–Crossley,
 //! LuGre on the ground and between spheres, rolling and twisting resistance, margin 1 cm).
 //!
-//! `cargo bench -p samara --bench granular [-- T] [N…] [regularized] [lattice]` runs each
+//! `cargo bench -p samara --bench granular [-- T] [N…] [regularized] [lattice] [symbolic]`
+//! (`symbolic`: no simulation, only the block LU's size for each column's initial candidate
+//! pairs: factor values and Schur updates per sphere) runs each
 //! column until the largest speed of a sphere falls below 1e-3 m/s (checked every 25 ms
 //! of simulated time; at most T = 3 s simulated, h = 1 ms; N = 125 250 500 1000 by
 //! default; `regularized`: the stateless sphere–sphere friction, v_r = 1 mm/s, instead of
