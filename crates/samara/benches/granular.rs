@@ -7,7 +7,9 @@
 //! contact laws of examples/contact/granular_column.toml ([[granular]]: Hunt–Crossley,
 //! LuGre on the ground and between spheres, rolling and twisting resistance, margin 1 cm).
 //!
-//! `cargo bench -p samara --bench granular [-- T] [N…] [regularized] [lattice]` runs each
+//! `cargo bench -p samara --bench granular [-- T] [N…] [regularized] [lattice] [symbolic]`
+//! (`symbolic`: no simulation, only the block LU's size for each column's initial candidate
+//! pairs: factor values and Schur updates per sphere) runs each
 //! column until the largest speed of a sphere falls below 1e-3 m/s (checked every 25 ms
 //! of simulated time; at most T = 3 s simulated, h = 1 ms; N = 125 250 500 1000 by
 //! default; `regularized`: the stateless sphere–sphere friction, v_r = 1 mm/s, instead of
@@ -158,6 +160,10 @@ fn main() {
     } else {
         vec![125, 250, 500, 1000]
     };
+    if std::env::args().any(|a| a == "symbolic") {
+        symbolic_only(&sizes, regularized, lattice);
+        return;
+    }
     let mut rows = Vec::new();
     for &n in &sizes {
         let mut text = column(n, CHUNK, regularized, lattice);
@@ -342,6 +348,36 @@ fn main() {
             w[1].0,
             e(w[0].1, w[1].1),
             e(w[0].2, w[1].2)
+        );
+    }
+}
+
+/// `symbolic`: no simulation; the block LU of each column's initial candidate pairs (the
+/// seats 2 mm away and the neighbours in a layer, within the 1 cm margin): blocks, factor
+/// values and Schur updates, per sphere, and the time of the symbolic factorization.
+fn symbolic_only(sizes: &[usize], regularized: bool, lattice: bool) {
+    for &n in sizes {
+        let m = Model::from_toml_str(&column(n, CHUNK, regularized, lattice), "column.toml")
+            .unwrap()
+            .model;
+        let sys = System::new(&m);
+        let state = sys.initial_state();
+        let set = &sys.granular[0];
+        let mut pairs = Vec::new();
+        set.candidate_pairs(&state.nodes, set.margin, &mut pairs);
+        let elements = pairs.iter().map(|&(i, j)| set.pair(i, j)).collect();
+        let asm = Assembler::with_pairs(&sys, Formulation::Index3, elements);
+        let clock = Instant::now();
+        let lu = BlockLuSymbolic::new(asm.structure()).unwrap();
+        let t = clock.elapsed().as_secs_f64();
+        println!(
+            "N = {n:5}: {} pairs, {} factor values ({:.0} per sphere), {} Schur updates ({:.0} per sphere), symbolic {:.2} ms",
+            pairs.len(),
+            lu.n_factor_values(),
+            lu.n_factor_values() as f64 / n as f64,
+            lu.n_updates(),
+            lu.n_updates() as f64 / n as f64,
+            1e3 * t
         );
     }
 }

@@ -12,6 +12,7 @@ mod block_lu;
 mod block_matrix;
 pub mod condition;
 mod linear;
+mod min_fill;
 pub mod newton;
 mod sparse_lu;
 
