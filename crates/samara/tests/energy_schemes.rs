@@ -222,6 +222,24 @@ fn flying_spaghetti_conserves_energy_and_momenta_once_free() {
 /// h = 0.1, 0.05, 0.025 s against h = 0.0125 s. With an error c h², the differences to the
 /// reference fall by (16 − ¼)/(4 − ¼) = 4.2 and then (4 − ¼)/(1 − ¼) = 5 (measured 4.8
 /// and 5.2); a first-order scheme would give 2.3 and 3. Accepted: both in [3.5, 6.5].
+/// Largest node-position error of the runs at `steps` against the run at `reference`
+/// (final nodes from `nodes`), and the ratios of successive errors.
+fn position_errors(
+    nodes: impl Fn(f64) -> Vec<samara::core::NodeState>,
+    steps: [f64; 3],
+    reference: f64,
+) -> ([f64; 3], [f64; 2]) {
+    let reference = nodes(reference);
+    let errors = steps.map(|step| {
+        nodes(step)
+            .iter()
+            .zip(&reference)
+            .map(|(a, b)| (a.x - b.x).norm())
+            .fold(0.0, f64::max)
+    });
+    (errors, [errors[0] / errors[1], errors[1] / errors[2]])
+}
+
 #[test]
 fn flying_spaghetti_is_second_order() {
     let tip = |step: f64| {
@@ -230,18 +248,7 @@ fn flying_spaghetti_is_second_order() {
         assert!(s.failure.is_none(), "{:?}", s.failure);
         h.last().unwrap().state.nodes.clone()
     };
-    let reference = tip(0.0125);
-    let errors: Vec<f64> = [0.1, 0.05, 0.025]
-        .iter()
-        .map(|&step| {
-            tip(step)
-                .iter()
-                .zip(&reference)
-                .map(|(a, b)| (a.x - b.x).norm())
-                .fold(0.0, f64::max)
-        })
-        .collect();
-    let ratios = [errors[0] / errors[1], errors[1] / errors[2]];
+    let (errors, ratios) = position_errors(tip, [0.1, 0.05, 0.025], 0.0125);
     eprintln!("flying spaghetti: errors {errors:?}, ratios {ratios:?}");
     assert!(ratios.iter().all(|r| (3.5..6.5).contains(r)), "{ratios:?}");
 }
@@ -567,18 +574,7 @@ fn decaying_scheme_on_the_flying_spaghetti() {
             assert!(s.failure.is_none(), "{:?}", s.failure);
             h.last().unwrap().state.nodes.clone()
         };
-        let reference = nodes(0.00625);
-        let errors: Vec<f64> = [0.05, 0.025, 0.0125]
-            .iter()
-            .map(|&st| {
-                nodes(st)
-                    .iter()
-                    .zip(&reference)
-                    .map(|(a, b)| (a.x - b.x).norm())
-                    .fold(0.0, f64::max)
-            })
-            .collect();
-        let ratios = [errors[0] / errors[1], errors[1] / errors[2]];
+        let (errors, ratios) = position_errors(nodes, [0.05, 0.025, 0.0125], 0.00625);
         eprintln!(
             "decaying spaghetti, ρ∞ = {rho:.3}: position errors {errors:?}, ratios {ratios:?}"
         );
