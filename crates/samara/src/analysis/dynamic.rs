@@ -1068,6 +1068,7 @@ pub fn run_dynamic(
         sys.event_values(&it.state, &mut ev.start, &mut ev.scratch);
     }
     let mut event_target: Option<f64> = None;
+    let mut outputs = super::output_grid::OutputGrid::new(t0, settings.output_interval);
     while it.state.time < settings.t_end {
         let t = it.state.time;
         let mut target = if on_grid && h == settings.step {
@@ -1094,6 +1095,10 @@ pub fn run_dynamic(
             && b < target + 1e-9 * h
         {
             target = b;
+        }
+        // Steps land on the output instants of `output_interval`.
+        if let Some(g) = &outputs {
+            target = g.land(target, h);
         }
         if target > settings.t_end || settings.t_end - target < 1e-9 * h {
             target = settings.t_end;
@@ -1192,7 +1197,10 @@ pub fn run_dynamic(
                 let viol = report.constraint_violation;
                 summary.max_constraint_violation = summary.max_constraint_violation.max(viol);
                 let last = it.state.time >= settings.t_end;
-                let output = step_index.is_multiple_of(settings.output_every) || last;
+                let output = match outputs.as_mut() {
+                    Some(g) => g.reached(it.state.time, h_try),
+                    None => step_index.is_multiple_of(settings.output_every),
+                } || last;
                 if output {
                     sys.update_passive_coordinates(&mut it.state, true);
                     energy.kinetic = sys.kinetic_energy(&it.state);

@@ -836,6 +836,9 @@ pub(super) fn run_energy_consistent(
     // mid-point rule never straddles one: a piecewise-linear load then does exactly its
     // impulse.
     let breakpoints = sys.breakpoints();
+    // Steps also land on the output instants of `output_interval` (short of the grid
+    // point like a breakpoint).
+    let mut outputs = super::output_grid::OutputGrid::new(t0, settings.output_interval);
     while it.state.time < settings.t_end {
         let t = it.state.time;
         let mut target = if h == settings.step {
@@ -849,6 +852,13 @@ pub(super) fn run_energy_consistent(
         {
             target = b;
             on_breakpoint = true;
+        }
+        if let Some(g) = &outputs {
+            let o = g.land(target, h);
+            if o < target - 1e-9 * h {
+                target = o;
+                on_breakpoint = true;
+            }
         }
         if target > settings.t_end || settings.t_end - target < 1e-9 * h {
             target = settings.t_end;
@@ -884,7 +894,11 @@ pub(super) fn run_energy_consistent(
                 external_work += 0.5 * h_try * (p_ext + e1);
                 p_ext = e1;
                 let last = it.state.time >= settings.t_end;
-                if step_index.is_multiple_of(settings.output_every) || last {
+                let output = match outputs.as_mut() {
+                    Some(g) => g.reached(it.state.time, h_try),
+                    None => step_index.is_multiple_of(settings.output_every),
+                };
+                if output || last {
                     let mut energy = energy_at(&it);
                     energy.dissipated = dissipated;
                     energy.external_work = external_work;

@@ -15,6 +15,7 @@ mod history;
 mod initial;
 pub mod modal;
 mod moment_neutral;
+mod output_grid;
 mod stage;
 mod statics;
 

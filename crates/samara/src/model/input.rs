@@ -281,6 +281,10 @@ pub struct AnalysisInput {
     /// dynamic: write every n-th step (default 1).
     #[serde(default)]
     pub output_every: Option<usize>,
+    /// dynamic: write at t_start + kΔ for this interval Δ [s] (and at t_end), the steps
+    /// landing on those instants; instead of `output_every`.
+    #[serde(default)]
+    pub output_interval: Option<f64>,
     /// dynamic: `full` (default) or `modified` Newton.
     #[serde(default)]
     pub jacobian: Option<JacobianUpdate>,

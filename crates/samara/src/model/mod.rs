@@ -98,6 +98,9 @@ pub struct DynamicSettings {
     pub rho_inf: f64,
     pub min_step: f64,
     pub output_every: usize,
+    /// Records at t_start + kΔ, the steps landing on them (`None`: every
+    /// `output_every`-th step).
+    pub output_interval: Option<f64>,
     pub jacobian: JacobianUpdate,
     pub formulation: FormulationType,
     pub solver: SolverSettings,
@@ -127,6 +130,7 @@ impl DynamicSettings {
             rho_inf,
             min_step: step / 1024.0,
             output_every: 1,
+            output_interval: None,
             jacobian: JacobianUpdate::Full,
             formulation: if rho_inf >= 1.0 {
                 FormulationType::StabilizedIndex2

@@ -782,7 +782,8 @@ impl<'a> Checker<'a> {
             return None;
         }
         // `scaling` multiplies rows and multipliers by βh²: there is no step in statics.
-        let dynamic_keys: [(&str, bool); 14] = [
+        let dynamic_keys: [(&str, bool); 15] = [
+            ("output_interval", ai.output_interval.is_some()),
             ("step_control", ai.step_control.is_some()),
             ("event_location", ai.event_location.is_some()),
             ("tolerance_abs", ai.tolerance_abs.is_some()),
@@ -1111,6 +1112,32 @@ impl<'a> Checker<'a> {
                     );
                     ok = false;
                 }
+                if let Some(dt) = ai.output_interval {
+                    if ai.output_every.is_some() {
+                        self.error(
+                            format!("{what}: give `output_interval` or `output_every`, not both"),
+                            self.key(&e, "output_interval"),
+                            Some("`output_interval` records at fixed times, `output_every` every n-th step".into()),
+                        );
+                        ok = false;
+                    } else if !(dt.is_finite() && dt > 0.0) {
+                        self.error(
+                            format!(
+                                "{what}: `output_interval` must be a positive time [s] (got {dt})"
+                            ),
+                            self.key(&e, "output_interval"),
+                            None,
+                        );
+                        ok = false;
+                    } else if dt <= resolution || (t_end - t_start) / dt > 1e12 {
+                        self.error(
+                            format!("{what}: `output_interval` ({dt:e}) gives more than 10¹² records, or is below the resolution of time near t = {t_end:e} ({resolution:.1e})"),
+                            self.key(&e, "output_interval"),
+                            Some("use a larger interval".into()),
+                        );
+                        ok = false;
+                    }
+                }
                 let formulation = ai.formulation.unwrap_or(if rho >= 1.0 {
                     FormulationType::StabilizedIndex2
                 } else {
@@ -1252,6 +1279,7 @@ impl<'a> Checker<'a> {
                     rho_inf: rho,
                     min_step,
                     output_every,
+                    output_interval: ai.output_interval,
                     jacobian: ai.jacobian.unwrap_or_default(),
                     formulation,
                     solver,
