@@ -448,7 +448,8 @@ fn line_of(text: &str, needle: &str) -> usize {
 }
 
 /// Bad control input gets a located error: an algebraic loop, unknown joints, coordinates
-/// and states, keys that do not belong to the block, improper transfer functions.
+/// and states, a quantity a sensor cannot measure, keys that do not belong to the block,
+/// improper transfer functions.
 #[test]
 fn bad_control_input_is_rejected_where_it_is_written() {
     let pid = std::fs::read_to_string(
@@ -527,6 +528,12 @@ gain = 0.5
             "name = \"angle\"\njoint = \"hinge\"\ncoordinate = \"theta3\"             # quantity = \"position\" by default; no filter",
             "name = \"angle\"\nstate = \"hinge.current\"",
             "unknown element state 'hinge.current'",
+        ),
+        (
+            &pid,
+            "coordinate = \"theta3\"             #",
+            "coordinate = \"theta3\"\nquantity = \"temperature\"             #",
+            "unknown value `temperature`",
         ),
     ];
     for (base, from, to, expect) in cases {
