@@ -4,9 +4,9 @@
 //! interpolated.
 
 mod common;
-use common::{model, model_file, run};
+use common::{example_model_text, kick_response, model, model_file, run};
 use samara::analysis::History;
-use samara::model::{AnalysisKind, ForceLaw, Model, TimeFunction};
+use samara::model::{AnalysisKind, Model};
 
 /// The record times are t_start + kΔ (to 1e-12 s: k·Δ in floating point), k = 0, 1, …,
 /// and t_end.
@@ -24,37 +24,10 @@ fn assert_on_grid(h: &History, t_start: f64, interval: f64, t_end: f64) {
 }
 
 /// The kicked mass of `examples/adaptive_kick.toml` (20 Hz, ζ = 0.05, a 100 N step at
-/// 0.5 s) and its closed form x(t) = F/k [1 − e^{−ζωs}(cos ω_d s + ζ/√(1−ζ²) sin ω_d s)],
-/// s = t − 0.5, with the constants read from the loaded model.
+/// 0.5 s) and its closed form.
 fn kick() -> (Model, impl Fn(f64) -> f64) {
     let m = model_file("examples/adaptive_kick.toml");
-    let mass = m.bodies[0].mass;
-    let d3 = m.joints[0].components[2].as_ref().unwrap();
-    let (
-        Some(ForceLaw::Linear { coefficient: k, .. }),
-        Some(ForceLaw::Linear { coefficient: c, .. }),
-    ) = (&d3.spring, &d3.damper)
-    else {
-        panic!("the example's rail has a linear spring and damper")
-    };
-    let (k, c) = (*k, *c);
-    let force = m.forces[0].force.x;
-    let TimeFunction::Step { time: t0, .. } = m.forces[0].function else {
-        panic!("the example's force is a step")
-    };
-    let w = (k / mass).sqrt();
-    let zeta = c / (2.0 * (k * mass).sqrt());
-    let wd = w * (1.0 - zeta * zeta).sqrt();
-    let exact = move |t: f64| {
-        if t < t0 {
-            return 0.0;
-        }
-        let s = t - t0;
-        force / k
-            * (1.0
-                - (-zeta * w * s).exp()
-                    * ((wd * s).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * s).sin()))
-    };
+    let exact = kick_response(&m);
     (m, exact)
 }
 
@@ -172,36 +145,10 @@ fn fixed_steps_cut_to_the_output_instants_stay_second_order() {
 /// Δ = 10 ms), and its energy stays constant to the Newton tolerance at every record.
 #[test]
 fn energy_scheme_lands_on_the_output_instants() {
-    let m = model(
-        r#"[model]
-name = "pendulum"
-gravity = [0.0, 0.0, -9.81]
-[[nodes]]
-name = "bob"
-position = [1.0, 0.0, 0.0]
-[[bodies]]
-name = "bob"
-node = "bob"
-mass = 1.0
-inertia = [[1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]
-[[joints]]
-name = "pivot"
-type = "revolute"
-node_a = "ground"
-node_b = "bob"
-position = [0.0, 0.0, 0.0]
-axis = [0.0, 1.0, 0.0]
-[[analyses]]
-name = "swing"
-type = "dynamic"
-integrator = "energy_preserving"
-t_end = 1.0
-step = 4e-3
-output_interval = 1e-2
-tolerance = 1e-12
-relative_tolerance = 1e-14
-"#,
-    );
+    let m = model(&format!(
+        "{}[[analyses]]\nname = \"swing\"\ntype = \"dynamic\"\nintegrator = \"energy_preserving\"\nt_end = 1.0\nstep = 4e-3\noutput_interval = 1e-2\ntolerance = 1e-12\nrelative_tolerance = 1e-14\n",
+        example_model_text("examples/pendulum.toml")
+    ));
     let (s, h) = run(&m);
     assert!(s.failure.is_none(), "{:?}", s.failure);
     assert_on_grid(&h, 0.0, 1e-2, 1.0);
@@ -217,7 +164,8 @@ relative_tolerance = 1e-14
 fn bad_output_intervals_are_located_errors() {
     let bad = |analysis: &str, message: &str| {
         let text = format!(
-            "[model]\nname = \"m\"\n[[nodes]]\nname = \"n\"\nposition = [0.0, 0.0, 0.0]\n[[bodies]]\nname = \"b\"\nnode = \"n\"\nmass = 1.0\ninertia = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]\n[[analyses]]\nname = \"run\"\n{analysis}"
+            "{}[[analyses]]\nname = \"run\"\n{analysis}",
+            example_model_text("examples/pendulum.toml")
         );
         let e = Model::from_toml_str(&text, "bad.toml").expect_err(analysis);
         let shown = e.to_string();

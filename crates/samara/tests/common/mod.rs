@@ -102,3 +102,51 @@ impl Lcg {
         nalgebra::Vector3::new(self.next(), self.next(), self.next()) * scale
     }
 }
+
+/// The closed-form response x(t) of the kicked mass of `examples/adaptive_kick.toml` (a
+/// mass on a prismatic joint with a linear spring-damper, a step force), its constants read
+/// from the loaded model: x = F/k [1 − e^{−ζωs}(cos ω_d s + ζ/√(1−ζ²) sin ω_d s)],
+/// s = t − t_step.
+pub fn kick_response(m: &Model) -> impl Fn(f64) -> f64 + use<> {
+    use samara::model::{ForceLaw, TimeFunction};
+    let mass = m.bodies[0].mass;
+    let d3 = m.joints[0].components[2].as_ref().unwrap();
+    let (
+        Some(ForceLaw::Linear { coefficient: k, .. }),
+        Some(ForceLaw::Linear { coefficient: c, .. }),
+    ) = (&d3.spring, &d3.damper)
+    else {
+        panic!("the kicked mass's rail has a linear spring and damper")
+    };
+    let (k, c) = (*k, *c);
+    let force = m.forces[0].force.x;
+    let TimeFunction::Step { time: t0, .. } = m.forces[0].function else {
+        panic!("the kick is a step force")
+    };
+    let w = (k / mass).sqrt();
+    let zeta = c / (2.0 * (k * mass).sqrt());
+    let wd = w * (1.0 - zeta * zeta).sqrt();
+    move |t: f64| {
+        if t < t0 {
+            return 0.0;
+        }
+        let s = t - t0;
+        force / k
+            * (1.0
+                - (-zeta * w * s).exp()
+                    * ((wd * s).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * s).sin()))
+    }
+}
+
+/// The model part of an example file (everything before its first `[[analyses]]`), to
+/// which a test appends analyses of its own.
+pub fn example_model_text(rel: &str) -> String {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel);
+    let text = std::fs::read_to_string(&path).unwrap();
+    match text.find("[[analyses]]") {
+        Some(i) => text[..i].to_string(),
+        None => text,
+    }
+}
