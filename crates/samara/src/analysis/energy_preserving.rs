@@ -50,17 +50,27 @@
 //! two-step memory, in the spirit of the G-stability of BDF2, Dahlquist 1978, plus the
 //! projector) is samara's own.
 //!
-//! The Newton matrix is formed by forward differences of the step residual (dense LU):
-//! meant for models of a few hundred unknowns.
+//! The Newton matrix is formed by forward differences of the step residual, sparse: the
+//! columns are perturbed in groups that share no row (`sparse_differences`), so for the
+//! preserving scheme one matrix costs a few dozen residual evaluations whatever the
+//! model's size, and it is factored by faer's sparse LU (symbolic analysis once). Its
+//! pattern is the coupling of the elements' and joints' unknowns. The decaying scheme's
+//! projector P couples every node's translation to all others (through the rigid
+//! rotation it removes), so there the translations form one dense block of the pattern
+//! and each needs its own residual evaluation: the matrix stays exact (dropping the
+//! block left Newton short of the tolerance-level momenta and energy statements), at a
+//! cost that grows with the number of nodes.
 
 use super::moment_neutral;
+use super::sparse_differences::{ColumnGroups, PatternLu};
 use super::{AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure};
 use crate::core::{Coordinate, DiscreteStep, NodeState, gonzalez_correction};
 use crate::math::cayley::cayley;
 use crate::math::{Rotation, skew};
 use crate::model::{DynamicSettings, IntegratorType};
 use crate::system::{State, System};
-use nalgebra::{DMatrix, DVector, Vector3};
+use faer::linalg::solvers::SolveCore;
+use nalgebra::{DMatrix, Vector3};
 use std::time::Instant;
 
 /// The decaying scheme's dissipation coefficient c for a high-frequency spectral radius
@@ -107,8 +117,12 @@ pub struct EnergyStepper<'a> {
     delta: Vec<f64>,
     /// LU of the Newton matrix and the step it was formed for (modified Newton: kept
     /// across steps while the iteration contracts).
-    lu: Option<nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>>,
+    lu: Option<faer::sparse::linalg::solvers::Lu<usize, f64>>,
     lu_h: f64,
+    /// The Newton matrix's pattern and column groups (taken out while differencing).
+    groups: Option<ColumnGroups>,
+    pattern_lu: PatternLu,
+    jacobian_values: Vec<f64>,
     /// Decaying scheme's memory: the last step's PΔv, ΔΩ per node (6 per node), the
     /// elements' strain increments (offsets `mem_offsets`), the joint coordinates' Δν;
     /// `*_scaled` the same times s for the step being taken.
@@ -216,9 +230,13 @@ impl<'a> EnergyStepper<'a> {
                 }
             }
         }
+        let groups = Some(newton_pattern(sys, n_node, n_coord, n, xi > 0.0));
         Ok(Self {
             sys,
             xi,
+            groups,
+            pattern_lu: PatternLu::default(),
+            jacobian_values: Vec::new(),
             dv_last: vec![0.0; n_node],
             dv_scaled: vec![0.0; n_node],
             mem_last: vec![0.0; off],
@@ -295,6 +313,11 @@ impl<'a> EnergyStepper<'a> {
             .map(|(k, d)| 0.5 * k * d * d)
             .sum();
         e + self.xi * (t_dv + memory + coords)
+    }
+
+    /// Residual evaluations per Newton matrix: the column groups of its pattern.
+    pub fn jacobian_groups(&self) -> usize {
+        self.groups.as_ref().map_or(0, ColumnGroups::n_groups)
     }
 
     /// Kinetic plus potential energy at the current state.
@@ -575,31 +598,41 @@ impl<'a> EnergyStepper<'a> {
                 });
             }
             if lu.is_none() {
-                // Forward differences from the residual just evaluated.
-                let mut jac = DMatrix::zeros(n, n);
-                let mut up = u.clone();
-                for j in 0..n {
-                    let eps = 1e-7 * (1.0 + u[j].abs());
-                    up[j] = u[j] + eps;
-                    self.residual(h, &up, &mut rp);
-                    up[j] = u[j];
-                    for i in 0..n {
-                        jac[(i, j)] = (rp[i] - r[i]) / eps;
-                    }
-                }
+                // Grouped forward differences from the residual just evaluated.
+                let mut groups = self
+                    .groups
+                    .take()
+                    .expect("the pattern is kept between uses");
+                let mut values = std::mem::take(&mut self.jacobian_values);
+                groups.jacobian(&mut u, &r, &mut rp, &mut values, |x, out| {
+                    self.residual(h, x, out)
+                });
+                let a = groups.matrix(&values);
+                self.groups = Some(groups);
+                self.jacobian_values = values;
                 // `residual` left the scratch states at the last perturbation.
                 self.configure(h, &u);
-                lu = Some(jac.lu());
+                lu = self.pattern_lu.factor(&a);
+                if lu.is_none() {
+                    return Err(StepFailure {
+                        reason: "the Newton matrix of the step is singular".into(),
+                    });
+                }
                 self.factorizations += 1;
             }
             let Some(dec) = lu.as_ref() else {
                 unreachable!()
             };
-            let Some(du) = dec.solve(&DVector::from_column_slice(&r)) else {
+            let mut du = r.clone();
+            dec.solve_in_place_with_conj(
+                faer::Conj::No,
+                faer::MatMut::from_column_major_slice_mut(&mut du, n, 1),
+            );
+            if !du.iter().all(|x| x.is_finite()) {
                 return Err(StepFailure {
                     reason: "the Newton matrix of the step is singular".into(),
                 });
-            };
+            }
             let mut worst: f64 = 0.0;
             for (j, (x, d)) in u.iter_mut().zip(du.iter()).enumerate() {
                 *x -= d;
@@ -691,6 +724,55 @@ impl EnergyStepper<'_> {
             .copy_from_slice(&u[self.n_node..self.n_node + self.n_coord]);
         self.h_last = h;
     }
+}
+
+/// The pattern of the step residual's Jacobian in the unknowns `(Δ, Δν, λ̃)`: every
+/// element couples the 6-blocks of its nodes; every joint its nodes, coordinates and
+/// multipliers (its rows Φ₁, its forces B̄ᵀλ, its coordinate springs). Each node's own
+/// block is always there; with `decaying` all translations couple (the projector P).
+fn newton_pattern(
+    sys: &System,
+    n_node: usize,
+    n_coord: usize,
+    n: usize,
+    decaying: bool,
+) -> ColumnGroups {
+    let mut rows_of: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut couple = |cols: &[usize]| {
+        for &j in cols {
+            rows_of[j].extend_from_slice(cols);
+        }
+    };
+    let node_cols = |nodes: &[usize], out: &mut Vec<usize>| {
+        for &i in nodes {
+            out.extend(6 * i..6 * i + 6);
+        }
+    };
+    let mut cols = Vec::new();
+    if decaying {
+        cols.extend((0..sys.n_nodes()).flat_map(|i| 6 * i..6 * i + 3));
+        couple(&cols);
+    }
+    for i in 0..sys.n_nodes() {
+        cols.clear();
+        node_cols(&[i], &mut cols);
+        couple(&cols);
+    }
+    for e in &sys.elements {
+        cols.clear();
+        node_cols(e.nodes(), &mut cols);
+        couple(&cols);
+    }
+    for (k, c) in sys.constraints.iter().enumerate() {
+        cols.clear();
+        node_cols(c.nodes(), &mut cols);
+        let co = sys.coordinate_offsets[k];
+        cols.extend(n_node + co..n_node + co + c.n_coordinates());
+        let mo = sys.multiplier_offsets[k];
+        cols.extend(n_node + n_coord + mo..n_node + n_coord + mo + c.n_equations());
+        couple(&cols);
+    }
+    ColumnGroups::new(n, rows_of)
 }
 
 /// The consistent start of a dynamic analysis from the model's initial state (assembled

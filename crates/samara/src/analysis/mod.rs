@@ -16,6 +16,7 @@ mod initial;
 pub mod modal;
 mod moment_neutral;
 mod output_grid;
+mod sparse_differences;
 mod stage;
 mod statics;
 
