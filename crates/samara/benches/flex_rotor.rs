@@ -35,8 +35,10 @@
 //! issue #17's fourth round (load average ≈ 12): 1.62 ms, 6.2× (1.72 ms before, builds
 //! interleaved); `modified` ≈ 0.65 ms, 15.5×. Fifth round (stations with states batched
 //! into their beam element's block): `oye modified turbulent` (the issue's configuration)
-//! callgrind over 0.3 s 1415.9M → 851.5M instructions; CPU figures in
-//! docs/aerodynamics.md, "Performance", with the history.
+//! callgrind over 0.3 s 1415.9M → 851.5M instructions, CPU 1.14–1.16 → 0.89–0.92 ms per
+//! step (11.3× real time; load average ≈ 8, builds interleaved); `oye turbulent` 4001.0M
+//! → 2098.9M, 3.2 → 2.3 ms (4.4×); quasi-steady BEM unchanged (1.65 ms, `modified`
+//! 0.66 ms). The history is in docs/aerodynamics.md, "Performance".
 //!
 //! The run ends by printing the aerodynamic power, the thrust and blade 1's tip deflection
 //! (hub frame) at its last step, to compare builds.
