@@ -33,8 +33,15 @@
 //! 9.4 ms before the stations were differentiated over their own kinematics); with
 //! `modified` 0.75 ms, 13×; with `oye` 3.73 ms, 2.7× (`oye modified` 1.28 ms, 7.8×). After
 //! issue #17's fourth round (load average ≈ 12): 1.62 ms, 6.2× (1.72 ms before, builds
-//! interleaved); `modified` ≈ 0.65 ms, 15.5×. The steps and the history are in
-//! docs/aerodynamics.md, "Performance".
+//! interleaved); `modified` ≈ 0.65 ms, 15.5×. Fifth round (stations with states batched
+//! into their beam element's block): `oye modified turbulent` (the issue's configuration)
+//! callgrind over 0.3 s 1415.9M → 851.5M instructions, CPU 1.14–1.16 → 0.89–0.92 ms per
+//! step (11.3× real time; load average ≈ 8, builds interleaved); `oye turbulent` 4001.0M
+//! → 2098.9M, 3.2 → 2.3 ms (4.4×); quasi-steady BEM unchanged (1.65 ms, `modified`
+//! 0.66 ms). The history is in docs/aerodynamics.md, "Performance".
+//!
+//! The run ends by printing the aerodynamic power, the thrust and blade 1's tip deflection
+//! (hub frame) at its last step, to compare builds.
 
 use samara::analysis::{History, run_analysis};
 use samara::core::{ElementInput, EvalContext, LocalTerms, Need};
@@ -324,6 +331,45 @@ fn main() {
         .unwrap()
     });
     assert!(s.failure.is_none(), "{:?}", s.failure);
+    // What the run computed, at its end: the aerodynamic power on the nodes and the
+    // thrust (Σ of the stations' forces along the axis x), and blade 1's tip
+    // deflection — to compare builds (equal to the Newton tolerance).
+    let end = &s.final_state;
+    let (mut power, mut thrust, mut scratch) = (0.0, 0.0, Vec::new());
+    let ctx = EvalContext {
+        time: end.time,
+        ..ctx
+    };
+    for (k, e) in sys.elements.iter().enumerate() {
+        if !e.name().starts_with("aero") {
+            continue;
+        }
+        let x = sys.element_input(k, end, &[], &mut scratch);
+        power += e.external_power(&ctx, &x);
+        let mut t = LocalTerms::for_element(e.as_ref());
+        t.clear(Need::Residual);
+        e.evaluate(&ctx, &x, Need::Residual, &mut t);
+        thrust -= (0..e.nodes().len()).map(|a| t.r[6 * a]).sum::<f64>();
+    }
+    // The tip's displacement in the hub's frame (the deflection, rotation removed).
+    let tip = m.node_index("blade1.12").expect("blade 1's tip node");
+    let hub = m.node_index("hub").expect("the hub node");
+    let d = end.nodes[hub]
+        .r()
+        .tr_mul(&(end.nodes[tip].x - end.nodes[hub].x))
+        - m.nodes[hub]
+            .orientation
+            .matrix()
+            .tr_mul(&(m.nodes[tip].position - m.nodes[hub].position));
+    println!(
+        "at t = {:.2} s: aerodynamic power {:.1} kW, thrust {:.2} kN, blade 1 tip deflection (hub frame) [{:.4}, {:.4}, {:.4}] m",
+        end.time,
+        power / 1e3,
+        thrust / 1e3,
+        d.x,
+        d.y,
+        d.z
+    );
     let steps = s.steps as f64;
     println!(
         "{t_end} s simulated{}{}{}: {} steps, {:.2} Newton iterations and {:.2} factorizations per step; wall {wall:.3} s, {:.3} ms/step, {:.2}× real time; CPU {}",

@@ -72,21 +72,54 @@ fn system(m: &Model, alone: bool) -> System {
     )
 }
 
-/// Residual and iteration matrix (dynamic coefficients, tangent operators away from the
-/// identity) of the flexible NREL 5-MW rotor, whose 19 stations per blade hang on the 7
-/// nodes of the blade's two beam elements, batched and alone: equal to rounding (the
-/// batch sums the stations' terms before adding them to the matrix; 1e-12 of the largest
-/// entry).
-#[test]
-fn batched_stations_assemble_as_the_elements_one_by_one() {
-    let m = model_file("examples/rotor/nrel5mw_flexible.toml");
-    let (batched, alone) = (system(&m, false), system(&m, true));
+/// Residual and iteration matrix of `m` at its initial state with `coef` and tangent
+/// operators away from the identity, batched and element by element: equal to rounding
+/// (the batch sums the stations' terms before adding them to the matrix; 1e-12 of the
+/// largest entry).
+fn assert_batched_equals_alone(m: &Model, coef: &Coefficients) {
+    let (batched, alone) = (system(m, false), system(m, true));
     let state = batched.initial_state();
     let ctx = EvalContext {
         time: 0.3,
         gravity: Vector3::zeros(),
         load_factor: 1.0,
     };
+    let ops: Vec<Matrix3<f64>> = (0..batched.n_nodes())
+        .map(|i| {
+            let t = 0.01 * (i as f64 + 1.0);
+            Matrix3::identity() + Vector3::new(t, -0.5 * t, 0.2).cross_matrix() * 0.1
+        })
+        .collect();
+    let assemble = |sys: &System| {
+        let mut asm = Assembler::new(sys, Formulation::Index3);
+        let mut r = vec![0.0; asm.n_unknowns()];
+        let mut mat = BlockMatrix::zeros(asm.structure().clone());
+        asm.assemble(sys, &state, &ctx, coef, &ops, &mut r, Some(&mut mat));
+        // The residual alone (the Need::Residual path) too.
+        let mut r0 = vec![0.0; asm.n_unknowns()];
+        asm.assemble(sys, &state, &ctx, coef, &ops, &mut r0, None);
+        (r, r0, mat.values.clone())
+    };
+    let (r1, q1, k1) = assemble(&batched);
+    let (r2, q2, k2) = assemble(&alone);
+    let close = |a: &[f64], b: &[f64], what: &str| {
+        assert_eq!(a.len(), b.len());
+        let scale = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        assert!(scale > 0.0);
+        for (i, (x, y)) in a.iter().zip(b).enumerate() {
+            assert!((x - y).abs() <= 1e-12 * scale, "{what}[{i}]: {x} vs {y}");
+        }
+    };
+    close(&r1, &r2, "residual");
+    close(&q1, &q2, "residual only");
+    close(&k1, &k2, "matrix");
+}
+
+/// The flexible NREL 5-MW rotor, whose 19 stations per blade hang on the 7 nodes of the
+/// blade's two beam elements (dynamic coefficients).
+#[test]
+fn batched_stations_assemble_as_the_elements_one_by_one() {
+    let m = model_file("examples/rotor/nrel5mw_flexible.toml");
     let coef = Coefficients {
         mass: 2.0e4,
         damping: 150.0,
@@ -99,29 +132,37 @@ fn batched_stations_assemble_as_the_elements_one_by_one() {
         state_row_scale: 1.0,
         step: 0.0,
     };
-    let ops: Vec<Matrix3<f64>> = (0..batched.n_nodes())
-        .map(|i| {
-            let t = 0.01 * (i as f64 + 1.0);
-            Matrix3::identity() + Vector3::new(t, -0.5 * t, 0.2).cross_matrix() * 0.1
-        })
-        .collect();
-    let assemble = |sys: &System| {
-        let mut asm = Assembler::new(sys, Formulation::Index3);
-        let mut r = vec![0.0; asm.n_unknowns()];
-        let mut mat = BlockMatrix::zeros(asm.structure().clone());
-        asm.assemble(sys, &state, &ctx, &coef, &ops, &mut r, Some(&mut mat));
-        (r, mat.values.clone())
+    assert_batched_equals_alone(&m, &coef);
+}
+
+/// The same rotor with Øye's dynamic wake: two states per station, so a batch's block
+/// holds the 7 nodes and then each station's two states in turn (state rows scaled by
+/// s_z ≠ s_r, state columns with ∂ż/∂Δz ≠ 0).
+#[test]
+fn batched_stations_with_states_assemble_as_the_elements_one_by_one() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/rotor/nrel5mw_flexible.toml");
+    let text = std::fs::read_to_string(&path).expect("example").replace(
+        "tip_radius = 63.0 }",
+        "tip_radius = 63.0, dynamic_wake = \"oye\" }",
+    );
+    let m = match Model::from_toml_str(&text, &path) {
+        Ok(l) => l.model,
+        Err(e) => panic!("{}", e.render_plain()),
     };
-    let (r1, k1) = assemble(&batched);
-    let (r2, k2) = assemble(&alone);
-    let close = |a: &[f64], b: &[f64], what: &str| {
-        assert_eq!(a.len(), b.len());
-        let scale = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        assert!(scale > 0.0);
-        for (i, (x, y)) in a.iter().zip(b).enumerate() {
-            assert!((x - y).abs() <= 1e-12 * scale, "{what}[{i}]: {x} vs {y}");
-        }
+    let sys = system(&m, false);
+    assert_eq!(sys.n_states, 2 * 57, "two wake states per station");
+    let coef = Coefficients {
+        mass: 2.0e4,
+        damping: 150.0,
+        stiffness: 1.0,
+        row_scale: 0.3,
+        multiplier_scale: 0.3,
+        velocity_scale: 1.0,
+        penalty: 0.0,
+        state_rate: 70.0,
+        state_row_scale: 0.01,
+        step: 0.0,
     };
-    close(&r1, &r2, "residual");
-    close(&k1, &k2, "matrix");
+    assert_batched_equals_alone(&m, &coef);
 }

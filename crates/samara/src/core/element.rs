@@ -77,6 +77,11 @@ pub struct LocalTerms {
     pub c: DMatrix<f64>,
     pub m: DMatrix<f64>,
     pub ds: DMatrix<f64>,
+    /// Where the element's states start after its node unknowns: its state rows and
+    /// columns are `6·nodes + state_shift + j`. 0 (right after the nodes) except while
+    /// the assembler evaluates a batch of accumulating elements with states into one
+    /// block ([`Element::accumulates`]), each element's states after the previous ones'.
+    pub state_shift: usize,
 }
 
 impl LocalTerms {
@@ -93,6 +98,7 @@ impl LocalTerms {
             c: DMatrix::zeros(n, n),
             m: DMatrix::zeros(n, n),
             ds: DMatrix::zeros(n, inputs),
+            state_shift: 0,
         }
     }
 
@@ -202,10 +208,11 @@ pub trait Element: Send + Sync {
     fn signals(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut SignalTerms) {}
     /// Residual and (if asked) tangents; `out` is cleared by the caller.
     fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms);
-    /// Whether [`Element::evaluate`] only adds into `out` (never overwrites or reads it):
-    /// then consecutive such elements on the same nodes, without states or input signals,
-    /// are evaluated into one local block and assembled once (the stations of a lifting
-    /// line on one beam element).
+    /// Whether [`Element::evaluate`] only adds into `out` (never overwrites or reads it)
+    /// and writes its state rows and columns at [`LocalTerms::state_shift`] past its node
+    /// unknowns: then consecutive such elements on the same nodes without input signals
+    /// are evaluated into one local block (the nodes, then each element's states in turn)
+    /// and assembled once (the stations of a lifting line on one beam element).
     fn accumulates(&self) -> bool {
         false
     }

@@ -435,11 +435,17 @@ impl Assembler {
         let slot =
             |i: usize, j: usize| s.entry(i, j).expect("pattern contains every coupled block");
         let mut sizes_seen: Vec<(usize, usize)> = Vec::new();
+        let batch_end = batches(sys);
         let term_of = sys
             .elements
             .iter()
-            .map(|e| {
-                let key = (6 * e.nodes().len() + e.n_states(), e.signal_inputs().len());
+            .enumerate()
+            .map(|(k, e)| {
+                // A batch's block: the nodes, then the states of each of its elements.
+                let nz: usize = (k..batch_end[k].max(k + 1))
+                    .map(|j| sys.elements[j].n_states())
+                    .sum();
+                let key = (6 * e.nodes().len() + nz, e.signal_inputs().len());
                 sizes_seen
                     .iter()
                     .position(|&m| m == key)
@@ -566,7 +572,6 @@ impl Assembler {
             .iter()
             .map(|s| vec![0.0; s.len()])
             .collect();
-        let batch_end = batches(sys);
         let parallel = sys.elements.len() >= PARALLEL_MIN_ELEMENTS;
         let element_terms = if parallel {
             sys.elements
@@ -864,7 +869,7 @@ impl Assembler {
                     &mut self.inputs,
                 );
                 let t = &self.terms[self.term_of[k]];
-                self.scatter_element(sys, k, t, coef, residual, matrix.as_deref_mut());
+                self.scatter_element(sys, k..end, t, coef, residual, matrix.as_deref_mut());
                 k = end;
             }
         } else {
@@ -891,7 +896,7 @@ impl Assembler {
                     );
                 });
             for (k, t) in self.element_terms.iter().enumerate() {
-                self.scatter_element(sys, k, t, coef, residual, matrix.as_deref_mut());
+                self.scatter_element(sys, k..k + 1, t, coef, residual, matrix.as_deref_mut());
             }
         }
         // Granular candidate pairs: node blocks only; their bristles (history) from the
@@ -1216,17 +1221,19 @@ impl Assembler {
         }
     }
 
-    /// Adds element k's terms (from [`element_terms`]) into the residual and, if given,
-    /// the iteration matrix, with the chain rule through its input signals.
+    /// Adds the terms of the elements `ks` (one element, or a batch from [`batches`];
+    /// from [`element_terms`]) into the residual and, if given, the iteration matrix,
+    /// with the chain rule through the input signals.
     fn scatter_element(
         &self,
         sys: &System,
-        k: usize,
+        ks: Range<usize>,
         t: &LocalTerms,
         coef: &Coefficients,
         residual: &mut [f64],
         matrix: Option<&mut BlockMatrix>,
     ) {
+        let k = ks.start;
         let e = &sys.elements[k];
         let sr = coef.row_scale;
         let en = e.nodes();
@@ -1235,16 +1242,26 @@ impl Assembler {
                 residual[6 * na + i] += sr * t.r[6 * a + i];
             }
         }
-        let nz = e.n_states();
-        if let Some(o) = self.state_place[k] {
-            for i in 0..nz {
-                residual[o + i] += coef.state_row_scale * t.r[6 * en.len() + i];
+        let n6 = 6 * en.len();
+        // Each element's states after the previous ones' (a batch's block).
+        let mut shift = 0;
+        for j in ks.clone() {
+            let nz = sys.elements[j].n_states();
+            if let Some(o) = self.state_place[j] {
+                for i in 0..nz {
+                    residual[o + i] += coef.state_row_scale * t.r[n6 + shift + i];
+                }
             }
+            shift += nz;
         }
         let Some(mat) = matrix else {
             return;
         };
-        let n6 = 6 * en.len();
+        if ks.len() > 1 && shift > 0 {
+            self.scatter_batch_matrix(sys, ks, t, mat);
+            return;
+        }
+        let nz = shift;
         let blocks = &self.element_blocks[k];
         let nb = blocks.len();
         let slots = &self.element_slots[k];
@@ -1295,6 +1312,67 @@ impl Assembler {
                     }
                 }
             }
+        }
+    }
+
+    /// The iteration-matrix block of a batch whose elements have states (no input
+    /// signals, [`batches`]): the node blocks once, then per element its state rows and
+    /// columns against the nodes and its own states (the states of two elements of the
+    /// batch do not couple: those entries of the block are zero).
+    fn scatter_batch_matrix(
+        &self,
+        sys: &System,
+        ks: Range<usize>,
+        t: &LocalTerms,
+        mat: &mut BlockMatrix,
+    ) {
+        let k = ks.start;
+        let n = sys.elements[k].nodes().len();
+        let n6 = 6 * n;
+        let nl = t.r.len();
+        let src = t.k.as_slice();
+        {
+            let nb = self.element_blocks[k].len();
+            let slots = &self.element_slots[k];
+            for a in 0..n {
+                for b in 0..n {
+                    let off = slots[a * nb + b];
+                    add_block6(&mut mat.values[off..off + 36], src, nl, a, b);
+                }
+            }
+        }
+        let mut shift = 0;
+        for j in ks {
+            let blocks = &self.element_blocks[j];
+            let nb = blocks.len();
+            let slots = &self.element_slots[j];
+            // The local position of block `x` of element j in the batch's block.
+            let local = |x: &LocalBlock| {
+                if x.local < n6 {
+                    x.local
+                } else {
+                    x.local + shift
+                }
+            };
+            for (a, ra) in blocks.iter().enumerate() {
+                for (b, cb) in blocks.iter().enumerate() {
+                    if ra.local < n6 && cb.local < n6 {
+                        continue;
+                    }
+                    let off = slots[a * nb + b];
+                    add_sub(
+                        &mut mat.values[off..off + ra.size * cb.size],
+                        cb.size,
+                        (0, 0),
+                        src,
+                        nl,
+                        (local(ra), local(cb)),
+                        (ra.size, cb.size),
+                        1.0,
+                    );
+                }
+            }
+            shift += sys.elements[j].n_states();
         }
     }
 
@@ -1449,13 +1527,14 @@ struct TangentInputs<'a> {
 
 /// Per element, one past the last element of its batch: a run of consecutive elements
 /// that accumulate ([`crate::core::Element::accumulates`]), touch the same nodes and have
-/// no states and no input signals shares one local block (their terms add up, and the
-/// tangent operators and coefficients act linearly on the sum).
+/// no input signals shares one local block, the nodes' unknowns then each element's
+/// states in turn (their terms add up, and the tangent operators and coefficients act
+/// linearly on the sum).
 fn batches(sys: &System) -> Vec<usize> {
     let n = sys.elements.len();
     let alone = |k: usize| {
         let e = &sys.elements[k];
-        !e.accumulates() || e.n_states() > 0 || !sys.signals.element_inputs[k].is_empty()
+        !e.accumulates() || !sys.signals.element_inputs[k].is_empty()
     };
     let mut end = (1..=n).collect::<Vec<_>>();
     let mut k = 0;
@@ -1495,38 +1574,50 @@ fn element_terms(
     };
     t.clear(need);
     let e = &sys.elements[ks.start];
+    // A batch's elements write their states one after another ([`batches`]).
     for k in ks {
         let x = sys.element_input(k, state, signals, inputs);
         sys.elements[k].evaluate(ctx, &x, need, t);
+        t.state_shift += sys.elements[k].n_states();
     }
+    t.state_shift = 0;
     let Some(tg) = tangents else {
         return;
     };
     let coef = tg.coef;
     let en = e.nodes();
     let n6 = 6 * en.len();
-    let nz = e.n_states();
-    if nz == 0 {
+    let nl = t.r.len();
+    if nl == n6 {
         combine_node_terms(t, en, tg);
     } else {
         apply_tangent_ops(&mut t.k, en, tg.tangent_ops);
         if !tg.rate_maps.is_empty() {
             add_rate_terms(t, en, tg.rate_maps);
         }
-        let sr = coef.row_scale;
+        let (sr, sz) = (coef.row_scale, coef.state_row_scale);
         // Node columns as above; state columns: c_K ∂r/∂z + (∂ż/∂Δz) ∂r/∂ż. State
-        // rows are scaled by s_z instead of s_r.
-        let nl = n6 + nz;
-        for j in 0..nl {
+        // rows are scaled by s_z instead of s_r. Column by column (column-major).
+        let cols =
+            t.k.as_mut_slice()
+                .chunks_exact_mut(nl)
+                .zip(t.m.as_slice().chunks_exact(nl))
+                .zip(t.c.as_slice().chunks_exact(nl));
+        for (j, ((k, m), c)) in cols.enumerate() {
             let (cmj, ccj) = if j < n6 {
                 (coef.mass, coef.damping)
             } else {
                 (0.0, coef.state_rate)
             };
-            for i in 0..nl {
-                let rs = if i < n6 { sr } else { coef.state_row_scale };
-                t.k[(i, j)] =
-                    rs * (coef.stiffness * t.k[(i, j)] + cmj * t.m[(i, j)] + ccj * t.c[(i, j)]);
+            for (rs, range) in [(sr, 0..n6), (sz, n6..nl)] {
+                let (ck, cm, cc) = (rs * coef.stiffness, rs * cmj, rs * ccj);
+                for ((kv, &mv), &cv) in k[range.clone()]
+                    .iter_mut()
+                    .zip(&m[range.clone()])
+                    .zip(&c[range])
+                {
+                    *kv = ck * *kv + cm * mv + cc * cv;
+                }
             }
         }
     }

@@ -1044,11 +1044,14 @@ impl AeroStation {
                 })
             })
         };
-        // Column by column (the local matrices are column-major).
+        // Column by column (the local matrices are column-major); the state columns
+        // (from nq on in `jac`) sit `shift` further in the terms (a batch's block).
+        let shift = out.state_shift;
         let spread = |jac: &[[f64; COLUMNS]; 6],
                       translation: Option<[[f64; 6]; 3]>,
                       mat: &mut nalgebra::DMatrix<f64>,
-                      cols: usize| {
+                      cols: usize,
+                      shift: usize| {
             let nr = mat.nrows();
             let mut spread_base = [[0.0; 6 * MAX_NODES]; 3];
             if let Some(b) = &translation {
@@ -1056,12 +1059,10 @@ impl AeroStation {
                     spread_column(g, c);
                 }
             }
-            for (col, c) in mat
-                .as_mut_slice()
-                .chunks_exact_mut(nr)
-                .take(cols)
-                .enumerate()
-            {
+            let values = mat.as_mut_slice();
+            for col in 0..cols {
+                let mc = if col < nq { col } else { col + shift };
+                let c = &mut values[mc * nr..(mc + 1) * nr];
                 if translation.is_some() && col < nq && col % 6 < 3 {
                     let wj = self.attach[col / 6].weight;
                     for (x, b) in c[..nq].iter_mut().zip(&spread_base[col % 6][..nq]) {
@@ -1073,9 +1074,9 @@ impl AeroStation {
                 }
             }
         };
-        spread(&jq, Some(base(0)), &mut out.k, n);
-        spread(&jv, Some(base(9)), &mut out.c, n);
-        spread(&js, None, &mut out.ds, ni);
+        spread(&jq, Some(base(0)), &mut out.k, n, shift);
+        spread(&jv, Some(base(9)), &mut out.c, n, shift);
+        spread(&js, None, &mut out.ds, ni, 0);
         // The node's own rotation in Rᵢᵀ F, Rᵢᵀ M: ∂(Rᵢᵀ y)/∂δθᵢ = (Rᵢᵀ y)~.
         for (i, (&nd, at)) in self.nodes.iter().zip(&self.attach).enumerate() {
             let rt = x.nodes[nd].r().transpose();
@@ -1094,12 +1095,13 @@ impl AeroStation {
         let mut kv = [0.0; COLUMNS];
         let mut ks = [0.0; MAX_INPUTS];
         for (s, zr) in zrows.iter().take(ns).enumerate() {
-            let ri = nq + s;
+            let ri = nq + shift + s;
             out.r[ri] += zr.v;
             self.columns(&arms, zr, &mut kq, &mut kv, &mut ks);
             for j in 0..n {
-                out.k[(ri, j)] += kq[j];
-                out.c[(ri, j)] += kv[j];
+                let cj = if j < nq { j } else { j + shift };
+                out.k[(ri, cj)] += kq[j];
+                out.c[(ri, cj)] += kv[j];
             }
             for (j, v) in ks.iter().enumerate().take(ni) {
                 out.ds[(ri, j)] += v;
@@ -1160,7 +1162,7 @@ impl AeroStation {
             }
         }
         for (s, zr) in zrows.iter().take(ns).enumerate() {
-            out.r[6 * nn + s] += zr;
+            out.r[6 * nn + out.state_shift + s] += zr;
         }
     }
 }
