@@ -1244,7 +1244,7 @@ fn energy_schemes_reproduce_the_slider_crank() {
             );
             // The decaying scheme's first step has no memory (s = 0), so its dissipative
             // term c Δv is O(h) there, not a second difference: the start-up leaves an O(h)
-            // velocity error (O(1) in Δv/h) that decays by ρ∞ per step. Only the
+            // velocity error (O(1) in Δv/h) that the dissipation then removes. Only the
             // preserving scheme is second order over the whole turn.
             if scheme.contains("preserving") {
                 assert!(
