@@ -8,7 +8,7 @@
 //! tolerance ε per step, h ∝ ε^(1/3) and the global error ∝ h² ∝ ε^(2/3).
 
 mod common;
-use common::{model, model_file, run};
+use common::{kick_constants, kick_response, model, model_file, run};
 use samara::model::Model;
 use std::f64::consts::PI;
 
@@ -102,36 +102,13 @@ fn global_error_follows_the_tolerance() {
 /// 20,000 steps at 4.6e-5 m, 1.5 % of the static deflection).
 #[test]
 fn a_fast_transient_then_rest_pays_for_adaptive_steps() {
-    use samara::model::{AnalysisKind, ForceLaw, TimeFunction};
+    use samara::model::AnalysisKind;
     let example = model_file("examples/adaptive_kick.toml");
-    let m = example.bodies[0].mass;
-    let d3 = example.joints[0].components[2].as_ref().unwrap();
-    let (
-        Some(ForceLaw::Linear { coefficient: k, .. }),
-        Some(ForceLaw::Linear { coefficient: c, .. }),
-    ) = (&d3.spring, &d3.damper)
-    else {
-        panic!("the example's rail has a linear spring and damper")
-    };
-    let (k, c) = (*k, *c);
-    let force = example.forces[0].force.x;
-    let TimeFunction::Step { time: t0, .. } = example.forces[0].function else {
-        panic!("the example's force is a step")
-    };
+    let (k, c, m, force, t0) = kick_constants(&example);
     let w = (k / m).sqrt();
     let zeta = c / (2.0 * (k * m).sqrt());
     assert!((w / (2.0 * PI) - 20.0).abs() < 1e-6 && (zeta - 0.05).abs() < 1e-6);
-    let wd = w * (1.0 - zeta * zeta).sqrt();
-    let exact = |t: f64| {
-        if t < t0 {
-            return 0.0;
-        }
-        let s = t - t0;
-        force / k
-            * (1.0
-                - (-zeta * w * s).exp()
-                    * ((wd * s).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * s).sin()))
-    };
+    let exact = kick_response(&example);
     let error_and_steps = |fixed_step: Option<f64>| {
         let mut mm = example.clone();
         if let (Some(h), AnalysisKind::Dynamic(d)) = (fixed_step, &mut mm.analyses[0].kind) {
@@ -517,34 +494,9 @@ fn bouncing_ball_adaptive_steps_against_fixed_steps_at_equal_accuracy() {
 /// 2.61e-6 m (of a static deflection 3.2e-3 m), exponent 0.632.
 #[test]
 fn kick_global_error_follows_the_tolerance() {
-    use samara::model::{AnalysisKind, ForceLaw, TimeFunction};
+    use samara::model::AnalysisKind;
     let example = model_file("examples/adaptive_kick.toml");
-    let m = example.bodies[0].mass;
-    let d3 = example.joints[0].components[2].as_ref().unwrap();
-    let (
-        Some(ForceLaw::Linear { coefficient: k, .. }),
-        Some(ForceLaw::Linear { coefficient: c, .. }),
-    ) = (&d3.spring, &d3.damper)
-    else {
-        panic!("the example's rail has a linear spring and damper")
-    };
-    let (k, c) = (*k, *c);
-    let force = example.forces[0].force.x;
-    let TimeFunction::Step { time: t0, .. } = example.forces[0].function else {
-        panic!("the example's force is a step")
-    };
-    let (w, zeta) = ((k / m).sqrt(), c / (2.0 * (k * m).sqrt()));
-    let wd = w * (1.0 - zeta * zeta).sqrt();
-    let exact = |t: f64| {
-        if t < t0 {
-            return 0.0;
-        }
-        let s = t - t0;
-        force / k
-            * (1.0
-                - (-zeta * w * s).exp()
-                    * ((wd * s).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * s).sin()))
-    };
+    let exact = kick_response(&example);
     let tols = [1e-5, 1e-6, 1e-7, 1e-8];
     let mut errors = Vec::new();
     for tol in tols {

@@ -103,13 +103,11 @@ impl Lcg {
     }
 }
 
-/// The closed-form response x(t) of the kicked mass of `examples/adaptive_kick.toml` (a
-/// mass on a prismatic joint with a linear spring-damper, a step force), its constants read
-/// from the loaded model: x = F/k [1 − e^{−ζωs}(cos ω_d s + ζ/√(1−ζ²) sin ω_d s)],
-/// s = t − t_step.
-pub fn kick_response(m: &Model) -> impl Fn(f64) -> f64 + use<> {
+/// The constants of the kicked mass of `examples/adaptive_kick.toml` (a mass on a
+/// prismatic joint with a linear spring-damper, hit by a step force), read from the loaded
+/// model: (k, c, m, F, t_step).
+pub fn kick_constants(m: &Model) -> (f64, f64, f64, f64, f64) {
     use samara::model::{ForceLaw, TimeFunction};
-    let mass = m.bodies[0].mass;
     let d3 = m.joints[0].components[2].as_ref().unwrap();
     let (
         Some(ForceLaw::Linear { coefficient: k, .. }),
@@ -118,11 +116,16 @@ pub fn kick_response(m: &Model) -> impl Fn(f64) -> f64 + use<> {
     else {
         panic!("the kicked mass's rail has a linear spring and damper")
     };
-    let (k, c) = (*k, *c);
-    let force = m.forces[0].force.x;
     let TimeFunction::Step { time: t0, .. } = m.forces[0].function else {
         panic!("the kick is a step force")
     };
+    (*k, *c, m.bodies[0].mass, m.forces[0].force.x, t0)
+}
+
+/// The closed-form response of the kicked mass ([`kick_constants`]):
+/// x = F/k [1 − e^{−ζωs}(cos ω_d s + ζ/√(1−ζ²) sin ω_d s)], s = t − t_step.
+pub fn kick_response(m: &Model) -> impl Fn(f64) -> f64 + use<> {
+    let (k, c, mass, force, t0) = kick_constants(m);
     let w = (k / mass).sqrt();
     let zeta = c / (2.0 * (k * mass).sqrt());
     let wd = w * (1.0 - zeta * zeta).sqrt();
