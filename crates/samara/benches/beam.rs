@@ -5,7 +5,8 @@
 //! `cargo bench -p samara --bench beam [-- N… t_end=T]` (default N = 10, 100, 1000) prints
 //! wall time, Newton iterations, ms per step and the tip displacement at the end of each
 //! analysis, then the fitted growth exponent of the dynamic wall time with N. `t_end`
-//! shortens the dynamic runs (for the large models and for profiling); the elements are
+//! shortens the dynamic runs (for the large models and for profiling), `newton=full` or
+//! `newton=modified` runs one variant only (`modified`: the dynamics alone); the elements are
 //! evaluated on rayon's threads (`RAYON_NUM_THREADS`) from `PARALLEL_MIN_ELEMENTS` on.
 
 use samara::analysis::History;
@@ -23,6 +24,9 @@ fn main() {
     let t_end: Option<f64> = all
         .iter()
         .find_map(|a| a.strip_prefix("t_end=")?.parse().ok());
+    let only_newton: Option<String> = all
+        .iter()
+        .find_map(|a| a.strip_prefix("newton=").map(String::from));
     let args: Vec<String> = all.into_iter().filter(|a| !a.contains('=')).collect();
     let cases: Vec<String> = if args.is_empty() {
         vec!["10".into(), "100".into(), "1000".into(), "p8x4".into()]
@@ -42,6 +46,9 @@ fn main() {
             continue;
         };
         for newton in ["full", "modified"] {
+            if only_newton.as_deref().is_some_and(|o| o != newton) {
+                continue;
+            }
             let mut model = loaded.model.clone();
             for a in &mut model.analyses {
                 if let AnalysisKind::Dynamic(d) = &mut a.kind {
