@@ -872,39 +872,50 @@ impl Assembler {
             // Large models, a window of elements at a time: each element of the window into
             // its own slot in parallel, then the same scatter in element order, so the sums
             // (and results) do not depend on the number of threads, and the scratch in use
-            // stays a window's (in the caches) however many elements there are.
+            // stays a window's (in the caches) however many elements there are. The loop
+            // runs on one of rayon's threads (`scope`): the windows are then shared out
+            // without handing each over from outside the pool (a thread wake-up per window,
+            // as much as a residual-only window costs).
             use rayon::prelude::*;
-            let values = &self.signal_values.values;
-            let n = sys.elements.len();
-            let mut start = 0;
-            while start < n {
-                let len = self.window.len().min(n - start);
-                let term_of = &self.term_of[start..start + len];
-                self.window[..len]
-                    .par_iter_mut()
-                    .zip(term_of.par_iter())
-                    .enumerate()
-                    .with_min_len(PARALLEL_CHUNK)
-                    .for_each(|(i, (slot, &size))| {
+            let tangents = tangents.as_ref();
+            let mut matrix = matrix.as_deref_mut();
+            // Taken out for the loop (a move, no allocation) and put back after it.
+            let mut window = std::mem::take(&mut self.window);
+            let this = &*self;
+            rayon::scope(|_| {
+                let values = &this.signal_values.values;
+                let n = sys.elements.len();
+                let mut start = 0;
+                while start < n {
+                    let len = window.len().min(n - start);
+                    let term_of = &this.term_of[start..start + len];
+                    window[..len]
+                        .par_iter_mut()
+                        .zip(term_of.par_iter())
+                        .enumerate()
+                        .with_min_len(PARALLEL_CHUNK)
+                        .for_each(|(i, (slot, &size))| {
+                            let k = start + i;
+                            element_terms(
+                                sys,
+                                k..k + 1,
+                                state,
+                                ctx,
+                                values,
+                                tangents,
+                                &mut slot.terms[size],
+                                &mut slot.inputs,
+                            );
+                        });
+                    for (i, slot) in window[..len].iter().enumerate() {
                         let k = start + i;
-                        element_terms(
-                            sys,
-                            k..k + 1,
-                            state,
-                            ctx,
-                            values,
-                            tangents.as_ref(),
-                            &mut slot.terms[size],
-                            &mut slot.inputs,
-                        );
-                    });
-                for (i, slot) in self.window[..len].iter().enumerate() {
-                    let k = start + i;
-                    let t = &slot.terms[self.term_of[k]];
-                    self.scatter_element(sys, k, t, coef, residual, matrix.as_deref_mut());
+                        let t = &slot.terms[this.term_of[k]];
+                        this.scatter_element(sys, k, t, coef, residual, matrix.as_deref_mut());
+                    }
+                    start += len;
                 }
-                start += len;
-            }
+            });
+            self.window = window;
         }
         // Granular candidate pairs: node blocks only; their bristles (history) from the
         // state, aligned with the pairs.
