@@ -10,10 +10,11 @@
 //! evaluated on rayon's threads (`RAYON_NUM_THREADS`) from `PARALLEL_MIN_ELEMENTS` on.
 //!
 //! 1,000 → 10,000 elements (`-- 1000 10000 t_end=0.1`, one thread, CPU per step, load
-//! average 5–6, 2026-11-27): full Newton 7.0 → 81.2 ms (exponent 1.06), modified 3.9 →
-//! 51.0 ms (1.12); before the parallel path's 128-element window 9.0 → 90.7 and 4.5 →
-//! 58.6 ms. Instructions grow exactly with N; the excess is the working set (element data,
-//! matrix, factors) leaving the shared cache (README, "Where the growth … comes from").
+//! average 1–3, 2026-11-27): full Newton 5.65 → 71.8 ms (exponent 1.10), modified 3.02 →
+//! 39.5 ms (1.12); before the parallel path's 128-element window (run inside
+//! `rayon::scope`) 6.53 → 85.5 and 3.27 → 52.4 ms (1.12 / 1.21). Instructions grow exactly
+//! with N; the excess is the working set (element data, matrix, factors) leaving the
+//! shared cache (README, "Where the growth … comes from").
 
 use samara::analysis::History;
 use samara::analysis::run_all;
