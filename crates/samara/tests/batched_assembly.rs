@@ -50,9 +50,20 @@ impl Element for Alone {
 }
 
 fn system(m: &Model, alone: bool) -> System {
+    system_copies(m, alone, 1)
+}
+
+/// The system of `m` with every element built `copies` times (on the same nodes; the
+/// constraints once): enough elements for the assembler's parallel path.
+fn system_copies(m: &Model, alone: bool, copies: usize) -> System {
     let initial = initial_nodes(m);
     let mut parts = Build::new(&initial);
     build_all(m, &mut parts);
+    for _ in 1..copies {
+        let mut more = Build::new(&initial);
+        build_all(m, &mut more);
+        parts.elements.extend(more.elements);
+    }
     let elements: Vec<Box<dyn Element>> = if alone {
         parts
             .elements
@@ -77,7 +88,10 @@ fn system(m: &Model, alone: bool) -> System {
 /// (the batch sums the stations' terms before adding them to the matrix; 1e-12 of the
 /// largest entry).
 fn assert_batched_equals_alone(m: &Model, coef: &Coefficients) {
-    let (batched, alone) = (system(m, false), system(m, true));
+    assert_systems_assemble_alike(system(m, false), system(m, true), coef);
+}
+
+fn assert_systems_assemble_alike(batched: System, alone: System, coef: &Coefficients) {
     let state = batched.initial_state();
     let ctx = EvalContext {
         time: 0.3,
@@ -152,6 +166,10 @@ fn batched_stations_with_states_assemble_as_the_elements_one_by_one() {
     };
     let sys = system(&m, false);
     assert_eq!(sys.n_states, 2 * 57, "two wake states per station");
+    // Five copies of every element: past PARALLEL_MIN_ELEMENTS, so the parallel window
+    // evaluates each station alone (never batched) into a slot of its own size.
+    let (big, big_alone) = (system_copies(&m, false, 5), system_copies(&m, true, 5));
+    assert!(big.elements.len() >= samara::system::PARALLEL_MIN_ELEMENTS);
     let coef = Coefficients {
         mass: 2.0e4,
         damping: 150.0,
@@ -165,4 +183,5 @@ fn batched_stations_with_states_assemble_as_the_elements_one_by_one() {
         step: 0.0,
     };
     assert_batched_equals_alone(&m, &coef);
+    assert_systems_assemble_alike(big, big_alone, &coef);
 }

@@ -1,15 +1,15 @@
 //! Issue #17: parallel element evaluation. Models of `PARALLEL_MIN_ELEMENTS` elements or
-//! more evaluate their elements in parallel (rayon) into element-ordered storage and
-//! scatter them in element order, so a run gives bit-identical results with any number
-//! of threads; and the parallel path computes the right answer (a 300-element cantilever
-//! against the Timoshenko closed form).
+//! more evaluate their elements in parallel (rayon), `PARALLEL_WINDOW` at a time, each into
+//! its own slot, and scatter them in element order, so a run gives bit-identical results
+//! with any number of threads; and the parallel path computes the right answer (a
+//! 300-element cantilever against the Timoshenko closed form).
 
 mod common;
 
 use common::model;
 use samara::analysis::{History, run_analysis};
 use samara::model::{AnalysisKind, JacobianUpdate, Model};
-use samara::system::{PARALLEL_MIN_ELEMENTS, State, System};
+use samara::system::{PARALLEL_MIN_ELEMENTS, PARALLEL_WINDOW, State, System};
 
 /// Steel cantilever (L = 1 m, 10 mm square) in 300 two-node elements, a 0.5 N tip load
 /// and a small tip mass (a second element size in the same model).
@@ -103,7 +103,13 @@ fn bits(s: &State) -> Vec<u64> {
 fn model_is_large_enough_for_the_parallel_path() {
     let m = model(CANTILEVER);
     let sys = System::new(&m);
-    assert!(sys.elements.len() >= PARALLEL_MIN_ELEMENTS);
+    let n = sys.elements.len();
+    assert!(n >= PARALLEL_MIN_ELEMENTS);
+    // Several windows of parallel evaluation, the last one partial.
+    assert!(
+        n > 2 * PARALLEL_WINDOW && !n.is_multiple_of(PARALLEL_WINDOW),
+        "{n} elements"
+    );
 }
 
 /// Static and dynamic runs (full and modified Newton) with 1 and 2 threads agree to the

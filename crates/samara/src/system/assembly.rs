@@ -198,17 +198,18 @@ pub struct Assembler {
     /// shared by every element of that size: the working set stays small however many
     /// elements there are.
     terms: Vec<LocalTerms>,
-    /// Index into `terms` of each element.
+    /// Index into `terms` of each element (of its batch's block when it starts one).
     term_of: Vec<usize>,
+    /// Index into `terms` of each element evaluated alone (the parallel window).
+    alone_term_of: Vec<usize>,
     /// Per element k: one past the last element of the batch k starts (consecutive
     /// accumulating elements on the same nodes without states or input signals, see
     /// [`crate::core::Element::accumulates`]), evaluated into one local block; k + 1 for
     /// an element alone (sequential path only).
     batch_end: Vec<usize>,
-    /// Models of [`PARALLEL_MIN_ELEMENTS`] elements or more: the terms and input-signal
-    /// scratch of each element, for the parallel evaluation (empty otherwise).
-    element_terms: Vec<LocalTerms>,
-    element_inputs: Vec<Vec<f64>>,
+    /// Models of [`PARALLEL_MIN_ELEMENTS`] elements or more: [`PARALLEL_WINDOW`] slots of
+    /// element scratch for the parallel evaluation (empty otherwise).
+    window: Vec<WindowSlot>,
     /// Local blocks of each element and the value offset of each (row block, column
     /// block) pair, row-major over the element's blocks.
     element_blocks: Vec<Vec<LocalBlock>>,
@@ -455,6 +456,21 @@ impl Assembler {
                     })
             })
             .collect();
+        // The parallel path evaluates every element alone (no batches): its own size.
+        let alone_term_of: Vec<usize> = sys
+            .elements
+            .iter()
+            .map(|e| {
+                let key = (6 * e.nodes().len() + e.n_states(), e.signal_inputs().len());
+                sizes_seen
+                    .iter()
+                    .position(|&m| m == key)
+                    .unwrap_or_else(|| {
+                        sizes_seen.push(key);
+                        sizes_seen.len() - 1
+                    })
+            })
+            .collect();
         let terms = sizes_seen
             .iter()
             .map(|&(n, i)| LocalTerms::with_sizes(n, i))
@@ -573,18 +589,21 @@ impl Assembler {
             .map(|s| vec![0.0; s.len()])
             .collect();
         let parallel = sys.elements.len() >= PARALLEL_MIN_ELEMENTS;
-        let element_terms = if parallel {
-            sys.elements
+        let window = if parallel {
+            let max_inputs = sys
+                .elements
                 .iter()
-                .map(|e| LocalTerms::for_element(e.as_ref()))
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let element_inputs = if parallel {
-            sys.elements
-                .iter()
-                .map(|e| Vec::with_capacity(e.signal_inputs().len()))
+                .map(|e| e.signal_inputs().len())
+                .max()
+                .unwrap_or(0);
+            (0..PARALLEL_WINDOW.min(sys.elements.len()))
+                .map(|_| WindowSlot {
+                    terms: sizes_seen
+                        .iter()
+                        .map(|&(n, i)| LocalTerms::with_sizes(n, i))
+                        .collect(),
+                    inputs: Vec::with_capacity(max_inputs),
+                })
                 .collect()
         } else {
             Vec::new()
@@ -604,9 +623,9 @@ impl Assembler {
             structure,
             terms,
             term_of,
+            alone_term_of,
             batch_end,
-            element_terms,
-            element_inputs,
+            window,
             element_blocks,
             element_slots,
             state_place,
@@ -851,7 +870,7 @@ impl Assembler {
             tangent_ops,
             rate_maps: &self.rate_maps,
         });
-        if self.element_terms.is_empty() {
+        if self.window.is_empty() {
             // Evaluate and scatter batch by batch (mostly one element) through the shared
             // scratch.
             let mut k = 0;
@@ -873,31 +892,60 @@ impl Assembler {
                 k = end;
             }
         } else {
-            // Large models: every element into its own storage in parallel, then the same
-            // scatter in element order, so the sums (and results) do not depend on the
-            // number of threads.
+            // Large models, a window of elements at a time: each element of the window into
+            // its own slot in parallel, then the same scatter in element order, so the sums
+            // (and results) do not depend on the number of threads, and the scratch in use
+            // stays a window's (in the caches) however many elements there are. The loop
+            // runs on one of rayon's threads (`scope`): the windows are then shared out
+            // without handing each over from outside the pool (a thread wake-up per window,
+            // as much as a residual-only window costs).
             use rayon::prelude::*;
-            let values = &self.signal_values.values;
-            self.element_terms
-                .par_iter_mut()
-                .zip(self.element_inputs.par_iter_mut())
-                .enumerate()
-                .with_min_len(PARALLEL_CHUNK)
-                .for_each(|(k, (t, inputs))| {
-                    element_terms(
-                        sys,
-                        k..k + 1,
-                        state,
-                        ctx,
-                        values,
-                        tangents.as_ref(),
-                        t,
-                        inputs,
-                    );
-                });
-            for (k, t) in self.element_terms.iter().enumerate() {
-                self.scatter_element(sys, k..k + 1, t, coef, residual, matrix.as_deref_mut());
-            }
+            let tangents = tangents.as_ref();
+            let mut matrix = matrix.as_deref_mut();
+            // Taken out for the loop (a move, no allocation) and put back after it.
+            let mut window = std::mem::take(&mut self.window);
+            let this = &*self;
+            rayon::scope(|_| {
+                let values = &this.signal_values.values;
+                let n = sys.elements.len();
+                let mut start = 0;
+                while start < n {
+                    let len = window.len().min(n - start);
+                    let term_of = &this.alone_term_of[start..start + len];
+                    window[..len]
+                        .par_iter_mut()
+                        .zip(term_of.par_iter())
+                        .enumerate()
+                        .with_min_len(PARALLEL_CHUNK)
+                        .for_each(|(i, (slot, &size))| {
+                            let k = start + i;
+                            element_terms(
+                                sys,
+                                k..k + 1,
+                                state,
+                                ctx,
+                                values,
+                                tangents,
+                                &mut slot.terms[size],
+                                &mut slot.inputs,
+                            );
+                        });
+                    for (i, slot) in window[..len].iter().enumerate() {
+                        let k = start + i;
+                        let t = &slot.terms[this.alone_term_of[k]];
+                        this.scatter_element(
+                            sys,
+                            k..k + 1,
+                            t,
+                            coef,
+                            residual,
+                            matrix.as_deref_mut(),
+                        );
+                    }
+                    start += len;
+                }
+            });
+            self.window = window;
         }
         // Granular candidate pairs: node blocks only; their bristles (history) from the
         // state, aligned with the pairs.
@@ -1266,6 +1314,7 @@ impl Assembler {
         let nb = blocks.len();
         let slots = &self.element_slots[k];
         let nl = n6 + nz;
+        debug_assert_eq!(nl, t.r.len(), "element terms of the element's own size");
         if nz == 0 {
             // Node blocks only: 6×6 each (sizes known at compile time: the hot path).
             let n = en.len();
@@ -1511,12 +1560,26 @@ impl Assembler {
     }
 }
 
-/// Elements from which [`Assembler`] evaluates elements in parallel (rayon), each into
-/// its own storage; below, one shared scratch per element size keeps the working set small.
+/// Elements from which [`Assembler`] evaluates elements in parallel (rayon), a window of
+/// [`PARALLEL_WINDOW`] at a time, each into its own slot; below, one shared scratch per
+/// element size keeps the working set small.
 pub const PARALLEL_MIN_ELEMENTS: usize = 256;
 
 /// Elements per parallel task (amortizes rayon's scheduling against a few µs per element).
-const PARALLEL_CHUNK: usize = 32;
+const PARALLEL_CHUNK: usize = 16;
+
+/// Elements evaluated in parallel before their terms are scattered: 128 slots of a
+/// two-node element's terms are ~0.45 MB, resident in the L2 caches. One slot per element
+/// (3.5 kB each for a two-node beam, 35 MB for 10,000 elements) was written and read back
+/// from memory in every iteration.
+pub const PARALLEL_WINDOW: usize = 128;
+
+/// Scratch of one element of the parallel window: terms for every element size (indexed
+/// like `Assembler::terms`) and the input signals.
+struct WindowSlot {
+    terms: Vec<LocalTerms>,
+    inputs: Vec<f64>,
+}
 
 /// What the iteration matrix needs besides the element's own terms.
 struct TangentInputs<'a> {

@@ -14,7 +14,8 @@ pub mod signals;
 
 pub use crate::core::{Coordinate, NodeState, State};
 pub use assembly::{
-    Assembler, BlockOwner, Coefficients, Formulation, PARALLEL_MIN_ELEMENTS, RateMaps,
+    Assembler, BlockOwner, Coefficients, Formulation, PARALLEL_MIN_ELEMENTS, PARALLEL_WINDOW,
+    RateMaps,
 };
 pub use matrices::SystemMatrices;
 pub use redundancy::ConstraintLoop;
