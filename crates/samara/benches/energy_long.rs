@@ -33,6 +33,22 @@ fn load(rel: &str, step: f64, t_end: f64, tolerance: f64, output_every: usize) -
     Model::from_toml_str(&text, rel).unwrap().model
 }
 
+/// The model's analysis, its history and its wall time [s].
+fn timed_run(sys: &System, m: &Model) -> (samara::analysis::AnalysisSummary, History, f64) {
+    let mut h = History::default();
+    let clock = Instant::now();
+    let s = run_analysis(
+        sys,
+        &m.analyses[0],
+        sys.initial_state(),
+        &mut h,
+        &mut |_| {},
+    )
+    .unwrap();
+    assert!(s.failure.is_none(), "{:?}", s.failure);
+    (s, h, clock.elapsed().as_secs_f64())
+}
+
 fn energy(f: &samara::analysis::Frame) -> f64 {
     f.energy.kinetic + f.energy.potential
 }
@@ -62,18 +78,7 @@ fn main() {
             500,
         );
         let sys = System::new(&m);
-        let mut h = History::default();
-        let clock = Instant::now();
-        let s = run_analysis(
-            &sys,
-            &m.analyses[0],
-            sys.initial_state(),
-            &mut h,
-            &mut |_| {},
-        )
-        .unwrap();
-        assert!(s.failure.is_none(), "{:?}", s.failure);
-        let wall = clock.elapsed().as_secs_f64();
+        let (s, h, wall) = timed_run(&sys, &m);
         let e0 = energy(&h.frames[0]);
         let drift = h
             .frames
@@ -100,18 +105,7 @@ fn main() {
             20,
         );
         let sys = System::new(&m);
-        let mut h = History::default();
-        let clock = Instant::now();
-        let s = run_analysis(
-            &sys,
-            &m.analyses[0],
-            sys.initial_state(),
-            &mut h,
-            &mut |_| {},
-        )
-        .unwrap();
-        assert!(s.failure.is_none(), "{:?}", s.failure);
-        let wall = clock.elapsed().as_secs_f64();
+        let (s, h, wall) = timed_run(&sys, &m);
         let free: Vec<_> = h.frames.iter().filter(|f| f.time >= 5.0 - 1e-9).collect();
         let e5 = energy(free[0]);
         let (p5, l5) = sys.momenta(&free[0].state);

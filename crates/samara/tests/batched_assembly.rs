@@ -129,12 +129,9 @@ fn assert_systems_assemble_alike(batched: System, alone: System, coef: &Coeffici
     close(&k1, &k2, "matrix");
 }
 
-/// The flexible NREL 5-MW rotor, whose 19 stations per blade hang on the 7 nodes of the
-/// blade's two beam elements (dynamic coefficients).
-#[test]
-fn batched_stations_assemble_as_the_elements_one_by_one() {
-    let m = model_file("examples/rotor/nrel5mw_flexible.toml");
-    let coef = Coefficients {
+/// Dynamic iteration-matrix coefficients, with the element states' ∂ż/∂Δz and row scale.
+fn dynamic_coefficients(state_rate: f64, state_row_scale: f64) -> Coefficients {
+    Coefficients {
         mass: 2.0e4,
         damping: 150.0,
         stiffness: 1.0,
@@ -142,10 +139,18 @@ fn batched_stations_assemble_as_the_elements_one_by_one() {
         multiplier_scale: 0.3,
         velocity_scale: 1.0,
         penalty: 0.0,
-        state_rate: 0.0,
-        state_row_scale: 1.0,
+        state_rate,
+        state_row_scale,
         step: 0.0,
-    };
+    }
+}
+
+/// The flexible NREL 5-MW rotor, whose 19 stations per blade hang on the 7 nodes of the
+/// blade's two beam elements (dynamic coefficients).
+#[test]
+fn batched_stations_assemble_as_the_elements_one_by_one() {
+    let m = model_file("examples/rotor/nrel5mw_flexible.toml");
+    let coef = dynamic_coefficients(0.0, 1.0);
     assert_batched_equals_alone(&m, &coef);
 }
 
@@ -170,18 +175,7 @@ fn batched_stations_with_states_assemble_as_the_elements_one_by_one() {
     // evaluates each station alone (never batched) into a slot of its own size.
     let (big, big_alone) = (system_copies(&m, false, 5), system_copies(&m, true, 5));
     assert!(big.elements.len() >= samara::system::PARALLEL_MIN_ELEMENTS);
-    let coef = Coefficients {
-        mass: 2.0e4,
-        damping: 150.0,
-        stiffness: 1.0,
-        row_scale: 0.3,
-        multiplier_scale: 0.3,
-        velocity_scale: 1.0,
-        penalty: 0.0,
-        state_rate: 70.0,
-        state_row_scale: 0.01,
-        step: 0.0,
-    };
+    let coef = dynamic_coefficients(70.0, 0.01);
     assert_batched_equals_alone(&m, &coef);
     assert_systems_assemble_alike(big, big_alone, &coef);
 }

@@ -210,33 +210,8 @@ fn heavy_top_matches_the_kynema_reference() {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../reference/kynema_verification/heavy_top_kynema_material_0pt000002s.csv"),
     );
-    // The reference values, as printed in that file (kept here so the test runs without it).
-    let reference: Vec<(f64, [f64; 7])> = vec![
-        (
-            1.0,
-            [
-                0.1733440435722807,
-                -0.3599112987333657,
-                -0.7484906793466106,
-                0.7329439942283007,
-                -0.2782856278135421,
-                0.5318246439927058,
-                -0.3201761370231893,
-            ],
-        ),
-        (
-            2.0,
-            [
-                -0.1504168894608856,
-                -1.7241654846852867,
-                -0.6730223697288009,
-                0.1229471344095339,
-                -0.4910798717314375,
-                0.3504301068655838,
-                -0.7879868665928781,
-            ],
-        ),
-    ];
+    // The reference values, as printed in that file (kept so the test runs without it).
+    let reference = common::KYNEMA_HEAVY_TOP;
     if let Ok(text) = csv {
         for (t, v) in &reference {
             let line = text

@@ -5,7 +5,6 @@
 
 mod common;
 use common::{example_model_text, model};
-use samara::analysis::energy_preserving::{EnergyStepper, consistent_initial_state};
 use samara::model::{AnalysisKind, Model};
 use samara::system::System;
 
@@ -30,25 +29,6 @@ fn spaghetti(elements: usize, integrator: &str, step: f64) -> Model {
     ))
 }
 
-/// A stepper at the consistent start of `m`'s analysis.
-fn stepper<'a>(sys: &'a System, m: &Model) -> (EnergyStepper<'a>, f64) {
-    let AnalysisKind::Dynamic(d) = &m.analyses[0].kind else {
-        panic!("dynamic")
-    };
-    let start = consistent_initial_state(sys, d).unwrap();
-    let it = EnergyStepper::new(
-        sys,
-        d.integrator,
-        d.rho_inf,
-        d.solver.tolerance,
-        d.solver.relative_tolerance,
-        d.solver.max_iterations,
-        start,
-    )
-    .unwrap();
-    (it, d.step)
-}
-
 /// Preserving scheme: 4, 16 and 64 elements (17 to 257 nodes, 102 to 1,542 unknowns)
 /// need the same number of column groups, fewer than a beam element's unknowns times
 /// the elements sharing a node (5 nodes of 6 unknowns, two elements: < 60); the dense
@@ -59,7 +39,7 @@ fn column_groups_do_not_grow_with_the_model() {
     let groups = |elements: usize, integrator: &str| {
         let m = spaghetti(elements, integrator, 0.05);
         let sys = System::new(&m);
-        let (it, _) = stepper(&sys, &m);
+        let (it, _) = common::energy_stepper(&sys, &m);
         (it.jacobian_groups(), 6 * sys.n_nodes())
     };
     let (g4, n4) = groups(4, "energy_preserving");

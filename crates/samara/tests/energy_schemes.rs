@@ -40,26 +40,12 @@ fn energy_drift(h: &samara::analysis::History, scale: f64) -> f64 {
 /// [`EnergyStepper`], for `n` steps of its `step`: the discrete energy Ẽ after every
 /// step (index 0: the start) and the states every `every` steps (and the last).
 fn step_by_hand(m: &Model, n: usize, every: usize) -> (Vec<f64>, Vec<samara::system::State>) {
-    use samara::analysis::energy_preserving::{EnergyStepper, consistent_initial_state};
     let sys = System::new(m);
-    let AnalysisKind::Dynamic(d) = &m.analyses[0].kind else {
-        panic!("not dynamic")
-    };
-    let start = consistent_initial_state(&sys, d).unwrap();
-    let mut it = EnergyStepper::new(
-        &sys,
-        d.integrator,
-        d.rho_inf,
-        d.solver.tolerance,
-        d.solver.relative_tolerance,
-        d.solver.max_iterations,
-        start,
-    )
-    .unwrap();
+    let (mut it, step) = common::energy_stepper(&sys, m);
     let mut e = vec![it.decaying_energy()];
     let mut states = vec![it.state().clone()];
     for k in 1..=n {
-        it.step(d.step).unwrap();
+        it.step(step).unwrap();
         e.push(it.decaying_energy());
         if k % every == 0 || k == n {
             states.push(it.state().clone());
@@ -1037,43 +1023,11 @@ fn energy_schemes_refuse_what_they_cannot_integrate() {
     );
 }
 
-/// The Kynema reference of the heavy top of Brüls, Cardona & Arnold (2012)
-/// (`reference/kynema_verification/heavy_top_kynema_material_0pt000002s.csv`, dt = 2e-6:
-/// CG displacement u and orientation quaternion q at t = 1 s and 2 s), as printed in that
-/// file; the copy is checked against the file by
-/// `constrained.rs::heavy_top_matches_the_kynema_reference`.
-const KYNEMA_TOP: [(f64, [f64; 7]); 2] = [
-    (
-        1.0,
-        [
-            0.1733440435722807,
-            -0.3599112987333657,
-            -0.7484906793466106,
-            0.7329439942283007,
-            -0.2782856278135421,
-            0.5318246439927058,
-            -0.3201761370231893,
-        ],
-    ),
-    (
-        2.0,
-        [
-            -0.1504168894608856,
-            -1.7241654846852867,
-            -0.6730223697288009,
-            0.1229471344095339,
-            -0.4910798717314375,
-            0.3504301068655838,
-            -0.7879868665928781,
-        ],
-    ),
-];
-
 /// Errors (max of |Δu| and the quaternion distance, q ≡ −q) of `examples/verification/
 /// heavy_top.toml` run with `scheme` (the `integrator = …` lines) at `steps`, against
-/// [`KYNEMA_TOP`] at 1 s and 2 s: `errors[k][i]` at time k and step i.
+/// [`common::KYNEMA_HEAVY_TOP`] at 1 s and 2 s: `errors[k][i]` at time k and step i.
 fn kynema_top_errors(scheme: &str, steps: &[f64]) -> Vec<Vec<f64>> {
-    let mut errors = vec![Vec::new(); KYNEMA_TOP.len()];
+    let mut errors = vec![Vec::new(); common::KYNEMA_HEAVY_TOP.len()];
     for &h in steps {
         let m = example_with(
             "examples/verification/heavy_top.toml",
@@ -1085,7 +1039,7 @@ fn kynema_top_errors(scheme: &str, steps: &[f64]) -> Vec<Vec<f64>> {
         let x0 = m.nodes[0].position;
         let (s, hist) = run(&m);
         assert!(s.failure.is_none(), "{:?}", s.failure);
-        for (k, (t, r)) in KYNEMA_TOP.iter().enumerate() {
+        for (k, (t, r)) in common::KYNEMA_HEAVY_TOP.iter().enumerate() {
             let f = hist.at(*t).unwrap();
             assert!((f.time - t).abs() < 1e-9, "{}", f.time);
             let u = f.state.nodes[0].x - x0;
@@ -1126,7 +1080,7 @@ fn energy_schemes_match_the_kynema_heavy_top() {
         "integrator = \"energy_decaying\"\nrho_inf = 0.5\n",
     ] {
         let errors = kynema_top_errors(scheme, &steps);
-        for (k, (t, _)) in KYNEMA_TOP.iter().enumerate() {
+        for (k, (t, _)) in common::KYNEMA_HEAVY_TOP.iter().enumerate() {
             let p = orders(&errors[k]);
             let cayley = 0.5 * spin * t * (spin * steps[2]).powi(2) / 12.0;
             eprintln!(
@@ -1163,17 +1117,7 @@ fn energy_schemes_match_the_kynema_heavy_top() {
 /// comment below.
 #[test]
 fn energy_schemes_reproduce_the_slider_crank() {
-    use std::f64::consts::PI;
-    let (r, l, w) = (0.1f64, 0.3f64, 2.0 * PI);
-    let exact = |t: f64| -> [f64; 3] {
-        let th = w * t;
-        let (s, c) = th.sin_cos();
-        let d = (l * l - r * r * s * s).sqrt();
-        let x = r * c + d;
-        let x1 = -r * s - r * r * s * c / d;
-        let x2 = -r * c - r * r * (c * c - s * s) / d - r.powi(4) * s * s * c * c / d.powi(3);
-        [x, w * x1, w * w * x2]
-    };
+    let exact = common::slider_crank_piston;
     let text = std::fs::read_to_string(
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/slider_crank.toml"),
     )

@@ -25,16 +25,7 @@ fn coord(m: &Model, name: &str) -> usize {
 /// consistent initial conditions: the errors must fall by ~4 when h halves.
 #[test]
 fn slider_crank_piston_follows_the_closed_form() {
-    let (r, l, w) = (0.1f64, 0.3f64, 2.0 * PI);
-    let exact = |t: f64| -> [f64; 3] {
-        let th = w * t;
-        let (s, c) = th.sin_cos();
-        let d = (l * l - r * r * s * s).sqrt();
-        let x = r * c + d;
-        let x1 = -r * s - r * r * s * c / d;
-        let x2 = -r * c - r * r * (c * c - s * s) / d - r.powi(4) * s * s * c * c / d.powi(3);
-        [x, w * x1, w * w * x2]
-    };
+    let exact = common::slider_crank_piston;
     let base = model_file("examples/slider_crank.toml");
     // The slide's coordinate has nothing attached: it is passive, solved after each step
     // from its defining equation; it must agree with the piston node to round-off.

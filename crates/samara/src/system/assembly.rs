@@ -436,8 +436,16 @@ impl Assembler {
         let slot =
             |i: usize, j: usize| s.entry(i, j).expect("pattern contains every coupled block");
         let mut sizes_seen: Vec<(usize, usize)> = Vec::new();
+        // Index of a (local unknowns, input signals) size among those seen.
+        let mut index_of = |key: (usize, usize)| match sizes_seen.iter().position(|&m| m == key) {
+            Some(i) => i,
+            None => {
+                sizes_seen.push(key);
+                sizes_seen.len() - 1
+            }
+        };
         let batch_end = batches(sys);
-        let term_of = sys
+        let term_of: Vec<usize> = sys
             .elements
             .iter()
             .enumerate()
@@ -446,30 +454,14 @@ impl Assembler {
                 let nz: usize = (k..batch_end[k].max(k + 1))
                     .map(|j| sys.elements[j].n_states())
                     .sum();
-                let key = (6 * e.nodes().len() + nz, e.signal_inputs().len());
-                sizes_seen
-                    .iter()
-                    .position(|&m| m == key)
-                    .unwrap_or_else(|| {
-                        sizes_seen.push(key);
-                        sizes_seen.len() - 1
-                    })
+                index_of((6 * e.nodes().len() + nz, e.signal_inputs().len()))
             })
             .collect();
         // The parallel path evaluates every element alone (no batches): its own size.
         let alone_term_of: Vec<usize> = sys
             .elements
             .iter()
-            .map(|e| {
-                let key = (6 * e.nodes().len() + e.n_states(), e.signal_inputs().len());
-                sizes_seen
-                    .iter()
-                    .position(|&m| m == key)
-                    .unwrap_or_else(|| {
-                        sizes_seen.push(key);
-                        sizes_seen.len() - 1
-                    })
-            })
+            .map(|e| index_of((6 * e.nodes().len() + e.n_states(), e.signal_inputs().len())))
             .collect();
         let terms = sizes_seen
             .iter()

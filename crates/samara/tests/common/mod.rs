@@ -153,3 +153,73 @@ pub fn example_model_text(rel: &str) -> String {
         None => text,
     }
 }
+
+/// The Kynema reference of the heavy top of Brüls, Cardona & Arnold (2012)
+/// (`reference/kynema_verification/heavy_top_kynema_material_0pt000002s.csv`, dt = 2e-6:
+/// CG displacement u and orientation quaternion q at t = 1 s and 2 s), as printed in that
+/// file; `constrained.rs::heavy_top_matches_the_kynema_reference` checks this copy against
+/// the file.
+pub const KYNEMA_HEAVY_TOP: [(f64, [f64; 7]); 2] = [
+    (
+        1.0,
+        [
+            0.1733440435722807,
+            -0.3599112987333657,
+            -0.7484906793466106,
+            0.7329439942283007,
+            -0.2782856278135421,
+            0.5318246439927058,
+            -0.3201761370231893,
+        ],
+    ),
+    (
+        2.0,
+        [
+            -0.1504168894608856,
+            -1.7241654846852867,
+            -0.6730223697288009,
+            0.1229471344095339,
+            -0.4910798717314375,
+            0.3504301068655838,
+            -0.7879868665928781,
+        ],
+    ),
+];
+
+/// The slider-crank of `examples/slider_crank.toml` (crank r = 0.1 m, rod l = 0.3 m, driven
+/// at ω = 2π rad/s): piston position, velocity and acceleration at t from
+/// x = r cos θ + √(l² − r² sin² θ), θ = ω t, and its derivatives.
+pub fn slider_crank_piston(t: f64) -> [f64; 3] {
+    let (r, l, w) = (0.1f64, 0.3f64, 2.0 * std::f64::consts::PI);
+    let th = w * t;
+    let (s, c) = th.sin_cos();
+    let d = (l * l - r * r * s * s).sqrt();
+    let x = r * c + d;
+    let x1 = -r * s - r * r * s * c / d;
+    let x2 = -r * c - r * r * (c * c - s * s) / d - r.powi(4) * s * s * c * c / d.powi(3);
+    [x, w * x1, w * w * x2]
+}
+
+/// An energy-scheme stepper at the consistent start of `m`'s first analysis (dynamic, an
+/// energy scheme), and that analysis's step.
+pub fn energy_stepper<'a>(
+    sys: &'a System,
+    m: &Model,
+) -> (samara::analysis::energy_preserving::EnergyStepper<'a>, f64) {
+    use samara::analysis::energy_preserving::{EnergyStepper, consistent_initial_state};
+    let AnalysisKind::Dynamic(d) = &m.analyses[0].kind else {
+        panic!("not dynamic")
+    };
+    let start = consistent_initial_state(sys, d).unwrap();
+    let it = EnergyStepper::new(
+        sys,
+        d.integrator,
+        d.rho_inf,
+        d.solver.tolerance,
+        d.solver.relative_tolerance,
+        d.solver.max_iterations,
+        start,
+    )
+    .unwrap();
+    (it, d.step)
+}
