@@ -69,8 +69,7 @@ use crate::math::cayley::cayley;
 use crate::math::{Rotation, skew};
 use crate::model::{DynamicSettings, IntegratorType};
 use crate::system::{State, System};
-use faer::linalg::solvers::SolveCore;
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::{DMatrix, RowVector3, Vector3};
 use std::time::Instant;
 
 /// The decaying scheme's dissipation coefficient c for a high-frequency spectral radius
@@ -105,7 +104,6 @@ pub struct EnergyStepper<'a> {
     mbar: f64,
     n_node: usize,
     n_coord: usize,
-    n: usize,
     // Scratch.
     end: Vec<NodeState>,
     mid: Vec<NodeState>,
@@ -115,14 +113,28 @@ pub struct EnergyStepper<'a> {
     phi0: Vec<f64>,
     phi1: Vec<f64>,
     delta: Vec<f64>,
-    /// LU of the Newton matrix and the step it was formed for (modified Newton: kept
-    /// across steps while the iteration contracts).
-    lu: Option<faer::sparse::linalg::solvers::Lu<usize, f64>>,
+    /// Each joint's mid-point Jacobian (rows × local unknowns); a joint's row values and
+    /// one row.
+    joint_jacobians: Vec<DMatrix<f64>>,
+    joint_phi: Vec<f64>,
+    joint_row: Vec<f64>,
+    /// A joint's coordinates at rest, and their spring and total forces.
+    still_coords: Vec<Coordinate>,
+    coord_spring: Vec<f64>,
+    coord_force: Vec<f64>,
+    /// The Newton iteration's unknowns, residual, perturbed residual and correction, and
+    /// the constraint values after a step.
+    newton_u: Vec<f64>,
+    newton_r: Vec<f64>,
+    newton_rp: Vec<f64>,
+    newton_du: Vec<f64>,
+    phi_end: Vec<f64>,
+    /// LU of the Newton matrix, for the step `lu_h` it was formed for (modified Newton:
+    /// kept across steps while the iteration contracts).
+    pattern_lu: PatternLu,
     lu_h: f64,
     /// The Newton matrix's pattern and column groups (taken out while differencing).
     groups: Option<ColumnGroups>,
-    pattern_lu: PatternLu,
-    jacobian_values: Vec<f64>,
     /// Decaying scheme's memory: the last step's PΔv, ΔΩ per node (6 per node), the
     /// elements' strain increments (offsets `mem_offsets`), the joint coordinates' Δν;
     /// `*_scaled` the same times s for the step being taken.
@@ -230,13 +242,33 @@ impl<'a> EnergyStepper<'a> {
                 }
             }
         }
+        let max_coords = sys
+            .constraints
+            .iter()
+            .map(|c| c.n_coordinates())
+            .max()
+            .unwrap_or(0);
         let groups = Some(newton_pattern(sys, n_node, n_coord, n, xi > 0.0));
         Ok(Self {
             sys,
             xi,
             groups,
             pattern_lu: PatternLu::default(),
-            jacobian_values: Vec::new(),
+            joint_jacobians: sys
+                .constraints
+                .iter()
+                .map(|c| DMatrix::zeros(c.n_equations(), 6 * c.nodes().len() + c.n_coordinates()))
+                .collect(),
+            joint_phi: vec![0.0; max_rows],
+            joint_row: vec![0.0; max_local],
+            still_coords: vec![Coordinate::default(); max_coords],
+            coord_spring: vec![0.0; max_coords],
+            coord_force: vec![0.0; max_coords],
+            newton_u: vec![0.0; n],
+            newton_r: vec![0.0; n],
+            newton_rp: vec![0.0; n],
+            newton_du: vec![0.0; n],
+            phi_end: vec![0.0; sys.n_multipliers],
             dv_last: vec![0.0; n_node],
             dv_scaled: vec![0.0; n_node],
             mem_last: vec![0.0; off],
@@ -254,7 +286,6 @@ impl<'a> EnergyStepper<'a> {
             mbar: sys.characteristic_mass,
             n_node,
             n_coord,
-            n,
             end: state.nodes.clone(),
             mid: state.nodes.clone(),
             end_coords: state.coords.clone(),
@@ -264,7 +295,6 @@ impl<'a> EnergyStepper<'a> {
             phi1: vec![0.0; max_rows],
             delta: vec![0.0; max_local],
             state,
-            lu: None,
             lu_h: f64::NAN,
             factorizations: 0,
             constraint_violation: 0.0,
@@ -470,28 +500,36 @@ impl<'a> EnergyStepper<'a> {
                 // Q = cay(ψ/2)ᵀ (I + ψ̃/2). (The exact ∂/∂ψ, B_θ T_c(ψ/2), differs from it
                 // by O(ψ) across ψ and makes a fast spin drift at O(h).) Qψ = ψ, so the
                 // defect ΔΦ − B̄Δ is O(|Δ|³) and the Gonzalez correction O(|Δ|²).
-                let mut bm = DMatrix::zeros(m, cols);
-                let mut phis = vec![0.0; m];
+                let bm = &mut self.joint_jacobians[k];
+                bm.fill(0.0);
                 c.evaluate(
                     &ctx1,
                     &self.mid,
                     &self.mid_coords[co..co + nc],
-                    &mut phis,
-                    Some(&mut bm),
+                    &mut self.joint_phi[..m],
+                    Some(bm),
                 );
                 for a in 0..nodes.len() {
                     let psi = Vector3::new(delta[6 * a + 3], delta[6 * a + 4], delta[6 * a + 5]);
                     let half = cayley(&(psi * 0.5)).to_rotation_matrix().into_inner();
                     let q = half.transpose() * (nalgebra::Matrix3::identity() + skew(&psi) * 0.5);
-                    let cols_rot = bm.view((0, 6 * a + 3), (m, 3)) * q;
-                    bm.view_mut((0, 6 * a + 3), (m, 3)).copy_from(&cols_rot);
+                    for j in 0..m {
+                        let b = RowVector3::new(
+                            bm[(j, 6 * a + 3)],
+                            bm[(j, 6 * a + 4)],
+                            bm[(j, 6 * a + 5)],
+                        ) * q;
+                        for (i, x) in b.iter().enumerate() {
+                            bm[(j, 6 * a + 3 + i)] = *x;
+                        }
+                    }
                 }
-                let mut row = vec![0.0; cols];
+                let row = &mut self.joint_row[..cols];
                 for j in 0..m {
                     for (x, y) in row.iter_mut().zip(bm.row(j).iter()) {
                         *x = *y;
                     }
-                    gonzalez_correction(&mut row, delta, self.phi1[j] - self.phi0[j]);
+                    gonzalez_correction(row, delta, self.phi1[j] - self.phi0[j]);
                     let lam = u[self.n_node + self.n_coord + mo + j];
                     for (a, &ni) in nodes.iter().enumerate() {
                         for q in 0..6 {
@@ -507,30 +545,26 @@ impl<'a> EnergyStepper<'a> {
             if nc > 0 {
                 // Coordinate springs: Gonzalez discrete gradient of their potential;
                 // dampers at the mean rate Δν/h.
-                let still: Vec<Coordinate> = self.mid_coords[co..co + nc]
-                    .iter()
-                    .map(|x| Coordinate {
-                        q: x.q,
+                let still = &mut self.still_coords[..nc];
+                for (x, m) in still.iter_mut().zip(&self.mid_coords[co..co + nc]) {
+                    *x = Coordinate {
+                        q: m.q,
                         v: 0.0,
                         a: 0.0,
-                    })
-                    .collect();
-                let mut fs = vec![0.0; nc];
-                c.coordinate_forces(&ctx_mid, &still, &[], &mut fs, None);
+                    };
+                }
+                let fs = &mut self.coord_spring[..nc];
+                fs.fill(0.0);
+                c.coordinate_forces(&ctx_mid, still, &[], fs, None);
                 let dv = c.potential_energy(&self.end_coords[co..co + nc])
                     - c.potential_energy(&coords0[co..co + nc]);
-                let mut full = vec![0.0; nc];
-                c.coordinate_forces(
-                    &ctx_mid,
-                    &self.mid_coords[co..co + nc],
-                    &[],
-                    &mut full,
-                    None,
-                );
-                for (f, s) in full.iter_mut().zip(&fs) {
+                let full = &mut self.coord_force[..nc];
+                full.fill(0.0);
+                c.coordinate_forces(&ctx_mid, &self.mid_coords[co..co + nc], &[], full, None);
+                for (f, s) in full.iter_mut().zip(fs.iter()) {
                     *f -= s;
                 }
-                gonzalez_correction(&mut fs, &delta[nn..], dv);
+                gonzalez_correction(fs, &delta[nn..], dv);
                 for q in 0..nc {
                     // Decay: c k_ν (Δν − s Δν_prev), dissipating c k_ν Δν (Δν − s Δν_prev).
                     let dis = xi
@@ -550,7 +584,6 @@ impl<'a> EnergyStepper<'a> {
     }
 
     fn solve_step(&mut self, h: f64, full: bool) -> Result<(), StepFailure> {
-        let n = self.n;
         if self.xi > 0.0 {
             // s = min(h/h_prev, 1): the second differences are O(h²) on a smooth motion
             // for any s ≈ h/h_prev, and s ≤ 1 keeps the energy statement.
@@ -569,7 +602,30 @@ impl<'a> EnergyStepper<'a> {
                 *a = s * b;
             }
         }
-        let mut u = vec![0.0; n];
+        let mut u = std::mem::take(&mut self.newton_u);
+        let mut r = std::mem::take(&mut self.newton_r);
+        let mut rp = std::mem::take(&mut self.newton_rp);
+        let mut du = std::mem::take(&mut self.newton_du);
+        let result = self.newton(h, full, &mut u, &mut r, &mut rp, &mut du);
+        self.newton_u = u;
+        self.newton_r = r;
+        self.newton_rp = rp;
+        self.newton_du = du;
+        result
+    }
+
+    /// The Newton iteration of [`EnergyStepper::solve_step`] on the work vectors given
+    /// (each of length n).
+    fn newton(
+        &mut self,
+        h: f64,
+        full: bool,
+        u: &mut [f64],
+        r: &mut [f64],
+        rp: &mut [f64],
+        du: &mut [f64],
+    ) -> Result<(), StepFailure> {
+        u.fill(0.0);
         // Predictor: Δ = h v₀.
         for (i, nd) in self.state.nodes.iter().enumerate() {
             let p = nd.v * h;
@@ -584,50 +640,39 @@ impl<'a> EnergyStepper<'a> {
         for (j, l) in self.state.lambda.iter().enumerate() {
             u[self.n_node + self.n_coord + j] = l * lscale;
         }
-        let mut r = vec![0.0; n];
-        let mut rp = vec![0.0; n];
-        let mut lu = if self.lu_h == h { self.lu.take() } else { None };
+        if self.lu_h != h {
+            self.pattern_lu.forget();
+        }
         let mut last = f64::INFINITY;
         let mut converged = false;
         let ncfg = self.n_node + self.n_coord;
         for it in 0..self.max_iterations {
-            self.residual(h, &u, &mut r);
+            self.residual(h, u, r);
             if r.iter().any(|x| !x.is_finite()) {
                 return Err(StepFailure {
                     reason: "the step residual is not finite".into(),
                 });
             }
-            if lu.is_none() {
+            if !self.pattern_lu.is_factored() {
                 // Grouped forward differences from the residual just evaluated.
                 let mut groups = self
                     .groups
                     .take()
                     .expect("the pattern is kept between uses");
-                let mut values = std::mem::take(&mut self.jacobian_values);
-                groups.jacobian(&mut u, &r, &mut rp, &mut values, |x, out| {
-                    self.residual(h, x, out)
-                });
-                let a = groups.matrix(&values);
+                groups.jacobian(u, r, rp, |x, out| self.residual(h, x, out));
+                let factored = self.pattern_lu.factor(groups.matrix());
                 self.groups = Some(groups);
-                self.jacobian_values = values;
                 // `residual` left the scratch states at the last perturbation.
-                self.configure(h, &u);
-                lu = self.pattern_lu.factor(&a);
-                if lu.is_none() {
+                self.configure(h, u);
+                if !factored {
                     return Err(StepFailure {
                         reason: "the Newton matrix of the step is singular".into(),
                     });
                 }
                 self.factorizations += 1;
             }
-            let Some(dec) = lu.as_ref() else {
-                unreachable!()
-            };
-            let mut du = r.clone();
-            dec.solve_in_place_with_conj(
-                faer::Conj::No,
-                faer::MatMut::from_column_major_slice_mut(&mut du, n, 1),
-            );
+            du.copy_from_slice(r);
+            self.pattern_lu.solve_in_place(du);
             if !du.iter().all(|x| x.is_finite()) {
                 return Err(StepFailure {
                     reason: "the Newton matrix of the step is singular".into(),
@@ -654,14 +699,13 @@ impl<'a> EnergyStepper<'a> {
             // Modified Newton: a new matrix when the iteration stops contracting fast
             // (a fresh one contracts quadratically).
             if full || worst > 0.05 * last {
-                lu = None;
+                self.pattern_lu.forget();
             }
             last = worst;
         }
-        self.lu = lu;
         self.lu_h = h;
         if !converged {
-            self.lu = None;
+            self.pattern_lu.forget();
             return Err(StepFailure {
                 reason: format!(
                     "Newton did not converge in {} iterations",
@@ -669,9 +713,9 @@ impl<'a> EnergyStepper<'a> {
                 ),
             });
         }
-        self.configure(h, &u);
+        self.configure(h, u);
         if self.xi > 0.0 {
-            self.update_memory(h, &u);
+            self.update_memory(h, u);
         }
         std::mem::swap(&mut self.state.nodes, &mut self.end);
         for j in 0..self.n_coord {
@@ -684,9 +728,9 @@ impl<'a> EnergyStepper<'a> {
         self.state.time += h;
         self.sys.update_passive_coordinates(&mut self.state, true);
         let ctx = self.sys.context(self.state.time, 1.0);
-        let mut phi = vec![0.0; self.sys.n_multipliers];
-        self.sys.constraint_values(&ctx, &self.state, &mut phi);
-        self.constraint_violation = phi.iter().fold(0.0, |m, x| m.max(x.abs()));
+        self.sys
+            .constraint_values(&ctx, &self.state, &mut self.phi_end);
+        self.constraint_violation = self.phi_end.iter().fold(0.0, |m, x| m.max(x.abs()));
         // Keep the scratch copies in step with the new state (their rotations are reused).
         self.end.clone_from(&self.state.nodes);
         Ok(())

@@ -5,15 +5,17 @@
 //! model's step residual their number is bounded by the coupling of one node, not by the
 //! model's size.
 
-use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
-use faer::sparse::{SparseColMat, SymbolicSparseColMat};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::lu::{NumericLu, SymbolicLu, factorize_symbolic_lu};
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
+use faer::{Conj, MatMut, Par};
 
-/// A sparsity pattern (compressed columns, sorted rows) and its column groups.
+/// A sparsity pattern (compressed columns, sorted rows), its column groups, and the
+/// matrix on it that [`ColumnGroups::jacobian`] fills.
 #[derive(Clone, Debug)]
 pub(crate) struct ColumnGroups {
-    n: usize,
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
+    /// The Jacobian's values on the pattern (allocated once).
+    matrix: SparseColMat<usize, f64>,
     /// Columns of each group, increasing.
     groups: Vec<Vec<usize>>,
     /// The unperturbed values of a group's columns (scratch).
@@ -64,10 +66,10 @@ impl ColumnGroups {
             group_of[j] = g;
             groups[g].push(j);
         }
+        let nnz = row_idx.len();
+        let sym = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         Self {
-            n,
-            col_ptr,
-            row_idx,
+            matrix: SparseColMat::new(sym, vec![0.0; nnz]),
             groups,
             saved: Vec::new(),
         }
@@ -79,79 +81,131 @@ impl ColumnGroups {
     }
 
     /// Entries of the pattern.
+    #[cfg(test)]
     pub(crate) fn nnz(&self) -> usize {
-        self.row_idx.len()
+        self.matrix.val().len()
+    }
+
+    /// The Jacobian of the last [`ColumnGroups::jacobian`] (zero before the first).
+    pub(crate) fn matrix(&self) -> SparseColMatRef<'_, usize, f64> {
+        self.matrix.as_ref()
     }
 
     /// Forward differences at `u`, where the residual is `r0`:
     /// J_ij = (r_i(u + Σ_{k∈G} ε_k e_k) − r0_i)/ε_j for the columns j of each group G and
     /// the rows i of column j, with ε_j = 1e-7 (1 + |u_j|). `residual(u, r)` evaluates r
-    /// at u; `u` is left as it came in. The values are in the pattern's order.
+    /// at u; `u` is left as it came in. The values go to [`ColumnGroups::matrix`].
     pub(crate) fn jacobian(
         &mut self,
         u: &mut [f64],
         r0: &[f64],
         scratch: &mut [f64],
-        values: &mut Vec<f64>,
         mut residual: impl FnMut(&[f64], &mut [f64]),
     ) {
-        values.clear();
-        values.resize(self.nnz(), 0.0);
         let eps = |x: f64| 1e-7 * (1.0 + x.abs());
-        for g in &self.groups {
-            self.saved.clear();
-            self.saved.extend(g.iter().map(|&j| u[j]));
+        let Self {
+            matrix,
+            groups,
+            saved,
+        } = self;
+        let (pattern, values) = matrix.parts_mut();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        for g in groups.iter() {
+            saved.clear();
+            saved.extend(g.iter().map(|&j| u[j]));
             for &j in g {
                 u[j] += eps(u[j]);
             }
             residual(u, scratch);
-            for (&j, &uj) in g.iter().zip(&self.saved) {
+            for (&j, &uj) in g.iter().zip(saved.iter()) {
                 let e = u[j] - uj;
-                let range = self.col_ptr[j]..self.col_ptr[j + 1];
-                for (v, &i) in values[range.clone()].iter_mut().zip(&self.row_idx[range]) {
+                let range = col_ptr[j]..col_ptr[j + 1];
+                for (v, &i) in values[range.clone()].iter_mut().zip(&row_idx[range]) {
                     *v = (scratch[i] - r0[i]) / e;
                 }
                 u[j] = uj;
             }
         }
     }
-
-    /// The matrix of `values` (in the pattern's order) for faer.
-    pub(crate) fn matrix(&self, values: &[f64]) -> SparseColMat<usize, f64> {
-        let sym = SymbolicSparseColMat::new_checked(
-            self.n,
-            self.n,
-            self.col_ptr.clone(),
-            None,
-            self.row_idx.clone(),
-        );
-        SparseColMat::new(sym, values.to_vec())
-    }
 }
 
 /// Sparse LU of Jacobians on one pattern: the symbolic analysis (fill-reducing order) is
-/// made once and reused.
+/// made once; the numeric factors and the work space are reused, so refactoring and
+/// solving allocate nothing once the first factorization has sized them.
 #[derive(Default)]
 pub(crate) struct PatternLu {
     symbolic: Option<SymbolicLu<usize>>,
+    numeric: NumericLu<usize, f64>,
+    work: Option<MemBuffer>,
+    factored: bool,
 }
 
 impl PatternLu {
-    /// The LU of `a`; `None` when faer finds it singular.
-    pub(crate) fn factor(&mut self, a: &SparseColMat<usize, f64>) -> Option<Lu<usize, f64>> {
+    /// Factors `a` (always on the same pattern); false when faer finds it singular (or
+    /// cannot allocate), and then [`PatternLu::is_factored`] is false.
+    pub(crate) fn factor(&mut self, a: SparseColMatRef<'_, usize, f64>) -> bool {
+        self.factored = false;
+        let par = Par::Seq;
         if self.symbolic.is_none() {
-            self.symbolic = SymbolicLu::try_new(a.symbolic()).ok();
+            let Ok(sym) = factorize_symbolic_lu(a.symbolic(), Default::default()) else {
+                return false;
+            };
+            let req = StackReq::any_of(&[
+                sym.factorize_numeric_lu_scratch::<f64>(par, Default::default()),
+                sym.solve_in_place_scratch::<f64>(1, par),
+            ]);
+            let Ok(work) = MemBuffer::try_new(req) else {
+                return false;
+            };
+            self.symbolic = Some(sym);
+            self.work = Some(work);
         }
-        let sym = self.symbolic.as_ref()?;
-        Lu::try_new_with_symbolic(sym.clone(), a.as_ref()).ok()
+        let (Some(sym), Some(work)) = (&self.symbolic, &mut self.work) else {
+            return false;
+        };
+        self.factored = sym
+            .factorize_numeric_lu(
+                &mut self.numeric,
+                a,
+                par,
+                MemStack::new(work),
+                Default::default(),
+            )
+            .is_ok();
+        self.factored
+    }
+
+    /// Whether the last [`PatternLu::factor`] succeeded (and nothing forgot it since).
+    pub(crate) fn is_factored(&self) -> bool {
+        self.factored
+    }
+
+    /// Forgets the factors (the next use factors anew).
+    pub(crate) fn forget(&mut self) {
+        self.factored = false;
+    }
+
+    /// Solves A x = b in place with the last factors; false if there are none.
+    pub(crate) fn solve_in_place(&mut self, b: &mut [f64]) -> bool {
+        let (true, Some(sym), Some(work)) = (self.factored, &self.symbolic, &mut self.work) else {
+            return false;
+        };
+        let n = b.len();
+        // The numeric part is from `factorize_numeric_lu` on this symbolic analysis.
+        let lu = faer::sparse::linalg::lu::LuRef::new_unchecked(sym, &self.numeric);
+        lu.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(b, n, 1),
+            Par::Seq,
+            MemStack::new(work),
+        );
+        true
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use faer::Conj;
-    use faer::linalg::solvers::SolveCore;
 
     /// A tridiagonal pattern needs three groups however long it is, and the grouped
     /// differences of a residual with that pattern equal its exact Jacobian to the
@@ -182,10 +236,9 @@ mod tests {
         let mut r0 = vec![0.0; n];
         residual(&u, &mut r0);
         let mut scratch = vec![0.0; n];
-        let mut values = Vec::new();
-        g.jacobian(&mut u, &r0, &mut scratch, &mut values, residual);
+        g.jacobian(&mut u, &r0, &mut scratch, residual);
         assert_eq!(u, u_in);
-        let a = g.matrix(&values);
+        let a = g.matrix();
         for (j, &uj) in u.iter().enumerate() {
             for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
                 let exact = if i == j {
@@ -202,17 +255,15 @@ mod tests {
             }
         }
         // The LU solves with it: J x = J·1 gives x = 1 to the differences' accuracy.
-        let lu = PatternLu::default().factor(&a).unwrap();
+        let mut lu = PatternLu::default();
+        assert!(lu.factor(a));
         let mut b = vec![0.0; n];
         for j in 0..n {
             for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
                 b[i] += v;
             }
         }
-        lu.solve_in_place_with_conj(
-            Conj::No,
-            faer::MatMut::from_column_major_slice_mut(&mut b, n, 1),
-        );
+        assert!(lu.solve_in_place(&mut b));
         assert!(b.iter().all(|x| (x - 1.0).abs() < 1e-10), "{b:?}");
     }
 

@@ -49,7 +49,7 @@ pub struct ElementState {
 }
 
 /// State of the whole system at one time.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Debug, Default, PartialEq)]
 pub struct State {
     pub time: f64,
     pub nodes: Vec<NodeState>,
@@ -68,6 +68,36 @@ pub struct State {
     /// variables, [`crate::elements::SpherePair::bristle_end`]), sorted by pair, in the
     /// order of the integrator's candidate list; empty without sets or pair friction.
     pub pair_bristles: Vec<PairBristle>,
+}
+
+impl Clone for State {
+    fn clone(&self) -> Self {
+        Self {
+            time: self.time,
+            nodes: self.nodes.clone(),
+            coords: self.coords.clone(),
+            states: self.states.clone(),
+            lambda: self.lambda.clone(),
+            held: self.held.clone(),
+            pair_bristles: self.pair_bristles.clone(),
+        }
+    }
+
+    /// Field by field, reusing the vectors' storage (a step's trial state is copied from
+    /// the last one without allocating).
+    fn clone_from(&mut self, source: &Self) {
+        self.time = source.time;
+        self.nodes.clone_from(&source.nodes);
+        self.coords.clone_from(&source.coords);
+        self.states.clone_from(&source.states);
+        self.lambda.clone_from(&source.lambda);
+        if self.held.len() == source.held.len() {
+            self.held.copy_from_slice(&source.held);
+        } else {
+            self.held = source.held.clone();
+        }
+        self.pair_bristles.clone_from(&source.pair_bristles);
+    }
 }
 
 /// The bristle deflection z (global components, in the tangent plane) of the sphere pair
