@@ -104,14 +104,15 @@ fn magnitude(base: &ElementInput, node_ids: &[usize], col: Column) -> f64 {
 }
 
 /// Values of outputs `which` (indices into [`Element::output_names`], of which `e` has
-/// `n_out`) of `e` at `x`, and their derivatives by central differences into `out` (one
-/// row per entry of `which`; `out` sized `which.len()` × local unknowns and × input
-/// signals, cleared by the caller).
+/// `n_out`) of `e` at `x`, and with `derivatives` their derivatives by central differences
+/// into `out` (one row per entry of `which`; `out` sized `which.len()` × local unknowns and
+/// × input signals, cleared by the caller).
 pub fn output_terms(
     e: &dyn Element,
     ctx: &EvalContext,
     x: &ElementInput,
     (which, n_out): (&[usize], usize),
+    derivatives: bool,
     w: &mut ProbeWork,
     out: &mut SignalTerms,
 ) {
@@ -120,6 +121,9 @@ pub fn output_terms(
     e.outputs(ctx, x, &mut w.plus);
     for (r, &o) in which.iter().enumerate() {
         out.values[r] = w.plus[o];
+    }
+    if !derivatives {
+        return;
     }
     // The work copy: the element's own nodes (the others are never read), states, inputs.
     let ids = e.nodes();
@@ -246,7 +250,7 @@ mod tests {
             ds: nalgebra::DMatrix::zeros(2, 1),
         };
         let mut w = ProbeWork::default();
-        output_terms(&e, &ctx, &x, (&[1, 0], 2), &mut w, &mut out);
+        output_terms(&e, &ctx, &x, (&[1, 0], 2), true, &mut w, &mut out);
         let n = &nodes[1];
         // Rows: b, then a.
         let r = n.r();
@@ -284,7 +288,7 @@ mod tests {
         assert!(out.m[(0, 2)].abs() < tol_b && out.c[(0, 0)].abs() < tol_b);
         // A second call reuses the scratch (same answers).
         let before = out.clone();
-        output_terms(&e, &ctx, &x, (&[1, 0], 2), &mut w, &mut out);
+        output_terms(&e, &ctx, &x, (&[1, 0], 2), true, &mut w, &mut out);
         assert_eq!(before.k, out.k);
     }
 }

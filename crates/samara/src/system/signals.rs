@@ -517,7 +517,7 @@ impl SignalGraph {
             if let Some(t) = out.probe_terms[k].as_mut() {
                 t.clear();
                 let which = (self.probe_outputs[k].as_slice(), self.probe_counts[k]);
-                output_terms(e, ctx, &x, which, &mut out.probe_work, t);
+                output_terms(e, ctx, &x, which, gradients, &mut out.probe_work, t);
                 for (o, &s) in self.probe_ids[k].iter().enumerate() {
                     self.chain(k, s, o, t, &mut out.values, &mut out.gradients, gradients);
                 }
