@@ -516,7 +516,16 @@ impl Integrator<'_> {
     /// A step that lands on a breakpoint of the time functions restarts the same way
     /// (the step itself saw the left limit of the forcing, the restart its right limit), so
     /// a jump in a load, drive or wind is passed at second order.
+    ///
+    /// Joint reactions read by signals are held first: at a sample instant those of the
+    /// consistent accelerations and multipliers at the converged state (the equations of
+    /// motion there, not the step's algorithmic multipliers, which oscillate from step to
+    /// step with ρ∞ near 1), otherwise the converged step's.
     fn settle(&mut self) {
+        if !self.sys.signals.reactions.is_empty() && self.sys.sample_due(self.state.time) {
+            self.restart_consistent();
+        }
+        self.sys.hold_reactions(&mut self.state, &self.mu);
         let jumped = self.sys.n_held > 0 && self.sys.sample(&mut self.state, false);
         if jumped || self.on_breakpoint(self.state.time) {
             self.restart_consistent();
@@ -877,6 +886,7 @@ fn start<'a>(
         return Err(Box::new(it.state));
     }
     // Sample-and-hold values at the start (kept when continuing a dynamic analysis).
+    let fresh = it.state.held.len() != sys.n_held;
     sys.sample(&mut it.state, false);
     sys.constraint_values(&ctx0, &it.state, &mut it.phi);
     let viol0 = it.phi.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -933,6 +943,14 @@ fn start<'a>(
     }
     sys.update_passive_coordinates(&mut it.state, true);
     it.mu.copy_from_slice(&it.state.lambda);
+    // Held joint reactions: those of the consistent initial state (the samples above
+    // read the state's previous multipliers); the holds due are taken again with them.
+    if !sys.signals.reactions.is_empty() {
+        sys.hold_reactions(&mut it.state, &it.mu);
+        if sys.sample(&mut it.state, fresh) {
+            it.restart_consistent();
+        }
+    }
     Ok((it, viol0))
 }
 

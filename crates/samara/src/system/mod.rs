@@ -9,6 +9,7 @@
 
 mod assembly;
 pub mod matrices;
+pub mod probe;
 pub mod redundancy;
 pub mod signals;
 
@@ -182,6 +183,13 @@ impl System {
         (t - k * period).abs() <= 1e-9 * period
     }
 
+    /// Whether `t` is a sample instant of some sampling element.
+    pub fn sample_due(&self, t: f64) -> bool {
+        self.sample_periods
+            .iter()
+            .any(|&p| Self::on_sample_instant(t, p))
+    }
+
     /// The first sample instant `k T` of any sampling element later than `t` by more
     /// than 1e-9 T (None when nothing samples): time steppers land on it.
     pub fn next_sample(&self, t: f64) -> Option<f64> {
@@ -234,9 +242,68 @@ impl System {
             let x = self.element_input(k, state, &signals, &mut scratch);
             e.sample(&ctx, &x, &mut next[o..o + nh]);
         }
+        if state.held.len() != self.n_held {
+            // First holds: the joint reactions of the state's multipliers.
+            let first = self.n_held - self.signals.reactions.len();
+            self.reaction_values(state, &state.lambda, &mut next[first..]);
+        }
         let changed = *next != *state.held;
         state.held = next.into_boxed_slice();
         changed
+    }
+
+    /// Holds the joint reactions that signals read ([`SignalGraph::reactions`]) at their
+    /// values in the converged `state` with the multipliers `mu` (physical units, as
+    /// written in the results): the dynamic analysis calls it after each accepted step,
+    /// before taking the samples due, so a sensor sampling a reaction at `t_k` holds its
+    /// value at `t_k`, and an unsampled reader sees it during the next step (one step
+    /// late). Does nothing when `state` holds no values (statics).
+    pub fn hold_reactions(&self, state: &mut State, mu: &[f64]) {
+        let n = self.signals.reactions.len();
+        if n == 0 || state.held.len() != self.n_held {
+            return;
+        }
+        let mut values = vec![0.0; n];
+        self.reaction_values(state, mu, &mut values);
+        state.held[self.n_held - n..].copy_from_slice(&values);
+    }
+
+    /// Values of the reactions signals read, at `state` with the multipliers `mu`.
+    fn reaction_values(&self, state: &State, mu: &[f64], out: &mut [f64]) {
+        use signals::ReactionSource;
+        let sources = &self.signals.reactions;
+        if sources.is_empty() {
+            return;
+        }
+        let ctx = self.context(state.time, 1.0);
+        let joint = sources
+            .iter()
+            .any(|r| !matches!(r.1, ReactionSource::CoordinateForce { .. }));
+        let mut fm = vec![(Vector3::zeros(), Vector3::zeros()); self.constraints.len()];
+        if joint {
+            let mut all = vec![0.0; self.n_rows];
+            self.reactions(&ctx, state, mu, &mut all, |k, f, m| fm[k] = (f, m));
+        }
+        let mut cf = vec![0.0; self.n_coordinates + self.n_passive];
+        if sources
+            .iter()
+            .any(|r| matches!(r.1, ReactionSource::CoordinateForce { .. }))
+        {
+            self.coordinate_forces(&ctx, state, mu, &mut cf);
+        }
+        for (o, (_, src)) in out.iter_mut().zip(sources) {
+            *o = match *src {
+                ReactionSource::Force {
+                    constraint,
+                    component,
+                } => fm[constraint].0[component],
+                ReactionSource::Moment {
+                    constraint,
+                    component,
+                } => fm[constraint].1[component],
+                ReactionSource::CoordinateForce { coordinate } => cf[coordinate],
+            };
+        }
     }
 
     /// Values of all signals at `state` (allocates; the assembler keeps its own scratch).
@@ -419,6 +486,8 @@ impl System {
                 first_state: 6 * n + nc,
             },
         );
+        // The held joint reactions follow the elements' held values.
+        let n_held = signals.n_held();
         let mut node_mass = vec![0.0; n];
         for b in &bodies {
             node_mass[b.nodes()[0]] += b.mass();

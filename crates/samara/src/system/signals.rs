@@ -13,7 +13,20 @@
 //! rows couple to every unknown of the supports of its inputs. Producers are evaluated in
 //! an order where every input with feedthrough is known first; a loop of signals through
 //! elements that all have feedthrough has no such order and is reported.
+//!
+//! Besides the signals elements produce, a consumer may read (names with a colon):
+//! - a joint coordinate or an element state, directly ([`DirectSource`]);
+//! - an element's output, `output:<element>.<output>` (the results' `element_output`
+//!   names): a signal of the element, `g = y(x_p, s_in)`, with the derivatives of
+//!   [`super::probe`]; it counts as depending directly on the element's input signals;
+//! - a joint reaction, `joint_force:<joint>.<x|y|z>`, `joint_moment:<joint>.<x|y|z>`
+//!   (frame A, as written in the results) or `joint_coordinate_force:<joint>.<component>`
+//!   ([`ReactionSource`]): the multipliers are not configuration unknowns, so these are
+//!   held values (in [`State::held`], after the elements' own), set from the converged
+//!   solution after each step ([`super::System::hold_reactions`]); within a step they are
+//!   constants (no derivatives, empty support).
 
+use super::probe::{ProbeWork, output_terms};
 use crate::core::{Element, ElementInput, EvalContext, SignalTerms, State};
 
 /// Index of a node unknown, a joint coordinate or an element state in the configuration
@@ -78,9 +91,55 @@ pub struct SignalGraph {
     /// or an element state, [`DirectSource`]): (signal id, source).
     pub direct: Vec<(usize, DirectSource)>,
     /// Offset of each element's sample-and-hold values in [`State::held`], and their
-    /// number.
+    /// number with the held reactions.
     held_offsets: Vec<usize>,
     n_held: usize,
+    /// Element outputs read as signals: per element, the output indices and their signal
+    /// ids (empty for elements nobody probes).
+    pub probe_outputs: Vec<Vec<usize>>,
+    pub probe_ids: Vec<Vec<usize>>,
+    /// Number of outputs of each probed element (0 for the others).
+    probe_counts: Vec<usize>,
+    /// Joint reactions read as signals: (signal id, source); the value of the i-th is
+    /// held in [`State::held`] at `n_held − reactions.len() + i`.
+    pub reactions: Vec<(usize, ReactionSource)>,
+}
+
+/// A joint reaction read as a signal: component `component` (frame A) of the reaction
+/// force or moment of constraint `constraint`, or the generalized force on active joint
+/// coordinate `coordinate` (index into [`State::coords`]), as the results write them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReactionSource {
+    Force { constraint: usize, component: usize },
+    Moment { constraint: usize, component: usize },
+    CoordinateForce { coordinate: usize },
+}
+
+impl ReactionSource {
+    /// The source named `joint_force:<joint>.<x|y|z>`, `joint_moment:…` or
+    /// `joint_coordinate_force:<joint>.<component>`, with `joints` the constraint names
+    /// and `coordinates` the active coordinate names (`<joint>.<component>`).
+    pub fn resolve(name: &str, joints: &[&str], coordinates: &[String]) -> Option<Self> {
+        let (kind, what) = name.split_once(':')?;
+        if kind == "joint_coordinate_force" {
+            let coordinate = coordinates.iter().position(|c| c == what)?;
+            return Some(Self::CoordinateForce { coordinate });
+        }
+        let (joint, comp) = what.rsplit_once('.')?;
+        let component = ["x", "y", "z"].iter().position(|c| *c == comp)?;
+        let constraint = joints.iter().position(|j| *j == joint)?;
+        match kind {
+            "joint_force" => Some(Self::Force {
+                constraint,
+                component,
+            }),
+            "joint_moment" => Some(Self::Moment {
+                constraint,
+                component,
+            }),
+            _ => None,
+        }
+    }
 }
 
 /// What a direct signal reads: a joint coordinate's value, rate or acceleration
@@ -141,6 +200,9 @@ pub struct SignalValues {
     /// Per signal, per support entry: `[∂s/∂q, ∂s/∂v, ∂s/∂v̇]` (for states: value, rate, 0).
     pub gradients: Vec<Vec<[f64; 3]>>,
     terms: Vec<Option<SignalTerms>>,
+    /// Per element: the values and derivatives of its probed outputs.
+    probe_terms: Vec<Option<SignalTerms>>,
+    probe_work: ProbeWork,
     inputs: Vec<f64>,
 }
 
@@ -159,6 +221,12 @@ impl SignalGraph {
             g.held_offsets.push(g.n_held);
             g.n_held += e.n_held();
         }
+        g.probe_outputs = vec![Vec::new(); elements.len()];
+        g.probe_ids = vec![Vec::new(); elements.len()];
+        g.probe_counts = vec![0; elements.len()];
+        let joints: Vec<&str> = constraint_inputs.iter().map(|c| c.0.as_str()).collect();
+        // `<element>.<output>` per element, listed when a consumer first reads an output.
+        let mut output_names: Option<Vec<Vec<String>>> = None;
         let mut id = std::collections::HashMap::new();
         for (k, e) in elements.iter().enumerate() {
             let mut outs = Vec::new();
@@ -187,6 +255,43 @@ impl SignalGraph {
                 g.names.push(name.clone());
                 g.producer.push(None);
                 return g.names.len() - 1;
+            }
+            if let Some(src) = ReactionSource::resolve(name, &joints, direct.coordinates) {
+                id.insert(name.clone(), g.names.len());
+                g.reactions.push((g.names.len(), src));
+                g.names.push(name.clone());
+                g.producer.push(None);
+                return g.names.len() - 1;
+            }
+            if let Some(what) = name.strip_prefix("output:") {
+                let lists = output_names.get_or_insert_with(|| {
+                    elements
+                        .iter()
+                        .map(|e| {
+                            e.output_names()
+                                .into_iter()
+                                .map(|(o, _)| format!("{}.{o}", e.name()))
+                                .collect()
+                        })
+                        .collect()
+                });
+                let found = lists
+                    .iter()
+                    .enumerate()
+                    .find_map(|(k, l)| l.iter().position(|n| n == what).map(|o| (k, o)));
+                if let Some((k, o)) = found {
+                    let s = g.names.len();
+                    id.insert(name.clone(), s);
+                    g.names.push(name.clone());
+                    g.producer.push(Some((
+                        k,
+                        elements[k].signal_outputs().len() + g.probe_ids[k].len(),
+                    )));
+                    g.probe_outputs[k].push(o);
+                    g.probe_counts[k] = lists[k].len();
+                    g.probe_ids[k].push(s);
+                    return s;
+                }
             }
             g.issues.push(SignalIssue::Unknown {
                 consumer: consumer.to_string(),
@@ -218,10 +323,17 @@ impl SignalGraph {
         for &(s, src) in &g.direct {
             g.support[s] = vec![src.config];
         }
+        g.n_held += g.reactions.len();
         for &k in &g.order.clone() {
             let outs = elements[k].signal_outputs().len();
-            for o in 0..outs {
-                let Some(s) = g.id_of(k, o) else { continue };
+            let probed = g.probe_ids[k].clone();
+            for o in 0..outs + probed.len() {
+                let s = if o < outs {
+                    let Some(s) = g.id_of(k, o) else { continue };
+                    s
+                } else {
+                    probed[o - outs]
+                };
                 let mut sup: Vec<ConfigIndex> = local_config[k].clone();
                 for &j in &g.element_inputs[k] {
                     sup.extend_from_slice(&g.support[j]);
@@ -244,22 +356,33 @@ impl SignalGraph {
         self.element_outputs[element][output]
     }
 
+    /// Whether element `k` produces signals (its own or probed outputs).
+    fn produces(&self, elements: &[Box<dyn Element>], k: usize) -> bool {
+        !elements[k].signal_outputs().is_empty() || !self.probe_ids[k].is_empty()
+    }
+
+    /// Number of values held in [`State::held`]: the elements' and the reactions'.
+    pub fn n_held(&self) -> usize {
+        self.n_held
+    }
+
     /// Topological order of the producers over feedthrough edges (Kahn); the elements of a
     /// loop are appended at the end and the loop is reported.
     fn order_producers(&mut self, elements: &[Box<dyn Element>]) {
         let producers: Vec<usize> = (0..elements.len())
-            .filter(|&k| !elements[k].signal_outputs().is_empty())
+            .filter(|&k| self.produces(elements, k))
             .collect();
         // An edge p → k when k has feedthrough and reads an output of p.
         let mut indegree = vec![0usize; elements.len()];
         let mut next: Vec<Vec<usize>> = vec![Vec::new(); elements.len()];
         for &k in &producers {
-            if !elements[k].feedthrough() {
+            // An output is a function of everything the element sees, its inputs too.
+            if !elements[k].feedthrough() && self.probe_ids[k].is_empty() {
                 continue;
             }
             for &s in &self.element_inputs[k] {
                 if let Some((p, _)) = self.producer[s]
-                    && !elements[p].signal_outputs().is_empty()
+                    && self.produces(elements, p)
                 {
                     next[p].push(k);
                     indegree[k] += 1;
@@ -287,7 +410,10 @@ impl SignalGraph {
         if !stuck.is_empty() {
             let signals = stuck
                 .iter()
-                .flat_map(|&k| elements[k].signal_outputs().iter().cloned())
+                .flat_map(|&k| {
+                    let probed = self.probe_ids[k].iter().map(|&s| self.names[s].clone());
+                    elements[k].signal_outputs().iter().cloned().chain(probed)
+                })
                 .collect();
             self.issues.push(SignalIssue::Loop { signals });
             self.order.extend(stuck);
@@ -297,8 +423,23 @@ impl SignalGraph {
     /// Scratch for [`SignalGraph::evaluate`].
     pub fn values(&self, elements: &[Box<dyn Element>]) -> SignalValues {
         let mut terms: Vec<Option<SignalTerms>> = (0..elements.len()).map(|_| None).collect();
+        let mut probe_terms: Vec<Option<SignalTerms>> = (0..elements.len()).map(|_| None).collect();
         for &k in &self.order {
-            terms[k] = Some(SignalTerms::for_element(elements[k].as_ref()));
+            let e = elements[k].as_ref();
+            if !e.signal_outputs().is_empty() {
+                terms[k] = Some(SignalTerms::for_element(e));
+            }
+            let rows = self.probe_ids[k].len();
+            if rows > 0 {
+                let (n, i) = (6 * e.nodes().len() + e.n_states(), e.signal_inputs().len());
+                probe_terms[k] = Some(SignalTerms {
+                    values: vec![0.0; rows],
+                    k: nalgebra::DMatrix::zeros(rows, n),
+                    c: nalgebra::DMatrix::zeros(rows, n),
+                    m: nalgebra::DMatrix::zeros(rows, n),
+                    ds: nalgebra::DMatrix::zeros(rows, i),
+                });
+            }
         }
         SignalValues {
             values: vec![0.0; self.names.len()],
@@ -308,6 +449,8 @@ impl SignalGraph {
                 .map(|s| vec![[0.0; 3]; s.len()])
                 .collect(),
             terms,
+            probe_terms,
+            probe_work: ProbeWork::default(),
             inputs: Vec::new(),
         }
     }
@@ -337,12 +480,17 @@ impl SignalGraph {
                 out.gradients[s][0] = g;
             }
         }
+        let first_reaction = self.n_held - self.reactions.len();
+        for (i, &(s, _)) in self.reactions.iter().enumerate() {
+            // Held (dynamics); nothing is held in statics, where no reaction sensor runs.
+            out.values[s] = if state.held.len() == self.n_held {
+                state.held[first_reaction + i]
+            } else {
+                0.0
+            };
+        }
         for &k in &self.order {
             let e = elements[k].as_ref();
-            let Some(t) = out.terms[k].as_mut() else {
-                continue;
-            };
-            t.clear();
             out.inputs.clear();
             out.inputs
                 .extend(self.element_inputs[k].iter().map(|&j| out.values[j]));
@@ -358,33 +506,60 @@ impl SignalGraph {
                     &[]
                 },
             };
-            e.signals(ctx, &x, t);
-            for o in 0..t.values.len() {
-                let Some(s) = self.id_of(k, o) else { continue };
-                out.values[s] = t.values[o];
-                if !gradients {
-                    continue;
+            if let Some(t) = out.terms[k].as_mut() {
+                t.clear();
+                e.signals(ctx, &x, t);
+                for o in 0..t.values.len() {
+                    let Some(s) = self.id_of(k, o) else { continue };
+                    self.chain(k, s, o, t, &mut out.values, &mut out.gradients, gradients);
                 }
-                let mut g = std::mem::take(&mut out.gradients[s]);
-                g.iter_mut().for_each(|x| *x = [0.0; 3]);
-                for (l, &p) in self.local_pos[s].iter().enumerate() {
-                    g[p][0] += t.k[(o, l)];
-                    g[p][1] += t.c[(o, l)];
-                    g[p][2] += t.m[(o, l)];
+            }
+            if let Some(t) = out.probe_terms[k].as_mut() {
+                t.clear();
+                let which = (self.probe_outputs[k].as_slice(), self.probe_counts[k]);
+                output_terms(e, ctx, &x, which, gradients, &mut out.probe_work, t);
+                for (o, &s) in self.probe_ids[k].iter().enumerate() {
+                    self.chain(k, s, o, t, &mut out.values, &mut out.gradients, gradients);
                 }
-                for (j, &sj) in self.element_inputs[k].iter().enumerate() {
-                    let d = t.ds[(o, j)];
-                    if d == 0.0 {
-                        continue;
-                    }
-                    for (gi, &p) in out.gradients[sj].iter().zip(&self.input_pos[s][j]) {
-                        for c in 0..3 {
-                            g[p][c] += d * gi[c];
-                        }
-                    }
-                }
-                out.gradients[s] = g;
             }
         }
+    }
+
+    /// Stores row `o` of producer `k`'s terms `t` as signal `s`: its value and (with
+    /// `with_gradients`) its derivatives over its support by the chain rule.
+    #[allow(clippy::too_many_arguments)]
+    fn chain(
+        &self,
+        k: usize,
+        s: usize,
+        o: usize,
+        t: &SignalTerms,
+        values: &mut [f64],
+        gradients: &mut [Vec<[f64; 3]>],
+        with_gradients: bool,
+    ) {
+        values[s] = t.values[o];
+        if !with_gradients {
+            return;
+        }
+        let mut g = std::mem::take(&mut gradients[s]);
+        g.iter_mut().for_each(|x| *x = [0.0; 3]);
+        for (l, &p) in self.local_pos[s].iter().enumerate() {
+            g[p][0] += t.k[(o, l)];
+            g[p][1] += t.c[(o, l)];
+            g[p][2] += t.m[(o, l)];
+        }
+        for (j, &sj) in self.element_inputs[k].iter().enumerate() {
+            let d = t.ds[(o, j)];
+            if d == 0.0 {
+                continue;
+            }
+            for (gi, &p) in gradients[sj].iter().zip(&self.input_pos[s][j]) {
+                for c in 0..3 {
+                    g[p][c] += d * gi[c];
+                }
+            }
+        }
+        gradients[s] = g;
     }
 }

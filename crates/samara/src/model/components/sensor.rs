@@ -1,6 +1,6 @@
-//! `[[sensors]]`: a node quantity, a joint coordinate, an element state or a signal, through
-//! an optional first-order low-pass filter, producing a signal named like the sensor
-//! (kernel: [`crate::elements::LowPassSensor`]).
+//! `[[sensors]]`: a node quantity, a joint coordinate, an element state, an element output,
+//! a joint reaction or a signal, through an optional first-order low-pass filter, producing
+//! a signal named like the sensor (kernel: [`crate::elements::LowPassSensor`]).
 //!
 //! ```toml
 //! [[sensors]]
@@ -11,6 +11,11 @@
 //! # joint = "hinge"          # … or a joint coordinate (active: something acts on it),
 //! # coordinate = "theta3"    #   quantity position | velocity | acceleration
 //! # state = "pump.current"   # … or an element state `<element>.<state>` (its value)
+//! # output = "spring.tension" # … or an element output `<element>.<output>`, read in the
+//! #                          #   same Newton iteration (derivatives by differences)
+//! # joint = "hinge"          # … or a joint reaction, held from the converged solution:
+//! # reaction = "force"       #   force | moment (frame A), with `component` x | y | z
+//! # quantity = "force"       #   (or, with `coordinate`, the coordinate's generalized force)
 //! # signal = "command"       # … or another signal
 //! time_constant = 0.05       # τ [s] > 0; absent: no filter, s = g u (no state)
 //! gain = 1.0                 # g (default 1)
@@ -42,6 +47,16 @@ pub enum QuantityInput {
     Acceleration,
     /// Node angular velocity [rad/s].
     AngularVelocity,
+    /// Generalized force on a joint coordinate [N or N m] (`joint_coordinate_force`).
+    Force,
+}
+
+/// Joint reaction measured (`joint_force` or `joint_moment` of the results).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ReactionInput {
+    Force,
+    Moment,
 }
 
 /// Global component of a vector.
@@ -80,6 +95,12 @@ pub struct SensorEntry {
     /// Measured element state `<element>.<state>` (as written in the results).
     #[serde(default)]
     pub state: Option<Located<String>>,
+    /// Measured element output `<element>.<output>` (as written in the results).
+    #[serde(default)]
+    pub output: Option<Located<String>>,
+    /// Measured joint reaction (with `joint` and `component`), frame A.
+    #[serde(default)]
+    pub reaction: Option<ReactionInput>,
     /// Filter time constant τ [s], positive; absent: no filter.
     #[serde(default)]
     pub time_constant: Option<f64>,
@@ -111,6 +132,10 @@ pub struct SensorDef {
     /// once the whole model is known.
     pub joint: Option<(String, String, Option<std::ops::Range<usize>>)>,
     pub state: Option<(String, Option<std::ops::Range<usize>>)>,
+    /// The element output read (name, span), checked once the elements are known.
+    pub output: Option<(String, Option<std::ops::Range<usize>>)>,
+    /// The joint whose reaction is read (name, span): a held value.
+    pub reaction: Option<(String, Option<std::ops::Range<usize>>)>,
     pub gain: f64,
     pub initial: f64,
     /// Sample period T [s] of a zero-order hold, if any.
@@ -189,14 +214,17 @@ impl ComponentKind for Sensor {
         };
         let mut joint = None;
         let mut state = None;
-        let joint_keys = si.joint.is_some() || si.coordinate.is_some();
+        let mut output = None;
+        let mut reaction = None;
+        let joint_keys = si.joint.is_some() || si.coordinate.is_some() || si.reaction.is_some();
         let node_keys =
-            si.node.is_some() || si.component.is_some() || (si.quantity.is_some() && !joint_keys);
+            si.node.is_some() || (!joint_keys && (si.component.is_some() || si.quantity.is_some()));
         let n_sources = [
             si.signal.is_some(),
             node_keys,
             joint_keys,
             si.state.is_some(),
+            si.output.is_some(),
         ]
         .iter()
         .filter(|&&b| b)
@@ -204,13 +232,52 @@ impl ComponentKind for Sensor {
         let input = match (&si.signal, node_keys) {
             _ if n_sources != 1 => {
                 cx.error(
-                    format!("{what}: give exactly one of `signal`, `node` (with `quantity` and `component`), `joint` (with `coordinate`) or `state`"),
+                    format!("{what}: give exactly one of `signal`, `node` (with `quantity` and `component`), `joint` (with `coordinate` or `reaction`), `state` or `output`"),
                     e.span.clone(),
                     None,
                 );
                 return None;
             }
+            _ if si.reaction.is_some() => {
+                let kind = si.reaction?;
+                let (Some(j), Some(c)) = (&si.joint, si.component) else {
+                    cx.error(
+                        format!("{what}: a reaction measurement needs `joint` and `component`"),
+                        e.span.clone(),
+                        Some("e.g. joint = \"hinge\", reaction = \"force\", component = \"z\" (frame A, as joint_force in the results)".into()),
+                    );
+                    return None;
+                };
+                if si.coordinate.is_some() || si.quantity.is_some() {
+                    cx.error(
+                        format!("{what}: `reaction` takes no `coordinate` or `quantity`"),
+                        cx.key(&e, if si.coordinate.is_some() { "coordinate" } else { "quantity" }),
+                        Some("the generalized force on a coordinate is `coordinate` with quantity = \"force\"".into()),
+                    );
+                    return None;
+                }
+                let prefix = match kind {
+                    ReactionInput::Force => "joint_force",
+                    ReactionInput::Moment => "joint_moment",
+                };
+                let comp = ["x", "y", "z"][c as usize];
+                reaction = Some((j.value.clone(), j.span.clone()));
+                SensorInput::Signal(format!("{prefix}:{}.{comp}", j.value))
+            }
+            _ if si.output.is_some() => {
+                let o = si.output.as_ref()?;
+                output = Some((o.value.clone(), o.span.clone()));
+                SensorInput::Signal(format!("output:{}", o.value))
+            }
             _ if joint_keys => {
+                if si.component.is_some() {
+                    cx.error(
+                        format!("{what}: `component` is for node quantities and joint reactions"),
+                        cx.key(&e, "component"),
+                        Some("a joint coordinate is named by `coordinate` (d1 … theta3)".into()),
+                    );
+                    return None;
+                }
                 let (Some(j), Some(c)) = (&si.joint, &si.coordinate) else {
                     cx.error(
                         format!("{what}: a joint measurement needs `joint` and `coordinate`"),
@@ -223,11 +290,18 @@ impl ComponentKind for Sensor {
                     QuantityInput::Position => "coordinate",
                     QuantityInput::Velocity => "coordinate_rate",
                     QuantityInput::Acceleration => "coordinate_acceleration",
+                    QuantityInput::Force => {
+                        reaction = Some((j.value.clone(), j.span.clone()));
+                        "joint_coordinate_force"
+                    }
                     QuantityInput::AngularVelocity => {
                         cx.error(
                             format!("{what}: a joint coordinate has no angular velocity"),
                             cx.key(&e, "quantity"),
-                            Some("position, velocity or acceleration of the coordinate".into()),
+                            Some(
+                                "position, velocity, acceleration or force of the coordinate"
+                                    .into(),
+                            ),
                         );
                         return None;
                     }
@@ -295,6 +369,14 @@ impl ComponentKind for Sensor {
                     QuantityInput::Velocity => NodeQuantity::Velocity(i),
                     QuantityInput::Acceleration => NodeQuantity::Acceleration(i),
                     QuantityInput::AngularVelocity => NodeQuantity::AngularVelocity(i),
+                    QuantityInput::Force => {
+                        cx.error(
+                            format!("{what}: a node has no `force` quantity"),
+                            cx.key(&e, "quantity"),
+                            Some("forces are read from an element's `output` or a joint's `reaction`".into()),
+                        );
+                        return None;
+                    }
                 };
                 SensorInput::Node { node, quantity }
             }
@@ -328,6 +410,8 @@ impl ComponentKind for Sensor {
             span: s.span.clone(),
             joint,
             state,
+            output,
+            reaction,
             gain,
             initial,
             sample_period,
@@ -340,6 +424,10 @@ impl ComponentKind for Sensor {
         use crate::joints::{COMPONENT_NAMES, JointType};
         for s in &model.sensors {
             let what = format!("sensor '{}'", s.name);
+            if let Some((jn, span)) = &s.reaction {
+                // A coordinate's joint is checked with the coordinate below.
+                reaction_checks(cx, model, &what, jn, span, s.joint.is_none());
+            }
             let Some((jn, comp, span)) = &s.joint else {
                 continue;
             };
@@ -380,7 +468,11 @@ impl ComponentKind for Sensor {
                 );
             }
         }
-        let wanted: Vec<&SensorDef> = model.sensors.iter().filter(|s| s.state.is_some()).collect();
+        let wanted: Vec<&SensorDef> = model
+            .sensors
+            .iter()
+            .filter(|s| s.state.is_some() || s.output.is_some())
+            .collect();
         if wanted.is_empty()
             || cx
                 .diags
@@ -401,6 +493,19 @@ impl ComponentKind for Sensor {
                 e.state_names().into_iter().map(move |s| format!("{n}.{s}"))
             })
             .collect();
+        let outputs: Vec<(String, Vec<String>)> = parts
+            .elements
+            .iter()
+            .map(|e| {
+                let o = e.output_names().into_iter().map(|(o, _)| o).collect();
+                (e.name().to_string(), o)
+            })
+            .collect();
+        for s in &wanted {
+            if let Some((o, span)) = &s.output {
+                output_check(cx, &s.name, o, span, &outputs);
+            }
+        }
         for s in wanted {
             let Some((st, span)) = &s.state else { continue };
             if !names.contains(st) {
@@ -516,4 +621,84 @@ impl ComponentKind for Sensor {
         );
         out
     }
+}
+
+/// A reaction sensor's joint exists, and no static analysis runs it (statics hold
+/// nothing: the reactions of the iteration are not known to the signals).
+fn reaction_checks(
+    cx: &mut Checker,
+    model: &Model,
+    what: &str,
+    joint: &str,
+    span: &Option<std::ops::Range<usize>>,
+    check_name: bool,
+) {
+    if !model.joints.iter().any(|j| j.name == joint) {
+        if !check_name {
+            return;
+        }
+        let names: Vec<&str> = model.joints.iter().map(|j| j.name.as_str()).collect();
+        let hint = match cx.suggest(joint, names.iter().copied()) {
+            Some(b) => format!("did you mean '{b}'?"),
+            None => "name a joint of the model".into(),
+        };
+        cx.error(
+            format!("{what}: unknown joint '{joint}'"),
+            span.clone(),
+            Some(hint),
+        );
+        return;
+    }
+    if let Some(a) = model
+        .analyses
+        .iter()
+        .find(|a| matches!(a.kind, crate::model::AnalysisKind::Static(_)))
+    {
+        cx.error(
+            format!(
+                "{what} reads a joint reaction, which a static analysis ('{}') cannot give it",
+                a.name
+            ),
+            span.clone(),
+            Some("reaction sensors hold the converged reactions of a dynamic analysis; in statics read an element output or a node quantity instead".into()),
+        );
+    }
+}
+
+/// An output sensor names `<element>.<output>` of an element that has it; the hint lists
+/// the element's outputs (or suggests an element).
+fn output_check(
+    cx: &mut Checker,
+    sensor: &str,
+    wanted: &str,
+    span: &Option<std::ops::Range<usize>>,
+    outputs: &[(String, Vec<String>)],
+) {
+    let all: Vec<String> = outputs
+        .iter()
+        .flat_map(|(e, o)| o.iter().map(move |o| format!("{e}.{o}")))
+        .collect();
+    if all.iter().any(|n| n == wanted) {
+        return;
+    }
+    let element = wanted.rsplit_once('.').map_or(wanted, |p| p.0);
+    let hint = match outputs.iter().find(|(e, _)| e == element) {
+        Some((_, o)) if o.is_empty() => format!("element '{element}' has no outputs"),
+        Some((_, o)) => {
+            let list = o.join(", ");
+            match cx.suggest(wanted, all.iter().map(|s| s.as_str())) {
+                Some(b) => format!("did you mean '{b}'? '{element}' has outputs {list}"),
+                None => format!("'{element}' has outputs {list}"),
+            }
+        }
+        None => match cx.suggest(wanted, all.iter().map(|s| s.as_str())) {
+            Some(b) => format!("did you mean '{b}'?"),
+            None => "element outputs are named `<element>.<output>`, as in the results' element_output names".into(),
+        },
+    };
+    cx.error(
+        format!("sensor '{sensor}': unknown element output '{wanted}'"),
+        span.clone(),
+        Some(hint),
+    );
 }
