@@ -145,7 +145,8 @@ impl ComponentKind for JointKind {
     type Def = JointDef;
 
     /// Constraint rows at the end of the step, forces from the Gonzalez-corrected mid-point
-    /// Jacobian (docs/integrators.md); input ports are refused when the analysis starts.
+    /// Jacobian (docs/integrators.md); input ports and servos (`drive_signal`) are refused
+    /// when the analysis starts.
     fn discrete_form(_input: &JointInput) -> Result<(), String> {
         Ok(())
     }
