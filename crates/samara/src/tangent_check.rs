@@ -357,6 +357,10 @@ pub struct ConstraintReport {
     pub coordinate_damping: Mismatch,
     /// ∂r/∂s of the input ports.
     pub coordinate_signals: Mismatch,
+    /// Servo rows ([`crate::core::ServoRow`]): the largest deviation from their contract,
+    /// Φ = ν_c − s with the target s given to `evaluate_rows`, ∂Φ/∂s = −1 (a difference
+    /// in the target), B = e_ν (the system adds −∂s/∂x), zero rate terms.
+    pub servo: f64,
     /// Largest difference, relative to each term's largest entry, between the one
     /// evaluation of [`Constraint::evaluate_rows`] and the separate `evaluate`,
     /// `reaction_tangent` and `Bᵀμ` (round-off).
@@ -373,6 +377,7 @@ impl ConstraintReport {
             self.coordinate_stiffness.relative,
             self.coordinate_damping.relative,
             self.coordinate_signals.relative,
+            self.servo,
             self.combined,
         ])
     }
@@ -400,6 +405,16 @@ pub fn check_constraint(
     let mut k = DMatrix::zeros(n, n);
     let mut mu_out = vec![0.0; m];
     let mut force = vec![0.0; n];
+    // Servo rows get non-zero targets (their signals' values).
+    let mut targets = vec![0.0; m];
+    let servo_rows: Vec<(usize, crate::core::ServoRow)> = c
+        .servo_rows()
+        .iter()
+        .filter_map(|s| Some((c.active_rows().iter().position(|&r| r == s.row)?, *s)))
+        .collect();
+    for (j, (i, _)) in servo_rows.iter().enumerate() {
+        targets[*i] = 0.41 + 0.1 * j as f64;
+    }
     c.evaluate_rows(
         ctx,
         nodes,
@@ -413,11 +428,53 @@ pub fn check_constraint(
             b: &mut b,
             want_b: false,
             tangent: Some(&mut k),
+            targets: &targets,
         },
     );
     let mut phi_s = vec![0.0; m];
     let mut b_s = DMatrix::zeros(m, n);
     c.evaluate(ctx, nodes, coords, &mut phi_s, Some(&mut b_s));
+    // The servo contract: Φ = ν_c (− s in evaluate_rows), B = e_ν, zero rate terms,
+    // and ∂Φ/∂s = −1 against a difference in the target.
+    let mut servo: f64 = 0.0;
+    {
+        let mut conv = vec![0.0; m];
+        c.acceleration_term(ctx, nodes, coords, &mut conv);
+        let mut phi_t = vec![0.0; m];
+        c.velocity_term(ctx, &mut phi_t);
+        let (mut mu_p, mut f_p, mut b_p) = (vec![0.0; m], vec![0.0; n], DMatrix::zeros(m, n));
+        let mut phi_p = vec![0.0; m];
+        for &(i, s) in &servo_rows {
+            let col = nq + s.coordinate;
+            for j in 0..n {
+                let e = if j == col { 1.0 } else { 0.0 };
+                servo = servo.max((b_s[(i, j)] - e).abs());
+            }
+            servo = servo.max((phi_s[i] - coords[s.coordinate].q).abs());
+            servo = servo.max(conv[i].abs()).max(phi_t[i].abs());
+            servo = servo.max(usize::from(s.input >= c.signal_inputs().len()) as f64);
+            let mut tp = targets.clone();
+            tp[i] += EPS;
+            c.evaluate_rows(
+                ctx,
+                nodes,
+                coords,
+                mu,
+                0.0,
+                RowTerms {
+                    phi: &mut phi_p,
+                    mu: &mut mu_p,
+                    force: &mut f_p,
+                    b: &mut b_p,
+                    want_b: false,
+                    tangent: None,
+                    targets: &tp,
+                },
+            );
+            servo = servo.max(((phi_p[i] - phi[i]) / EPS + 1.0).abs());
+        }
+    }
+    let phi_targeted: Vec<f64> = phi_s.iter().zip(&targets).map(|(p, t)| p - t).collect();
     let mut k_s = DMatrix::zeros(n, n);
     c.reaction_tangent(ctx, nodes, coords, mu, &mut k_s);
     let force_s = b_s.transpose() * nalgebra::DVector::from_column_slice(mu);
@@ -427,7 +484,7 @@ pub fn check_constraint(
             .zip(s)
             .fold(0.0f64, |x, (p, q)| x.max((p - q).abs() / scale))
     };
-    let combined = rel(&phi, &phi_s)
+    let combined = rel(&phi, &phi_targeted)
         .max(rel(&mu_out, mu))
         .max(rel(&force, force_s.as_slice()))
         .max(rel(b.as_slice(), b_s.as_slice()))
@@ -509,7 +566,7 @@ pub fn check_constraint(
     let mut conv_err: f64 = 0.0;
     let mut vel_err: f64 = 0.0;
     for i in 0..m {
-        let fd2 = (pp1[i] - 2.0 * phi[i] + pm1[i]) / (eps2 * eps2);
+        let fd2 = (pp1[i] - 2.0 * phi_s[i] + pm1[i]) / (eps2 * eps2);
         conv_err = conv_err.max((fd2 - conv[i]).abs() / scale);
         let fd1 = (pp1[i] - pm1[i]) / (2.0 * eps2);
         let bv: f64 = (0..n).map(|j| b[(i, j)] * vel[j]).sum();
@@ -586,7 +643,7 @@ pub fn check_constraint(
     let scalars = groups(0, size);
     let reaction = (b.transpose() * &mu_v).as_slice().to_vec();
     ConstraintReport {
-        b: compare(&b, &b_fd, &phi, &equations, &unknowns),
+        b: compare(&b, &b_fd, &phi_s, &equations, &unknowns),
         k: compare(&k, &k_fd, &reaction, &unknowns, &unknowns),
         convective: conv_err,
         velocity: vel_err,
@@ -599,6 +656,7 @@ pub fn check_constraint(
             &scalars,
             &groups(0, n_in.max(1)),
         ),
+        servo,
         combined,
     }
 }

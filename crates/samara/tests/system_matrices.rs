@@ -207,3 +207,9 @@ fn curved_beam_with_a_body() {
 fn active_suspension_with_states_and_signals() {
     check("examples/active_suspension.toml");
 }
+
+/// A servo row (`drive_signal`): B carries −∂s/∂x of the controller's output.
+#[test]
+fn servo_follower() {
+    check("examples/control/servo_follower.toml");
+}

@@ -115,7 +115,8 @@ const ALL_JOINTS: [JointType; 11] = [
 
 /// Everything that can hang on a free component: a table spring, a linear damper, a
 /// backlash contact (engaged at the random coordinate values used here), an input and,
-/// on every other component, a drive.
+/// on every other component, a drive (a time function on components 0, 2, 4; a signal —
+/// a servo row — on 1, 3, 5).
 fn attachments(rng: &mut Lcg, c: usize) -> ComponentDef {
     ComponentDef {
         spring: Some(ForceLaw::Table {
@@ -140,6 +141,7 @@ fn attachments(rng: &mut Lcg, c: usize) -> ComponentDef {
             start: 0.0,
         }),
         input: Some("u".into()),
+        drive_signal: (!c.is_multiple_of(2)).then(|| "command".into()),
     }
 }
 
@@ -238,6 +240,9 @@ fn every_constraint_tangent_matches_finite_differences() {
             // sums in another order (Bᵀμ summed in spatial components, then rotated), so
             // round-off, a few ulps of the largest entry.
             assert!(rep.combined < 1e-13, "trial {trial}, {}: {rep:?}", c.name());
+            // The servo rows' contract (Φ = ν − s, B = e_ν, ∂Φ/∂s = −1): exact but for
+            // the difference quotient in s (one rounding of Φ ~ 1 over ε = 1e-6).
+            assert!(rep.servo < 1e-9, "trial {trial}, {}: {rep:?}", c.name());
             // Differences at ε = 1e-4: O(ε²) truncation and O(u/ε²) round-off ≈ 1e-8.
             assert!(
                 rep.convective < 1e-5 && rep.velocity < 1e-5,

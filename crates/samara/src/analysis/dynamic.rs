@@ -866,6 +866,22 @@ fn start<'a>(
         });
     };
 
+    // Servo rows have the index-3 form only (their velocity row would need ṡ and its
+    // derivatives, second derivatives of the signal).
+    if formulation == Formulation::StabilizedIndex2
+        && let Some(c) = sys.constraints.iter().find(|c| !c.servo_rows().is_empty())
+    {
+        fail(
+            summary,
+            t0,
+            format!(
+                "joint '{}' has a drive_signal (servo), which the stabilized_index2 formulation does not support",
+                c.name()
+            ),
+            Some("use formulation = \"index3\" (with rho_inf < 1)".into()),
+        );
+        return Err(Box::new(it.state));
+    }
     // Consistent initial conditions: assembly onto the constraints, then accelerations.
     let ctx0 = sys.context(t0, 1.0);
     // The initial problems have the index-3 layout in either formulation.

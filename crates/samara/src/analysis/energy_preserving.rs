@@ -854,7 +854,7 @@ pub fn check_discrete_forms(sys: &System) -> Result<(), StepFailure> {
         if !c.signal_inputs().is_empty() {
             return Err(StepFailure {
                 reason: format!(
-                    "joint `{}` has input ports, which the energy-consistent integrators do not support yet",
+                    "joint `{}` has input ports or a drive_signal (servo), which the energy-consistent integrators do not support yet",
                     c.name()
                 ),
             });

@@ -30,6 +30,21 @@ pub struct CoordinateTangents<'a> {
     pub signals: &'a mut [f64],
 }
 
+/// A servo row `Φ = ν_c − s_j = 0`: its target is input signal `input` (an index into
+/// [`Constraint::signal_inputs`]) rather than a function of time. The constraint
+/// evaluates the row as `Φ = ν_c` with `B = e_ν` (coordinate `coordinate`), `Φ̇ − Bv = 0`,
+/// `Φ̈ − Bv̇ = 0`; the system subtracts `s_j` from Φ, `ṡ_j` from the velocity row and
+/// `∂s_j/∂x` from the row's Jacobian over the signal's support. Its multiplier acts on ν
+/// only (the actuator force, `−μ`): the row is not the transpose of its column.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ServoRow {
+    /// Index among all rows (see [`Constraint::n_rows`]). Its value enters
+    /// [`Constraint::evaluate_rows`] as [`RowTerms::targets`].
+    pub row: usize,
+    pub input: usize,
+    pub coordinate: usize,
+}
+
 /// What one evaluation of a constraint's rows returns (see [`Constraint::evaluate_rows`]).
 pub struct RowTerms<'a> {
     /// `Φ` (length `n_equations`).
@@ -44,6 +59,10 @@ pub struct RowTerms<'a> {
     pub want_b: bool,
     /// `∂(Bᵀμ)/∂(q, ν)` at fixed `μ` (square, overwritten), when the matrix is wanted.
     pub tangent: Option<&'a mut DMatrix<f64>>,
+    /// Per enforced equation, the value of the servo row's signal, subtracted from its
+    /// `Φ` before `μ` is formed ([`ServoRow`]; zero on the other rows, or empty when the
+    /// constraint has no servo rows).
+    pub targets: &'a [f64],
 }
 
 /// A constraint on a few nodes and its own joint coordinates.
@@ -89,6 +108,9 @@ pub trait Constraint: Send + Sync {
         out: RowTerms,
     ) {
         self.evaluate(ctx, nodes, coords, out.phi, Some(out.b));
+        for (p, s) in out.phi.iter_mut().zip(out.targets) {
+            *p -= s;
+        }
         for ((m, l), p) in out.mu.iter_mut().zip(lambda).zip(out.phi.iter()) {
             *m = l + penalty * p;
         }
@@ -125,8 +147,13 @@ pub trait Constraint: Send + Sync {
         _tangents: Option<CoordinateTangents>,
     ) {
     }
-    /// Names of the signals read by the coordinate elements (input ports).
+    /// Names of the signals read by the coordinate elements (input ports) and the servo
+    /// rows.
     fn signal_inputs(&self) -> &[String] {
+        &[]
+    }
+    /// The servo rows, whose targets are input signals.
+    fn servo_rows(&self) -> &[ServoRow] {
         &[]
     }
     /// Potential energy of the coordinate springs and backlash contacts.

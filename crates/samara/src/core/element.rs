@@ -206,6 +206,10 @@ pub trait Element: Send + Sync {
     }
     /// Values of the produced signals and their derivatives; `out` is cleared by the caller.
     fn signals(&self, _ctx: &EvalContext, _x: &ElementInput, _out: &mut SignalTerms) {}
+    /// Explicit time derivatives `[∂s/∂t, ∂²s/∂t²]` of the produced signals at fixed
+    /// unknowns and inputs (a time function's f′, f″); zero by default. A servo's target
+    /// rate and acceleration in the consistent initial conditions use them.
+    fn signal_time_derivatives(&self, _ctx: &EvalContext, _out: &mut [[f64; 2]]) {}
     /// Residual and (if asked) tangents; `out` is cleared by the caller.
     fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms);
     /// Whether [`Element::evaluate`] only adds into `out` (never overwrites or reads it)

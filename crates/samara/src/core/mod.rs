@@ -6,7 +6,7 @@ mod discrete;
 mod element;
 mod state;
 
-pub use constraint::{Constraint, CoordinateTangents, RowRole, RowTerms};
+pub use constraint::{Constraint, CoordinateTangents, RowRole, RowTerms, ServoRow};
 pub use discrete::{DiscreteStep, gonzalez_correction};
 pub use element::{Element, ElementInput, EvalContext, LocalTerms, Need, SignalTerms, add_block};
 pub use state::{Coordinate, ElementState, NodeState, PairBristle, State, remap_bristles};

@@ -36,6 +36,10 @@ impl Element for TimeSignal {
     fn signals(&self, ctx: &EvalContext, _x: &ElementInput, out: &mut SignalTerms) {
         out.values[0] = self.function.eval(ctx.time);
     }
+    fn signal_time_derivatives(&self, ctx: &EvalContext, out: &mut [[f64; 2]]) {
+        let d = self.function.derivatives(ctx.time);
+        out[0] = [d[1], d[2]];
+    }
     fn evaluate(&self, _ctx: &EvalContext, _x: &ElementInput, _need: Need, _out: &mut LocalTerms) {}
     /// No nodes, no energy: nothing to discretize.
     fn discrete_form(&self) -> Result<(), String> {

@@ -19,6 +19,7 @@ use crate::core::EvalContext;
 use crate::core::NodeRef;
 use crate::core::RowRole;
 use crate::core::RowTerms;
+use crate::core::ServoRow;
 use crate::core::{Coordinate, NodeState};
 use crate::math::TimeFunction;
 use crate::math::skew;
@@ -63,6 +64,8 @@ pub struct Joint {
     input_of: Vec<Option<usize>>,
     /// Defining rows of the passive coordinates (`coord` indexes the passive list).
     passive_rows: Vec<Row>,
+    /// The servo rows (drives whose target is an input signal).
+    servos: Vec<ServoRow>,
 }
 
 impl Joint {
@@ -93,7 +96,24 @@ impl Joint {
         let rotations_wanted = def.components[3..].iter().any(|c| c.is_some());
         let drives: [Option<TimeFunction>; 6] =
             std::array::from_fn(|c| def.components[c].as_ref().and_then(|d| d.drive.clone()));
-        let (all_rows, all_components) = rows_of(def.kind, def.pitch, rotations_wanted, &drives);
+        let (mut all_rows, all_components) =
+            rows_of(def.kind, def.pitch, rotations_wanted, &drives);
+        let servo_of = |c: usize| {
+            def.components[c]
+                .as_ref()
+                .and_then(|d| d.drive_signal.clone())
+        };
+        // Servo rows after the drives, reading the signals listed after the input ports'.
+        let mut servo_signals: Vec<String> = Vec::new();
+        for (j, &c) in all_components.iter().enumerate() {
+            if let Some(name) = servo_of(c) {
+                all_rows.push(Row::Servo {
+                    coord: j,
+                    input: servo_signals.len(),
+                });
+                servo_signals.push(name);
+            }
+        }
         let loads_of = |c: usize| {
             def.components[c]
                 .as_ref()
@@ -106,6 +126,7 @@ impl Joint {
         let is_active = |c: usize| {
             matches!(def.kind, JointType::Screw | JointType::Prescribed)
                 || drives[c].is_some()
+                || servo_of(c).is_some()
                 || !loads_of(c).is_empty()
         };
         let mut renumber = vec![0usize; all_components.len()];
@@ -129,7 +150,7 @@ impl Joint {
             let coord = match &row {
                 Row::Displacement { coord, .. } => coord.map(|(c, _)| c),
                 Row::Angle { coord, .. } => *coord,
-                Row::Drive { coord, .. } => Some(*coord),
+                Row::Drive { coord, .. } | Row::Servo { coord, .. } => Some(*coord),
             };
             let passive = coord.is_some_and(|c| !is_active(all_components[c]));
             let row = match row {
@@ -144,6 +165,10 @@ impl Joint {
                 Row::Drive { coord, function } => Row::Drive {
                     coord: renumber[coord],
                     function,
+                },
+                Row::Servo { coord, input } => Row::Servo {
+                    coord: renumber[coord],
+                    input,
                 },
             };
             if passive {
@@ -168,6 +193,31 @@ impl Joint {
                 })
             })
             .collect();
+        // The servos' signals join the input list (shared when a port reads the same one).
+        let mut index_of = |name: &String| {
+            inputs.iter().position(|n| n == name).unwrap_or_else(|| {
+                inputs.push(name.clone());
+                inputs.len() - 1
+            })
+        };
+        let servo_inputs: Vec<usize> = servo_signals.iter().map(&mut index_of).collect();
+        for row in &mut rows {
+            if let Row::Servo { input, .. } = row {
+                *input = servo_inputs[*input];
+            }
+        }
+        let servos = rows
+            .iter()
+            .enumerate()
+            .filter_map(|(r, row)| match row {
+                Row::Servo { coord, input } => Some(ServoRow {
+                    row: r,
+                    input: *input,
+                    coordinate: *coord,
+                }),
+                _ => None,
+            })
+            .collect();
         Self {
             name: def.name.clone(),
             kind: def.kind,
@@ -181,6 +231,7 @@ impl Joint {
             inputs,
             input_of,
             passive_rows,
+            servos,
         }
     }
 
@@ -258,6 +309,11 @@ impl Joint {
                 b: Row12::zeros(),
                 dnu: Some((*coord, 1.0)),
             },
+            Row::Servo { coord, .. } => RowValue {
+                phi: coords[*coord].q,
+                b: Row12::zeros(),
+                dnu: Some((*coord, 1.0)),
+            },
         }
     }
 
@@ -269,6 +325,7 @@ impl Joint {
             }
             Row::Angle { row, coord } => row.value(f, coord.map_or(0.0, |c| coords[c].q))[0],
             Row::Drive { coord, function } => coords[*coord].q - function.eval(t),
+            Row::Servo { coord, .. } => coords[*coord].q,
         }
     }
 
@@ -372,7 +429,7 @@ impl Joint {
                         k[(nq + c, nq + c)] += mu_r * row.value(f, nu)[2];
                     }
                 }
-                Row::Drive { .. } => {}
+                Row::Drive { .. } | Row::Servo { .. } => {}
             }
         }
         if any_displacement {
@@ -472,7 +529,7 @@ impl Constraint for Joint {
                     let nu = coord.map_or(0.0, |c| coords[c].q);
                     axpy12(&mut g12, mu_r, &row.jacobian(&f, nu, 0));
                 }
-                Row::Drive { .. } => {}
+                Row::Drive { .. } | Row::Servo { .. } => {}
             }
         }
         self.add_reaction_tangent(&f, &rots, coords, mu, &g12, k);
@@ -494,6 +551,7 @@ impl Constraint for Joint {
             b,
             want_b,
             tangent,
+            targets,
         } = out;
         let f = self.frames(nodes);
         let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
@@ -508,9 +566,13 @@ impl Constraint for Joint {
         // Σ μ_r b_r in spatial components: converted to the local columns once.
         let mut g12 = Row12::zeros();
         for (i, &r) in self.active.iter().enumerate() {
-            let v = self.row_value(&f, coords, ctx.time, &self.rows[r]);
-            phi[i] = v.phi;
-            let mu_r = lambda[i] + penalty * v.phi;
+            let row = &self.rows[r];
+            let v = self.row_value(&f, coords, ctx.time, row);
+            phi[i] = match row {
+                Row::Servo { .. } if !targets.is_empty() => v.phi - targets[i],
+                _ => v.phi,
+            };
+            let mu_r = lambda[i] + penalty * phi[i];
             mu[i] = mu_r;
             if mu_r != 0.0 {
                 axpy12(&mut g12, mu_r, &v.b);
@@ -549,6 +611,8 @@ impl Constraint for Joint {
                     row.convective(&f, nu, nu_dot)
                 }
                 Row::Drive { function, .. } => -function.derivatives(ctx.time)[2],
+                // The signal's part is the system's (ServoRow).
+                Row::Servo { .. } => 0.0,
             };
         }
     }
@@ -590,6 +654,10 @@ impl Constraint for Joint {
 
     fn signal_inputs(&self) -> &[String] {
         &self.inputs
+    }
+
+    fn servo_rows(&self) -> &[ServoRow] {
+        &self.servos
     }
 
     fn potential_energy(&self, coords: &[Coordinate]) -> f64 {
@@ -781,7 +849,7 @@ impl Constraint for Joint {
             let conv = match row {
                 Row::Displacement { axis, .. } => displacement::convective(&f, *axis),
                 Row::Angle { row, .. } => row.convective(&f, passive[c].q, passive[c].v),
-                Row::Drive { .. } => 0.0,
+                Row::Drive { .. } | Row::Servo { .. } => 0.0,
             };
             passive[c].a = -(conv + v.b.dot(&acc)) / d;
         }
@@ -792,9 +860,9 @@ impl Constraint for Joint {
     }
 
     fn drive_row(&self, c: usize) -> Option<usize> {
-        self.rows
-            .iter()
-            .position(|r| matches!(r, Row::Drive { coord, .. } if *coord == c))
+        self.rows.iter().position(
+            |r| matches!(r, Row::Drive { coord, .. } | Row::Servo { coord, .. } if *coord == c),
+        )
     }
 }
 

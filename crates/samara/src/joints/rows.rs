@@ -37,6 +37,10 @@ pub enum Row {
         coord: usize,
         function: TimeFunction,
     },
+    /// Servo `ν_c − s = 0`, `s` the joint's input signal `input`: the joint evaluates
+    /// `ν_c` (B = e_ν); the system subtracts `s` and adds `−∂s/∂x` to the row
+    /// ([`crate::core::ServoRow`]).
+    Servo { coord: usize, input: usize },
 }
 
 impl Row {
@@ -45,7 +49,7 @@ impl Row {
             Row::Displacement { coord: None, .. } | Row::Angle { coord: None, .. } => {
                 RowRole::Constraint
             }
-            Row::Drive { .. } => RowRole::Drive,
+            Row::Drive { .. } | Row::Servo { .. } => RowRole::Drive,
             _ => RowRole::Definition,
         }
     }

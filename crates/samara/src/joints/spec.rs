@@ -101,6 +101,8 @@ pub struct ComponentDef {
     pub drive: Option<TimeFunction>,
     /// Input port: the name of the signal whose value is the force/torque.
     pub input: Option<String>,
+    /// Servo: the coordinate follows this signal, `ν − s = 0` (exclusive with `drive`).
+    pub drive_signal: Option<String>,
 }
 
 /// A joint. Frames are given in the initial configuration, global components: frame A

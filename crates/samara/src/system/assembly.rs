@@ -147,6 +147,11 @@ struct ConstraintWork {
     cf_c: Vec<f64>,
     /// Local velocities (node v, Ω, then ν̇).
     vel: Vec<f64>,
+    /// Servo rows ([`crate::core::ServoRow`]): (enforced equation, input index, local
+    /// coordinate).
+    servos: Vec<(usize, usize, usize)>,
+    /// The servo rows' signal values per equation (empty without servo rows).
+    targets: Vec<f64>,
     /// Value offsets of the (node a, node b) blocks, row-major over local nodes.
     node_slots: Vec<usize>,
     /// Offsets of the (node, joint block) and (joint block, node) blocks, and of the
@@ -229,6 +234,8 @@ pub struct Assembler {
     inputs: Vec<f64>,
     constraint_inputs: Vec<f64>,
     cf_ds: Vec<f64>,
+    /// Scratch: `∂s/∂Δ` of a servo's signal (the K channel at weight 1, like B).
+    servo_grad: Vec<f64>,
     constraints: Vec<ConstraintWork>,
     /// Stabilized only: (η_k, η_l) couplings of constraints k ≠ l sharing a node, as
     /// (k, l, value offset, local node index in k, local node index in l).
@@ -545,6 +552,19 @@ impl Assembler {
                     cf_k: vec![0.0; nc],
                     cf_c: vec![0.0; nc],
                     vel: vec![0.0; nl],
+                    targets: if c.servo_rows().is_empty() {
+                        Vec::new()
+                    } else {
+                        vec![0.0; m]
+                    },
+                    servos: c
+                        .servo_rows()
+                        .iter()
+                        .filter_map(|s| {
+                            let i = c.active_rows().iter().position(|&r| r == s.row)?;
+                            Some((i, s.input, s.coordinate))
+                        })
+                        .collect(),
                     node_slots: cn
                         .iter()
                         .flat_map(|&a| cn.iter().map(move |&b| (a, b)))
@@ -630,6 +650,7 @@ impl Assembler {
             inputs: Vec::new(),
             constraint_inputs: Vec::new(),
             cf_ds: Vec::new(),
+            servo_grad: vec![0.0; sys.signals.support.iter().map(Vec::len).max().unwrap_or(0)],
             constraints,
             nu_pairs,
             rate_maps: Vec::new(),
@@ -984,6 +1005,10 @@ impl Assembler {
             // One evaluation of the rows: Φ, μ, Bᵀμ and, for the matrix, B and
             // ∂(Bᵀμ)/∂q (a constraint without unknowns left has no block to add them to).
             let with_tangent = matrix.is_some() && w.place.block.is_some();
+            // Servo rows: their signals' values are the targets of Φ = ν − s.
+            for &(i, j, _) in &w.servos {
+                w.targets[i] = self.signal_values.values[sys.signals.constraint_inputs[k][j]];
+            }
             c.evaluate_rows(
                 ctx,
                 &state.nodes,
@@ -997,6 +1022,7 @@ impl Assembler {
                     b: &mut w.b,
                     want_b: stabilized,
                     tangent: with_tangent.then_some(&mut w.k),
+                    targets: &w.targets,
                 },
             );
             let cn = c.nodes();
@@ -1146,6 +1172,28 @@ impl Assembler {
                                     sr * ds * g[sp.pos];
                             }
                         }
+                    }
+                }
+                // Servo rows (index 3): −∂s/∂Δ in the row, at the weight of B (the K
+                // channel at 1, so the initial projections see it too); the penalty's
+                // −ρ ∂s/∂Δ in the coordinate's row.
+                for &(i, j, cc) in &w.servos {
+                    let sid = sys.signals.constraint_inputs[k][j];
+                    let len = sys.signals.support[sid].len();
+                    combine_gradient(
+                        sys,
+                        &sys.signals.support[sid],
+                        &self.signal_values.gradients[sid],
+                        coef,
+                        1.0,
+                        tangent_ops,
+                        &mut self.servo_grad[..len],
+                    );
+                    for sp in &self.constraint_signal_slots[k][j] {
+                        let g = self.servo_grad[sp.pos];
+                        mat.values[sp.slots[0] + i * sp.width + sp.col] -= g;
+                        mat.values[sp.slots[0] + (m + cc) * sp.width + sp.col] -=
+                            sr * coef.penalty * g;
                     }
                 }
             }
@@ -1426,40 +1474,16 @@ impl Assembler {
         coef: &Coefficients,
         tangent_ops: &[Matrix3<f64>],
     ) {
-        let n6 = 6 * sys.n_nodes();
-        let first_state = n6 + sys.n_coordinates;
         for (s, support) in sys.signals.support.iter().enumerate() {
-            let g = &self.signal_values.gradients[s];
-            let out = &mut self.signal_combined[s];
-            let mut p = 0;
-            while p < support.len() {
-                let c = support[p];
-                if c < n6 && c % 6 == 3 && p + 2 < support.len() && support[p + 2] == c + 2 {
-                    // A node's rotation triplet: gₖᵀ T.
-                    let node = c / 6;
-                    let t = tangent_ops
-                        .get(node)
-                        .copied()
-                        .unwrap_or_else(Matrix3::identity);
-                    for j in 0..3 {
-                        let mut acc = 0.0;
-                        for i in 0..3 {
-                            acc += g[p + i][0] * t[(i, j)];
-                        }
-                        out[p + j] = coef.stiffness * acc
-                            + coef.damping * g[p + j][1]
-                            + coef.mass * g[p + j][2];
-                    }
-                    p += 3;
-                    continue;
-                }
-                out[p] = if c >= first_state {
-                    coef.stiffness * g[p][0] + coef.state_rate * g[p][1]
-                } else {
-                    coef.stiffness * g[p][0] + coef.damping * g[p][1] + coef.mass * g[p][2]
-                };
-                p += 1;
-            }
+            combine_gradient(
+                sys,
+                support,
+                &self.signal_values.gradients[s],
+                coef,
+                coef.stiffness,
+                tangent_ops,
+                &mut self.signal_combined[s],
+            );
         }
     }
 
@@ -1508,6 +1532,16 @@ impl Assembler {
         }
     }
 
+    /// Explicit time derivatives of the signals at the last assembly's state (only when
+    /// some constraint has servo rows; empty otherwise).
+    fn servo_time_derivatives(&self, sys: &System, ctx: &EvalContext) -> Vec<[f64; 2]> {
+        if self.constraints.iter().all(|w| w.servos.is_empty()) {
+            return Vec::new();
+        }
+        sys.signals
+            .time_derivatives(&sys.elements, ctx, &self.signal_values)
+    }
+
     /// Overwrites the constraint rows of `residual` with the convective accelerations
     /// `Φ̈ − B (v̇, ν̈)` (for the consistent-initial-acceleration problem, index-3 layout).
     pub fn acceleration_rows(
@@ -1517,9 +1551,15 @@ impl Assembler {
         ctx: &EvalContext,
         residual: &mut [f64],
     ) {
+        let rates = self.servo_time_derivatives(sys, ctx);
         for (k, c) in sys.constraints.iter().enumerate() {
             let r = self.multiplier_range(k);
+            let first = r.start;
             c.acceleration_term(ctx, &state.nodes, sys.coords_of(k, state), &mut residual[r]);
+            // Servo rows: ν̈ − s̈ with s̈ ≈ Σ (∂s/∂x) ẍ (in the matrix) + ∂²s/∂t².
+            for &(i, j, _) in &self.constraints[k].servos {
+                residual[first + i] = -rates[sys.signals.constraint_inputs[k][j]][1];
+            }
         }
     }
 
@@ -1534,6 +1574,7 @@ impl Assembler {
         residual: &mut [f64],
     ) {
         residual.fill(0.0);
+        let rates = self.servo_time_derivatives(sys, ctx);
         for (k, c) in sys.constraints.iter().enumerate() {
             let w = &mut self.constraints[k];
             c.velocity_term(ctx, &mut w.phi_t);
@@ -1547,6 +1588,18 @@ impl Assembler {
                     acc += w.b[(i, j)] * w.vel[j];
                 }
                 residual[w.place.lam + i] = acc;
+            }
+            // Servo rows: ν̇ − ṡ with ṡ = Σ (∂s/∂x) ẋ over the signal's support (the
+            // states' ż as stored; the rate and acceleration channels left out) + ∂s/∂t.
+            for &(i, j, _) in &w.servos {
+                let sid = sys.signals.constraint_inputs[k][j];
+                let g = &self.signal_values.gradients[sid];
+                let s_dot: f64 = sys.signals.support[sid]
+                    .iter()
+                    .zip(g)
+                    .map(|(&c, g)| g[0] * config_rate(sys, state, c))
+                    .sum();
+                residual[w.place.lam + i] -= s_dot + rates[sid][0];
             }
         }
     }
@@ -1739,6 +1792,64 @@ fn add_gram(k: &mut [f64], b: &[f64], rows: &mut [f64], m: usize, nl: usize, rho
 
 /// The local velocity vector of a constraint: node v (global) and Ω (material) per node,
 /// then the coordinate rates.
+/// `∂s/∂Δ` of one signal over its `support` from its channels `g`: the K channel times
+/// the tangent operator on node rotations, at weight `k_config` on the nodes and joint
+/// coordinates (the element states' at `coef.stiffness`), plus the C and M channels with
+/// the coefficients of the column's kind (second order: γ', β'; element states: ∂ż/∂Δz).
+fn combine_gradient(
+    sys: &System,
+    support: &[usize],
+    g: &[[f64; 3]],
+    coef: &Coefficients,
+    k_config: f64,
+    tangent_ops: &[Matrix3<f64>],
+    out: &mut [f64],
+) {
+    let n6 = 6 * sys.n_nodes();
+    let first_state = n6 + sys.n_coordinates;
+    let mut p = 0;
+    while p < support.len() {
+        let c = support[p];
+        if c < n6 && c % 6 == 3 && p + 2 < support.len() && support[p + 2] == c + 2 {
+            // A node's rotation triplet: gₖᵀ T.
+            let node = c / 6;
+            let t = tangent_ops
+                .get(node)
+                .copied()
+                .unwrap_or_else(Matrix3::identity);
+            for j in 0..3 {
+                let mut acc = 0.0;
+                for i in 0..3 {
+                    acc += g[p + i][0] * t[(i, j)];
+                }
+                out[p + j] = k_config * acc + coef.damping * g[p + j][1] + coef.mass * g[p + j][2];
+            }
+            p += 3;
+            continue;
+        }
+        out[p] = if c >= first_state {
+            coef.stiffness * g[p][0] + coef.state_rate * g[p][1]
+        } else {
+            k_config * g[p][0] + coef.damping * g[p][1] + coef.mass * g[p][2]
+        };
+        p += 1;
+    }
+}
+
+/// Rate of configuration unknown `c`: a node's v or Ω, a coordinate's ν̇, a state's ż.
+fn config_rate(sys: &System, state: &State, c: usize) -> f64 {
+    let n6 = 6 * sys.n_nodes();
+    if c < n6 {
+        let nd = &state.nodes[c / 6];
+        let d = c % 6;
+        if d < 3 { nd.v[d] } else { nd.w[d - 3] }
+    } else if c < n6 + sys.n_coordinates {
+        state.coords[c - n6].v
+    } else {
+        state.states[c - n6 - sys.n_coordinates].zd
+    }
+}
+
 fn local_velocities(
     vel: &mut [f64],
     nodes: &[usize],

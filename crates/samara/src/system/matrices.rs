@@ -127,7 +127,21 @@ impl System {
             c.evaluate(ctx, &state.nodes, coords, &mut phi, Some(&mut b));
             let off = self.multiplier_offsets[k];
             let lam = &state.lambda[off..off + m];
+            self.subtract_servo_targets(k, &sv.values, &mut phi);
             phi_all[off..off + m].copy_from_slice(&phi);
+            // Servo rows: −∂s/∂x joins the row of B over the signal's support (K channel;
+            // the rate and acceleration channels of a servo's signal have no place in B).
+            for sr in c.servo_rows() {
+                let Some(i) = c.active_rows().iter().position(|&r| r == sr.row) else {
+                    continue;
+                };
+                let s = self.signals.constraint_inputs[k][sr.input];
+                for (g, &cfg) in sv.gradients[s].iter().zip(&self.signals.support[s]) {
+                    if g[0] != 0.0 {
+                        b_trip.push(Triplet::new(off + i, cfg, -g[0]));
+                    }
+                }
+            }
             let mut kc = DMatrix::zeros(nl, nl);
             c.reaction_tangent(ctx, &state.nodes, coords, lam, &mut kc);
             for (j, &cj) in cfg.iter().enumerate() {

@@ -914,8 +914,15 @@ impl System {
         (t, v)
     }
 
-    /// Constraint values Φ of all constraints, concatenated.
+    /// Constraint values Φ of all constraints, concatenated (servo rows with their
+    /// signals subtracted).
     pub fn constraint_values(&self, ctx: &EvalContext, s: &State, out: &mut [f64]) {
+        let has_servos = self.constraints.iter().any(|c| !c.servo_rows().is_empty());
+        let signals = if has_servos {
+            self.signal_values(ctx, s)
+        } else {
+            Vec::new()
+        };
         for (k, (c, off)) in self
             .constraints
             .iter()
@@ -923,13 +930,20 @@ impl System {
             .enumerate()
         {
             let m = c.n_equations();
-            c.evaluate(
-                ctx,
-                &s.nodes,
-                self.coords_of(k, s),
-                &mut out[*off..off + m],
-                None,
-            );
+            let phi = &mut out[*off..off + m];
+            c.evaluate(ctx, &s.nodes, self.coords_of(k, s), phi, None);
+            self.subtract_servo_targets(k, &signals, phi);
+        }
+    }
+
+    /// `Φ_i −= s` on the servo rows of constraint `k` (`phi` its enforced equations,
+    /// `signals` the values of all signals).
+    pub fn subtract_servo_targets(&self, k: usize, signals: &[f64], phi: &mut [f64]) {
+        let c = &self.constraints[k];
+        for sr in c.servo_rows() {
+            if let Some(i) = c.active_rows().iter().position(|&r| r == sr.row) {
+                phi[i] -= signals[self.signals.constraint_inputs[k][sr.input]];
+            }
         }
     }
 }

@@ -563,3 +563,40 @@ impl SignalGraph {
         gradients[s] = g;
     }
 }
+
+impl SignalGraph {
+    /// Explicit time derivatives `[∂s/∂t, ∂²s/∂t²]` of every signal, after
+    /// [`SignalGraph::evaluate`] into `values` at the same state and time: each producer's
+    /// own ([`Element::signal_time_derivatives`]) plus the chain through its inputs,
+    /// `Σ_j (∂g/∂s_j) ∂s_j/∂t` (for the second derivative this leaves out the curvature
+    /// of nonlinear blocks: exact through linear ones). Signals read straight from the
+    /// unknowns have none. For the consistent initial conditions (allocates).
+    pub fn time_derivatives(
+        &self,
+        elements: &[Box<dyn Element>],
+        ctx: &EvalContext,
+        values: &SignalValues,
+    ) -> Vec<[f64; 2]> {
+        let mut out = vec![[0.0; 2]; self.names.len()];
+        for &k in &self.order {
+            let e = elements[k].as_ref();
+            let n_out = e.signal_outputs().len();
+            let mut own = vec![[0.0; 2]; n_out];
+            e.signal_time_derivatives(ctx, &mut own);
+            let Some(t) = values.terms[k].as_ref() else {
+                continue;
+            };
+            for (o, d) in own.iter_mut().enumerate() {
+                for (j, &sj) in self.element_inputs[k].iter().enumerate() {
+                    let ds = t.ds[(o, j)];
+                    d[0] += ds * out[sj][0];
+                    d[1] += ds * out[sj][1];
+                }
+                if let Some(s) = self.id_of(k, o) {
+                    out[s] = *d;
+                }
+            }
+        }
+        out
+    }
+}

@@ -149,7 +149,7 @@ pub struct ControllerDef {
 }
 
 impl ControllerDef {
-    fn element(&self) -> ControllerElement {
+    pub(crate) fn element(&self) -> ControllerElement {
         ControllerElement::new(
             &self.name,
             self.block.clone(),

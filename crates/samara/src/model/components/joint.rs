@@ -47,6 +47,11 @@ pub struct ComponentInput {
     /// increase the coordinate.
     #[serde(default)]
     pub input: Option<Located<String>>,
+    /// Servo: the coordinate follows the named signal [m or rad] (a `[[signals]]` time
+    /// function, a sensor's or a controller's output), ν − s = 0; the force it takes is
+    /// written out as `joint_coordinate_force`. Exclusive with `drive`.
+    #[serde(default)]
+    pub drive_signal: Option<Located<String>>,
 }
 /// Free play |ν − center| ≤ width/2; beyond it a contact force k g + c ν̇ (g the
 /// penetration) pushes back.
@@ -140,7 +145,8 @@ impl ComponentKind for JointKind {
     type Def = JointDef;
 
     /// Constraint rows at the end of the step, forces from the Gonzalez-corrected mid-point
-    /// Jacobian (docs/integrators.md); input ports are refused when the analysis starts.
+    /// Jacobian (docs/integrators.md); input ports and servos (`drive_signal`) are refused
+    /// when the analysis starts.
     fn discrete_form(_input: &JointInput) -> Result<(), String> {
         Ok(())
     }
@@ -151,6 +157,88 @@ impl ComponentKind for JointKind {
 
     fn validate(j: &Located<JointInput>, cx: &mut Checker, model: &mut Model) -> Option<JointDef> {
         cx.joint(j, model)
+    }
+
+    /// Servo checks once every signal producer is known: a `drive_signal` that reads the
+    /// same coordinate's value through blocks with feedthrough only (an unfiltered
+    /// sensor on it, gains, sums, …) makes the row ν − s(ν) = 0 an algebraic loop
+    /// (singular for a unit gain); the stabilized index-2 formulation has no servo rows.
+    fn finish(input: &super::ModelInput, cx: &mut Checker, model: &Model) {
+        use crate::model::AnalysisKind;
+        // Feedthrough inputs of each signal's producer.
+        let mut through: std::collections::HashMap<&str, Vec<&str>> = Default::default();
+        for c in &model.controllers {
+            if crate::core::Element::feedthrough(&c.element()) {
+                for o in &c.outputs {
+                    through.insert(o, c.inputs.iter().map(|s| s.as_str()).collect());
+                }
+            }
+        }
+        for s in &model.sensors {
+            if s.time_constant == 0.0
+                && let crate::elements::SensorInput::Signal(i) = &s.input
+            {
+                through.insert(&s.name, vec![i.as_str()]);
+            }
+        }
+        let stabilized = model.analyses.iter().any(|a| {
+            matches!(&a.kind, AnalysisKind::Dynamic(d) if d.formulation == FormulationType::StabilizedIndex2)
+        });
+        for ji in &input.joints {
+            let ji = &ji.value;
+            let comps = [&ji.d1, &ji.d2, &ji.d3, &ji.theta1, &ji.theta2, &ji.theta3];
+            for (c, comp) in comps.iter().enumerate() {
+                let Some(ds) = comp.as_ref().and_then(|x| x.value.drive_signal.as_ref()) else {
+                    continue;
+                };
+                let what = format!(
+                    "joint '{}', `{}`",
+                    ji.name.value,
+                    crate::joints::COMPONENT_NAMES[c]
+                );
+                if stabilized {
+                    cx.error(
+                        format!("{what}: a `drive_signal` (servo) is not supported by the stabilized_index2 formulation"),
+                        ds.span.clone(),
+                        Some("use formulation = \"index3\" with rho_inf < 1 in the dynamic analyses".into()),
+                    );
+                }
+                let own = format!(
+                    "coordinate:{}.{}",
+                    ji.name.value,
+                    crate::joints::COMPONENT_NAMES[c]
+                );
+                // Depth-first over feedthrough edges from the servo's signal.
+                let mut path: Vec<&str> = Vec::new();
+                let mut stack: Vec<(&str, usize)> = vec![(ds.value.as_str(), 0)];
+                let mut seen: std::collections::HashSet<&str> = Default::default();
+                let mut found = None;
+                while let Some((name, depth)) = stack.pop() {
+                    path.truncate(depth);
+                    path.push(name);
+                    if name == own {
+                        found = Some(path.clone());
+                        break;
+                    }
+                    if !seen.insert(name) {
+                        continue;
+                    }
+                    for &i in through.get(name).map(Vec::as_slice).unwrap_or(&[]) {
+                        stack.push((i, depth + 1));
+                    }
+                }
+                if let Some(chain) = found {
+                    cx.error(
+                        format!(
+                            "{what}: algebraic loop: the servo's signal depends on the coordinate it drives without a state in between ({})",
+                            chain.join(" ← ")
+                        ),
+                        ds.span.clone(),
+                        Some("ν − s(ν) = 0 has no solution to follow (singular for a unit gain): filter the measurement (a sensor with time_constant > 0) or command the coordinate from another quantity".into()),
+                    );
+                }
+            }
+        }
     }
 
     fn nodes(def: &JointDef) -> Vec<usize> {
@@ -200,6 +288,7 @@ impl ComponentKind for JointKind {
             // A spring, a damper and an input on every free component, so every
             // coordinate is an unknown; a drive on the first.
             let mut first = true;
+            let mut servo_placed = false;
             for c in 0..6 {
                 if has_coordinate(kind, c) {
                     def.components[c] = Some(ComponentDef {
@@ -225,7 +314,11 @@ impl ComponentKind for JointKind {
                             start: 0.0,
                         }),
                         input: Some("push".into()),
+                        // A servo on the second coordinate (the row the system completes
+                        // with the signal's derivatives).
+                        drive_signal: (!first && !servo_placed).then(|| "command".into()),
                     });
+                    servo_placed |= !first;
                     first = false;
                 }
             }
@@ -609,32 +702,50 @@ impl Checker<'_> {
                 d
             }
         };
-        let input = match &c.input {
-            None => None,
-            Some(name) => match self.signal_names.contains_key(&name.value) {
-                true => Some(name.value.clone()),
-                false => {
-                    let known: Vec<String> = self.signal_names.keys().cloned().collect();
-                    let hint = match self.suggest(&name.value, known.iter().map(|s| s.as_str())) {
-                        Some(b) => format!("did you mean '{b}'?"),
-                        None => "declare it in a [[signals]] table (name and function), or name a sensor's output".into(),
-                    };
-                    self.error(
-                        format!("{what}: unknown signal '{}'", name.value),
-                        name.span.clone(),
-                        Some(hint),
-                    );
-                    ok = false;
-                    None
-                }
-            },
-        };
+        let input = self.known_signal(c.input.as_ref(), what, "input");
+        ok &= c.input.is_none() || input.is_some();
+        let drive_signal = self.known_signal(c.drive_signal.as_ref(), what, "drive_signal");
+        ok &= c.drive_signal.is_none() || drive_signal.is_some();
+        if let (Some(_), Some(ds)) = (&c.drive, &c.drive_signal) {
+            self.error(
+                format!("{what}: give either `drive` (a time function) or `drive_signal` (a signal), not both"),
+                ds.span.clone(),
+                Some("a [[signals]] entry turns a time function into a signal: drive_signal = \"name\" with [[signals]] name = \"name\", function = { … }".into()),
+            );
+            ok = false;
+        }
         ok.then_some(ComponentDef {
             spring,
             damper,
             backlash,
             drive,
             input,
+            drive_signal,
         })
+    }
+
+    /// The signal named by `key` if some entry produces it; otherwise a located error
+    /// with the closest known name.
+    fn known_signal(
+        &mut self,
+        name: Option<&Located<String>>,
+        what: &str,
+        key: &str,
+    ) -> Option<String> {
+        let name = name?;
+        if self.signal_names.contains_key(&name.value) {
+            return Some(name.value.clone());
+        }
+        let known: Vec<String> = self.signal_names.keys().cloned().collect();
+        let hint = match self.suggest(&name.value, known.iter().map(|s| s.as_str())) {
+            Some(b) => format!("did you mean '{b}'?"),
+            None => "declare it in a [[signals]] table (name and function), or name a sensor's or a controller's output".into(),
+        };
+        self.error(
+            format!("{what}: `{key}` names an unknown signal '{}'", name.value),
+            name.span.clone(),
+            Some(hint),
+        );
+        None
     }
 }

@@ -458,6 +458,7 @@ impl ComponentKind for Sensor {
                         || d.damper.is_some()
                         || d.backlash.is_some()
                         || d.drive.is_some()
+                        || d.drive_signal.is_some()
                         || d.input.is_some()
                 });
             if !active {
