@@ -129,7 +129,8 @@ fn generalized_alpha_allocations(m: &samara::model::Model, warm: usize, steps: u
 
 /// The generalized-α step loop: rigid bodies and joints, beams, a wing's lifting line,
 /// a hovering rotor with dynamic inflow, contact with friction, a tire, hydraulics, a
-/// motor, a controller, and the landing gear with all of them.
+/// motor, a controller, a servo (a joint driven by a controller's signal), and the landing
+/// gear with all of them.
 #[test]
 fn generalized_alpha_steps_without_allocating() {
     for rel in [
@@ -143,6 +144,7 @@ fn generalized_alpha_steps_without_allocating() {
         "examples/hydraulics/actuator.toml",
         "examples/electric/motor_spinup.toml",
         "examples/control/pid_position.toml",
+        "examples/control/servo_follower.toml",
         "examples/landing_gear_drop.toml",
     ] {
         let text = example_model_text(rel);

@@ -86,6 +86,9 @@ pub struct System {
     /// `<element>.<output>`, with units.
     pub output_names: Vec<String>,
     pub output_units: Vec<String>,
+    /// Scratch of [`System::constraint_values`] for the servo rows' signals (kept, so a
+    /// step's constraint check allocates nothing).
+    servo_signals: std::sync::Mutex<Option<SignalValues>>,
 }
 
 impl System {
@@ -534,6 +537,7 @@ impl System {
             output_offsets,
             output_names,
             output_units,
+            servo_signals: std::sync::Mutex::new(None),
         }
     }
 
@@ -918,10 +922,17 @@ impl System {
     /// signals subtracted).
     pub fn constraint_values(&self, ctx: &EvalContext, s: &State, out: &mut [f64]) {
         let has_servos = self.constraints.iter().any(|c| !c.servo_rows().is_empty());
-        let signals = if has_servos {
-            self.signal_values(ctx, s)
+        let mut scratch = self
+            .servo_signals
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let signals: &[f64] = if has_servos && !self.signals.names.is_empty() {
+            let v = scratch.get_or_insert_with(|| self.signals.values(&self.elements));
+            self.signals
+                .evaluate(&self.elements, &self.state_offsets, ctx, s, v, false);
+            &v.values
         } else {
-            Vec::new()
+            &[]
         };
         for (k, (c, off)) in self
             .constraints
@@ -932,7 +943,7 @@ impl System {
             let m = c.n_equations();
             let phi = &mut out[*off..off + m];
             c.evaluate(ctx, &s.nodes, self.coords_of(k, s), phi, None);
-            self.subtract_servo_targets(k, &signals, phi);
+            self.subtract_servo_targets(k, signals, phi);
         }
     }
 
