@@ -701,31 +701,21 @@ impl ComponentKind for Controller {
     }
 
     /// Algebraic loops: signals that depend on each other only through blocks with
-    /// feedthrough (controllers without a state in the path, unfiltered sensors).
+    /// feedthrough (controllers without a state in the path, unfiltered sensors, element
+    /// outputs read by unfiltered sensors, which depend on the element's input signals;
+    /// [`super::feedthrough`]).
     fn finish(_input: &ModelInput, cx: &mut Checker, model: &Model) {
+        let owned = super::feedthrough::feedthrough_edges(cx, model);
         // Producer of each signal with feedthrough: (its inputs, where it is declared).
-        let mut edges: std::collections::HashMap<&str, (Vec<&str>, Option<Range<usize>>)> =
-            Default::default();
-        for c in &model.controllers {
-            if crate::core::Element::feedthrough(&c.element()) {
-                for o in &c.outputs {
-                    edges.insert(
-                        o.as_str(),
-                        (
-                            c.inputs.iter().map(|s| s.as_str()).collect(),
-                            c.span.clone(),
-                        ),
-                    );
-                }
-            }
-        }
-        for s in &model.sensors {
-            if s.time_constant == 0.0
-                && let crate::elements::SensorInput::Signal(i) = &s.input
-            {
-                edges.insert(s.name.as_str(), (vec![i.as_str()], s.span.clone()));
-            }
-        }
+        let edges: std::collections::HashMap<&str, (Vec<&str>, Option<Range<usize>>)> = owned
+            .iter()
+            .map(|(k, (ins, span))| {
+                (
+                    k.as_str(),
+                    (ins.iter().map(|s| s.as_str()).collect(), span.clone()),
+                )
+            })
+            .collect();
         // Depth-first search for a cycle (0 new, 1 on the path, 2 done).
         let mut names: Vec<&str> = edges.keys().copied().collect();
         names.sort_unstable();
@@ -760,7 +750,7 @@ impl ComponentKind for Controller {
                                 cycle.join(" → ")
                             ),
                             edges[child].1.clone(),
-                            Some("break the loop with a block that has a state: a filtered sensor (time_constant > 0), a transfer function without direct feedthrough, a rate limiter, or a PID's integral".into()),
+                            Some("break the loop with a block that has a state: a filtered sensor (time_constant > 0; a sample rate alone does not break it, statics pass the value through), a transfer function without direct feedthrough, a rate limiter, or a PID's integral".into()),
                         );
                         return;
                     }

@@ -166,21 +166,11 @@ impl ComponentKind for JointKind {
     fn finish(input: &super::ModelInput, cx: &mut Checker, model: &Model) {
         use crate::model::AnalysisKind;
         // Feedthrough inputs of each signal's producer.
-        let mut through: std::collections::HashMap<&str, Vec<&str>> = Default::default();
-        for c in &model.controllers {
-            if crate::core::Element::feedthrough(&c.element()) {
-                for o in &c.outputs {
-                    through.insert(o, c.inputs.iter().map(|s| s.as_str()).collect());
-                }
-            }
-        }
-        for s in &model.sensors {
-            if s.time_constant == 0.0
-                && let crate::elements::SensorInput::Signal(i) = &s.input
-            {
-                through.insert(&s.name, vec![i.as_str()]);
-            }
-        }
+        let edges = super::feedthrough::feedthrough_edges(cx, model);
+        let through: std::collections::HashMap<&str, Vec<&str>> = edges
+            .iter()
+            .map(|(k, (ins, _))| (k.as_str(), ins.iter().map(|s| s.as_str()).collect()))
+            .collect();
         let stabilized = model.analyses.iter().any(|a| {
             matches!(&a.kind, AnalysisKind::Dynamic(d) if d.formulation == FormulationType::StabilizedIndex2)
         });

@@ -16,6 +16,7 @@ pub mod beam;
 pub mod body;
 pub mod contact;
 pub mod controller;
+pub mod feedthrough;
 pub mod force;
 pub mod granular;
 pub mod ground;
