@@ -768,3 +768,74 @@ fn granular_runs_report_line_search_and_contact_counts() {
     );
     assert!(s.contains(&line), "'{line}' missing from:\n{s}");
 }
+
+/// The landing-gear drop from the command line (issue #16): `samara run` on
+/// `examples/landing_gear_drop.toml` shortened to its touchdown and spin-up (0.25 s)
+/// writes the strut's gas pressure (an element state), the tire's forces (element
+/// outputs) and the brake controller's signal; the pressure is the library's run of the
+/// same model record for record (1e-12 relative: the same computation), the gear touches
+/// down (tire load above the aircraft's weight share, m g = 19.6 kN, at the impact) and
+/// the strut's gas is compressed above its initial pressure.
+#[test]
+fn landing_gear_drop_runs_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(root().join("examples/landing_gear_drop.toml")).unwrap();
+    let short = text.replace("t_end = 3.4", "t_end = 0.25");
+    assert_ne!(short, text);
+    let file = dir.path().join("landing_gear_drop.toml");
+    std::fs::write(&file, &short).unwrap();
+    let out = dir.path().join("out");
+    let o = samara(&[
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut r = samara::output::ResultsReader::open(out.join("drop_and_retract.nc")).unwrap();
+    let pressure = r
+        .channel("element_state:shock_strut.upper.pressure")
+        .unwrap();
+    let load = r.channel("element_output:tire.normal_force").unwrap();
+    let brake = r.channel("signal:brake_torque").unwrap();
+    assert_eq!(load.units, "N");
+    // The library's run of the same file.
+    let m = samara::model::Model::from_toml_str(&short, &file)
+        .unwrap()
+        .model;
+    let sys = samara::system::System::new(&m);
+    let mut h = samara::analysis::History::default();
+    let s = samara::analysis::run_analysis(
+        &sys,
+        &m.analyses[0],
+        sys.initial_state(),
+        &mut h,
+        &mut |_| {},
+    )
+    .unwrap();
+    assert!(s.failure.is_none(), "{:?}", s.failure);
+    let k = sys
+        .state_names
+        .iter()
+        .position(|n| n == "shock_strut.upper.pressure")
+        .unwrap();
+    assert_eq!(h.frames.len(), pressure.values.len());
+    for (f, p) in h.frames.iter().zip(&pressure.values) {
+        let z = f.state.states[k].z;
+        assert!(
+            (z - p).abs() <= 1e-12 * z.abs(),
+            "t = {}: {z} vs {p}",
+            f.time
+        );
+    }
+    let peak = load.values.iter().fold(0.0f64, |a, &b| a.max(b));
+    let p_max = pressure.values.iter().fold(0.0f64, |a, &b| a.max(b));
+    println!(
+        "peak tire load {peak:.0} N, peak gas pressure {p_max:.4e} Pa (initial {:.4e}), brake signal {} records",
+        pressure.values[0],
+        brake.values.len()
+    );
+    assert!(peak > 2000.0 * 9.81, "{peak}");
+    assert!(p_max > 1.2 * pressure.values[0], "{p_max}");
+    assert_eq!(brake.values.len(), pressure.values.len());
+}
