@@ -13,6 +13,7 @@
 //! observed order as the step is halved.
 
 mod common;
+use common::{first_error, line_of};
 use common::{model, run, with_step};
 
 fn example() -> String {
@@ -126,20 +127,6 @@ fn adiabatic_turbulent_discharge_matches_an_independent_integration() {
     let (tf, pf) = *last.last().unwrap();
     println!("p({tf}) = {pf:.1} Pa");
     assert!(tf > t_empty + 0.1 && (pf - 1e5).abs() < 1e3, "{pf}");
-}
-
-fn first_error(text: &str) -> (usize, String, String) {
-    let Err(e) = samara::model::Model::from_toml_str(text, "bad.toml") else {
-        panic!("accepted:\n{text}")
-    };
-    let d = e.errors().next().expect("an error");
-    let span = d.span.clone().expect("a located error");
-    let (line, _) = e.source.line_col(span.start);
-    (line, d.message.clone(), d.hint.clone().unwrap_or_default())
-}
-
-fn line_of(text: &str, needle: &str) -> usize {
-    text[..text.find(needle).unwrap()].matches('\n').count() + 1
 }
 
 /// Bad gas charges, metering tables, openings and chambers get located errors.

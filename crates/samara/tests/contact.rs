@@ -17,6 +17,7 @@
 //! and the Stribeck region (v_s = 1e-3 m/s), both far below the tolerances stated per test.
 
 mod common;
+use common::{first_error, line_of};
 use common::{model, model_file, run};
 use samara::analysis::History;
 use samara::model::{AnalysisKind, Model};
@@ -325,21 +326,6 @@ fn stick_slip_limit_cycle_matches_the_closed_form() {
         println!("period {t:.5} s, closed form {period:.5} s");
         assert!((t - period).abs() < 0.02 * period, "{t} {period}");
     }
-}
-
-/// The 1-based line of the first error of a rejected model, its message and hint.
-fn first_error(text: &str) -> (usize, String, String) {
-    let Err(e) = Model::from_toml_str(text, "bad.toml") else {
-        panic!("accepted:\n{text}")
-    };
-    let d = e.errors().next().expect("an error");
-    let span = d.span.clone().expect("a located error");
-    let (line, _) = e.source.line_col(span.start);
-    (line, d.message.clone(), d.hint.clone().unwrap_or_default())
-}
-
-fn line_of(text: &str, needle: &str) -> usize {
-    text[..text.find(needle).unwrap()].matches('\n').count() + 1
 }
 
 /// Bad contact input gets a located error with a hint, at the key that is wrong (or at

@@ -15,6 +15,7 @@
 //! bounds there, each stated at its assertion.
 
 mod common;
+use common::{first_error, line_of};
 use common::{model, model_file, run, with_step};
 use samara::model::Model;
 use samara::system::System;
@@ -431,20 +432,6 @@ time_constant = 0.02
     println!("filter residual {lag_check:.3e} rad/s");
     // Speeds up to ~60 rad/s over 0.5 s: the residual of the O(h²) scheme is below 0.1.
     assert!(lag_check < 0.1, "{lag_check}");
-}
-
-fn first_error(text: &str) -> (usize, String, String) {
-    let Err(e) = Model::from_toml_str(text, "bad.toml") else {
-        panic!("accepted:\n{text}")
-    };
-    let d = e.errors().next().expect("an error");
-    let span = d.span.clone().expect("a located error");
-    let (line, _) = e.source.line_col(span.start);
-    (line, d.message.clone(), d.hint.clone().unwrap_or_default())
-}
-
-fn line_of(text: &str, needle: &str) -> usize {
-    text[..text.find(needle).unwrap()].matches('\n').count() + 1
 }
 
 /// Bad control input gets a located error: an algebraic loop, unknown joints, coordinates

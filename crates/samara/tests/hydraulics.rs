@@ -16,6 +16,7 @@
 //! finest step.
 
 mod common;
+use common::{first_error, line_of};
 use common::{model, model_file, run};
 use samara::analysis::History;
 use samara::model::{AnalysisKind, Model};
@@ -233,20 +234,6 @@ fn check_valve_blocks_reverse_flow_and_shuts_at_its_cracking_pressure() {
             assert!(p >= crack * (1.0 - 1e-6), "{p}");
         }
     }
-}
-
-fn first_error(text: &str) -> (usize, String, String) {
-    let Err(e) = Model::from_toml_str(text, "bad.toml") else {
-        panic!("accepted:\n{text}")
-    };
-    let d = e.errors().next().expect("an error");
-    let span = d.span.clone().expect("a located error");
-    let (line, _) = e.source.line_col(span.start);
-    (line, d.message.clone(), d.hint.clone().unwrap_or_default())
-}
-
-fn line_of(text: &str, needle: &str) -> usize {
-    text[..text.find(needle).unwrap()].matches('\n').count() + 1
 }
 
 /// Bad hydraulic input gets a located error with a hint at the offending key or name.

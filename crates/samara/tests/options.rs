@@ -4,6 +4,7 @@
 //! distributed loads (`[[beams.loads]]`) against the closed form of a loaded cantilever.
 
 mod common;
+use common::{first_error, line_of};
 
 use common::model;
 use nalgebra::Vector3;
@@ -260,22 +261,6 @@ fn modified_newton_converges_to_the_full_newton_answer() {
     assert!(errors[0] < 1e-5, "{errors:?}");
     assert!(errors[1] < 1e-8, "{errors:?}");
     assert!(errors[2] < 1e-10 && errors[3] < 1e-10, "{errors:?}");
-}
-
-/// The location (1-based line) of the first error of a model that must be rejected, and
-/// its message and hint.
-fn first_error(text: &str) -> (usize, String, String) {
-    let Err(e) = Model::from_toml_str(text, "bad.toml") else {
-        panic!("accepted:\n{text}")
-    };
-    let d = e.errors().next().expect("an error");
-    let span = d.span.clone().expect("a located error");
-    let (line, _) = e.source.line_col(span.start);
-    (line, d.message.clone(), d.hint.clone().unwrap_or_default())
-}
-
-fn line_of(text: &str, needle: &str) -> usize {
-    text[..text.find(needle).unwrap()].matches('\n').count() + 1
 }
 
 /// `scaling` scales rows and multipliers by βh² — there is no step in a static analysis,

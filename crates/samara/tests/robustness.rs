@@ -2,6 +2,7 @@
 //! loops, and result names from models built in code.
 
 mod common;
+use common::line_of;
 use common::*;
 use samara::analysis::{History, run_analysis};
 use samara::model::{AnalysisKind, Model};
@@ -140,10 +141,6 @@ fn system_error(text: &str) -> (usize, String, String) {
     let span = d.span.clone().expect("a located error");
     let (line, _) = e.source.line_col(span.start);
     (line, d.message.clone(), d.hint.clone().unwrap_or_default())
-}
-
-fn line_of(text: &str, needle: &str) -> usize {
-    text[..text.find(needle).unwrap()].matches('\n').count() + 1
 }
 
 const PENDULUM: &str = r#"[model]

@@ -29,6 +29,7 @@
 //! therefore leaves a margin of ≥ 10 over what is expected.
 
 mod common;
+use common::{first_error, line_of};
 use common::{model, run};
 use samara::analysis::History;
 
@@ -362,21 +363,6 @@ fn between_spheres_the_resistance_uses_the_effective_radius() {
             "{rate} vs {rate_ref}"
         );
     }
-}
-
-/// The 1-based line of the first error of a rejected model, its message and hint.
-fn first_error(text: &str) -> (usize, String, String) {
-    let Err(e) = samara::model::Model::from_toml_str(text, "bad.toml") else {
-        panic!("accepted:\n{text}")
-    };
-    let d = e.errors().next().expect("an error");
-    let span = d.span.clone().expect("a located error");
-    let (line, _) = e.source.line_col(span.start);
-    (line, d.message.clone(), d.hint.clone().unwrap_or_default())
-}
-
-fn line_of(text: &str, needle: &str) -> usize {
-    text[..text.find(needle).unwrap()].matches('\n').count() + 1
 }
 
 /// Bad input: each new key's errors, located at the key, with a hint.

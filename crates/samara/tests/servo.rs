@@ -16,6 +16,7 @@
 
 mod common;
 use common::*;
+use common::{first_error, line_of};
 use nalgebra::{Matrix4, Vector4};
 use samara::model::Model;
 use samara::system::System;
@@ -257,20 +258,6 @@ fn servo_newton_matrix_matches_differences_of_the_residual() {
         worst < 1e-7,
         "Newton matrix mismatch {worst:e} (scale {scale:e})"
     );
-}
-
-fn first_error(text: &str) -> (usize, String, String) {
-    let Err(e) = Model::from_toml_str(text, "bad.toml") else {
-        panic!("accepted:\n{text}")
-    };
-    let d = e.errors().next().expect("an error");
-    let span = d.span.clone().expect("a located error");
-    let (line, _) = e.source.line_col(span.start);
-    (line, d.message.clone(), d.hint.clone().unwrap_or_default())
-}
-
-fn line_of(text: &str, needle: &str) -> usize {
-    text[..text.find(needle).unwrap()].matches('\n').count() + 1
 }
 
 /// Bad servo input gets a located error: an unknown signal (with the closest name), a

@@ -223,3 +223,19 @@ pub fn energy_stepper<'a>(
     .unwrap();
     (it, d.step)
 }
+
+/// The 1-based line of the first error of a rejected model, its message and hint.
+pub fn first_error(text: &str) -> (usize, String, String) {
+    let Err(e) = Model::from_toml_str(text, "bad.toml") else {
+        panic!("accepted:\n{text}")
+    };
+    let d = e.errors().next().expect("an error");
+    let span = d.span.clone().expect("a located error");
+    let (line, _) = e.source.line_col(span.start);
+    (line, d.message.clone(), d.hint.clone().unwrap_or_default())
+}
+
+/// The 1-based line of the first occurrence of `needle` in `text`.
+pub fn line_of(text: &str, needle: &str) -> usize {
+    text[..text.find(needle).unwrap()].matches('\n').count() + 1
+}
