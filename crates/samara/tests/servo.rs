@@ -16,7 +16,6 @@
 
 mod common;
 use common::*;
-use common::{first_error, line_of};
 use nalgebra::{Matrix4, Vector4};
 use samara::model::Model;
 use samara::system::System;
@@ -381,11 +380,25 @@ fn servo_statics_hold_the_signal_at_every_load_step() {
     }
 }
 
+/// Why `m`'s first analysis stops at its start (it must stop).
+fn refusal(m: &Model) -> String {
+    let sys = System::new(m);
+    let mut h = samara::analysis::History::default();
+    let s = samara::analysis::run_analysis(
+        &sys,
+        &m.analyses[0],
+        sys.initial_state(),
+        &mut h,
+        &mut |_| {},
+    )
+    .expect("recording to memory cannot fail");
+    s.failure.expect("refused").reason
+}
+
 /// The energy-consistent integrators have no discrete form of a servo row: the run stops
 /// at its start with the reason (the four-bar's crank driven through a signal).
 #[test]
 fn energy_integrators_refuse_a_servo() {
-    use samara::analysis::{History, run_analysis};
     let text = example_model_text("examples/four_bar.toml").replace(
         r#"drive = { type = "polynomial", coefficients = [0.0, 6.283185307179586] }"#,
         r#"drive_signal = "crank_angle""#,
@@ -402,17 +415,7 @@ t_end = 0.1
 step = 1e-3
 "#;
     let m = model(&text);
-    let sys = System::new(&m);
-    let mut h = History::default();
-    let s = run_analysis(
-        &sys,
-        &m.analyses[0],
-        sys.initial_state(),
-        &mut h,
-        &mut |_| {},
-    )
-    .expect("recording to memory cannot fail");
-    let reason = s.failure.expect("refused").reason;
+    let reason = refusal(&m);
     assert!(
         reason.contains("crank_pivot") && reason.contains("drive_signal"),
         "{reason}"
@@ -423,23 +426,12 @@ step = 1e-3
 /// (the model file check does not see it) gets the analysis refused at its start.
 #[test]
 fn stabilized_formulation_refuses_a_servo_at_the_start() {
-    use samara::analysis::{History, run_analysis};
     use samara::model::{AnalysisKind, input::FormulationType};
     let mut m = model_file("examples/control/servo_follower.toml");
     if let AnalysisKind::Dynamic(d) = &mut m.analyses[0].kind {
         d.formulation = FormulationType::StabilizedIndex2;
     }
-    let sys = System::new(&m);
-    let mut h = History::default();
-    let s = run_analysis(
-        &sys,
-        &m.analyses[0],
-        sys.initial_state(),
-        &mut h,
-        &mut |_| {},
-    )
-    .expect("recording to memory cannot fail");
-    let reason = s.failure.expect("refused").reason;
+    let reason = refusal(&m);
     assert!(
         reason.contains("slide") && reason.contains("stabilized_index2"),
         "{reason}"
