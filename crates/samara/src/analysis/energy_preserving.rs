@@ -9,8 +9,8 @@
 //! Δx/h = (v₀ + v₁)/2 + c P(Δv − s b),     ψ/h = (Ω₀ + Ω₁)/2 + c (ΔΩ − s ΔΩ_prev)
 //! ```
 //!
-//! with `Δv = v₁ − v₀`, `ΔΩ_prev` the previous step's, `s = min(h/h_prev, 1)` (0 on the
-//! first step), P the M-orthogonal projector that makes the translations' dissipation
+//! with `Δv = v₁ − v₀`, `ΔΩ_prev` the previous step's, `s = min(h/h_prev, 1)`, P the
+//! M-orthogonal projector that makes the translations' dissipation
 //! moment-free ([`super::moment_neutral`]: `Σ m_i (Pδ)_i × Δx_i = 0`) and `b` the
 //! previous step's `PΔv`. Equilibrium is imposed in the discrete form of every element
 //! ([`crate::core::DiscreteStep`]; a discrete gradient of its energy) plus the constraint
@@ -34,7 +34,12 @@
 //! ```
 //!
 //! the discrete energy Ẽ, which differs from E by O(h²), never increases without applied
-//! loads (D ≥ 0 the dampers' dissipation). All dissipative terms are second differences
+//! loads (D ≥ 0 the dampers' dissipation). The scheme is a two-step one, and like BDF2
+//! it is started by a one-step method: its first step is the preserving one (c = 0: E₁ =
+//! E₀ − D exactly), whose increments are the memory of the second, so Ẽ is defined from
+//! the first step on, `Ẽ₁ = E₁ + (c/2)(‖PΔv₁‖²_M + …)` (above E₀ by O(h²) on a resolved
+//! motion; on any, with quadratic energies measured from their minimum, by at most
+//! `2c(E₀ + E₁) = 4cE₀ ≤ E₀/4`, since ‖Δv‖² ≤ 2‖v₀‖² + 2‖v₁‖²), and never increases after. All dissipative terms are second differences
 //! (O(h²) on a smooth motion; P depends on the directions of the increments only, so it
 //! varies smoothly), so the scheme is second order; on a linear oscillator (where P = I)
 //! its high-frequency spectral radius is the ρ∞ with `c = ρ∞(1 − ρ∞)/(2(1 + ρ∞)²)`,
@@ -96,6 +101,9 @@ pub struct EnergyStepper<'a> {
     sys: &'a System,
     /// Dissipation coefficient c (0: preserving).
     xi: f64,
+    /// The coefficient of the step being taken: 0 on the decaying scheme's first step
+    /// (the starting step, which seeds the memory), `xi` after it.
+    xi_step: f64,
     tolerance: f64,
     relative_tolerance: f64,
     max_iterations: usize,
@@ -152,7 +160,7 @@ pub struct EnergyStepper<'a> {
     /// Weights of the joint coordinates' dissipation: |∂f/∂ν| of their springs at the
     /// start (constant, so that the energy statement telescopes).
     coord_stiffness: Vec<f64>,
-    /// Step of the last step taken (NaN before the first: s = 0).
+    /// Step of the last step taken (NaN before the first, which is the preserving starting step).
     h_last: f64,
     /// Newton matrices formed so far.
     pub factorizations: usize,
@@ -252,6 +260,7 @@ impl<'a> EnergyStepper<'a> {
         Ok(Self {
             sys,
             xi,
+            xi_step: xi,
             groups,
             pattern_lu: PatternLu::default(),
             joint_jacobians: sys
@@ -363,7 +372,7 @@ impl<'a> EnergyStepper<'a> {
         // Translations: Δx/h = v̄ + c P(Δv − s b) with P the moment-free projector of
         // the increments (`moment_neutral`) and b the last step's PΔv. With y = Δx/h − v₀
         // + c P(s b) and P² = P: Δv = (½ + cP)⁻¹ y = 2(I − P)y + P y/(½ + c).
-        let xi = self.xi;
+        let xi = self.xi_step;
         let (c0, c1) = (0.5 - xi, 0.5 + xi);
         let dx_of = |i: usize| Vector3::new(u[6 * i], u[6 * i + 1], u[6 * i + 2]);
         let sb_of = |i: usize| {
@@ -372,7 +381,9 @@ impl<'a> EnergyStepper<'a> {
         };
         let nodes0 = &self.state.nodes;
         let w_of = |i: usize| dx_of(i) / h - nodes0[i].v;
-        let (zw, zb) = if xi > 0.0 {
+        // The projector is formed whenever the scheme decays, also on its (preserving)
+        // first step, whose PΔv is the memory of the second.
+        let (zw, zb) = if self.xi > 0.0 {
             let pinv = moment_neutral::increment_inertia_pinv(&self.node_mass, dx_of);
             (
                 moment_neutral::removed_rotation(&self.node_mass, &pinv, dx_of, w_of),
@@ -436,7 +447,7 @@ impl<'a> EnergyStepper<'a> {
         let ctx_mid = sys.context(t0 + 0.5 * h, 1.0);
         let ctx1 = sys.context(t0 + h, 1.0);
         let h2 = h * h;
-        let xi = self.xi;
+        let xi = self.xi_step;
         {
             let step = DiscreteStep {
                 h,
@@ -585,12 +596,24 @@ impl<'a> EnergyStepper<'a> {
 
     fn solve_step(&mut self, h: f64, full: bool) -> Result<(), StepFailure> {
         if self.xi > 0.0 {
+            // The decaying scheme is a two-step scheme: its first step is the preserving
+            // one (c = 0, E exactly conserved), which seeds the memory, so the
+            // dissipative terms are second differences from the second step on. (A
+            // first step with c > 0 and no memory makes c PΔv an O(h) term and the
+            // velocities first order over the start-up.)
+            let starting = !self.h_last.is_finite();
+            let xi_step = if starting { 0.0 } else { self.xi };
+            if xi_step != self.xi_step {
+                // The Newton matrix was formed for the other coefficient.
+                self.pattern_lu.forget();
+                self.xi_step = xi_step;
+            }
             // s = min(h/h_prev, 1): the second differences are O(h²) on a smooth motion
             // for any s ≈ h/h_prev, and s ≤ 1 keeps the energy statement.
-            let s = if self.h_last.is_finite() {
-                (h / self.h_last).min(1.0)
-            } else {
+            let s = if starting {
                 0.0
+            } else {
+                (h / self.h_last).min(1.0)
             };
             for (a, b) in self.dv_scaled.iter_mut().zip(&self.dv_last) {
                 *a = s * b;
