@@ -15,10 +15,12 @@
 //! previous step's `PΔv`. Equilibrium is imposed in the discrete form of every element
 //! ([`crate::core::DiscreteStep`]; a discrete gradient of its energy) plus the constraint
 //! forces `B̄ᵀλ`, with the constraints enforced at the end of the step, `Φ(q₁, t₁) = 0`.
-//! `B̄` is the mid-point Jacobian corrected row by row after Gonzalez (1996),
-//! `B̄Δ = Φ(q₁, t₁) − Φ(q₀, t₁)`, so the constraint forces do no work over a step
-//! (Gonzalez 1999, "Mechanical systems subject to holonomic constraints", Physica D 132;
-//! Betsch & Leyendecker 2006 reach the same statement by a discrete null space).
+//! `B̄` is the rows' discrete gradient (`Constraint::discrete_jacobian`: their Jacobian at
+//! the frames' mean over the step), `B̄Δ = Φ(q₁, t₁) − Φ(q₀, t₁)` exactly, so the
+//! constraint forces do no work over a step (Gonzalez 1999, "Mechanical systems subject
+//! to holonomic constraints", Physica D 132; Betsch & Leyendecker 2006 reach the same
+//! statement by a discrete null space), and `B̄` annihilates the superposed rigid
+//! motions, so they have no resultant and no moment.
 //!
 //! c = 0 is the preserving scheme. For c > 0 (the decaying scheme) every element with a
 //! potential adds the dissipative stress `c C (e − s e_prev)` on its strain increments
@@ -48,8 +50,7 @@
 //! the kinematics (`Σ m Δv = h Σ f̄`); the translations' kinematic term would leave the
 //! angular momentum `Σ Δx_i × m v̄_i = c Σ m (Pδ)_i × Δx_i`, which P zeroes; and the
 //! rotations' Simo–Wong balance holds for any ψ. So linear and angular momentum are exact
-//! (to the Newton tolerance) where no external load acts (joints aside: their
-//! Gonzalez-corrected rows keep the momenta to O(h²) in both schemes). Bauchau, Bottasso & Trainelli
+//! (to the Newton tolerance) where no external load acts, through joints too. Bauchau, Bottasso & Trainelli
 //! (2003, time-discontinuous two-stage steps) and Armero & Romero (2001, EDMC methods)
 //! reach the same statements by other constructions; this one (second differences with a
 //! two-step memory, in the spirit of the G-stability of BDF2, Dahlquist 1978, plus the
@@ -74,7 +75,7 @@ use crate::math::cayley::cayley;
 use crate::math::{Rotation, skew};
 use crate::model::{DynamicSettings, IntegratorType};
 use crate::system::{State, System};
-use nalgebra::{DMatrix, RowVector3, Vector3};
+use nalgebra::{DMatrix, Matrix3, Vector3};
 use std::time::Instant;
 
 /// The decaying scheme's dissipation coefficient c for a high-frequency spectral radius
@@ -118,14 +119,12 @@ pub struct EnergyStepper<'a> {
     end_coords: Vec<Coordinate>,
     mid_coords: Vec<Coordinate>,
     local: Vec<f64>,
-    phi0: Vec<f64>,
     phi1: Vec<f64>,
     delta: Vec<f64>,
-    /// Each joint's mid-point Jacobian (rows × local unknowns); a joint's row values and
-    /// one row.
+    /// Each joint's discrete Jacobian (rows × local unknowns) and its nodes' rotation
+    /// column maps `R₀(I + ψ̃/2)`.
     joint_jacobians: Vec<DMatrix<f64>>,
-    joint_phi: Vec<f64>,
-    joint_row: Vec<f64>,
+    column_maps: Vec<Matrix3<f64>>,
     /// A joint's coordinates at rest, and their spring and total forces.
     still_coords: Vec<Coordinate>,
     coord_spring: Vec<f64>,
@@ -268,8 +267,14 @@ impl<'a> EnergyStepper<'a> {
                 .iter()
                 .map(|c| DMatrix::zeros(c.n_equations(), 6 * c.nodes().len() + c.n_coordinates()))
                 .collect(),
-            joint_phi: vec![0.0; max_rows],
-            joint_row: vec![0.0; max_local],
+            column_maps: vec![
+                Matrix3::identity();
+                sys.constraints
+                    .iter()
+                    .map(|c| c.nodes().len())
+                    .max()
+                    .unwrap_or(0)
+            ],
             still_coords: vec![Coordinate::default(); max_coords],
             coord_spring: vec![0.0; max_coords],
             coord_force: vec![0.0; max_coords],
@@ -300,7 +305,6 @@ impl<'a> EnergyStepper<'a> {
             end_coords: state.coords.clone(),
             mid_coords: state.coords.clone(),
             local: vec![0.0; max_local],
-            phi0: vec![0.0; max_rows],
             phi1: vec![0.0; max_rows],
             delta: vec![0.0; max_local],
             state,
@@ -493,62 +497,37 @@ impl<'a> EnergyStepper<'a> {
             if m > 0 {
                 c.evaluate(
                     &ctx1,
-                    &self.state.nodes,
-                    &coords0[co..co + nc],
-                    &mut self.phi0[..m],
-                    None,
-                );
-                c.evaluate(
-                    &ctx1,
                     &self.end,
                     &self.end_coords[co..co + nc],
                     &mut self.phi1[..m],
                     None,
                 );
-                // Mid-point Jacobian with the rotation columns taken conjugate to ψ the
-                // way the rigid bodies' rows are (their moment rows are
-                // `(I − ψ̃/2) R₀ᵀ m` for a spatial moment m): B_θ(R_mid) Q with
-                // Q = cay(ψ/2)ᵀ (I + ψ̃/2). (The exact ∂/∂ψ, B_θ T_c(ψ/2), differs from it
-                // by O(ψ) across ψ and makes a fast spin drift at O(h).) Qψ = ψ, so the
-                // defect ΔΦ − B̄Δ is O(|Δ|³) and the Gonzalez correction O(|Δ|²).
-                let bm = &mut self.joint_jacobians[k];
-                bm.fill(0.0);
-                c.evaluate(
-                    &ctx1,
-                    &self.mid,
-                    &self.mid_coords[co..co + nc],
-                    &mut self.joint_phi[..m],
-                    Some(bm),
-                );
-                for a in 0..nodes.len() {
+                // The rows' discrete gradient (`Constraint::discrete_jacobian`): B̄Δ =
+                // Φ(q₁) − Φ(q₀) exactly, and no resultant or moment of B̄ᵀλ beyond the
+                // ground's, with the rotation columns conjugate to ψ the way the rigid
+                // bodies' are (`R₀(I + ψ̃/2)` on the spatial columns).
+                for (a, &ni) in nodes.iter().enumerate() {
                     let psi = Vector3::new(delta[6 * a + 3], delta[6 * a + 4], delta[6 * a + 5]);
-                    let half = cayley(&(psi * 0.5)).to_rotation_matrix().into_inner();
-                    let q = half.transpose() * (nalgebra::Matrix3::identity() + skew(&psi) * 0.5);
-                    for j in 0..m {
-                        let b = RowVector3::new(
-                            bm[(j, 6 * a + 3)],
-                            bm[(j, 6 * a + 4)],
-                            bm[(j, 6 * a + 5)],
-                        ) * q;
-                        for (i, x) in b.iter().enumerate() {
-                            bm[(j, 6 * a + 3 + i)] = *x;
-                        }
-                    }
+                    self.column_maps[a] =
+                        self.state.nodes[ni].r() * (Matrix3::identity() + skew(&psi) * 0.5);
                 }
-                let row = &mut self.joint_row[..cols];
+                let bm = &mut self.joint_jacobians[k];
+                c.discrete_jacobian(
+                    &self.state.nodes,
+                    &self.end,
+                    [&coords0[co..co + nc], &self.end_coords[co..co + nc]],
+                    &self.column_maps[..nodes.len()],
+                    bm,
+                );
                 for j in 0..m {
-                    for (x, y) in row.iter_mut().zip(bm.row(j).iter()) {
-                        *x = *y;
-                    }
-                    gonzalez_correction(row, delta, self.phi1[j] - self.phi0[j]);
                     let lam = u[self.n_node + self.n_coord + mo + j];
                     for (a, &ni) in nodes.iter().enumerate() {
                         for q in 0..6 {
-                            r[6 * ni + q] += self.mbar * row[6 * a + q] * lam;
+                            r[6 * ni + q] += self.mbar * bm[(j, 6 * a + q)] * lam;
                         }
                     }
                     for q in 0..nc {
-                        r[self.n_node + co + q] += self.mbar * row[nn + q] * lam;
+                        r[self.n_node + co + q] += self.mbar * bm[(j, nn + q)] * lam;
                     }
                     r[self.n_node + self.n_coord + mo + j] = self.mbar * self.phi1[j];
                 }

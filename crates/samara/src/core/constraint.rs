@@ -85,6 +85,22 @@ pub trait Constraint: Send + Sync {
         phi: &mut [f64],
         b: Option<&mut DMatrix<f64>>,
     );
+    /// The enforced rows' discrete gradient over a step (the energy-consistent
+    /// integrators): `B̄` (`n_equations × (6·nodes + n_coordinates)`, overwritten) with
+    /// `B̄ Δ = Φ(q₁, ν₁, t) − Φ(q₀, ν₀, t)` exactly for the step's increments
+    /// `Δ = (Δx, ψ, Δν)` (`R₁ = R₀ cay(ψ)`), and `B̄ G = 0` for every superposed rigid
+    /// motion G that leaves the rows invariant, so that the constraint forces `B̄ᵀλ`
+    /// do no work and have no resultant or moment beyond the ground's reaction.
+    /// `column_maps[k]` maps node k's spatial rotation column to its ψ column,
+    /// `R₀(I + ψ̃/2)`.
+    fn discrete_jacobian(
+        &self,
+        start: &[NodeState],
+        end: &[NodeState],
+        coords: [&[Coordinate]; 2],
+        column_maps: &[Matrix3<f64>],
+        b: &mut DMatrix<f64>,
+    );
     /// Adds `∂(Bᵀμ)/∂(q, ν)` at fixed `μ` into `k` (square, `6·nodes + n_coordinates`).
     fn reaction_tangent(
         &self,

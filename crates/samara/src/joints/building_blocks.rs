@@ -56,6 +56,23 @@ impl FramePair {
         )
     }
 
+    /// The frames' mean over a step, `(f0 + f1)/2` entry by entry (its axes are not
+    /// orthonormal): the rows, bilinear in positions, arms and axes, have there the
+    /// Jacobian of the discrete product rule.
+    pub fn mean(f0: &FramePair, f1: &FramePair) -> FramePair {
+        let avg = |a: &Vector3<f64>, b: &Vector3<f64>| (a + b) * 0.5;
+        FramePair {
+            x: [avg(&f0.x[0], &f1.x[0]), avg(&f0.x[1], &f1.x[1])],
+            arm: [avg(&f0.arm[0], &f1.arm[0]), avg(&f0.arm[1], &f1.arm[1])],
+            axes: [
+                (f0.axes[0] + f1.axes[0]) * 0.5,
+                (f0.axes[1] + f1.axes[1]) * 0.5,
+            ],
+            v: [Vector3::zeros(); 2],
+            omega: [Vector3::zeros(); 2],
+        }
+    }
+
     /// Relative displacement `d = uᴮ − uᴬ`.
     pub fn d(&self) -> Vector3<f64> {
         self.origin(1) - self.origin(0)
@@ -217,6 +234,34 @@ impl Trig {
     }
 }
 
+impl Trig {
+    /// `[(a(ν₀) + a(ν₁))/2, (a(ν₁) − a(ν₀))/(ν₁ − ν₀)]`: the mean and the difference
+    /// quotient of the discrete product rule `Δ(a R) = Δa R̄ + ā ΔR` (the quotient's limit
+    /// a'(ν̄) at ν₀ = ν₁, taken without cancellation as `−sin ν̄ · sinc(Δν/2)` and
+    /// `cos ν̄ · sinc(Δν/2)`).
+    #[inline]
+    pub fn mean_and_secant(self, nu0: f64, nu1: f64) -> [f64; 2] {
+        let (m, h) = (0.5 * (nu0 + nu1), 0.5 * (nu1 - nu0));
+        let sinc = if h.abs() < 1e-4 {
+            1.0 - h * h / 6.0
+        } else {
+            h.sin() / h
+        };
+        match self {
+            Trig::Zero => [0.0; 2],
+            Trig::One(s) => [s, 0.0],
+            Trig::Cos(s) => {
+                let (sn, cs) = m.sin_cos();
+                [s * cs * h.cos(), -s * sn * sinc]
+            }
+            Trig::Sin(s) => {
+                let (sn, cs) = m.sin_cos();
+                [s * sn * h.cos(), s * cs * sinc]
+            }
+        }
+    }
+}
+
 /// A rotation row (generalized eq. 12b):
 /// `Φ = a₁(ν) R_{p₁q₁} + a₂(ν) R_{p₂q₂} + c(ν)`, with `R_pq = e_pᴬ · e_qᴮ`.
 ///
@@ -303,6 +348,36 @@ impl AngleRow {
             b += direction_cosine::jacobian(f, p, q) * a.eval(nu)[d];
         }
         b
+    }
+
+    /// The discrete gradient over a step from frames `f0` to `f1` (`fm` their mean) and
+    /// ν₀ to ν₁: the q-row `Σ ā_t b_t(fm)` and the ν-entry `Σ (Δa_t/Δν) R̄_t + Δc/Δν`,
+    /// with R̄_t the mean of the two ends' `R_pq`. `R_pq` is bilinear in the frames' axes,
+    /// which move by `ψ × ē` exactly over a Cayley step, so `b(fm)Δ = ΔR_pq` and the
+    /// row times the increments is ΔΦ exactly.
+    pub fn discrete_jacobian(
+        &self,
+        f0: &FramePair,
+        f1: &FramePair,
+        fm: &FramePair,
+        nu0: f64,
+        nu1: f64,
+    ) -> (Row12, f64) {
+        if let Some((p, q)) = self.plain() {
+            return (direction_cosine::jacobian(fm, p, q), 0.0);
+        }
+        let mut b = Row12::zeros();
+        let mut dnu = self.constant.mean_and_secant(nu0, nu1)[1];
+        for &(a, p, q) in &self.terms {
+            if a == Trig::Zero {
+                continue;
+            }
+            let [mean, secant] = a.mean_and_secant(nu0, nu1);
+            b += direction_cosine::jacobian(fm, p, q) * mean;
+            let r = 0.5 * (direction_cosine::value(f0, p, q) + direction_cosine::value(f1, p, q));
+            dnu += secant * r;
+        }
+        (b, dnu)
     }
 
     /// `μ Σ a_t(ν) ∂(b_tᵀ)/∂q` (spatial).

@@ -505,6 +505,48 @@ impl Constraint for Joint {
         self.fill(ctx, nodes, coords, &self.active, phi, b);
     }
 
+    fn discrete_jacobian(
+        &self,
+        start: &[NodeState],
+        end: &[NodeState],
+        coords: [&[Coordinate]; 2],
+        column_maps: &[Matrix3<f64>],
+        b: &mut DMatrix<f64>,
+    ) {
+        let (f0, f1) = (self.frames(start), self.frames(end));
+        let fm = FramePair::mean(&f0, &f1);
+        let nq = 6 * self.nodes.len();
+        let m = b.nrows();
+        let bs = b.as_mut_slice();
+        bs.fill(0.0);
+        let mut rots = [Matrix3::identity(); 2];
+        for (x, s) in self.sides.iter().enumerate() {
+            if s.node.is_some() {
+                rots[x] = column_maps[s.local];
+            }
+        }
+        for (i, &r) in self.active.iter().enumerate() {
+            let (b12, dnu) = match &self.rows[r] {
+                Row::Displacement { axis, coord } => (
+                    displacement::jacobian(&fm, *axis),
+                    coord.map(|(c, s)| (c, -s)),
+                ),
+                Row::Angle { row, coord } => {
+                    let (n0, n1) = coord.map_or((0.0, 0.0), |c| (coords[0][c].q, coords[1][c].q));
+                    let (q, d) = row.discrete_jacobian(&f0, &f1, &fm, n0, n1);
+                    (q, coord.map(|c| (c, d)))
+                }
+                Row::Drive { coord, .. } | Row::Servo { coord, .. } => {
+                    (Row12::zeros(), Some((*coord, 1.0)))
+                }
+            };
+            self.to_local(&b12, &rots, |c, x| bs[c * m + i] = x);
+            if let Some((c, d)) = dnu {
+                bs[(nq + c) * m + i] = d;
+            }
+        }
+    }
+
     fn reaction_tangent(
         &self,
         _ctx: &EvalContext,

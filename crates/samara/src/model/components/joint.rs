@@ -144,8 +144,8 @@ impl ComponentKind for JointKind {
     type Input = JointInput;
     type Def = JointDef;
 
-    /// Constraint rows at the end of the step, forces from the Gonzalez-corrected mid-point
-    /// Jacobian (docs/integrators.md); input ports and servos (`drive_signal`) are refused
+    /// Constraint rows at the end of the step, forces from the rows' discrete gradient
+    /// (`Constraint::discrete_jacobian`, docs/integrators.md); input ports and servos (`drive_signal`) are refused
     /// when the analysis starts.
     fn discrete_form(_input: &JointInput) -> Result<(), String> {
         Ok(())
