@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{model, model_file, run};
+use common::{model, run};
 use nalgebra::Vector3;
 
 /// Compared span (≈ 2 periods of the first mode).
@@ -21,12 +21,37 @@ const T_COMPARE: f64 = 0.5;
 /// differs from order 4 by < 0.02 over 2 s) and in time (ρ∞ = 1 vs 0.9: < 0.01), so the
 /// drift is the reference's own discretization (BeamDyn's order-4 element, its quadrature
 /// and unknown ρ∞), not resolvable from the data given. See the report.
+///
+/// Issue #17, verification 4: the energy-preserving and energy-decaying (ρ∞ = 0.9) schemes
+/// reproduce it within the same tolerance (their lumped inertia and Cayley update are
+/// other discretizations of the same beam; measured in the output).
 #[test]
 fn composite_dynamic() {
+    for integrator in INTEGRATORS {
+        composite_dynamic_with(integrator);
+    }
+}
+
+/// The analysis lines of generalized-α (the examples' own, ρ∞ = 0.9) and of the two
+/// energy-consistent schemes.
+const INTEGRATORS: [&str; 3] = [
+    "rho_inf = 0.9",
+    "integrator = \"energy_preserving\"",
+    "integrator = \"energy_decaying\"\nrho_inf = 0.9",
+];
+
+/// The example with its `rho_inf = 0.9` line replaced by `integrator`'s lines.
+fn example_with_integrator(rel: &str, integrator: &str) -> samara::model::Model {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples/verification/composite_dynamic.toml");
+        .join("../..")
+        .join(rel);
     let text = std::fs::read_to_string(path).unwrap();
-    let m = model(&text);
+    assert!(text.contains("rho_inf = 0.9\n"));
+    model(&text.replace("rho_inf = 0.9\n", &format!("{integrator}\n")))
+}
+
+fn composite_dynamic_with(integrator: &str) {
+    let m = example_with_integrator("examples/verification/composite_dynamic.toml", integrator);
     let (_, h) = run(&m);
     let tip = m.node_index("tip").unwrap();
     let x0 = m.nodes[tip].position;
@@ -59,8 +84,11 @@ fn composite_dynamic() {
         worst = worst.max(err);
         n += 1;
     }
-    println!("{n} samples, worst tip-displacement difference {worst:.4e} (peak response 2.35)");
-    assert!(worst < 0.04 * 2.35);
+    println!(
+        "{}: {n} samples, worst tip-displacement difference {worst:.4e} (peak response 2.35)",
+        integrator.replace('\n', " ")
+    );
+    assert!(worst < 0.04 * 2.35, "{integrator}: {worst:e}");
 }
 
 /// Steel cantilever (L = 1 m, 0.01 m square), released from a small static tip deflection.
@@ -215,12 +243,32 @@ fn run_chain(
 /// member, step 0.25 — our run at h = 0.25 moves towards it) read off a figure, and its phase
 /// error grows with time. Measured: over the first 15 s max |Δu₃| = 7 % (elbow) and 4 % (tip)
 /// of the peak displacement; over 30 s the RMS difference is 6 % and 3 %. Tolerances: 10 %
-/// of the peak (max, 15 s) and 8 % (RMS, 30 s).
+/// of the peak (max, 15 s) and 8 % (RMS, 30 s). Issue #17, verification 4: the
+/// energy-preserving and energy-decaying (ρ∞ = 0.9) schemes, the same tolerances.
 #[test]
 fn right_angle_cantilever_against_simo_vu_quoc() {
-    let m = model_file("examples/verification/right_angle_cantilever.toml");
+    for integrator in INTEGRATORS {
+        right_angle_cantilever_with(integrator);
+    }
+}
+
+fn right_angle_cantilever_with(integrator: &str) {
+    let m = example_with_integrator(
+        "examples/verification/right_angle_cantilever.toml",
+        integrator,
+    );
     let (s, h) = run(&m);
-    assert_eq!(s.rejected_steps, 0);
+    // Generalized-α takes every step; the energy schemes halve a few where their Newton
+    // iteration (modified, with the matrix of finite differences) stalls at the hit.
+    println!(
+        "{}: {} steps, {} rejected",
+        integrator.replace('\n', " "),
+        s.steps,
+        s.rejected_steps
+    );
+    if !integrator.contains("energy") {
+        assert_eq!(s.rejected_steps, 0);
+    }
     let text = std::fs::read_to_string(
         std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../examples/verification/right_angle_cantilever_reference.csv"),
@@ -259,10 +307,14 @@ fn right_angle_cantilever_against_simo_vu_quoc() {
         }
         let rms = (sum2 / reference.len() as f64).sqrt();
         println!(
-            "{point}: peak {peak:.2}, max |Δ| over 15 s {max15:.3} ({:.1} %), RMS over 30 s {rms:.3} ({:.1} %)",
+            "{}: {point}: peak {peak:.2}, max |Δ| over 15 s {max15:.3} ({:.1} %), RMS over 30 s {rms:.3} ({:.1} %)",
+            integrator.replace('\n', " "),
             100.0 * max15 / peak,
             100.0 * rms / peak
         );
-        assert!(max15 < 0.10 * peak && rms < 0.08 * peak);
+        assert!(
+            max15 < 0.10 * peak && rms < 0.08 * peak,
+            "{integrator}: {point} {max15} {rms}"
+        );
     }
 }

@@ -98,9 +98,9 @@ fn heavy_top_keeps_its_energy_for_1000_periods() {
 /// Double pendulum released horizontal (chaotic), 300 periods of its slow linear mode
 /// (2π/√((2 − √2) g) = 2.62 s) at h = 0.04 s. Tolerance 1e-9 m g l: the Newton tolerance
 /// (1e-12 on increments) times the forces, summed over the steps. 1,000 periods are
-/// `cargo bench -p samara --bench energy_long -- double_pendulum`: 89,325 steps (10,862
-/// of them halved after a Newton failure in the chaotic phase), drift 1.75e-11 m g l,
-/// 61 s on the loaded 2-core machine — too long for the suite.
+/// `cargo bench -p samara --bench energy_long -- double_pendulum`: 104,008 steps (17,257
+/// of them halved after a Newton failure in the chaotic phase), drift 3.5e-11 m g l,
+/// 33 s on the shared 2-core machine — too long for the suite.
 #[test]
 fn double_pendulum_keeps_its_energy_for_300_periods() {
     let period = 2.0 * std::f64::consts::PI / ((2.0 - 2f64.sqrt()) * 9.81).sqrt();
