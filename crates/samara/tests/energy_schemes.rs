@@ -54,6 +54,22 @@ fn step_by_hand(m: &Model, n: usize, every: usize) -> (Vec<f64>, Vec<samara::sys
     (e, states)
 }
 
+/// The first state's linear and angular momentum and the largest departures from them,
+/// `(p₀, L₀, max |p − p₀|, max |L − L₀|)`.
+fn momentum_drift(
+    sys: &System,
+    states: &[samara::system::State],
+) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>, f64, f64) {
+    let (p0, l0) = sys.momenta(&states[0]);
+    let (mut dp, mut dl): (f64, f64) = (0.0, 0.0);
+    for s in states {
+        let (p, l) = sys.momenta(s);
+        dp = dp.max((p - p0).norm());
+        dl = dl.max((l - l0).norm());
+    }
+    (p0, l0, dp, dl)
+}
+
 /// Largest one-step rise of the discrete energy Ẽ of [`step_by_hand`]'s sequence, from
 /// the first step on: the decaying scheme is started by one preserving step, which
 /// conserves E and seeds the memory, so Ẽ is defined from then on (`e[0]` is E₀; the
@@ -509,13 +525,7 @@ fn joints_keep_the_momenta_of_a_free_mechanism() {
         let m = model(&text(scheme));
         let sys = System::new(&m);
         let (e, states) = step_by_hand(&m, 2000, 10);
-        let (p0, l0) = sys.momenta(&states[0]);
-        let (mut dp, mut dl): (f64, f64) = (0.0, 0.0);
-        for s in &states {
-            let (p, l) = sys.momenta(s);
-            dp = dp.max((p - p0).norm());
-            dl = dl.max((l - l0).norm());
-        }
+        let (p0, l0, dp, dl) = momentum_drift(&sys, &states);
         let rise = largest_rise(&e);
         let change = e[e.len() - 1] - e[0];
         eprintln!(
@@ -555,13 +565,7 @@ fn decaying_free_top_keeps_its_momenta() {
     );
     let sys = System::new(&m);
     let (e, states) = step_by_hand(&m, 2000, 1);
-    let (p0, l0) = sys.momenta(&states[0]);
-    let (mut dp, mut dl): (f64, f64) = (0.0, 0.0);
-    for s in &states {
-        let (p, l) = sys.momenta(s);
-        dp = dp.max((p - p0).norm());
-        dl = dl.max((l - l0).norm());
-    }
+    let (p0, l0, dp, dl) = momentum_drift(&sys, &states);
     let rise = largest_rise(&e);
     eprintln!(
         "decaying free top: Ẽ {:.6} → {:.6} J, largest one-step rise {rise:.2e} J, |Δp| {dp:.2e}, |ΔL| {dl:.2e} of |L| {:.4}",
