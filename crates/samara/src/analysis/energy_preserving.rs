@@ -70,7 +70,7 @@
 use super::moment_neutral;
 use super::sparse_differences::{ColumnGroups, PatternLu};
 use super::{AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure};
-use crate::core::{Coordinate, DiscreteStep, NodeState, gonzalez_correction};
+use crate::core::{Coordinate, DiscreteStep, Element, NodeState, gonzalez_correction};
 use crate::math::cayley::cayley;
 use crate::math::{Rotation, skew};
 use crate::model::{DynamicSettings, IntegratorType};
@@ -154,8 +154,15 @@ pub struct EnergyStepper<'a> {
     dnu_scaled: Vec<f64>,
     /// Translational mass of every node (the projector's M).
     node_mass: Vec<f64>,
-    /// PΔv of every node at the last configured iterate (the translations' memory).
+    /// PΔv_c of every node's mass point at the last configured iterate (the
+    /// translations' memory).
     projected_dv: Vec<Vector3<f64>>,
+    /// The CG offset of the body on each node that carries one off the node (the node's
+    /// mass point; the node carries no other inertia), and the mass points' increment
+    /// and start velocity at the last configured iterate.
+    mass_offsets: Vec<Option<Vector3<f64>>>,
+    mass_dx: Vec<Vector3<f64>>,
+    mass_v0: Vec<Vector3<f64>>,
     /// Weights of the joint coordinates' dissipation: |∂f/∂ν| of their springs at the
     /// start (constant, so that the energy statement telescopes).
     coord_stiffness: Vec<f64>,
@@ -292,6 +299,9 @@ impl<'a> EnergyStepper<'a> {
             dnu_scaled: vec![0.0; n_coord],
             node_mass: sys.discrete_node_masses(),
             projected_dv: vec![Vector3::zeros(); sys.n_nodes()],
+            mass_offsets: offset_mass_points(sys)?,
+            mass_dx: vec![Vector3::zeros(); sys.n_nodes()],
+            mass_v0: vec![Vector3::zeros(); sys.n_nodes()],
             coord_stiffness,
             h_last: f64::NAN,
             tolerance,
@@ -337,8 +347,10 @@ impl<'a> EnergyStepper<'a> {
         let mut moving = self.state.clone();
         for (i, n) in moving.nodes.iter_mut().enumerate() {
             let d = &self.dv_last[6 * i..6 * i + 6];
-            n.v = Vector3::new(d[0], d[1], d[2]);
             n.w = Vector3::new(d[3], d[4], d[5]);
+            // The memory is the mass point's: an offset body's CG moves with PΔv_c.
+            let cg = self.mass_offsets[i].map_or(Vector3::zeros(), |s| n.r() * n.w.cross(&s));
+            n.v = Vector3::new(d[0], d[1], d[2]) - cg;
         }
         let ctx = self.sys.context(self.state.time, 1.0);
         let (t_dv, _) = self.sys.discrete_energies(&ctx, &moving);
@@ -373,18 +385,35 @@ impl<'a> EnergyStepper<'a> {
     /// Sets node, coordinate and scratch states for the unknowns `u`.
     fn configure(&mut self, h: f64, u: &[f64]) {
         // Rotations: ψ/h = (Ω₀ + Ω₁)/2 + c(Ω₁ − Ω₀ − s ΔΩ_prev), solved for Ω₁.
-        // Translations: Δx/h = v̄ + c P(Δv − s b) with P the moment-free projector of
-        // the increments (`moment_neutral`) and b the last step's PΔv. With y = Δx/h − v₀
-        // + c P(s b) and P² = P: Δv = (½ + cP)⁻¹ y = 2(I − P)y + P y/(½ + c).
+        // Translations of each node's mass point (the node, or the CG of an offset body
+        // on it: Δx_c = Δx + (R₀ψ) × s̄, v_c = v + R(Ω × s)): Δx_c/h = v̄_c + c P(Δv_c − s b)
+        // with P the moment-free projector of the increments (`moment_neutral`) and b the
+        // last step's PΔv_c. With y = Δx_c/h − v_c0 + c P(s b) and P² = P:
+        // Δv_c = (½ + cP)⁻¹ y = 2(I − P)y + P y/(½ + c).
         let xi = self.xi_step;
         let (c0, c1) = (0.5 - xi, 0.5 + xi);
-        let dx_of = |i: usize| Vector3::new(u[6 * i], u[6 * i + 1], u[6 * i + 2]);
+        for (i, n0) in self.state.nodes.iter().enumerate() {
+            let d = &u[6 * i..6 * i + 6];
+            let dx = Vector3::new(d[0], d[1], d[2]);
+            let psi = Vector3::new(d[3], d[4], d[5]);
+            let p = &self.dv_scaled[6 * i..6 * i + 6];
+            let e = &mut self.end[i];
+            e.rot = Rotation::from_quaternion(n0.rot.quaternion() * cayley(&psi));
+            e.w = (psi / h + Vector3::new(p[3], p[4], p[5]) * xi - n0.w * c0) / c1;
+            (self.mass_dx[i], self.mass_v0[i]) = match self.mass_offsets[i] {
+                Some(s) => (
+                    dx + (n0.r() * psi).cross(&((n0.r() * s + e.r() * s) * 0.5)),
+                    n0.v + n0.r() * n0.w.cross(&s),
+                ),
+                None => (dx, n0.v),
+            };
+        }
+        let dx_of = |i: usize| self.mass_dx[i];
         let sb_of = |i: usize| {
             let p = &self.dv_scaled[6 * i..6 * i + 3];
             Vector3::new(p[0], p[1], p[2])
         };
-        let nodes0 = &self.state.nodes;
-        let w_of = |i: usize| dx_of(i) / h - nodes0[i].v;
+        let w_of = |i: usize| self.mass_dx[i] / h - self.mass_v0[i];
         // The projector is formed whenever the scheme decays, also on its (preserving)
         // first step, whose PΔv is the memory of the second.
         let (zw, zb) = if self.xi > 0.0 {
@@ -400,28 +429,28 @@ impl<'a> EnergyStepper<'a> {
             let d = &u[6 * i..6 * i + 6];
             let dx = Vector3::new(d[0], d[1], d[2]);
             let psi = Vector3::new(d[3], d[4], d[5]);
-            let p = &self.dv_scaled[6 * i..6 * i + 6];
             let w = w_of(i);
             let mi = self.node_mass[i];
-            let pw = moment_neutral::project(mi, &dx, &w, &zw);
-            let psb = moment_neutral::project(mi, &dx, &sb_of(i), &zb);
+            let dxm = self.mass_dx[i];
+            let pw = moment_neutral::project(mi, &dxm, &w, &zw);
+            let psb = moment_neutral::project(mi, &dxm, &sb_of(i), &zb);
             let pdv = (pw + psb * xi) / c1;
             self.projected_dv[i] = pdv;
-            let v1 = n0.v + (w - pw) * 2.0 + pdv;
-            let w1 = (psi / h + Vector3::new(p[3], p[4], p[5]) * xi - n0.w * c0) / c1;
-            let a = (v1 - n0.v) / h;
-            let wd = (w1 - n0.w) / h;
-            let q0 = *n0.rot.quaternion();
+            let vm1 = self.mass_v0[i] + (w - pw) * 2.0 + pdv;
             let e = &mut self.end[i];
+            let v1 = match self.mass_offsets[i] {
+                Some(s) => vm1 - e.r() * e.w.cross(&s),
+                None => vm1,
+            };
+            let a = (v1 - n0.v) / h;
+            let wd = (e.w - n0.w) / h;
             e.x = n0.x + dx;
-            e.rot = Rotation::from_quaternion(q0 * cayley(&psi));
             e.v = v1;
-            e.w = w1;
             e.a = a;
             e.wd = wd;
             let m = &mut self.mid[i];
             m.x = n0.x + dx * 0.5;
-            m.rot = Rotation::from_quaternion(q0 * cayley(&(psi * 0.5)));
+            m.rot = Rotation::from_quaternion(n0.rot.quaternion() * cayley(&(psi * 0.5)));
             m.v = dx / h;
             m.w = psi / h;
             m.a = a;
@@ -863,6 +892,51 @@ pub fn check_discrete_forms(sys: &System) -> Result<(), StepFailure> {
         }
     }
     Ok(())
+}
+
+/// The CG offset of the body on each node whose body sits off it (`None` elsewhere).
+/// Such a node's kinematic relation is written for the CG, so it must carry no other
+/// inertia (another body, or a beam's lumped mass): refused, naming both.
+fn offset_mass_points(sys: &System) -> Result<Vec<Option<Vector3<f64>>>, StepFailure> {
+    let mut carriers: Vec<Vec<String>> = vec![Vec::new(); sys.n_nodes()];
+    for b in &sys.bodies {
+        carriers[b.nodes()[0]].push(format!("body `{}`", b.name()));
+    }
+    for beam in &sys.beams {
+        for e in &beam.elements {
+            for (i, _) in e.lumped_node_masses() {
+                let who = format!("beam `{}`", beam.name);
+                if !carriers[i].contains(&who) {
+                    carriers[i].push(who);
+                }
+            }
+        }
+    }
+    let mut out = vec![None; sys.n_nodes()];
+    for b in &sys.bodies {
+        let s = b.cg_offset();
+        if s == Vector3::zeros() {
+            continue;
+        }
+        let i = b.nodes()[0];
+        if carriers[i].len() > 1 {
+            return Err(StepFailure {
+                reason: format!(
+                    "body `{}` has a `cg_offset` and its node `{}` also carries {}: the energy-consistent integrators write that node's kinematics for the body's CG, so it must carry no other inertia (give the body a node of its own, joined by a `fixed` joint)",
+                    b.name(),
+                    sys.node_names[i],
+                    carriers[i]
+                        .iter()
+                        .filter(|c| **c != format!("body `{}`", b.name()))
+                        .cloned()
+                        .collect::<Vec<_>>()
+                        .join(" and ")
+                ),
+            });
+        }
+        out[i] = Some(s);
+    }
+    Ok(out)
 }
 
 /// The dynamic analysis with an energy-consistent integrator: fixed steps (halved after

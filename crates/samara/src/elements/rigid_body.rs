@@ -52,6 +52,11 @@ impl RigidBody {
         self.mass
     }
 
+    /// The CG relative to the node, node frame.
+    pub fn cg_offset(&self) -> Vector3<f64> {
+        self.s
+    }
+
     /// Position of the CG.
     pub fn cg_position(&self, n: &NodeState) -> Vector3<f64> {
         n.x + n.r() * self.s
@@ -117,34 +122,45 @@ impl Element for RigidBody {
         0.5 * self.mass * vc.norm_squared() + 0.5 * n.w.dot(&(self.j_cg * n.w))
     }
 
-    /// The discrete form is written about the CG (node at the CG).
+    /// Written about the CG, also with a `cg_offset` (the integrator then moves the node
+    /// so that the CG obeys the mid-point relation; the node must carry no other inertia,
+    /// checked when the analysis starts).
     fn discrete_form(&self) -> Result<(), String> {
-        if self.s != Vector3::zeros() {
-            return Err("a rigid body with a `cg_offset` has no energy-consistent discrete form yet: put its node at the CG (joints and springs can attach at offsets)".into());
-        }
         Ok(())
     }
 
     /// Simo & Wong's (1991) energy–momentum form about the CG, with the Cayley update
-    /// `R₁ = R₀ cay(ψ)`:
+    /// `R₁ = R₀ cay(ψ)` and the CG `x_c = x + R s` moving by `Δx_c = Δx + (R₀ψ) × s̄`
+    /// (s̄ = (R₀s + R₁s)/2, exact for the Cayley update), `v_c = v + R(Ω × s)`:
     ///
     /// ```text
-    /// m (v₁ − v₀)/h − m g                              (global)
-    /// J (Ω₁ − Ω₀)/h + (ψ/h) × J (Ω₀ + Ω₁)/2            (conjugate to ψ)
+    /// F = m (v_c1 − v_c0)/h − m g                                      (global)
+    /// J (Ω₁ − Ω₀)/h + (ψ/h) × J (Ω₀ + Ω₁)/2 + (I − ψ̃/2) R₀ᵀ (s̄ × F)   (conjugate to ψ)
     /// ```
     ///
-    /// With `Δx = h(v₀ + v₁)/2` and `ψ = h(Ω₀ + Ω₁)/2` (the preserving scheme),
-    /// `Δx·r_x + ψ·r_ψ = ΔT − m g·Δx` exactly (ψ ⟂ ψ × ·), and the rotation rows are the
-    /// change of spatial angular momentum: `R₁JΩ₁ − R₀JΩ₀ = h R₀ (I − ψ̃/2)⁻¹ r_ψ`.
+    /// The integrator moves the node so that the CG obeys the mid-point relation,
+    /// `Δx_c = h(v_c0 + v_c1)/2` (the scheme's kinematics, written for the CG of a node
+    /// carrying an offset body). Then `Δx·F + ψ·r_ψ = F·Δx_c + ΔT_rot = ΔT − m g·Δx_c`
+    /// exactly (`ψ·(I − ψ̃/2)a = ψ·a`, ψ ⟂ ψ × ·), and the rotation rows are the change of
+    /// spatial angular momentum about the CG plus the moment `s̄ × F` of the CG's force:
+    /// `R₁JΩ₁ − R₀JΩ₀ = h R₀ (I − ψ̃/2)⁻¹ r_ψ − h s̄ × F`, so the angular momentum balance is
+    /// exact as for a body with its node at the CG (s = 0 gives that form).
     fn discrete_residual(&self, step: &DiscreteStep, out: &mut [f64]) {
         let i = self.node[0];
         let (n0, n1) = (&step.start[i], &step.end[i]);
         let (_, psi) = step.increment(i);
         let h = step.h;
         let g = step.ctx.gravity * step.ctx.load_factor;
-        let f = (n1.v - n0.v) * (self.mass / h) - g * self.mass;
+        let (vc0, vc1) = (
+            n0.v + n0.r() * n0.w.cross(&self.s),
+            n1.v + n1.r() * n1.w.cross(&self.s),
+        );
+        let f = (vc1 - vc0) * (self.mass / h) - g * self.mass;
         let jw = self.j_cg * (n0.w + n1.w) * 0.5;
-        let m = self.j_cg * (n1.w - n0.w) / h + psi.cross(&jw) / h;
+        let mut m = self.j_cg * (n1.w - n0.w) / h + psi.cross(&jw) / h;
+        if self.s != Vector3::zeros() {
+            m += step.conjugate_moment(i, &step.mean_arm(i, &self.s).cross(&f));
+        }
         out[..3].copy_from_slice(f.as_slice());
         out[3..6].copy_from_slice(m.as_slice());
     }

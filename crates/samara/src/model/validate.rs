@@ -1261,6 +1261,17 @@ impl<'a> Checker<'a> {
                         );
                         ok = false;
                     }
+                    if let Some((body, other)) = super::components::body::offset_body_sharing_node(
+                        &input.bodies,
+                        &input.beams,
+                    ) {
+                        self.error(
+                            format!("{what}: integrator = \"{scheme}\": body `{body}` has a `cg_offset` and its node also carries {other}"),
+                            self.key(&e, "integrator"),
+                            Some("these integrators write the node's kinematics for the body's CG: give the body a node of its own, joined by a `fixed` joint".into()),
+                        );
+                        ok = false;
+                    }
                     if let Some((table, entry, why)) =
                         super::components::without_discrete_form(input)
                     {

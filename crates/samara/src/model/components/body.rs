@@ -43,12 +43,10 @@ pub struct BodyDef {
 pub struct Body;
 
 impl ComponentKind for Body {
-    /// Simo & Wong's form is written about the centre of gravity.
-    fn discrete_form(input: &BodyInput) -> Result<(), String> {
-        match input.cg_offset {
-            Some(c) if c != [0.0; 3] => Err("a body with a `cg_offset` (the discrete form is written about the CG: put the node at the CG; joints and springs can attach at offsets)".into()),
-            _ => Ok(()),
-        }
+    /// Simo & Wong's form about the centre of gravity, also with a `cg_offset`
+    /// ([`crate::elements::RigidBody`]'s `discrete_residual`).
+    fn discrete_form(_input: &BodyInput) -> Result<(), String> {
+        Ok(())
     }
     const NOUN: &'static str = "body";
     type Input = BodyInput;
@@ -121,6 +119,46 @@ impl ComponentKind for Body {
             })
             .collect()
     }
+}
+
+/// A body with a `cg_offset` whose node also carries another body or belongs to a beam
+/// (its root, tip or a created `<beam>.<k>` node): `(body, the other inertia)`. The
+/// energy-consistent integrators write such a node's kinematics for the body's CG, so it
+/// must carry no other inertia.
+pub fn offset_body_sharing_node(
+    bodies: &[Located<BodyInput>],
+    beams: &[Located<super::beam::input::BeamInput>],
+) -> Option<(String, String)> {
+    for b in bodies {
+        let b = &b.value;
+        if b.cg_offset.is_none_or(|c| c == [0.0; 3]) {
+            continue;
+        }
+        let node = &b.node.value;
+        if let Some(other) = bodies
+            .iter()
+            .find(|o| o.value.name.value != b.name.value && &o.value.node.value == node)
+        {
+            return Some((
+                b.name.value.clone(),
+                format!("body `{}`", other.value.name.value),
+            ));
+        }
+        if let Some(beam) = beams.iter().find(|beam| {
+            let beam = &beam.value;
+            beam.root.as_ref().is_some_and(|r| &r.value == node)
+                || beam.tip.as_ref().is_some_and(|t| &t.value == node)
+                || node
+                    .strip_prefix(&format!("{}.", beam.name.value))
+                    .is_some_and(|k| k.parse::<usize>().is_ok())
+        }) {
+            return Some((
+                b.name.value.clone(),
+                format!("beam `{}`", beam.value.name.value),
+            ));
+        }
+    }
+    None
 }
 
 impl Checker<'_> {
