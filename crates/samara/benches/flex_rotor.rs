@@ -40,8 +40,9 @@
 //! → 2098.9M, 3.2 → 2.3 ms (4.4×); quasi-steady BEM unchanged (1.65 ms, `modified`
 //! 0.66 ms). Sixth round (the stations' tangents compiled for AVX with the spread over
 //! the node rows vectorized; the airfoil tables' interval from a binned index):
-//! `oye modified turbulent` callgrind over 0.3 s 849.3M → 746.3M, CPU BENCH_CPU; power,
-//! thrust and tip deflection equal to the bit. The history is in docs/aerodynamics.md,
+//! `oye modified turbulent` callgrind over 0.3 s 849.3M → 746.3M, CPU 0.94 → 0.84 ms per
+//! step (11.9× real time; load average ≈ 5.5, builds interleaved); power, thrust and tip
+//! deflection unchanged. The history is in docs/aerodynamics.md,
 //! "Performance".
 //!
 //! The run ends by printing the aerodynamic power, the thrust and blade 1's tip deflection
