@@ -27,7 +27,10 @@
 //! implicit-function theorem. The chain to the node increments (δxᵢ, δθᵢ: Rᵢ ← Rᵢ(I + δθ̃ᵢ))
 //! and rates (vᵢ, Ωᵢ) is analytic ([`AeroStation::to_nodes`]): δ(Rᵢ bᵢ) = Rᵢ (δθᵢ × bᵢ)
 //! for each node-frame vector bᵢ (dᵢ, ĉᵢ, n̂ᵢ, Ωᵢ × dᵢ, Ωᵢ × ĉᵢ), and the moment rows
-//! add the node's own rotation in Rᵢᵀ: ∂(Rᵢᵀ y)/∂δθᵢ = (Rᵢᵀ y)~.
+//! add the node's own rotation in Rᵢᵀ: ∂(Rᵢᵀ y)/∂δθᵢ = (Rᵢᵀ y)~. Each column g of
+//! ∂(F, M) is spread over the node rows as `c −= L g`, L the shares' map
+//! `[wᵢ I 0; wᵢ d̃ᵢ Rᵢᵀ wᵢ Rᵢᵀ]` stacked over the nodes; on CPUs with AVX the tangents run in
+//! a copy compiled for it ([`AeroStation::tangents_avx`], the same bits).
 //!
 //! **Unsteady airfoil** ([`super::unsteady`]): with Wagner's attached-flow states or Øye's
 //! dynamic stall the station takes the air velocity at the three-quarter-chord point,
