@@ -68,6 +68,19 @@ struct Table {
     values: [Vec<f64>; 3],
     /// Their knot slopes.
     slopes: [Vec<f64>; 3],
+    /// Where the interval search starts ([`Table::interval`]): entry b is the number of
+    /// knots ≤ the left edge of the b-th of [`SEARCH_BINS`] equal bins of −π … π.
+    bin_start: Vec<u32>,
+}
+
+/// Equal bins of −π … π indexing the interval search (1.4° each: a lookup steps over
+/// the few knots of its bin instead of bisecting the whole table).
+const SEARCH_BINS: usize = 256;
+
+/// The search bin of α ∈ −π … π (the last one for π).
+#[inline]
+fn search_bin(a: f64) -> usize {
+    (((a + PI) * (SEARCH_BINS as f64 / (2.0 * PI))) as usize).min(SEARCH_BINS - 1)
 }
 
 /// An airfoil: one table covering −π … π, or several at increasing Reynolds numbers
@@ -369,19 +382,41 @@ impl Table {
         let values: [Vec<f64>; 3] =
             std::array::from_fn(|c| rows.iter().map(|r| r.1[c + 1]).collect());
         let slopes = std::array::from_fn(|c| knot_slopes(&alpha, &values[c]));
+        let bin_start = (0..SEARCH_BINS)
+            .map(|b| {
+                let edge = -PI + b as f64 * (2.0 * PI / SEARCH_BINS as f64);
+                alpha.partition_point(|&x| x <= edge) as u32
+            })
+            .collect();
         Ok(Self {
             alpha,
             values,
             slopes,
+            bin_start,
         })
+    }
+
+    /// The number of knots ≤ a (`partition_point(|x| x <= a)`), from the start of a's
+    /// bin stepping back over knots above a (a bin edge rounded past a) and forward over
+    /// knots up to a: the bisection's answer without its unpredictable branches.
+    #[inline]
+    fn interval(&self, a: f64) -> usize {
+        let x = &self.alpha;
+        let mut k = self.bin_start[search_bin(a)] as usize;
+        while k > 0 && x[k - 1] > a {
+            k -= 1;
+        }
+        while k < x.len() && x[k] <= a {
+            k += 1;
+        }
+        k
     }
 
     /// Coefficients at α [rad] (any angle: wrapped to −π … π).
     fn eval(&self, alpha: f64) -> Coefficients {
         let a = wrap(alpha);
         let n = self.alpha.len();
-        // Interval by bisection.
-        let i = match self.alpha.partition_point(|&x| x <= a) {
+        let i = match self.interval(a) {
             0 => 0,
             k if k >= n => n - 2,
             k => k - 1,
@@ -875,6 +910,35 @@ fn parse_aerodyn(text: &str) -> Result<AeroDynTables, AirfoilError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn binned_interval_search_equals_bisection() {
+        // Irregular knots (dense near 0, sparse at the ends, several per bin and bins with
+        // none), probed at every knot, just beside it, at the bin edges and at random
+        // angles: the binned search must give exactly the bisection's count.
+        let mut deg: Vec<f64> = vec![-180.0, -170.0, -100.0, -31.3];
+        deg.extend((-80..=80).map(|k| 0.25 * k as f64));
+        deg.extend([27.5, 40.0, 90.0, 179.9, 180.0]);
+        let rows: Vec<(usize, [f64; 4])> = deg.iter().map(|&d| (0, [d, 0.0, 0.0, 0.0])).collect();
+        let t = Table::from_rows(&rows).unwrap();
+        let bisect = |a: f64| t.alpha.partition_point(|&x| x <= a);
+        let mut probes = vec![-PI, PI, 0.0, -0.0];
+        for &x in &t.alpha {
+            probes.extend([x, x.next_down(), x.next_up()]);
+        }
+        for b in 0..=SEARCH_BINS {
+            let e = -PI + b as f64 * (2.0 * PI / SEARCH_BINS as f64);
+            probes.extend([e, e.next_down(), e.next_up()]);
+        }
+        let mut u = 0.123_f64;
+        for _ in 0..10_000 {
+            u = (u * 9301.0 + 0.49297).fract();
+            probes.push(-PI + 2.0 * PI * u);
+        }
+        for a in probes.into_iter().filter(|a| (-PI..=PI).contains(a)) {
+            assert_eq!(t.interval(a), bisect(a), "α = {a}");
+        }
+    }
 
     #[test]
     fn cubic_reproduces_a_quadratic_inside_and_is_c1() {
