@@ -148,9 +148,10 @@ struct LumpedNode {
 
 /// A beam finite element.
 ///
-/// Its data are compact (about 0.2 kB for a two-node element besides the name and the
-/// lumped inertia): per point the weight, η, the reference strains and the shape
-/// functions (all points' in one array); the sections come from the beam's shared table.
+/// Its point data are compact: per point the weight, η, the reference strains and the
+/// shape functions (all points' in one array), 184 B for a two-node element against
+/// ~1.7 kB with the section matrices stored per point; the sections come from the beam's
+/// shared table.
 #[derive(Clone, Debug)]
 pub struct BeamElement {
     name: String,
