@@ -130,11 +130,6 @@ pub struct BlockLuSymbolic {
     scatter: Vec<Scatter>,
     /// Storage ranges (offset, len) of fill blocks that must be zeroed.
     fill: Vec<(usize, usize)>,
-    /// Per position k: the scatter entries and fill ranges done before step k end at
-    /// `scatter_upto[k]` and `fill_upto[k]`: every block the step reads or updates, and
-    /// none later (the copy of the input then meets the elimination in the caches).
-    scatter_upto: Vec<usize>,
-    fill_upto: Vec<usize>,
     n_values: usize,
     max_size: usize,
 }
@@ -246,36 +241,30 @@ impl BlockLuSymbolic {
                 covered[dst] = true;
             }
         }
-        // Block starts that were not covered are fill blocks (in storage order).
+        // Block starts that were not covered are fill blocks.
         let mut fill: Vec<(usize, usize)> = Vec::new();
+        let mut push_fill = |o: usize, len: usize| {
+            if let Some(last) = fill.last_mut()
+                && last.0 + last.1 == o
+            {
+                last.1 += len;
+                return;
+            }
+            fill.push((o, len));
+        };
         for k in 0..n {
             for e in &s_ent[s_ptr[k]..s_ptr[k + 1]] {
                 let len = e.size * size[k];
                 if !covered[e.l] {
-                    fill.push((e.l, len));
+                    push_fill(e.l, len);
                 }
                 if !covered[e.u] {
-                    fill.push((e.u, len));
+                    push_fill(e.u, len);
                 }
             }
         }
         // Sort scatter by destination for streaming writes.
         scatter.sort_unstable_by_key(|sc| sc.dst);
-        // The storage is in elimination order: step k touches its own column and row
-        // (up to `d_off[k + 1]`) and the targets of its Schur updates. Everything below the
-        // running maximum of those ends is copied in (or zeroed) just before the step.
-        let mut scatter_upto = Vec::with_capacity(n);
-        let mut fill_upto = Vec::with_capacity(n);
-        let mut high = 0usize;
-        for k in 0..n {
-            let own_end = if k + 1 < n { d_off[k + 1] } else { n_values };
-            high = high.max(own_end);
-            for up in &upd[upd_ptr[k]..upd_ptr[k + 1]] {
-                high = high.max(up.dst + (up.si * up.sj) as usize);
-            }
-            scatter_upto.push(scatter.partition_point(|sc| sc.dst < high));
-            fill_upto.push(fill.partition_point(|f| f.0 < high));
-        }
 
         let max_size = size.iter().copied().max().unwrap_or(0);
         Ok(Self {
@@ -293,8 +282,6 @@ impl BlockLuSymbolic {
             upd,
             scatter,
             fill,
-            scatter_upto,
-            fill_upto,
             n_values,
             max_size,
         })
@@ -559,21 +546,45 @@ impl BlockLu {
         let piv = &mut self.piv[..];
         let perm = &mut self.perm[..];
 
+        // ---- scatter ----
         colmax.fill(0.0);
+        for &(o, len) in &sym.fill {
+            vals[o..o + len].fill(0.0);
+        }
         let av = &a.values[..];
-        let (mut scattered, mut filled) = (0, 0);
-        for k in 0..sym.n {
-            // ---- scatter: the input blocks this step is the first to touch ----
-            for &(o, len) in &sym.fill[filled..sym.fill_upto[k]] {
-                vals[o..o + len].fill(0.0);
+        for sc in &sym.scatter {
+            let (rows, cols) = (sc.rows as usize, sc.cols as usize);
+            let len = rows * cols;
+            let src = &av[sc.src..sc.src + len];
+            let dst = &mut vals[sc.dst..sc.dst + len];
+            // Copy and column maximum in one pass. Same value as a fold of `f64::max` (NaN
+            // entries are skipped either way), in a form the compiler vectorizes.
+            let mut m = 0.0f64;
+            if sc.transpose {
+                for (r, row) in src.chunks_exact(cols).enumerate() {
+                    for (c, &x) in row.iter().enumerate() {
+                        dst[c * rows + r] = x;
+                        let a = x.abs();
+                        if a > m {
+                            m = a;
+                        }
+                    }
+                }
+            } else {
+                for (d, &x) in dst.iter_mut().zip(src) {
+                    *d = x;
+                    let a = x.abs();
+                    if a > m {
+                        m = a;
+                    }
+                }
             }
-            filled = sym.fill_upto[k];
-            for sc in &sym.scatter[scattered..sym.scatter_upto[k]] {
-                scatter_block(sc, av, vals, colmax);
-            }
-            scattered = sym.scatter_upto[k];
+            let c = &mut colmax[sc.col];
+            *c = c.max(m);
+        }
 
-            // ---- elimination ----
+        // ---- elimination ----
+        for k in 0..sym.n {
             let sk = sym.size[k];
             let d = sym.d_off[k];
             let rk = sym.roff[k];
@@ -757,40 +768,6 @@ impl BlockLu {
             rhs[rk..rk + sk].copy_from_slice(t);
         }
     }
-}
-
-/// Copies one input block into the factor storage (a pivot block as it is, an
-/// off-diagonal block transposed) and raises the column maximum of its block column.
-#[inline(always)]
-fn scatter_block(sc: &Scatter, av: &[f64], vals: &mut [f64], colmax: &mut [f64]) {
-    let (rows, cols) = (sc.rows as usize, sc.cols as usize);
-    let len = rows * cols;
-    let src = &av[sc.src..sc.src + len];
-    let dst = &mut vals[sc.dst..sc.dst + len];
-    // Copy and column maximum in one pass. Same value as a fold of `f64::max` (NaN
-    // entries are skipped either way), in a form the compiler vectorizes.
-    let mut m = 0.0f64;
-    if sc.transpose {
-        for (r, row) in src.chunks_exact(cols).enumerate() {
-            for (c, &x) in row.iter().enumerate() {
-                dst[c * rows + r] = x;
-                let a = x.abs();
-                if a > m {
-                    m = a;
-                }
-            }
-        }
-    } else {
-        for (d, &x) in dst.iter_mut().zip(src) {
-            *d = x;
-            let a = x.abs();
-            if a > m {
-                m = a;
-            }
-        }
-    }
-    let c = &mut colmax[sc.col];
-    *c = c.max(m);
 }
 
 // ----------------------------------------------------------------------------

@@ -219,12 +219,6 @@ pub struct Assembler {
     /// block) pair, row-major over the element's blocks.
     element_blocks: Vec<Vec<LocalBlock>>,
     element_slots: Vec<Vec<usize>>,
-    /// Per element k: the matrix values are zeroed up to this offset before its terms are
-    /// added (the running maximum over elements 0..=k of the ends of the blocks they add
-    /// to), the rest after the last element: each part is zeroed just before it is
-    /// first written, while the elements' sweep passes it, instead of in a separate pass
-    /// over the whole matrix.
-    element_zero_upto: Vec<usize>,
     /// Per element with states: the Newton-vector offset of its state block.
     state_place: Vec<Option<usize>>,
     /// Per element and input signal: where the chain-rule terms go.
@@ -480,7 +474,7 @@ impl Assembler {
             .iter()
             .map(|&(n, i)| LocalTerms::with_sizes(n, i))
             .collect();
-        let element_slots: Vec<Vec<usize>> = element_blocks
+        let element_slots = element_blocks
             .iter()
             .map(|blocks| {
                 blocks
@@ -505,7 +499,7 @@ impl Assembler {
                 })
                 .collect()
         };
-        let element_signal_slots: Vec<Vec<Vec<SupportSlot>>> = element_blocks
+        let element_signal_slots = element_blocks
             .iter()
             .enumerate()
             .map(|(k, blocks)| {
@@ -529,7 +523,6 @@ impl Assembler {
             .iter()
             .map(|b| b.map(|b| s.block_offset(b)))
             .collect();
-        let element_zero_upto = zero_marks(&element_blocks, &element_slots, &element_signal_slots);
         let constraints = sys
             .constraints
             .iter()
@@ -647,7 +640,6 @@ impl Assembler {
             window,
             element_blocks,
             element_slots,
-            element_zero_upto,
             state_place,
             element_signal_slots,
             constraint_signal_slots,
@@ -865,9 +857,9 @@ impl Assembler {
     ) {
         let stabilized = self.formulation == Formulation::StabilizedIndex2;
         residual.fill(0.0);
-        // The matrix is zeroed part by part as the elements' sweep reaches it
-        // (`element_zero_upto`), the rest after them.
-        let mut zeroed = 0;
+        if let Some(m) = matrix.as_deref_mut() {
+            m.fill_zero();
+        }
         let sr = coef.row_scale;
 
         // Signals first (in producer order), with their derivatives combined like the
@@ -909,9 +901,6 @@ impl Assembler {
                     &mut self.inputs,
                 );
                 let t = &self.terms[self.term_of[k]];
-                if let Some(m) = matrix.as_deref_mut() {
-                    zero_up_to(&mut m.values, &mut zeroed, self.element_zero_upto[end - 1]);
-                }
                 self.scatter_element(sys, k..end, t, coef, residual, matrix.as_deref_mut());
                 k = end;
             }
@@ -929,7 +918,6 @@ impl Assembler {
             // Taken out for the loop (a move, no allocation) and put back after it.
             let mut window = std::mem::take(&mut self.window);
             let this = &*self;
-            let zeroed = &mut zeroed;
             rayon::scope(|_| {
                 let values = &this.signal_values.values;
                 let n = sys.elements.len();
@@ -958,9 +946,6 @@ impl Assembler {
                     for (i, slot) in window[..len].iter().enumerate() {
                         let k = start + i;
                         let t = &slot.terms[this.alone_term_of[k]];
-                        if let Some(m) = matrix.as_deref_mut() {
-                            zero_up_to(&mut m.values, zeroed, this.element_zero_upto[k]);
-                        }
                         this.scatter_element(
                             sys,
                             k..k + 1,
@@ -974,9 +959,6 @@ impl Assembler {
                 }
             });
             self.window = window;
-        }
-        if let Some(m) = matrix.as_deref_mut() {
-            m.values[zeroed..].fill(0.0);
         }
         // Granular candidate pairs: node blocks only; their bristles (history) from the
         // state, aligned with the pairs.
@@ -1621,43 +1603,6 @@ impl Assembler {
             }
         }
     }
-}
-
-/// Zeroes `values[*zeroed..upto]` (nothing if `upto` is not beyond) and moves `zeroed`.
-#[inline]
-fn zero_up_to(values: &mut [f64], zeroed: &mut usize, upto: usize) {
-    if upto > *zeroed {
-        values[*zeroed..upto].fill(0.0);
-        *zeroed = upto;
-    }
-}
-
-/// Per element k, the running maximum over elements 0..=k of the end of every matrix
-/// value the element's terms are added to (its blocks and its input signals'
-/// chain-rule columns): see `Assembler::element_zero_upto`.
-fn zero_marks(
-    blocks: &[Vec<LocalBlock>],
-    slots: &[Vec<usize>],
-    signal_slots: &[Vec<Vec<SupportSlot>>],
-) -> Vec<usize> {
-    let mut high = 0;
-    blocks
-        .iter()
-        .zip(slots)
-        .zip(signal_slots)
-        .map(|((bl, sl), sig)| {
-            let nb = bl.len();
-            for (a, ra) in bl.iter().enumerate() {
-                for (b, cb) in bl.iter().enumerate() {
-                    high = high.max(sl[a * nb + b] + ra.size * cb.size);
-                }
-                for sp in sig.iter().flatten() {
-                    high = high.max(sp.slots[a] + ra.size * sp.width);
-                }
-            }
-            high
-        })
-        .collect()
 }
 
 /// Elements from which [`Assembler`] evaluates elements in parallel (rayon), a window of
