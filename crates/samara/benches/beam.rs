@@ -16,14 +16,14 @@
 //! with N; the excess is the working set (element data, matrix, factors) leaving the
 //! shared cache (README, "Where the growth … comes from").
 //!
-//! After the compact beam element (sections interpolated from the shared table, not
-//! stored per point), the block LU's copy of the input fused into its elimination and the
-//! matrix zeroed as the assembly reaches it (3 alternating runs each, load average 4–5,
-//! 2026-11-27): full Newton 6.50 → 78.7 ms before, 6.63 → 79.8 ms after (exponent 1.08
-//! both); modified 3.17 → 47.8 ms (1.18) before, 3.37 → 40.5 ms (1.08) after. CPU per
-//! element and step, after: full 6.3–6.7, 7.1–7.6, 7.8–7.9, 7.7–7.8 µs at 1,000, 2,000,
-//! 4,000 and 10,000 elements (linear from 2,000 on); modified 3.2–3.4, 3.25–3.45,
-//! 3.4–3.6, 3.9–4.0 µs.
+//! After the compact beam element (sections interpolated from the beam's shared table, not
+//! stored per point; 3 alternating runs each, load average 6–8, 2026-11-27): full Newton
+//! 8.47 → 85.6 ms before, 7.63 → 79.4 ms after; modified 3.93 → 50.8 ms before, 3.80 →
+//! 44.0 ms after. CPU per element and step at 1,000 / 2,000 / 4,000 / 10,000 elements (one
+//! sitting, load average 6): full Newton 6.5 / 7.15 / 7.7 / 8.2 µs before, 7.0 / 7.8 / 7.8 /
+//! 7.9 µs after (exponent 1.10 → 1.05); modified 3.2 / 3.4 / 3.8 / 4.8 µs before, 3.45 / 3.6
+//! / 4.0 / 4.35 µs after (1.18 → 1.10). `cantilever_2000/4000.toml` are not kept: write
+//! them with `model()` of `make_cantilevers.py`.
 
 use samara::analysis::History;
 use samara::analysis::run_all;
