@@ -17,13 +17,13 @@
 //! shared cache (README, "Where the growth … comes from").
 //!
 //! After the compact beam element (sections interpolated from the beam's shared table, not
-//! stored per point; 3 alternating runs each, load average 6–8, 2026-11-27): full Newton
-//! 8.47 → 85.6 ms before, 7.63 → 79.4 ms after; modified 3.93 → 50.8 ms before, 3.80 →
-//! 44.0 ms after. CPU per element and step at 1,000 / 2,000 / 4,000 / 10,000 elements (one
-//! sitting, load average 6): full Newton 6.5 / 7.15 / 7.7 / 8.2 µs before, 7.0 / 7.8 / 7.8 /
-//! 7.9 µs after (exponent 1.10 → 1.05); modified 3.2 / 3.4 / 3.8 / 4.8 µs before, 3.45 / 3.6
-//! / 4.0 / 4.35 µs after (1.18 → 1.10). `cantilever_2000/4000.toml` are not kept: write
-//! them with `model()` of `make_cantilevers.py`.
+//! stored per point; 3 alternating runs each, wall, quiet machine, 2026-11-27): full Newton
+//! 6.38 → 77.2 ms before (exponent 1.08), 6.30 → 72.8 ms after (1.06); modified 3.28 →
+//! 44.9 ms before (1.14), 3.39 → 38.1 ms after (1.05). Per element and step at 1,000 /
+//! 2,000 / 4,000 / 10,000 elements: full Newton 6.6 / 7.2 / 7.8 / 8.0 µs before, 6.4 / 6.4 /
+//! 7.5 / 7.7 µs after; modified 3.4 / 3.5 / 3.9 / 4.8 µs before, 3.3 / 3.2 / 3.6 / 4.2 µs
+//! after. `cantilever_2000/4000.toml` are not kept: write them with `model()` of
+//! `make_cantilevers.py`.
 
 use samara::analysis::History;
 use samara::analysis::run_all;
