@@ -18,7 +18,7 @@ use super::kernel::{
     PointLoads,
 };
 use super::quaternion::{Quat, conj, dg_w, dgt_f, from_rotation, g_mat, mul, rotation};
-use super::section::{SectionTable, damping_matrix};
+use super::section::{SectionTable, damping_matrix_from_roots};
 use crate::core::{ElementInput, NodeState};
 use crate::elements::{Element, EvalContext, LocalTerms, Need};
 use crate::math::Rotation;
@@ -73,27 +73,28 @@ impl DistributedLoad {
     }
 }
 
-#[derive(Clone, Debug)]
+/// An elastic quadrature point. Its section (stiffness, damping) is not stored but
+/// interpolated from the beam's table at η in the pass that needs it: a few dozen flops
+/// against 0.6 kB per point read from memory in every evaluation.
+#[derive(Clone, Copy, Debug)]
 struct ElasticPoint {
     /// Gauss weight × ds/dξ.
     w: f64,
-    h: Vec<f64>,
-    /// dh/ds.
-    dh: Vec<f64>,
-    c: Matrix6<f64>,
-    d: Option<Matrix6<f64>>,
     eps0: Vector3<f64>,
     k0: Vector3<f64>,
     eta: f64,
+    /// Where h (p + 1 values) and then dh/ds (p + 1) start in [`BeamElement::shape`].
+    at: usize,
 }
 
-#[derive(Clone, Debug)]
+/// An inertial quadrature point (its sectional mass interpolated from the table at η,
+/// as the elastic point's stiffness).
+#[derive(Clone, Copy, Debug)]
 struct InertialPoint {
     w: f64,
-    h: Vec<f64>,
-    m6: Matrix6<f64>,
-    mass: InertialSection,
     eta: f64,
+    /// Where h (p + 1 values) starts in [`BeamElement::shape`].
+    at: usize,
 }
 
 /// Sectional state at an elastic quadrature point (for output).
@@ -126,7 +127,8 @@ pub struct ElementSpec<'a> {
     pub node_frames: &'a [Rotation],
     /// η at the element's first and last node.
     pub eta_range: (f64, f64),
-    pub table: &'a SectionTable,
+    /// The beam's section table (shared by its elements).
+    pub table: Arc<SectionTable>,
     pub damping: [f64; 6],
     pub quadrature: Quadrature,
     pub loads: Arc<Vec<DistributedLoad>>,
@@ -145,6 +147,11 @@ struct LumpedNode {
 }
 
 /// A beam finite element.
+///
+/// Its point data are compact: per point the weight, η, the reference strains and the
+/// shape functions (all points' in one array), 184 B for a two-node element against
+/// ~1.7 kB with the section matrices stored per point; the sections come from the beam's
+/// shared table.
 #[derive(Clone, Debug)]
 pub struct BeamElement {
     name: String,
@@ -153,6 +160,11 @@ pub struct BeamElement {
     middle: usize,
     elastic: Vec<ElasticPoint>,
     inertial: Vec<InertialPoint>,
+    /// Shape functions of the points: per elastic point h then dh/ds, per inertial point h.
+    shape: Vec<f64>,
+    table: Arc<SectionTable>,
+    /// `√μᵢ` of the stiffness-proportional damping (None: undamped).
+    root_damping: Option<[f64; 6]>,
     loads: Arc<Vec<DistributedLoad>>,
     lumped: Vec<LumpedNode>,
 }
@@ -214,22 +226,22 @@ impl BeamElement {
             Quadrature::Full => p + 1,
         };
         let damped = spec.damping.iter().any(|&m| m > 0.0);
+        let mut shape = Vec::new();
         let (gx, gw) = super::gll::gauss_legendre(n_el);
         let elastic = gx
             .iter()
             .zip(&gw)
             .map(|(&xi, &wq)| {
                 let (w, h, dh, eps0, k0, eta) = point(xi, wq);
-                let c = spec.table.at(eta).stiffness;
+                let at = shape.len();
+                shape.extend_from_slice(&h);
+                shape.extend_from_slice(&dh);
                 ElasticPoint {
                     w,
-                    h,
-                    dh,
-                    d: damped.then(|| damping_matrix(&c, &spec.damping)),
-                    c,
                     eps0,
                     k0,
                     eta,
+                    at,
                 }
             })
             .collect();
@@ -239,16 +251,12 @@ impl BeamElement {
             .zip(&gw)
             .map(|(&xi, &wq)| {
                 let (w, h, _, _, _, eta) = point(xi, wq);
-                let m6 = spec.table.at(eta).mass;
-                InertialPoint {
-                    w,
-                    h,
-                    m6,
-                    mass: InertialSection::new(&m6),
-                    eta,
-                }
+                let at = shape.len();
+                shape.extend_from_slice(&h);
+                InertialPoint { w, eta, at }
             })
             .collect();
+        shape.shrink_to_fit();
         // GLL lumping: at node k every Lagrange polynomial but h_k vanishes, so the
         // interpolated section there is the node's own; weight w_k |dx₀/dξ|.
         let (_, gll_w) = super::gll::gauss_lobatto_legendre(p);
@@ -282,9 +290,44 @@ impl BeamElement {
             middle,
             elastic,
             inertial,
+            shape,
+            root_damping: damped.then(|| spec.damping.map(f64::sqrt)),
+            table: spec.table,
             loads: spec.loads,
             lumped,
         }
+    }
+
+    /// Shape functions h and dh/ds at an elastic point.
+    #[inline]
+    fn shape_of(&self, ep: &ElasticPoint) -> (&[f64], &[f64]) {
+        let nn = self.nodes.len();
+        let s = &self.shape[ep.at..ep.at + 2 * nn];
+        s.split_at(nn)
+    }
+
+    /// Shape functions h at an inertial point.
+    #[inline]
+    fn inertial_shape(&self, ip: &InertialPoint) -> &[f64] {
+        &self.shape[ip.at..ip.at + self.nodes.len()]
+    }
+
+    /// Sectional stiffness C and (if the beam is damped) damping D = Λ C Λ at an elastic
+    /// point.
+    #[inline]
+    fn section_matrices(&self, ep: &ElasticPoint) -> (Matrix6<f64>, Option<Matrix6<f64>>) {
+        let c = self.table.stiffness_at(ep.eta);
+        let d = self
+            .root_damping
+            .as_ref()
+            .map(|r| damping_matrix_from_roots(&c, r));
+        (c, d)
+    }
+
+    /// Sectional mass matrix at an inertial point.
+    #[inline]
+    fn mass_of(&self, ip: &InertialPoint) -> Matrix6<f64> {
+        self.table.mass_at(ip.eta)
     }
 
     pub fn nodes_slice(&self) -> &[usize] {
@@ -319,8 +362,9 @@ impl BeamElement {
     pub fn node_masses(&self) -> Vec<f64> {
         let mut out = vec![0.0; self.nodes.len()];
         for ip in &self.inertial {
+            let (m, h) = (self.mass_of(ip)[(0, 0)], self.inertial_shape(ip));
             for (k, o) in out.iter_mut().enumerate() {
-                *o += ip.w * ip.m6[(0, 0)] * ip.h[k];
+                *o += ip.w * m * h[k];
             }
         }
         out
@@ -354,12 +398,13 @@ impl BeamElement {
 
     fn elastic_fields(&self, ep: &ElasticPoint, g: &Work) -> ElasticFields {
         let mut f = ElasticFields::default();
+        let (hs, dhs) = self.shape_of(ep);
         for k in 0..self.nodes.len() {
-            let (h, dh) = (ep.h[k], ep.dh[k]);
+            let (h, dh) = (hs[k], dhs[k]);
             f.xp += g.x[k] * dh;
             f.q += g.s[k] * h;
             f.qp += g.s[k] * dh;
-            if ep.d.is_some() {
+            if self.root_damping.is_some() {
                 f.xpd += g.v[k] * dh;
                 f.qd += g.sd[k] * h;
                 f.qpd += g.sd[k] * dh;
@@ -370,8 +415,9 @@ impl BeamElement {
 
     fn inertial_fields(&self, ip: &InertialPoint, g: &Work) -> InertialFields {
         let mut f = InertialFields::default();
+        let hs = self.inertial_shape(ip);
         for k in 0..self.nodes.len() {
-            let h = ip.h[k];
+            let h = hs[k];
             f.q += g.s[k] * h;
             f.a += g.a[k] * h;
             f.qd += g.sd[k] * h;
@@ -430,14 +476,16 @@ impl BeamElement {
 
     fn section_state(&self, ep: &ElasticPoint, g: &Work, eo: &mut ElasticOut) -> SectionState {
         let f = self.elastic_fields(ep, g);
+        let (c, d) = self.section_matrices(ep);
         let sec = ElasticSection {
-            c: &ep.c,
-            d: ep.d.as_ref(),
+            c: &c,
+            d: d.as_ref(),
             eps0: ep.eps0,
             k0: ep.k0,
         };
         kernel::elastic(&f, &sec, false, eo);
-        let position = (0..self.nodes.len()).map(|k| g.x[k] * ep.h[k]).sum();
+        let h = self.shape_of(ep).0;
+        let position = (0..self.nodes.len()).map(|k| g.x[k] * h[k]).sum();
         SectionState {
             position,
             frame: rotation(&f.q),
@@ -466,14 +514,15 @@ impl BeamElement {
         // Elastic points.
         let eo = &mut g.eo;
         for ep in &self.elastic {
+            let (hs, dhs) = self.shape_of(ep);
             let f = {
                 let mut f = ElasticFields::default();
                 for k in 0..nn {
-                    let (h, dh) = (ep.h[k], ep.dh[k]);
+                    let (h, dh) = (hs[k], dhs[k]);
                     f.xp += g.x[k] * dh;
                     f.q += g.s[k] * h;
                     f.qp += g.s[k] * dh;
-                    if ep.d.is_some() {
+                    if self.root_damping.is_some() {
                         f.xpd += g.v[k] * dh;
                         f.qd += g.sd[k] * h;
                         f.qpd += g.sd[k] * dh;
@@ -481,26 +530,27 @@ impl BeamElement {
                 }
                 f
             };
+            let (c, d) = self.section_matrices(ep);
             let sec = ElasticSection {
-                c: &ep.c,
-                d: ep.d.as_ref(),
+                c: &c,
+                d: d.as_ref(),
                 eps0: ep.eps0,
                 k0: ep.k0,
             };
             kernel::elastic(&f, &sec, tangents, eo);
             let w = ep.w;
             for j in 0..nn {
-                out.add_r(6 * j, &(eo.f_xp * (w * ep.dh[j])));
-                g.fq[j] += (eo.f_q * ep.h[j] + eo.f_qp * ep.dh[j]) * w;
+                out.add_r(6 * j, &(eo.f_xp * (w * dhs[j])));
+                g.fq[j] += (eo.f_q * hs[j] + eo.f_qp * dhs[j]) * w;
             }
             if !tangents {
                 continue;
             }
-            let damped = ep.d.is_some();
+            let damped = d.is_some();
             let (jx, jq, jp) = (&eo.d_xp, &eo.d_q, &eo.d_qp);
             // Columns of node k (θ_k; with damping also Ω_k).
             for k in 0..nn {
-                let (hk, dk) = (ep.h[k], ep.dh[k]);
+                let (hk, dk) = (hs[k], dhs[k]);
                 let gk = &g.g[k];
                 let (ax, aq, ap) = (
                     jx.q * hk + jx.qp * dk,
@@ -528,7 +578,7 @@ impl BeamElement {
             // Rows of node j.
             let (km, cm) = (out.k.as_mut_slice(), out.c.as_mut_slice());
             for j in 0..nn {
-                let (hj, dj) = (ep.h[j], ep.dh[j]);
+                let (hj, dj) = (hs[j], dhs[j]);
                 let gjt = g.g[j].transpose();
                 let (wj, wdj) = (w * hj, w * dj);
                 let gx = gjt * (jq.xp * wj + jp.xp * wdj);
@@ -538,7 +588,7 @@ impl BeamElement {
                     Matrix3::zeros()
                 };
                 for k in 0..nn {
-                    let dk = ep.dh[k];
+                    let dk = dhs[k];
                     let (r, c) = (6 * j, 6 * k);
                     add3(km, ld, r, c, &jx.xp, wdj * dk);
                     add3(km, ld, r, c + 3, &g.c3a[k], wdj);
@@ -562,10 +612,12 @@ impl BeamElement {
         }
         let io = &mut g.io;
         for ip in &self.inertial {
+            let hs = self.inertial_shape(ip);
+            let mass = InertialSection::new(&self.mass_of(ip));
             let f = {
                 let mut f = InertialFields::default();
                 for k in 0..nn {
-                    let h = ip.h[k];
+                    let h = hs[k];
                     f.q += g.s[k] * h;
                     f.a += g.a[k] * h;
                     f.qd += g.sd[k] * h;
@@ -578,18 +630,18 @@ impl BeamElement {
             } else {
                 self.point_loads(&g.load_factors, ip.eta)
             };
-            kernel::inertial(&f, &ip.mass, &grav, &pl, tangents, io);
+            kernel::inertial(&f, &mass, &grav, &pl, tangents, io);
             let w = ip.w;
             for j in 0..nn {
-                out.add_r(6 * j, &(io.f_x * (w * ip.h[j])));
-                g.fq[j] += io.f_q * (w * ip.h[j]);
+                out.add_r(6 * j, &(io.f_x * (w * hs[j])));
+                g.fq[j] += io.f_q * (w * hs[j]);
             }
             if !tangents {
                 continue;
             }
-            let (m, x_rot, offset) = (ip.mass.m, io.x_rot, ip.mass.offset);
+            let (m, x_rot, offset) = (mass.m, io.x_rot, mass.offset);
             for k in 0..nn {
-                let hk = ip.h[k];
+                let hk = hs[k];
                 let (gk, gdk, gddk, swk) = (&g.g[k], &g.gd[k], &g.gdd[k], &g.sdd_w[k]);
                 g.c43a[k] = (io.q_q * gk + io.q_qd * gdk + io.q_qdd * gddk) * hk;
                 g.c43b[k] = (io.q_qd * gk + io.q_qdd * swk) * hk;
@@ -606,7 +658,7 @@ impl BeamElement {
                 out.m.as_mut_slice(),
             );
             for j in 0..nn {
-                let wj = w * ip.h[j];
+                let wj = w * hs[j];
                 let gjt = g.g[j].transpose() * wj;
                 let gqa = if offset {
                     gjt * io.q_a
@@ -614,7 +666,7 @@ impl BeamElement {
                     Matrix3::zeros()
                 };
                 for k in 0..nn {
-                    let hk = ip.h[k];
+                    let hk = hs[k];
                     let (r, c) = (6 * j, 6 * k);
                     add3(km, ld, r + 3, c + 3, &(gjt * g.c43a[k]), 1.0);
                     add3(cm, ld, r + 3, c + 3, &(gjt * g.c43b[k]), 1.0);
@@ -846,8 +898,9 @@ impl Element for BeamElement {
                 .iter()
                 .map(|ip| {
                     let f = self.inertial_fields(ip, g);
-                    let v: Vector3<f64> = (0..self.nodes.len()).map(|k| g.v[k] * ip.h[k]).sum();
-                    ip.w * kernel::kinetic_density(&f.q, &f.qd, &v, &ip.m6)
+                    let h = self.inertial_shape(ip);
+                    let v: Vector3<f64> = (0..self.nodes.len()).map(|k| g.v[k] * h[k]).sum();
+                    ip.w * kernel::kinetic_density(&f.q, &f.qd, &v, &self.mass_of(ip))
                 })
                 .sum()
         })
@@ -861,21 +914,24 @@ impl Element for BeamElement {
             let mut u = 0.0;
             for ep in &self.elastic {
                 let f = self.elastic_fields(ep, g);
+                let c = self.table.stiffness_at(ep.eta);
                 let sec = ElasticSection {
-                    c: &ep.c,
+                    c: &c,
                     d: None,
                     eps0: ep.eps0,
                     k0: ep.k0,
                 };
                 kernel::elastic(&f, &sec, false, &mut eo);
-                u += 0.5 * ep.w * eo.strain.dot(&(ep.c * eo.strain));
+                u += 0.5 * ep.w * eo.strain.dot(&(c * eo.strain));
             }
             let grav = ctx.gravity * ctx.load_factor;
             for ip in &self.inertial {
                 let f = self.inertial_fields(ip, g);
-                let x: Vector3<f64> = (0..self.nodes.len()).map(|k| g.x[k] * ip.h[k]).sum();
-                let m = ip.m6[(0, 0)];
-                let m_eta = Vector3::new(ip.m6[(5, 1)], ip.m6[(3, 2)], ip.m6[(4, 0)]);
+                let h = self.inertial_shape(ip);
+                let x: Vector3<f64> = (0..self.nodes.len()).map(|k| g.x[k] * h[k]).sum();
+                let m6 = self.mass_of(ip);
+                let m = m6[(0, 0)];
+                let m_eta = Vector3::new(m6[(5, 1)], m6[(3, 2)], m6[(4, 0)]);
                 u -= ip.w * grav.dot(&(x * m + rotation(&f.q) * m_eta));
             }
             u
@@ -893,7 +949,8 @@ impl Element for BeamElement {
             let mut p = 0.0;
             for ip in &self.inertial {
                 let f = self.inertial_fields(ip, g);
-                let v: Vector3<f64> = (0..self.nodes.len()).map(|k| g.v[k] * ip.h[k]).sum();
+                let h = self.inertial_shape(ip);
+                let v: Vector3<f64> = (0..self.nodes.len()).map(|k| g.v[k] * h[k]).sum();
                 let n = f.q.norm_squared();
                 let r = rotation(&f.q);
                 let omega = super::quaternion::e_mat(&f.q) * f.qd * (2.0 / n);
@@ -908,7 +965,7 @@ impl Element for BeamElement {
 
     fn dissipated_power(&self, x: &ElementInput) -> f64 {
         let nodes = x.nodes;
-        if self.elastic.iter().all(|e| e.d.is_none()) {
+        if self.root_damping.is_none() {
             return 0.0;
         }
         with_work(self.nodes.len(), |g| {
@@ -916,10 +973,13 @@ impl Element for BeamElement {
             let mut eo = ElasticOut::default();
             let mut p = 0.0;
             for ep in &self.elastic {
-                let Some(d) = &ep.d else { continue };
+                let (c, Some(d)) = self.section_matrices(ep) else {
+                    continue;
+                };
+                let d = &d;
                 let f = self.elastic_fields(ep, g);
                 let sec = ElasticSection {
-                    c: &ep.c,
+                    c: &c,
                     d: Some(d),
                     eps0: ep.eps0,
                     k0: ep.k0,

@@ -64,6 +64,7 @@ impl Beam {
     /// model's initial state) fix the node-to-section offsets.
     pub fn build(def: &BeamDef, nodes: &[NodeState]) -> Self {
         let loads = Arc::new(def.loads.clone());
+        let table = Arc::new(def.table.clone());
         let p = def.order;
         let elements = (0..def.n_elements)
             .map(|e| {
@@ -79,7 +80,7 @@ impl Beam {
                     sections0: &def.sections0[local],
                     node_frames: &frames,
                     eta_range: (etas[0], etas[p]),
-                    table: &def.table,
+                    table: table.clone(),
                     damping: def.damping,
                     quadrature: def.quadrature,
                     loads: loads.clone(),

@@ -200,21 +200,36 @@ impl SectionTable {
 
     /// The section at η.
     pub fn at(&self, eta: f64) -> Section {
+        Section {
+            stiffness: self.stiffness_at(eta),
+            mass: self.mass_at(eta),
+        }
+    }
+
+    /// The stiffness at η (as [`Self::at`]).
+    pub fn stiffness_at(&self, eta: f64) -> Matrix6<f64> {
+        self.interpolate(eta, |s| &s.stiffness)
+    }
+
+    /// The mass matrix at η (as [`Self::at`]).
+    pub fn mass_at(&self, eta: f64) -> Matrix6<f64> {
+        self.interpolate(eta, |s| &s.mass)
+    }
+
+    /// `(1 − t) X_{k−1} + t X_k` between the stations around η; the end sections outside.
+    #[inline]
+    fn interpolate(&self, eta: f64, of: impl Fn(&Section) -> &Matrix6<f64>) -> Matrix6<f64> {
         let n = self.stations.len();
         if n == 1 || eta <= self.stations[0] {
-            return self.sections[0];
+            return *of(&self.sections[0]);
         }
         if eta >= self.stations[n - 1] {
-            return self.sections[n - 1];
+            return *of(&self.sections[n - 1]);
         }
         let k = self.stations.partition_point(|&s| s <= eta).clamp(1, n - 1);
         let (a, b) = (self.stations[k - 1], self.stations[k]);
         let t = (eta - a) / (b - a);
-        let (sa, sb) = (&self.sections[k - 1], &self.sections[k]);
-        Section {
-            stiffness: sa.stiffness * (1.0 - t) + sb.stiffness * t,
-            mass: sa.mass * (1.0 - t) + sb.mass * t,
-        }
+        of(&self.sections[k - 1]) * (1.0 - t) + of(&self.sections[k]) * t
     }
 }
 
@@ -222,7 +237,13 @@ impl SectionTable {
 /// semi-definite for any μᵢ ≥ 0 (dissipation ėᵀDė ≥ 0), and `μ C` for equal μᵢ
 /// (Hansen 2001's anisotropic form of Rayleigh damping).
 pub fn damping_matrix(c: &Matrix6<f64>, mu: &[f64; 6]) -> Matrix6<f64> {
-    Matrix6::from_fn(|i, j| mu[i].sqrt() * c[(i, j)] * mu[j].sqrt())
+    damping_matrix_from_roots(c, &mu.map(f64::sqrt))
+}
+
+/// [`damping_matrix`] from `√μᵢ`: `D_ij = √μᵢ C_ij √μⱼ`.
+#[inline]
+pub fn damping_matrix_from_roots(c: &Matrix6<f64>, root_mu: &[f64; 6]) -> Matrix6<f64> {
+    Matrix6::from_fn(|i, j| root_mu[i] * c[(i, j)] * root_mu[j])
 }
 
 #[cfg(test)]

@@ -98,14 +98,15 @@ impl BeamElement {
         let mut u = 0.0;
         for (p, ep) in self.elastic.iter().enumerate() {
             let f = self.elastic_fields(ep, g);
+            let c = self.table.stiffness_at(ep.eta);
             let sec = ElasticSection {
-                c: &ep.c,
+                c: &c,
                 d: None,
                 eps0: ep.eps0,
                 k0: ep.k0,
             };
             kernel::elastic(&f, &sec, false, &mut eo);
-            u += 0.5 * ep.w * eo.strain.dot(&(ep.c * eo.strain));
+            u += 0.5 * ep.w * eo.strain.dot(&(c * eo.strain));
             if let Some(o) = out.as_deref_mut() {
                 o[p] = eo.strain;
             }
@@ -135,19 +136,21 @@ impl BeamElement {
                 eps0 -= sh[p].fixed_rows::<3>(0);
                 k0 -= sh[p].fixed_rows::<3>(3);
             }
+            let (c, d) = self.section_matrices(ep);
             let sec = ElasticSection {
-                c: &ep.c,
-                d: if damping { ep.d.as_ref() } else { None },
+                c: &c,
+                d: if damping { d.as_ref() } else { None },
                 eps0,
                 k0,
             };
             kernel::elastic(&f, &sec, false, &mut eo);
+            let (h, dh) = self.shape_of(ep);
             for j in 0..nn {
-                let fx = eo.f_xp * (ep.w * ep.dh[j]);
+                let fx = eo.f_xp * (ep.w * dh[j]);
                 for i in 0..3 {
                     out[6 * j + i] += fx[i];
                 }
-                g.fq[j] += (eo.f_q * ep.h[j] + eo.f_qp * ep.dh[j]) * ep.w;
+                g.fq[j] += (eo.f_q * h[j] + eo.f_qp * dh[j]) * ep.w;
             }
         }
         for j in 0..nn {
@@ -199,7 +202,7 @@ impl BeamElement {
                         Vector6::zeros()
                     };
                     let shift = (e - prev) * step.decay;
-                    dis += ep.w * e.dot(&(ep.c * shift));
+                    dis += ep.w * e.dot(&(self.table.stiffness_at(ep.eta) * shift));
                     strain1[p] = shift;
                 }
             }
@@ -209,7 +212,7 @@ impl BeamElement {
             let mut damp = std::mem::take(&mut g.rows_b);
             let shift = decaying.then_some(&strain1[..self.elastic.len()]);
             self.elastic_rows(g, false, shift, &mut rows);
-            let damped = self.elastic.iter().any(|e| e.d.is_some());
+            let damped = self.root_damping.is_some();
             if damped {
                 self.elastic_rows(g, true, shift, &mut damp);
                 for (a, b) in damp.iter_mut().zip(&rows) {
@@ -326,7 +329,7 @@ impl BeamElement {
             .enumerate()
             .map(|(p, ep)| {
                 let e = Vector6::from_column_slice(&memory[6 * p..6 * p + 6]);
-                0.5 * ep.w * e.dot(&(ep.c * e))
+                0.5 * ep.w * e.dot(&(self.table.stiffness_at(ep.eta) * e))
             })
             .sum()
     }
