@@ -1438,7 +1438,20 @@ impl Element for AeroStation {
 mod tests {
     use super::*;
     use crate::core::ElementState;
-    use crate::tangent_check::random_node;
+
+    /// A node in a generic state from `k` (deterministic; components of order one).
+    fn generic_node(k: u64) -> NodeState {
+        let val = |j: u64| ((k * 31 + j) as f64 * 0.754_877_666).fract() * 2.0 - 1.0;
+        let v3 = |j: u64| Vector3::new(val(j), val(j + 1), val(j + 2));
+        NodeState {
+            x: v3(0),
+            rot: crate::math::Rotation::exp(&(v3(3) * 2.0)),
+            v: v3(6),
+            w: v3(9) * 2.0,
+            a: v3(12),
+            wd: v3(15),
+        }
+    }
 
     /// The AVX copy of the tangents ([`AeroStation::tangents_avx`], taken by `evaluate`
     /// on CPUs with AVX) and the baseline copy give the same residual and tangents to the
@@ -1480,7 +1493,7 @@ mod tests {
             // Nodes near a spinning blade station at r ≈ 2 (BEM finds its windmill root).
             let nodes: Vec<NodeState> = (0..7)
                 .map(|i| {
-                    let mut n = random_node(900 + i);
+                    let mut n = generic_node(900 + i);
                     n.x = Vector3::new(0.05, 0.1, 2.0) + 0.02 * n.x;
                     n.v = Vector3::new(0.3, -12.0, 0.2) + 0.1 * n.v;
                     n.w *= 0.3;
