@@ -542,16 +542,7 @@ fn an_offset_body_must_have_its_node_to_itself() {
     if let AnalysisKind::Dynamic(d) = &mut m.analyses[0].kind {
         d.integrator = IntegratorType::EnergyPreserving;
     }
-    let sys = System::new(&m);
-    let mut h = samara::analysis::History::default();
-    let s = samara::analysis::run_analysis(
-        &sys,
-        &m.analyses[0],
-        sys.initial_state(),
-        &mut h,
-        &mut |_| {},
-    )
-    .unwrap();
+    let (s, _) = common::run_unchecked(&m, 0);
     let why = format!("{:?}", s.failure);
     assert!(
         why.contains("body `arm`")
