@@ -367,7 +367,7 @@ fn main() {
             .matrix()
             .tr_mul(&(m.nodes[tip].position - m.nodes[hub].position));
     println!(
-        "at t = {:.2} s: aerodynamic power {:.1} kW, thrust {:.2} kN, blade 1 tip deflection (hub frame) [{:.4}, {:.4}, {:.4}] m",
+        "at t = {:.2} s: aerodynamic power {:.2} kW, thrust {:.3} kN, blade 1 tip deflection (hub frame) [{:.4}, {:.4}, {:.4}] m",
         end.time,
         power / 1e3,
         thrust / 1e3,
