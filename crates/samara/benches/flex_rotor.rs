@@ -42,8 +42,15 @@
 //! the node rows vectorized; the airfoil tables' interval from a binned index):
 //! `oye modified turbulent` callgrind over 0.3 s 849.3M → 746.3M, CPU 0.94 → 0.84 ms per
 //! step (11.9× real time; load average ≈ 5.5, builds interleaved); power, thrust and tip
-//! deflection unchanged. The history is in docs/aerodynamics.md,
-//! "Performance".
+//! deflection unchanged. Seventh round (modified Newton keeps its factorization across
+//! round-off changes of the grid's step, which had forced a refresh at every other step,
+//! and replaces a matrix that contracted slower than 0.1 at the next step): 2.40 → 2.74
+//! iterations and 0.49 → 0.17 factorizations per step, callgrind over 0.3 s 750.9M →
+//! 561.5M, over 10 s 13.63G → 9.05G; CPU 1.07–1.09 → 0.79–0.82 ms per step (9.3× →
+//! 12.4× real time; builds interleaved, load average 2–3.5, a slower machine state than
+//! the sixth round's 0.84 ms for the old build: ≈ 16× there); thrust 728.26 → 728.321 kN
+//! (full Newton 728.258 kN, as modified Newton at tolerance 1e-9: a tolerance effect).
+//! Short of 20×. The history is in docs/aerodynamics.md, "Performance".
 //!
 //! The run ends by printing the aerodynamic power, the thrust and blade 1's tip deflection
 //! (hub frame) at its last step, to compare builds.
@@ -367,7 +374,7 @@ fn main() {
             .matrix()
             .tr_mul(&(m.nodes[tip].position - m.nodes[hub].position));
     println!(
-        "at t = {:.2} s: aerodynamic power {:.1} kW, thrust {:.2} kN, blade 1 tip deflection (hub frame) [{:.4}, {:.4}, {:.4}] m",
+        "at t = {:.2} s: aerodynamic power {:.2} kW, thrust {:.3} kN, blade 1 tip deflection (hub frame) [{:.4}, {:.4}, {:.4}] m",
         end.time,
         power / 1e3,
         thrust / 1e3,

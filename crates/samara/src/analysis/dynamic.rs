@@ -23,6 +23,16 @@ use std::time::Instant;
 /// Consecutive successful steps after a cut before the step is doubled again.
 const REGROW_AFTER: usize = 4;
 
+/// Relative difference of step sizes below which a factorization made for one serves the
+/// other (modified Newton): the steps of a fixed grid, `t0 + (k+1)·step − t_k`, differ in
+/// their last bits from step to step, and a matrix is never exact for the iterate anyway.
+const SAME_STEP: f64 = 1e-9;
+
+/// Whether a matrix assembled for the step `factored` still serves the step `h`.
+fn same_step(h: f64, factored: f64) -> bool {
+    (h - factored).abs() <= SAME_STEP * h
+}
+
 /// How a step's first Newton iterate is predicted (λ_{n+1} = λ_n always).
 ///
 /// - `Extrapolate`: v̇_{n+1} = v̇_n, exact for constant accelerations — the best guess for
@@ -453,7 +463,7 @@ impl Integrator<'_> {
             },
             step: h,
         };
-        if h != self.factored_h {
+        if !same_step(h, self.factored_h) {
             self.lin.invalidate();
         }
         let settings = NewtonSettings {

@@ -13,7 +13,12 @@
 //! 2. the constraint violation `max |Φ|` at the updated iterate is ≤ the tolerance.
 //!
 //! With `reuse_jacobian` (modified Newton) the factorization is kept while the correction
-//! norm contracts by at least [`SLOW_CONTRACTION`] per iteration.
+//! norm contracts by at least [`SLOW_CONTRACTION`] per iteration. A solve that converged
+//! with a reused matrix whose last contraction rate θ exceeded [`STALE_CONTRACTION`]
+//! drops the factorization, so that the next solve starts with a fresh matrix instead of
+//! spending extra iterations on the stale one (the rate of a reused matrix's second
+//! correction is not judged: the first carries the predictor's error in the unknowns the
+//! norm does not measure, such as multipliers and element states).
 //!
 //! With `line_search` (damped Newton) a correction that has not converged is accepted only
 //! if it lowers the residual norm, `‖r(y + αΔ)‖ ≤ (1 − 10⁻⁴ α) ‖r(y)‖` (Armijo on ‖r‖);
@@ -30,6 +35,14 @@ use super::{BlockMatrix, LinearError, LinearSolver};
 /// matrix costs about five residual iterations in the chain benchmark, so a matrix that
 /// still halves the correction is worth keeping (docs/integrators.md).
 pub const SLOW_CONTRACTION: f64 = 0.5;
+
+/// Contraction rate of a reused matrix's last correction above which modified Newton
+/// refactorizes at the start of the next solve: a stale matrix costs several iterations
+/// in every solve until one of them contracts slower than [`SLOW_CONTRACTION`], a fresh
+/// one two. Measured (docs/integrators.md): 0.1 beats 0.2 and no carry-over on the chain
+/// benchmark (N = 100 revolute, modified, callgrind) and on the flexible rotor, where
+/// 0.05 and 0.2 come close.
+pub const STALE_CONTRACTION: f64 = 0.1;
 
 /// A nonlinear problem `r(y) = 0` with iteration matrix `J ≈ ∂r/∂y`.
 pub trait NewtonSystem {
@@ -198,6 +211,10 @@ pub fn newton(
             let viol = problem.constraint_violation();
             report.constraint_violation = viol;
             if viol <= settings.constraint_tolerance {
+                // A matrix that contracted slowly is replaced at the next solve (module doc).
+                if settings.reuse_jacobian && !fresh && it >= 3 && theta > STALE_CONTRACTION {
+                    lin.invalidate();
+                }
                 return Ok(report);
             }
         }
