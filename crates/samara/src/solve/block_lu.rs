@@ -103,6 +103,8 @@ struct Scatter {
     rows: u32,
     cols: u32,
     transpose: bool,
+    /// Original block row.
+    row: u32,
     /// Elimination position of the block column.
     col: usize,
 }
@@ -159,7 +161,9 @@ impl BlockLuSymbolic {
         }
         drop(adj);
 
-        // ---- storage layout: per k: D_k, then (L_ik, U_ki) for i in S_k ----
+        // ---- storage layout: per k: D_k, then U_ki for i in S_k; after all of them, per
+        // k the L_ik: the forward solve streams through the L part alone, the backward
+        // solve through the D and U part alone ----
         let size: Vec<usize> = order.iter().map(|&b| s.block_size(b)).collect();
         let roff: Vec<usize> = order.iter().map(|&b| s.block_offset(b)).collect();
         let mut d_off = Vec::with_capacity(n);
@@ -173,17 +177,21 @@ impl BlockLuSymbolic {
             off += sk * sk;
             for &i in &srows[k] {
                 let si = size[i];
-                let l = off;
-                let u = off + si * sk;
-                off += 2 * si * sk;
                 s_ent.push(OffDiag {
                     roff: roff[i],
                     size: si,
-                    l,
-                    u,
+                    l: 0,
+                    u: off,
                 });
+                off += si * sk;
             }
             s_ptr.push(s_ent.len());
+        }
+        for k in 0..n {
+            for e in &mut s_ent[s_ptr[k]..s_ptr[k + 1]] {
+                e.l = off;
+                off += e.size * size[k];
+            }
         }
         let n_values = off;
 
@@ -236,6 +244,7 @@ impl BlockLuSymbolic {
                     rows: s.block_size(bi) as u32,
                     cols: s.block_size(bj) as u32,
                     transpose: bi != bj,
+                    row: bi as u32,
                     col: pos[bj],
                 });
                 covered[dst] = true;
@@ -263,11 +272,15 @@ impl BlockLuSymbolic {
                 }
             }
         }
-        // Sort scatter by destination, last first: the copy streams through the factor
-        // storage downwards and leaves its beginning, where the elimination starts, in the
-        // cache (at 10,000 beam elements the copy with ascending destinations had every
+        // Copy the blocks in the reverse of the order the elimination first needs them
+        // (by the first step that touches them, then by destination; last first): the
+        // blocks of the first steps are copied last and are still in the cache when the
+        // elimination starts (at 10,000 beam elements the copy in ascending order had every
         // block evicted again before the elimination reached it: factorization time −48 %).
-        scatter.sort_unstable_by_key(|sc| std::cmp::Reverse(sc.dst));
+        scatter.sort_unstable_by_key(|sc| {
+            let step = pos[sc.row as usize].min(sc.col);
+            std::cmp::Reverse((step, sc.dst))
+        });
 
         let max_size = size.iter().copied().max().unwrap_or(0);
         Ok(Self {
