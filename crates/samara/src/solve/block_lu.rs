@@ -20,7 +20,9 @@
 //! Pivot blocks are stored row-major, off-diagonal blocks (`L_ik`, `U_kj`) column-major:
 //! the products with them in the solves, the Schur updates into them and the triangular
 //! solves for `L_ik` then run down contiguous columns, as vector operations across
-//! independent rows, with every sum still taken term by term in the same order.
+//! independent rows, with every sum still taken term by term in the same order. The storage
+//! holds, per position, `D_k` and the `U_ki`, then in a segment of its own all `L_ik`: the
+//! forward solve streams through the L blocks alone, the backward solve through the rest.
 //!
 //! # Ordering
 //!
