@@ -257,6 +257,11 @@ fn modified_newton_converges_to_the_full_newton_answer() {
         if tol <= 1e-10 {
             assert!(sm.factorizations * 3 <= sf.factorizations);
         }
+        if tol == 1e-8 {
+            // A factorization serves every step of the fixed grid, whose sizes differ by
+            // round-off (8 here; 48 when such a difference forced a refresh).
+            assert!(sm.factorizations <= 16, "{}", sm.factorizations);
+        }
         errors.push(e);
     }
     assert!(errors[0] < 1e-5, "{errors:?}");
