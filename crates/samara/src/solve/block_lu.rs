@@ -575,27 +575,20 @@ impl BlockLu {
             let len = rows * cols;
             let src = &av[sc.src..sc.src + len];
             let dst = &mut vals[sc.dst..sc.dst + len];
-            // Copy and column maximum in one pass. Same value as a fold of `f64::max` (NaN
-            // entries are skipped either way), in a form the compiler vectorizes.
+            // Column maximum: the same value as a fold of `f64::max` (NaN entries are
+            // skipped either way; the maximum does not depend on the order), in a form the
+            // compiler vectorizes.
             let mut m = 0.0f64;
+            for &x in src {
+                let a = x.abs();
+                if a > m {
+                    m = a;
+                }
+            }
             if sc.transpose {
-                for (r, row) in src.chunks_exact(cols).enumerate() {
-                    for (c, &x) in row.iter().enumerate() {
-                        dst[c * rows + r] = x;
-                        let a = x.abs();
-                        if a > m {
-                            m = a;
-                        }
-                    }
-                }
+                transpose_into(src, dst, rows, cols);
             } else {
-                for (d, &x) in dst.iter_mut().zip(src) {
-                    *d = x;
-                    let a = x.abs();
-                    if a > m {
-                        m = a;
-                    }
-                }
+                dst.copy_from_slice(src);
             }
             let c = &mut colmax[sc.col];
             *c = c.max(m);
@@ -938,42 +931,61 @@ fn rsolve_block(x: &mut [f64], lu: &[f64], perm: &[u32], m: usize, s: usize, tmp
         let x = &mut x[..m * S];
         let mut r0 = 0;
         while r0 < m {
-            let mr = (m - r0).min(R);
-            let mut w = [[0.0f64; R]; S]; // w[c][r] = X[r0 + r][c]
-            for c in 0..S {
-                w[c][..mr].copy_from_slice(&x[c * m + r0..c * m + r0 + mr]);
-            }
-            // Uᵀ w = x
-            for c in 0..S {
-                let mut acc = w[c];
-                for q in 0..c {
-                    let u = lu[q][c];
-                    for r in 0..R {
-                        acc[r] -= u * w[q][r];
-                    }
-                }
-                let d = lu[c][c];
-                for r in 0..R {
-                    w[c][r] = acc[r] * d;
-                }
-            }
-            // Lᵀ v = w
-            for c in (0..S).rev() {
-                let mut acc = w[c];
-                for q in c + 1..S {
-                    let l = lu[q][c];
-                    for r in 0..R {
-                        acc[r] -= l * w[q][r];
-                    }
-                }
-                w[c] = acc;
-            }
-            // x = Pᵀ v
-            for c in 0..S {
-                let pc = perm[c] as usize;
-                x[pc * m + r0..pc * m + r0 + mr].copy_from_slice(&w[c][..mr]);
+            // The group's row count as a constant: its copies in and out are then fixed
+            // loads and stores, not calls to `memcpy` with a run-time length.
+            match m - r0 {
+                1 => group::<S, 1>(x, lu, &perm, m, r0),
+                2 => group::<S, 2>(x, lu, &perm, m, r0),
+                3 => group::<S, 3>(x, lu, &perm, m, r0),
+                4 => group::<S, 4>(x, lu, &perm, m, r0),
+                5 => group::<S, 5>(x, lu, &perm, m, r0),
+                _ => group::<S, R>(x, lu, &perm, m, r0),
             }
             r0 += R;
+        }
+    }
+    /// Rows `r0 .. r0 + G` of `X`.
+    #[inline(always)]
+    fn group<const S: usize, const G: usize>(
+        x: &mut [f64],
+        lu: &[[f64; S]],
+        perm: &[u32; S],
+        m: usize,
+        r0: usize,
+    ) {
+        let mut w = [[0.0f64; G]; S]; // w[c][r] = X[r0 + r][c]
+        for c in 0..S {
+            w[c].copy_from_slice(&x[c * m + r0..c * m + r0 + G]);
+        }
+        // Uᵀ w = x
+        for c in 0..S {
+            let mut acc = w[c];
+            for q in 0..c {
+                let u = lu[q][c];
+                for r in 0..G {
+                    acc[r] -= u * w[q][r];
+                }
+            }
+            let d = lu[c][c];
+            for r in 0..G {
+                w[c][r] = acc[r] * d;
+            }
+        }
+        // Lᵀ v = w
+        for c in (0..S).rev() {
+            let mut acc = w[c];
+            for q in c + 1..S {
+                let l = lu[q][c];
+                for r in 0..G {
+                    acc[r] -= l * w[q][r];
+                }
+            }
+            w[c] = acc;
+        }
+        // x = Pᵀ v
+        for c in 0..S {
+            let pc = perm[c] as usize;
+            x[pc * m + r0..pc * m + r0 + G].copy_from_slice(&w[c]);
         }
     }
     match s {
@@ -1009,6 +1021,53 @@ fn rsolve_block(x: &mut [f64], lu: &[f64], perm: &[u32], m: usize, s: usize, tmp
             }
         }
     }
+}
+
+/// `dst = srcᵀ`: `src` (`rows × cols`, row-major) copied column-major into `dst`. Node
+/// and joint block sizes (up to 6) are dispatched to compile-time constants, so the copy
+/// unrolls into straight loads and stores.
+#[inline(always)]
+fn transpose_into(src: &[f64], dst: &mut [f64], rows: usize, cols: usize) {
+    #[inline(always)]
+    fn fixed<const R: usize, const C: usize>(src: &[f64], dst: &mut [f64]) {
+        let src = as_rows::<C>(&src[..R * C]);
+        let dst = as_rows_mut::<R>(&mut dst[..R * C]);
+        for r in 0..R {
+            for c in 0..C {
+                dst[c][r] = src[r][c];
+            }
+        }
+    }
+    macro_rules! dispatch {
+        ($($rr:literal),*; $cs:tt) => {
+            match rows {
+                $( $rr => dispatch!(@c $rr $cs), )*
+                _ => dynamic(src, dst, rows, cols),
+            }
+        };
+        (@c $rr:literal [$($cc:literal),*]) => {
+            match cols {
+                $( $cc => fixed::<$rr, $cc>(src, dst), )*
+                _ => dynamic(src, dst, rows, cols),
+            }
+        };
+    }
+    #[inline(never)]
+    fn dynamic(src: &[f64], dst: &mut [f64], rows: usize, cols: usize) {
+        for (r, row) in src[..rows * cols].chunks_exact(cols).enumerate() {
+            for (c, &x) in row.iter().enumerate() {
+                dst[c * rows + r] = x;
+            }
+        }
+    }
+    dispatch!(1, 2, 3, 4, 5, 6; [1, 2, 3, 4, 5, 6])
+}
+
+#[inline(always)]
+fn as_rows_mut<const K: usize>(s: &mut [f64]) -> &mut [[f64; K]] {
+    let (rows, rest) = s.as_chunks_mut::<K>();
+    debug_assert!(rest.is_empty());
+    rows
 }
 
 #[inline(always)]

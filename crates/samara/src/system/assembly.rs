@@ -1769,8 +1769,36 @@ fn add_block6(dst: &mut [f64], src: &[f64], nr: usize, a: usize, b: usize) {
 /// rank-one updates `K[:, j] += ρ b_r[j] b_r` per row `b_r` of `B` (copied row-major into
 /// `rows`): contiguous column updates the compiler vectorizes, in place of nalgebra's
 /// `gemm_tr` (one short dot product per entry).
+/// One- and two-node constraints (`nl` = 6, 12) have the column length as a constant, so
+/// each column update unrolls into whole vector operations.
 #[inline(always)]
 fn add_gram(k: &mut [f64], b: &[f64], rows: &mut [f64], m: usize, nl: usize, rho: f64) {
+    #[inline(always)]
+    fn fixed<const NL: usize>(k: &mut [f64], b: &[f64], rows: &mut [f64], m: usize, rho: f64) {
+        let rows = &mut rows[..m * NL];
+        for (j, col) in b[..m * NL].chunks_exact(m).enumerate() {
+            for (r, &x) in col.iter().enumerate() {
+                rows[r * NL + j] = x;
+            }
+        }
+        let (k, _) = k[..NL * NL].as_chunks_mut::<NL>();
+        for row in rows.as_chunks::<NL>().0 {
+            for (kc, &bj) in k.iter_mut().zip(row) {
+                let s = rho * bj;
+                if s == 0.0 {
+                    continue;
+                }
+                for (kv, &bi) in kc.iter_mut().zip(row) {
+                    *kv += s * bi;
+                }
+            }
+        }
+    }
+    match nl {
+        12 => return fixed::<12>(k, b, rows, m, rho),
+        6 => return fixed::<6>(k, b, rows, m, rho),
+        _ => {}
+    }
     let rows = &mut rows[..m * nl];
     for (j, col) in b[..m * nl].chunks_exact(m).enumerate() {
         for (r, &x) in col.iter().enumerate() {
