@@ -8,6 +8,13 @@
 //! Words keep only the runs whose joint kind, analysis name or Newton variant they name
 //! (`revolute rho0.9 full`); `t_end` shortens the runs and `repeats` overrides the
 //! repetitions (for profiling and instruction counts).
+//!
+//! Issue #17's targets, N = 100 revolute, ρ∞ = 0.9: 0.3 s with full Newton, 0.15 s with
+//! modified Newton. On the 2-core VM of 2026-11-27 (1.43× slower than the earlier
+//! sessions', where the fifth round's code ran 0.289 / 0.139 s), after the sixth round:
+//! 0.374 / 0.192 s (best of 8 interleaved runs of this bench, load average 3.5–3.9; 0.417 /
+//! 0.195 s before it); callgrind `-- 100 revolute rho0.9 full t_end=0.1 repeats=1`
+//! 597.5M instructions (655.3M before). README "Benchmarks", docs/integrators.md.
 
 use samara::analysis::{History, run_analysis};
 use samara::model::Model;
