@@ -578,7 +578,13 @@ impl BlockLu {
             // Column maximum: the same value as a fold of `f64::max` (NaN entries are
             // skipped either way; the maximum does not depend on the order), in a form the
             // compiler vectorizes.
-            let m = abs_max(src);
+            let mut m = 0.0f64;
+            for &x in src {
+                let a = x.abs();
+                if a > m {
+                    m = a;
+                }
+            }
             if sc.transpose {
                 transpose_into(src, dst, rows, cols);
             } else {
@@ -1015,31 +1021,6 @@ fn rsolve_block(x: &mut [f64], lu: &[f64], perm: &[u32], m: usize, s: usize, tmp
             }
         }
     }
-}
-
-/// `max |x|` over `v` (0 for an empty slice; NaN entries skipped, as a fold of `f64::max`),
-/// in four independent lanes combined at the end — the maximum does not depend on the
-/// order, and the lanes vectorize.
-#[inline(always)]
-fn abs_max(v: &[f64]) -> f64 {
-    let (chunks, rest) = v.as_chunks::<4>();
-    let mut lanes = [0.0f64; 4];
-    for c in chunks {
-        for j in 0..4 {
-            let a = c[j].abs();
-            if a > lanes[j] {
-                lanes[j] = a;
-            }
-        }
-    }
-    let mut m = 0.0f64;
-    for &x in lanes.iter().chain(rest) {
-        let a = x.abs();
-        if a > m {
-            m = a;
-        }
-    }
-    m
 }
 
 /// `dst = srcᵀ`: `src` (`rows × cols`, row-major) copied column-major into `dst`. Node
