@@ -12,9 +12,9 @@
 //! Issue #17's targets, N = 100 revolute, ρ∞ = 0.9: 0.3 s with full Newton, 0.15 s with
 //! modified Newton. On the 2-core VM of 2026-11-27 (1.43× slower than the earlier
 //! sessions', where the fifth round's code ran 0.289 / 0.139 s), after the sixth round:
-//! 0.374 / 0.192 s (best of 8 interleaved runs of this bench, load average 3.5–3.9; 0.417 /
-//! 0.195 s before it); callgrind `-- 100 revolute rho0.9 full t_end=0.1 repeats=1`
-//! 597.5M instructions (655.3M before). README "Benchmarks", docs/integrators.md.
+//! 0.374 / 0.184 s (best of 8 interleaved runs of this bench, load average 2.8–3.6; 0.417 /
+//! 0.194 s before it); callgrind `-- 100 revolute rho0.9 full t_end=0.1 repeats=1`
+//! 597.4M instructions (655.3M before). README "Benchmarks", docs/integrators.md.
 
 use samara::analysis::{History, run_analysis};
 use samara::model::Model;
