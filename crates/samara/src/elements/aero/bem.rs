@@ -32,6 +32,13 @@ pub const WARM_ITERATIONS: usize = 8;
 /// Newton step [rad] below which the warm start has converged (the implicit-function
 /// step that follows squares it).
 pub const WARM_TOLERANCE: f64 = 1e-10;
+/// Error [rad] the values-only chord iteration leaves ([`BemRotor::chord_root`]): below
+/// the bracketing's 1e-14 rad, a few ulps of φ.
+pub const CHORD_TOLERANCE: f64 = 1e-15;
+/// Contraction rate of the chord iteration above which Newton takes over.
+pub const CHORD_CONTRACTION: f64 = 0.1;
+/// Exponent x of Prandtl's e^{−x} past which acos(e^{−x}) is π/2 in f64 (from 37 on).
+const LOSS_SATURATION: f64 = 40.0;
 /// Lower end of the windmill bracket (0, π/2) [rad].
 const BRACKET_EPS: f64 = 1e-6;
 
@@ -83,17 +90,18 @@ pub struct StationFlow<S> {
 }
 
 impl BemRotor {
-    fn loss<S: Scalar>(&self, phi: S, r: S) -> S {
+    /// Prandtl's F = F_tip F_hub from sin φ and r.
+    fn loss<S: Scalar>(&self, sin_phi: S, r: S) -> S {
         let b = self.blades as f64;
-        let s = phi.sin().abs();
+        let s = sin_phi.abs();
         let mut f = S::cst(1.0);
         if self.tip_loss && r.re() < self.tip_radius {
             let x = (S::cst(self.tip_radius) - r) * (b / 2.0) / (r * s);
-            f = f * (-x).exp().acos() * (2.0 / PI);
+            f = f * prandtl_acos(x) * (2.0 / PI);
         }
         if self.hub_loss && r.re() > self.hub_radius && self.hub_radius > 0.0 {
             let x = (r - self.hub_radius) * (b / 2.0) / (s * self.hub_radius);
-            f = f * (-x).exp().acos() * (2.0 / PI);
+            f = f * prandtl_acos(x) * (2.0 / PI);
         }
         f
     }
@@ -107,11 +115,11 @@ impl BemRotor {
     ) -> (S, Induction<S>) {
         let (sp, cp) = (phi.sin(), phi.cos());
         let alpha = phi - p.theta;
-        let ([cl, cd, _], _) = airfoil.coefficients(alpha, p.re);
+        let [cl, cd] = airfoil.lift_drag(alpha, p.re);
         let cn = cl * cp + cd * sp;
         let ct = cl * sp - cd * cp;
         let sigma = S::cst(self.blades as f64 * p.chord / (2.0 * PI)) / p.r;
-        let loss = self.loss(phi, p.r);
+        let loss = self.loss(sp, p.r);
         let k = sigma * cn / (loss * sp * sp * 4.0);
         let mut kp = sigma * ct / (loss * sp * cp * 4.0);
         if !self.tangential_induction {
@@ -192,20 +200,27 @@ impl BemRotor {
         };
         // R and ∂R/∂φ at φ (one dual direction), with the induction's φ-derivatives.
         let with_slope = |phi: f64| self.residual(Dual::<1>::var(phi, 0), &pd, airfoil);
+        if S::DIRECTIONS == 0 {
+            // Values only: the chord iteration from the hint, the implicit-function step
+            // in values (no derivatives to carry).
+            let ind = match hint.and_then(|h| self.chord_root(h, &pv, airfoil, &with_slope)) {
+                Some(ind) => ind,
+                None => {
+                    let phi = self.bracketed(&pv, airfoil)?;
+                    carried(phi, &with_slope(phi))
+                }
+            };
+            return Some(Induction {
+                phi: S::cst(ind.phi),
+                a: S::cst(ind.a),
+                ap: S::cst(ind.ap),
+                loss: S::cst(ind.loss),
+            });
+        }
         let (phi, (r_phi, ind_phi)) = match hint.and_then(|h| self.newton_root(h, &with_slope)) {
             Some(found) => found,
             None => {
-                let f = |x: f64| self.residual_value(x, &pv, airfoil);
-                let brackets = [
-                    (BRACKET_EPS, FRAC_PI_2),
-                    (-FRAC_PI_2 / 2.0, -BRACKET_EPS),
-                    (FRAC_PI_2, PI - BRACKET_EPS),
-                ];
-                let phi = brackets.iter().find_map(|&(lo, hi)| {
-                    let (flo, fhi) = (f(lo), f(hi));
-                    (flo.is_finite() && fhi.is_finite() && flo * fhi <= 0.0)
-                        .then(|| bracketed_root(&f, lo, hi, flo, fhi))
-                })?;
+                let phi = self.bracketed(&pv, airfoil)?;
                 (phi, with_slope(phi))
             }
         };
@@ -231,6 +246,78 @@ impl BemRotor {
 }
 
 impl BemRotor {
+    /// The root of the first bracket that holds one (windmill, propeller brake, then
+    /// φ > π/2), by [`bracketed_root`]; `None` if none does.
+    fn bracketed(&self, pv: &StationFlow<f64>, airfoil: &Airfoil) -> Option<f64> {
+        let f = |x: f64| self.residual_value(x, pv, airfoil);
+        let brackets = [
+            (BRACKET_EPS, FRAC_PI_2),
+            (-FRAC_PI_2 / 2.0, -BRACKET_EPS),
+            (FRAC_PI_2, PI - BRACKET_EPS),
+        ];
+        brackets.iter().find_map(|&(lo, hi)| {
+            let (flo, fhi) = (f(lo), f(hi));
+            (flo.is_finite() && fhi.is_finite() && flo * fhi <= 0.0)
+                .then(|| bracketed_root(&f, lo, hi, flo, fhi))
+        })
+    }
+
+    /// The values-only root from `phi0` inside the windmill bracket: one Newton step with
+    /// the exact slope R′(φ₀) (one dual direction), then the chord iteration
+    /// φ ← φ − R(φ)/R′(φ₀) in f64 until the error it leaves, |s| θ/(1 − θ) for a step s
+    /// contracting at θ = |s/s_prev|, is ≤ [`CHORD_TOLERANCE`]; the last step is applied
+    /// to the induction along its φ-derivative at φ₀ (an error O(s (φ − φ₀)), inside
+    /// the same bound). A first step ≤ [`WARM_TOLERANCE`] ends it as the implicit-function
+    /// step does. A contraction slower than [`CHORD_CONTRACTION`] hands over to Newton
+    /// ([`Self::newton_root`]); `None` as that does (the caller brackets).
+    fn chord_root(
+        &self,
+        phi0: f64,
+        pv: &StationFlow<f64>,
+        airfoil: &Airfoil,
+        with_slope: &dyn Fn(f64) -> (Dual<1>, Induction<Dual<1>>),
+    ) -> Option<Induction<f64>> {
+        let inside = |x: f64| x > BRACKET_EPS && x < FRAC_PI_2;
+        if !inside(phi0) {
+            return None;
+        }
+        let at = with_slope(phi0);
+        let slope = at.0.d[0];
+        let s0 = -at.0.v / slope;
+        if !s0.is_finite() || !inside(phi0 + s0) {
+            return None;
+        }
+        if s0.abs() <= WARM_TOLERANCE {
+            return Some(carried(phi0, &at));
+        }
+        let mut phi = phi0 + s0;
+        let mut last = s0.abs();
+        for _ in 0..WARM_ITERATIONS {
+            let (r, ind) = self.residual(phi, pv, airfoil);
+            let s = -r / slope;
+            if !s.is_finite() || !inside(phi + s) {
+                break;
+            }
+            let theta = s.abs() / last;
+            if theta >= CHORD_CONTRACTION {
+                break;
+            }
+            if s.abs() * theta / (1.0 - theta) <= CHORD_TOLERANCE {
+                let along = |v: f64, dv: Dual<1>| v + s * dv.d[0];
+                return Some(Induction {
+                    phi: phi + s,
+                    a: along(ind.a, at.1.a),
+                    ap: along(ind.ap, at.1.ap),
+                    loss: along(ind.loss, at.1.loss),
+                });
+            }
+            phi += s;
+            last = s.abs();
+        }
+        self.newton_root(phi, with_slope)
+            .map(|(phi, at)| carried(phi, &at))
+    }
+
     /// Newton's iteration from `phi` inside the windmill bracket (0, π/2): the last
     /// iterate φ (its step below [`WARM_TOLERANCE`]) with R, ∂R/∂φ and the induction
     /// there, or `None` (a step leaves the bracket, a non-finite or zero slope, or no
@@ -256,6 +343,41 @@ impl BemRotor {
             phi += step;
         }
         None
+    }
+}
+
+/// acos(e^{−x}) of Prandtl's factor. Past [`LOSS_SATURATION`] e^{−x} < 2⁻⁵³ and acos
+/// rounds to π/2 (as computed), its derivative e^{−x}/√(1 − e^{−2x}) dx below rounding:
+/// π/2 without the exp and acos (most stations' hub loss).
+#[inline]
+fn prandtl_acos<S: Scalar>(x: S) -> S {
+    if x.re() > LOSS_SATURATION {
+        S::cst(FRAC_PI_2)
+    } else {
+        (-x).exp().acos()
+    }
+}
+
+/// The induction at φ* + δφ from R, ∂R/∂φ and the induction at φ* (one dual direction),
+/// δφ = −R/∂R/∂φ: the implicit-function step in values.
+fn carried(phi: f64, at: &(Dual<1>, Induction<Dual<1>>)) -> Induction<f64> {
+    let (r, ind) = at;
+    let dr = r.d[0];
+    if dr.abs() <= 1e-300 {
+        return Induction {
+            phi,
+            a: ind.a.v,
+            ap: ind.ap.v,
+            loss: ind.loss.v,
+        };
+    }
+    let dphi = -(r.v / dr);
+    let along = |v: Dual<1>| v.v + dphi * v.d[0];
+    Induction {
+        phi: phi + dphi,
+        a: along(ind.a),
+        ap: along(ind.ap),
+        loss: along(ind.loss),
     }
 }
 
