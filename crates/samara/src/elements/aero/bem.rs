@@ -263,13 +263,15 @@ impl BemRotor {
     }
 
     /// The values-only root from `phi0` inside the windmill bracket: one Newton step with
-    /// the exact slope R′(φ₀) (one dual direction), then the chord iteration
-    /// φ ← φ − R(φ)/R′(φ₀) in f64 until the error it leaves, |s| θ/(1 − θ) for a step s
-    /// contracting at θ = |s/s_prev|, is ≤ [`CHORD_TOLERANCE`]; the last step is applied
-    /// to the induction along its φ-derivative at φ₀ (an error O(s (φ − φ₀)), inside
-    /// the same bound). A first step ≤ [`WARM_TOLERANCE`] ends it as the implicit-function
-    /// step does. A contraction slower than [`CHORD_CONTRACTION`] hands over to Newton
-    /// ([`Self::newton_root`]); `None` as that does (the caller brackets).
+    /// the exact slope m = R′(φ₀) (one dual direction), then steps φ ← φ − R(φ)/m in f64
+    /// with m updated from each new residual (the slope at φ of the quadratic through the
+    /// last iterate's R and m and this R; no derivative evaluated), until the error the
+    /// chord step would leave, |s| θ/(1 − θ) for a step s contracting at θ = |s/s_prev|,
+    /// is ≤ [`CHORD_TOLERANCE`] (the updated slope's own error is smaller); the last step
+    /// is applied to the induction along its φ-derivative at φ₀ (an error O(s (φ − φ₀)),
+    /// of the same order). A first step ≤ [`WARM_TOLERANCE`] ends it as the
+    /// implicit-function step does. A contraction slower than [`CHORD_CONTRACTION`] hands
+    /// over to Newton ([`Self::newton_root`]); `None` as that does (the caller brackets).
     fn chord_root(
         &self,
         phi0: f64,
@@ -282,7 +284,7 @@ impl BemRotor {
             return None;
         }
         let at = with_slope(phi0);
-        let slope = at.0.d[0];
+        let mut slope = at.0.d[0];
         let s0 = -at.0.v / slope;
         if !s0.is_finite() || !inside(phi0 + s0) {
             return None;
@@ -291,14 +293,17 @@ impl BemRotor {
             return Some(carried(phi0, &at));
         }
         let mut phi = phi0 + s0;
-        let mut last = s0.abs();
+        let mut last = s0;
         for _ in 0..WARM_ITERATIONS {
             let (r, ind) = self.residual(phi, pv, airfoil);
+            // The slope at φ of the quadratic with the last iterate's R and slope whose
+            // value here is R (the last step zeroed its linear part): m ← m + 2R/s.
+            slope += 2.0 * r / last;
             let s = -r / slope;
             if !s.is_finite() || !inside(phi + s) {
                 break;
             }
-            let theta = s.abs() / last;
+            let theta = (s / last).abs();
             if theta >= CHORD_CONTRACTION {
                 break;
             }
@@ -312,7 +317,7 @@ impl BemRotor {
                 });
             }
             phi += s;
-            last = s.abs();
+            last = s;
         }
         self.newton_root(phi, with_slope)
             .map(|(phi, at)| carried(phi, &at))
