@@ -21,7 +21,9 @@
 //! derivative (one dual direction) starts there; it is accepted when a step falls below
 //! [`WARM_TOLERANCE`] without leaving the bracket within [`WARM_ITERATIONS`] steps,
 //! otherwise the bracketing above runs. The implicit-function step that follows is one
-//! more Newton step, so the root agrees with the bracketed one to rounding.
+//! more Newton step, so the root agrees with the bracketed one to rounding. A values-only
+//! solve (f64) takes one such Newton step and then f64 residuals with the slope updated
+//! from each ([`BemRotor::chord_root`]), to an estimated 1e-15 rad.
 
 use super::airfoil::Airfoil;
 use crate::math::dual::{Dual, Scalar};
@@ -265,11 +267,11 @@ impl BemRotor {
     /// The values-only root from `phi0` inside the windmill bracket: one Newton step with
     /// the exact slope m = R′(φ₀) (one dual direction), then steps φ ← φ − R(φ)/m in f64
     /// with m updated from each new residual (the slope at φ of the quadratic through the
-    /// last iterate's R and m and this R; no derivative evaluated), until the error the
-    /// chord step would leave, |s| θ/(1 − θ) for a step s contracting at θ = |s/s_prev|,
-    /// is ≤ [`CHORD_TOLERANCE`] (the updated slope's own error is smaller); the last step
-    /// is applied to the induction along its φ-derivative at φ₀ (an error O(s (φ − φ₀)),
-    /// of the same order). A first step ≤ [`WARM_TOLERANCE`] ends it as the
+    /// last iterate's R and m and this R; no derivative evaluated). The last step s is
+    /// applied to the induction along its φ-derivatives at φ₀, an error O(s (φ − φ₀)),
+    /// so it stops when |s| max(θ/(1 − θ), |φ − φ₀|) ≤ [`CHORD_TOLERANCE`], θ = |s/s_prev|
+    /// the contraction (the first term the error a chord step would leave; the updated
+    /// slope's is smaller). A first step ≤ [`WARM_TOLERANCE`] ends it as the
     /// implicit-function step does. A contraction slower than [`CHORD_CONTRACTION`] hands
     /// over to Newton ([`Self::newton_root`]); `None` as that does (the caller brackets).
     fn chord_root(
@@ -307,7 +309,10 @@ impl BemRotor {
             if theta >= CHORD_CONTRACTION {
                 break;
             }
-            if s.abs() * theta / (1.0 - theta) <= CHORD_TOLERANCE {
+            // The error the chord step would leave, and that of carrying the step along
+            // the φ-derivatives at φ₀ instead of at the root.
+            let moved = (phi + s - phi0).abs();
+            if s.abs() * (theta / (1.0 - theta)).max(moved) <= CHORD_TOLERANCE {
                 let along = |v: f64, dv: Dual<1>| v + s * dv.d[0];
                 return Some(Induction {
                     phi: phi + s,
@@ -498,6 +503,64 @@ mod tests {
         // The near hints converge by Newton (not by the fallback): at least the 48 near
         // ones of the 72.
         assert!(warm >= 48, "{warm} warm starts converged");
+    }
+
+    /// The values-only solve (f64: one dual Newton step from the hint, then f64 steps
+    /// with the updated slope, [`BemRotor::chord_root`]) gives the values of the dual
+    /// path (Newton in one-direction dual numbers to 1e-10 rad, then the implicit-function
+    /// step): over the sweep of `warm_start_finds_the_bracketed_root`, from hints 1e-2,
+    /// 1e-4 and 1e-6 rad off the root (a step's, an iteration's and a converged state's
+    /// change of φ), φ, a, a′ and F agree to 1e-13 (the values-only path stops at an
+    /// estimated 1e-15 rad, the dual one squares a ≤ 1e-10 step; both round differently).
+    #[test]
+    fn values_only_root_matches_the_dual_path() {
+        let rotor = BemRotor {
+            blades: 3,
+            hub_radius: 1.5,
+            tip_radius: 63.0,
+            tip_loss: true,
+            hub_loss: true,
+            tangential_induction: true,
+            skewed_wake: false,
+        };
+        let airfoil = Airfoil::thin_plate_with_drag();
+        for r in [5.0, 12.0, 25.0, 40.0, 55.0, 62.0] {
+            for theta in [-0.05, 0.0, 0.1, 0.25] {
+                let p = StationFlow {
+                    vx: 11.4,
+                    vy: 1.267 * r,
+                    r,
+                    chord: 4.0 - 0.04 * r,
+                    theta,
+                    re: None,
+                };
+                let pd = StationFlow {
+                    vx: Dual::<1>::cst(p.vx),
+                    vy: Dual::<1>::cst(p.vy),
+                    r: Dual::<1>::cst(p.r),
+                    chord: p.chord,
+                    theta: Dual::<1>::cst(p.theta),
+                    re: None,
+                };
+                let root = rotor.solve(&p, &airfoil).unwrap().phi;
+                for off in [1e-2, -1e-2, 1e-4, -1e-6] {
+                    let hint = Some(root + off);
+                    let f = rotor.solve_near(&p, &airfoil, hint).unwrap();
+                    let d = rotor.solve_near(&pd, &airfoil, hint).unwrap();
+                    for (x, y) in [
+                        (f.phi, d.phi.v),
+                        (f.a, d.a.v),
+                        (f.ap, d.ap.v),
+                        (f.loss, d.loss.v),
+                    ] {
+                        assert!(
+                            (x - y).abs() <= 1e-13,
+                            "r {r} θ {theta} hint {off:e} off: {x} vs {y}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     /// A hint outside the windmill bracket is not used: the bracketing finds the root.
