@@ -54,8 +54,9 @@
 //! slope, then f64 steps with the slope updated from the residuals instead of repeated
 //! dual-number Newton steps and a redundant residual; the hub loss without exp/acos where
 //! it rounds to 1; Øye's curves from the loads' own table lookup; cl and cd only in the
-//! momentum balance): callgrind over 10 s 9.05G → 7.85G (−13.2 %), over 2 s 2120.9M →
-//! 1835.8M; CPU see docs/aerodynamics.md; power, thrust and tip deflection unchanged.
+//! momentum balance): callgrind over 10 s 9.05G → 7.88G (−12.9 %), over 2 s 2120.9M →
+//! 1845.4M; CPU 0.79–0.80 → 0.69–0.70 ms per step (12.6× → 14.3× real time, builds
+//! interleaved, load average ≈ 1.5); power, thrust and tip deflection unchanged.
 //! Short of 20×. The history is in docs/aerodynamics.md, "Performance".
 //!
 //! The run ends by printing the aerodynamic power, the thrust and blade 1's tip deflection
