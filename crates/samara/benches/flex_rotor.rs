@@ -50,6 +50,13 @@
 //! 12.4× real time; builds interleaved, load average 2–3.5, a slower machine state than
 //! the sixth round's 0.84 ms for the old build: ≈ 16× there); thrust 728.26 → 728.321 kN
 //! (full Newton 728.258 kN, as modified Newton at tolerance 1e-9: a tolerance effect).
+//! Eighth round (the stations' f64 path: the BEM root by one Newton step with the exact
+//! slope, then f64 steps with the slope updated from the residuals instead of repeated
+//! dual-number Newton steps and a redundant residual; the hub loss without exp/acos where
+//! it rounds to 1; Øye's curves from the loads' own table lookup; cl and cd only in the
+//! momentum balance): callgrind over 10 s 9.05G → 7.88G (−12.9 %), over 2 s 2120.9M →
+//! 1845.4M; CPU 0.79–0.80 → 0.69–0.70 ms per step (12.6× → 14.3× real time, builds
+//! interleaved, load average ≈ 1.5); power, thrust and tip deflection unchanged.
 //! Short of 20×. The history is in docs/aerodynamics.md, "Performance".
 //!
 //! The run ends by printing the aerodynamic power, the thrust and blade 1's tip deflection

@@ -60,7 +60,7 @@ pub struct Coefficients {
 }
 
 /// One table of an airfoil covering −π … π.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 struct Table {
     /// Angles of attack [rad], strictly increasing, first −π, last π.
     alpha: Vec<f64>,
@@ -412,8 +412,11 @@ impl Table {
         k
     }
 
-    /// Coefficients at α [rad] (any angle: wrapped to −π … π).
-    fn eval(&self, alpha: f64) -> Coefficients {
+    /// The cubic Hermite pieces at α [rad] (any angle: wrapped to −π … π): the interval
+    /// i, its width h, and the basis functions and their α-derivatives
+    /// (h₀₀, h₁₀, h₀₁, h₁₁, then d/dα of each).
+    #[inline(always)]
+    fn hermite(&self, alpha: f64) -> (usize, f64, [f64; 4], [f64; 4]) {
         let a = wrap(alpha);
         let n = self.alpha.len();
         let i = match self.interval(a) {
@@ -423,29 +426,42 @@ impl Table {
         };
         let h = self.alpha[i + 1] - self.alpha[i];
         let t = (a - self.alpha[i]) / h;
-        let (h00, h10, h01, h11) = (
-            (1.0 + 2.0 * t) * (1.0 - t) * (1.0 - t),
-            t * (1.0 - t) * (1.0 - t),
-            t * t * (3.0 - 2.0 * t),
-            t * t * (t - 1.0),
-        );
-        let (d00, d10, d01, d11) = (
-            6.0 * t * (t - 1.0) / h,
-            (1.0 - t) * (1.0 - 3.0 * t) / h,
-            6.0 * t * (1.0 - t) / h,
-            t * (3.0 * t - 2.0) / h,
-        );
-        let f = |c: usize| {
-            let (y0, y1) = (self.values[c][i], self.values[c][i + 1]);
-            let (m0, m1) = (self.slopes[c][i], self.slopes[c][i + 1]);
-            (
-                h00 * y0 + h10 * h * m0 + h01 * y1 + h11 * h * m1,
-                d00 * y0 + d10 * h * m0 + d01 * y1 + d11 * h * m1,
-            )
-        };
-        let (cl, dcl) = f(0);
-        let (cd, dcd) = f(1);
-        let (cm, dcm) = f(2);
+        (
+            i,
+            h,
+            [
+                (1.0 + 2.0 * t) * (1.0 - t) * (1.0 - t),
+                t * (1.0 - t) * (1.0 - t),
+                t * t * (3.0 - 2.0 * t),
+                t * t * (t - 1.0),
+            ],
+            [
+                6.0 * t * (t - 1.0) / h,
+                (1.0 - t) * (1.0 - 3.0 * t) / h,
+                6.0 * t * (1.0 - t) / h,
+                t * (3.0 * t - 2.0) / h,
+            ],
+        )
+    }
+
+    /// Coefficient c (cl, cd, cm) and its α-derivative on the pieces of [`Self::hermite`].
+    #[inline(always)]
+    fn piece(&self, c: usize, (i, h, b, d): &(usize, f64, [f64; 4], [f64; 4])) -> (f64, f64) {
+        let (i, h) = (*i, *h);
+        let (y0, y1) = (self.values[c][i], self.values[c][i + 1]);
+        let (m0, m1) = (self.slopes[c][i], self.slopes[c][i + 1]);
+        (
+            b[0] * y0 + b[1] * h * m0 + b[2] * y1 + b[3] * h * m1,
+            d[0] * y0 + d[1] * h * m0 + d[2] * y1 + d[3] * h * m1,
+        )
+    }
+
+    /// Coefficients at α [rad] (any angle: wrapped to −π … π).
+    fn eval(&self, alpha: f64) -> Coefficients {
+        let at = self.hermite(alpha);
+        let (cl, dcl) = self.piece(0, &at);
+        let (cd, dcd) = self.piece(1, &at);
+        let (cm, dcm) = self.piece(2, &at);
         Coefficients {
             cl,
             cd,
@@ -454,6 +470,12 @@ impl Table {
             dcd,
             dcm,
         }
+    }
+
+    /// cl and cd at α with their α-derivatives, as [`Self::eval`] gives them.
+    fn eval_lift_drag(&self, alpha: f64) -> [(f64, f64); 2] {
+        let at = self.hermite(alpha);
+        [self.piece(0, &at), self.piece(1, &at)]
     }
 }
 
@@ -494,6 +516,12 @@ impl Airfoil {
     /// Coefficients of the first table at α [rad] (any angle: wrapped to −π … π).
     pub fn eval(&self, alpha: f64) -> Coefficients {
         self.tables[0].eval(alpha)
+    }
+
+    /// Whether [`Self::eval`] of the two airfoils is the same function (equal first
+    /// tables).
+    pub fn same_first_table(&self, other: &Airfoil) -> bool {
+        self.tables[0] == other.tables[0]
     }
 
     /// Coefficients at α [rad] and Reynolds number Re, with their derivatives over Re:
@@ -549,6 +577,21 @@ impl Airfoil {
                     ],
                     c,
                 )
+            }
+        }
+    }
+
+    /// cl and cd of [`Self::coefficients`] (the same values and derivatives, c_m left out:
+    /// the momentum balance's lookup).
+    pub fn lift_drag<S: Scalar>(&self, alpha: S, re: Option<S>) -> [S; 2] {
+        match re {
+            None => {
+                let [(cl, dcl), (cd, dcd)] = self.tables[0].eval_lift_drag(alpha.re());
+                [alpha.chain(cl, dcl), alpha.chain(cd, dcd)]
+            }
+            Some(_) => {
+                let ([cl, cd, _], _) = self.coefficients(alpha, re);
+                [cl, cd]
             }
         }
     }

@@ -21,7 +21,9 @@
 //! derivative (one dual direction) starts there; it is accepted when a step falls below
 //! [`WARM_TOLERANCE`] without leaving the bracket within [`WARM_ITERATIONS`] steps,
 //! otherwise the bracketing above runs. The implicit-function step that follows is one
-//! more Newton step, so the root agrees with the bracketed one to rounding.
+//! more Newton step, so the root agrees with the bracketed one to rounding. A values-only
+//! solve (f64) takes one such Newton step and then f64 residuals with the slope updated
+//! from each ([`BemRotor::chord_root`]), to an estimated 1e-15 rad.
 
 use super::airfoil::Airfoil;
 use crate::math::dual::{Dual, Scalar};
@@ -32,6 +34,13 @@ pub const WARM_ITERATIONS: usize = 8;
 /// Newton step [rad] below which the warm start has converged (the implicit-function
 /// step that follows squares it).
 pub const WARM_TOLERANCE: f64 = 1e-10;
+/// Error [rad] the values-only chord iteration leaves ([`BemRotor::chord_root`]): below
+/// the bracketing's 1e-14 rad, a few ulps of φ.
+pub const CHORD_TOLERANCE: f64 = 1e-15;
+/// Contraction rate of the chord iteration above which Newton takes over.
+pub const CHORD_CONTRACTION: f64 = 0.1;
+/// Exponent x of Prandtl's e^{−x} past which acos(e^{−x}) is π/2 in f64 (from 37 on).
+const LOSS_SATURATION: f64 = 40.0;
 /// Lower end of the windmill bracket (0, π/2) [rad].
 const BRACKET_EPS: f64 = 1e-6;
 
@@ -83,17 +92,18 @@ pub struct StationFlow<S> {
 }
 
 impl BemRotor {
-    fn loss<S: Scalar>(&self, phi: S, r: S) -> S {
+    /// Prandtl's F = F_tip F_hub from sin φ and r.
+    fn loss<S: Scalar>(&self, sin_phi: S, r: S) -> S {
         let b = self.blades as f64;
-        let s = phi.sin().abs();
+        let s = sin_phi.abs();
         let mut f = S::cst(1.0);
         if self.tip_loss && r.re() < self.tip_radius {
             let x = (S::cst(self.tip_radius) - r) * (b / 2.0) / (r * s);
-            f = f * (-x).exp().acos() * (2.0 / PI);
+            f = f * prandtl_acos(x) * (2.0 / PI);
         }
         if self.hub_loss && r.re() > self.hub_radius && self.hub_radius > 0.0 {
             let x = (r - self.hub_radius) * (b / 2.0) / (s * self.hub_radius);
-            f = f * (-x).exp().acos() * (2.0 / PI);
+            f = f * prandtl_acos(x) * (2.0 / PI);
         }
         f
     }
@@ -107,11 +117,11 @@ impl BemRotor {
     ) -> (S, Induction<S>) {
         let (sp, cp) = (phi.sin(), phi.cos());
         let alpha = phi - p.theta;
-        let ([cl, cd, _], _) = airfoil.coefficients(alpha, p.re);
+        let [cl, cd] = airfoil.lift_drag(alpha, p.re);
         let cn = cl * cp + cd * sp;
         let ct = cl * sp - cd * cp;
         let sigma = S::cst(self.blades as f64 * p.chord / (2.0 * PI)) / p.r;
-        let loss = self.loss(phi, p.r);
+        let loss = self.loss(sp, p.r);
         let k = sigma * cn / (loss * sp * sp * 4.0);
         let mut kp = sigma * ct / (loss * sp * cp * 4.0);
         if !self.tangential_induction {
@@ -192,20 +202,27 @@ impl BemRotor {
         };
         // R and ∂R/∂φ at φ (one dual direction), with the induction's φ-derivatives.
         let with_slope = |phi: f64| self.residual(Dual::<1>::var(phi, 0), &pd, airfoil);
+        if S::DIRECTIONS == 0 {
+            // Values only: the chord iteration from the hint, the implicit-function step
+            // in values (no derivatives to carry).
+            let ind = match hint.and_then(|h| self.chord_root(h, &pv, airfoil, &with_slope)) {
+                Some(ind) => ind,
+                None => {
+                    let phi = self.bracketed(&pv, airfoil)?;
+                    carried(phi, &with_slope(phi))
+                }
+            };
+            return Some(Induction {
+                phi: S::cst(ind.phi),
+                a: S::cst(ind.a),
+                ap: S::cst(ind.ap),
+                loss: S::cst(ind.loss),
+            });
+        }
         let (phi, (r_phi, ind_phi)) = match hint.and_then(|h| self.newton_root(h, &with_slope)) {
             Some(found) => found,
             None => {
-                let f = |x: f64| self.residual_value(x, &pv, airfoil);
-                let brackets = [
-                    (BRACKET_EPS, FRAC_PI_2),
-                    (-FRAC_PI_2 / 2.0, -BRACKET_EPS),
-                    (FRAC_PI_2, PI - BRACKET_EPS),
-                ];
-                let phi = brackets.iter().find_map(|&(lo, hi)| {
-                    let (flo, fhi) = (f(lo), f(hi));
-                    (flo.is_finite() && fhi.is_finite() && flo * fhi <= 0.0)
-                        .then(|| bracketed_root(&f, lo, hi, flo, fhi))
-                })?;
+                let phi = self.bracketed(&pv, airfoil)?;
                 (phi, with_slope(phi))
             }
         };
@@ -231,6 +248,86 @@ impl BemRotor {
 }
 
 impl BemRotor {
+    /// The root of the first bracket that holds one (windmill, propeller brake, then
+    /// φ > π/2), by [`bracketed_root`]; `None` if none does.
+    fn bracketed(&self, pv: &StationFlow<f64>, airfoil: &Airfoil) -> Option<f64> {
+        let f = |x: f64| self.residual_value(x, pv, airfoil);
+        let brackets = [
+            (BRACKET_EPS, FRAC_PI_2),
+            (-FRAC_PI_2 / 2.0, -BRACKET_EPS),
+            (FRAC_PI_2, PI - BRACKET_EPS),
+        ];
+        brackets.iter().find_map(|&(lo, hi)| {
+            let (flo, fhi) = (f(lo), f(hi));
+            (flo.is_finite() && fhi.is_finite() && flo * fhi <= 0.0)
+                .then(|| bracketed_root(&f, lo, hi, flo, fhi))
+        })
+    }
+
+    /// The values-only root from `phi0` inside the windmill bracket: one Newton step with
+    /// the exact slope m = R′(φ₀) (one dual direction), then steps φ ← φ − R(φ)/m in f64
+    /// with m updated from each new residual (the slope at φ of the quadratic through the
+    /// last iterate's R and m and this R; no derivative evaluated). The last step s is
+    /// applied to the induction along its φ-derivatives at φ₀, an error O(s (φ − φ₀)),
+    /// so it stops when |s| max(θ/(1 − θ), |φ − φ₀|) ≤ [`CHORD_TOLERANCE`], θ = |s/s_prev|
+    /// the contraction (the first term the error a chord step would leave; the updated
+    /// slope's is smaller). A first step ≤ [`WARM_TOLERANCE`] ends it as the
+    /// implicit-function step does. A contraction slower than [`CHORD_CONTRACTION`] hands
+    /// over to Newton ([`Self::newton_root`]); `None` as that does (the caller brackets).
+    fn chord_root(
+        &self,
+        phi0: f64,
+        pv: &StationFlow<f64>,
+        airfoil: &Airfoil,
+        with_slope: &dyn Fn(f64) -> (Dual<1>, Induction<Dual<1>>),
+    ) -> Option<Induction<f64>> {
+        let inside = |x: f64| x > BRACKET_EPS && x < FRAC_PI_2;
+        if !inside(phi0) {
+            return None;
+        }
+        let at = with_slope(phi0);
+        let mut slope = at.0.d[0];
+        let s0 = -at.0.v / slope;
+        if !s0.is_finite() || !inside(phi0 + s0) {
+            return None;
+        }
+        if s0.abs() <= WARM_TOLERANCE {
+            return Some(carried(phi0, &at));
+        }
+        let mut phi = phi0 + s0;
+        let mut last = s0;
+        for _ in 0..WARM_ITERATIONS {
+            let (r, ind) = self.residual(phi, pv, airfoil);
+            // The slope at φ of the quadratic with the last iterate's R and slope whose
+            // value here is R (the last step zeroed its linear part): m ← m + 2R/s.
+            slope += 2.0 * r / last;
+            let s = -r / slope;
+            if !s.is_finite() || !inside(phi + s) {
+                break;
+            }
+            let theta = (s / last).abs();
+            if theta >= CHORD_CONTRACTION {
+                break;
+            }
+            // The error the chord step would leave, and that of carrying the step along
+            // the φ-derivatives at φ₀ instead of at the root.
+            let moved = (phi + s - phi0).abs();
+            if s.abs() * (theta / (1.0 - theta)).max(moved) <= CHORD_TOLERANCE {
+                let along = |v: f64, dv: Dual<1>| v + s * dv.d[0];
+                return Some(Induction {
+                    phi: phi + s,
+                    a: along(ind.a, at.1.a),
+                    ap: along(ind.ap, at.1.ap),
+                    loss: along(ind.loss, at.1.loss),
+                });
+            }
+            phi += s;
+            last = s;
+        }
+        self.newton_root(phi, with_slope)
+            .map(|(phi, at)| carried(phi, &at))
+    }
+
     /// Newton's iteration from `phi` inside the windmill bracket (0, π/2): the last
     /// iterate φ (its step below [`WARM_TOLERANCE`]) with R, ∂R/∂φ and the induction
     /// there, or `None` (a step leaves the bracket, a non-finite or zero slope, or no
@@ -256,6 +353,41 @@ impl BemRotor {
             phi += step;
         }
         None
+    }
+}
+
+/// acos(e^{−x}) of Prandtl's factor. Past [`LOSS_SATURATION`] e^{−x} < 2⁻⁵³ and acos
+/// rounds to π/2 (as computed), its derivative e^{−x}/√(1 − e^{−2x}) dx below rounding:
+/// π/2 without the exp and acos (most stations' hub loss).
+#[inline]
+fn prandtl_acos<S: Scalar>(x: S) -> S {
+    if x.re() > LOSS_SATURATION {
+        S::cst(FRAC_PI_2)
+    } else {
+        (-x).exp().acos()
+    }
+}
+
+/// The induction at φ* + δφ from R, ∂R/∂φ and the induction at φ* (one dual direction),
+/// δφ = −R/∂R/∂φ: the implicit-function step in values.
+fn carried(phi: f64, at: &(Dual<1>, Induction<Dual<1>>)) -> Induction<f64> {
+    let (r, ind) = at;
+    let dr = r.d[0];
+    if dr.abs() <= 1e-300 {
+        return Induction {
+            phi,
+            a: ind.a.v,
+            ap: ind.ap.v,
+            loss: ind.loss.v,
+        };
+    }
+    let dphi = -(r.v / dr);
+    let along = |v: Dual<1>| v.v + dphi * v.d[0];
+    Induction {
+        phi: phi + dphi,
+        a: along(ind.a),
+        ap: along(ind.ap),
+        loss: along(ind.loss),
     }
 }
 
@@ -371,6 +503,64 @@ mod tests {
         // The near hints converge by Newton (not by the fallback): at least the 48 near
         // ones of the 72.
         assert!(warm >= 48, "{warm} warm starts converged");
+    }
+
+    /// The values-only solve (f64: one dual Newton step from the hint, then f64 steps
+    /// with the updated slope, [`BemRotor::chord_root`]) gives the values of the dual
+    /// path (Newton in one-direction dual numbers to 1e-10 rad, then the implicit-function
+    /// step): over the sweep of `warm_start_finds_the_bracketed_root`, from hints 1e-2,
+    /// 1e-4 and 1e-6 rad off the root (a step's, an iteration's and a converged state's
+    /// change of φ), φ, a, a′ and F agree to 1e-13 (the values-only path stops at an
+    /// estimated 1e-15 rad, the dual one squares a ≤ 1e-10 step; both round differently).
+    #[test]
+    fn values_only_root_matches_the_dual_path() {
+        let rotor = BemRotor {
+            blades: 3,
+            hub_radius: 1.5,
+            tip_radius: 63.0,
+            tip_loss: true,
+            hub_loss: true,
+            tangential_induction: true,
+            skewed_wake: false,
+        };
+        let airfoil = Airfoil::thin_plate_with_drag();
+        for r in [5.0, 12.0, 25.0, 40.0, 55.0, 62.0] {
+            for theta in [-0.05, 0.0, 0.1, 0.25] {
+                let p = StationFlow {
+                    vx: 11.4,
+                    vy: 1.267 * r,
+                    r,
+                    chord: 4.0 - 0.04 * r,
+                    theta,
+                    re: None,
+                };
+                let pd = StationFlow {
+                    vx: Dual::<1>::cst(p.vx),
+                    vy: Dual::<1>::cst(p.vy),
+                    r: Dual::<1>::cst(p.r),
+                    chord: p.chord,
+                    theta: Dual::<1>::cst(p.theta),
+                    re: None,
+                };
+                let root = rotor.solve(&p, &airfoil).unwrap().phi;
+                for off in [1e-2, -1e-2, 1e-4, -1e-6] {
+                    let hint = Some(root + off);
+                    let f = rotor.solve_near(&p, &airfoil, hint).unwrap();
+                    let d = rotor.solve_near(&pd, &airfoil, hint).unwrap();
+                    for (x, y) in [
+                        (f.phi, d.phi.v),
+                        (f.a, d.a.v),
+                        (f.ap, d.ap.v),
+                        (f.loss, d.loss.v),
+                    ] {
+                        assert!(
+                            (x - y).abs() <= 1e-13,
+                            "r {r} θ {theta} hint {off:e} off: {x} vs {y}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     /// A hint outside the windmill bracket is not used: the bracketing finds the root.

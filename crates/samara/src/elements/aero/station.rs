@@ -201,6 +201,9 @@ pub struct AeroStation {
     /// The user property the airfoil's tables are interpolated in (AeroDyn's AFTabMod
     /// = 3), if any.
     user_property: Option<UserProperty>,
+    /// Whether Øye's stall curves read the section's airfoil table (then, without Re
+    /// interpolation, they take the static coefficients the loads looked up already).
+    stall_reads_section: bool,
 }
 
 /// Where a station's user property (e.g. a flap angle) comes from, AeroDyn's `UserProp`.
@@ -320,6 +323,7 @@ impl AeroStation {
             span: 0.0,
             gust_x: 0.0,
             user_property: None,
+            stall_reads_section: false,
         }
     }
 
@@ -344,6 +348,10 @@ impl AeroStation {
     /// quasi-steady values for the motion of `nodes` at time `t` (a station already in
     /// steady flow starts without a transient).
     pub fn with_unsteady(mut self, unsteady: Unsteady, t: f64, nodes: &[NodeState]) -> Self {
+        self.stall_reads_section = unsteady
+            .stall
+            .as_ref()
+            .is_some_and(|(stall, _)| stall.reads(&self.section.airfoil));
         self.unsteady = unsteady;
         self.initial = self.quasi_steady_states(t, nodes);
         let k = self.kinematics(nodes);
@@ -704,7 +712,11 @@ impl AeroStation {
                     (sc.f, sc.fs, sc.inv)
                 }
                 None => {
-                    let sc = stall.eval(alpha_e.re());
+                    let sc = if re.is_none() && self.stall_reads_section {
+                        stall.eval_with(alpha_e.re(), c)
+                    } else {
+                        stall.eval(alpha_e.re())
+                    };
                     (
                         alpha_e.chain(sc.f, sc.df),
                         alpha_e.chain(sc.fs, sc.dfs),

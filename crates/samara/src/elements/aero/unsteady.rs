@@ -35,7 +35,7 @@
 //! static table is recovered exactly. The row is written `ḟ + (V/(A_τ c)) (f − f_st)`
 //! (units 1/s), so it stays finite as V → 0.
 
-use super::airfoil::{Airfoil, TableWeight};
+use super::airfoil::{Airfoil, Coefficients, TableWeight};
 use crate::math::dual::Scalar;
 
 /// R. T. Jones' (1940) coefficients of the Wagner function's exponential approximation.
@@ -224,7 +224,18 @@ impl OyeStall {
     /// table lifts more than c_lα(α − α₀) (r > 1) the attached lift is the table's own
     /// (cl_inv = cl, f_st = 1): the static polar is reproduced everywhere.
     pub fn eval(&self, alpha: f64) -> StallCurves {
-        let c = self.airfoil.eval(alpha);
+        self.eval_with(alpha, self.airfoil.eval(alpha))
+    }
+
+    /// Whether [`Self::eval_with`] may take the static coefficients from `airfoil`'s
+    /// [`Airfoil::eval`] (it reads the same first table).
+    pub fn reads(&self, airfoil: &Airfoil) -> bool {
+        self.airfoil.same_first_table(airfoil)
+    }
+
+    /// [`Self::eval`] from the static coefficients `c` at α of its airfoil's first table
+    /// (a caller that has them already).
+    pub fn eval_with(&self, alpha: f64, c: Coefficients) -> StallCurves {
         let a = super::airfoil::wrap(alpha);
         let (lo, hi) = self.attached_range;
         let d = a - self.zero_lift;
