@@ -445,15 +445,9 @@ fn bracketed_root(
 mod tests {
     use super::*;
 
-    /// The warm start finds the bracketed root: over a sweep of an NREL 5-MW-like rotor's
-    /// stations (11.4 m/s, 12.1 rpm, radii 5…62 m, chords and twists around the blade's),
-    /// from a hint 0.05 rad off (a previous step's root) and from a far one (1.5 rad),
-    /// φ, a, a' and F agree with the bracketed solution. Both end with the same
-    /// implicit-function (Newton) step from a root converged to ≤ 1e-10 rad (warm) or
-    /// 1e-14 rad (bracketing), so they agree to rounding: 1e-12.
-    #[test]
-    fn warm_start_finds_the_bracketed_root() {
-        let rotor = BemRotor {
+    /// An NREL 5-MW-like rotor (3 blades, hub 1.5 m, tip 63 m, both losses).
+    fn sweep_rotor() -> BemRotor {
+        BemRotor {
             blades: 3,
             hub_radius: 1.5,
             tip_radius: 63.0,
@@ -461,43 +455,64 @@ mod tests {
             hub_loss: true,
             tangential_induction: true,
             skewed_wake: false,
-        };
-        let airfoil = Airfoil::thin_plate_with_drag();
-        let mut warm = 0;
-        for r in [5.0, 12.0, 25.0, 40.0, 55.0, 62.0] {
-            for theta in [-0.05, 0.0, 0.1, 0.25] {
-                let p = StationFlow {
+        }
+    }
+
+    /// Its stations' flow over a sweep: 11.4 m/s, 12.1 rpm, radii 5…62 m, chords and
+    /// twists around the blade's.
+    fn sweep_flows() -> impl Iterator<Item = StationFlow<f64>> {
+        [5.0, 12.0, 25.0, 40.0, 55.0, 62.0]
+            .into_iter()
+            .flat_map(|r| {
+                [-0.05, 0.0, 0.1, 0.25].map(|theta| StationFlow {
                     vx: 11.4,
                     vy: 1.267 * r,
                     r,
                     chord: 4.0 - 0.04 * r,
                     theta,
                     re: None,
-                };
-                let cold = rotor.solve(&p, &airfoil).unwrap();
-                for hint in [cold.phi + 0.05, cold.phi - 0.05, 1.5] {
-                    let hot = rotor.solve_near(&p, &airfoil, Some(hint)).unwrap();
-                    for (x, y) in [
-                        (hot.phi, cold.phi),
-                        (hot.a, cold.a),
-                        (hot.ap, cold.ap),
-                        (hot.loss, cold.loss),
-                    ] {
-                        assert!((x - y).abs() <= 1e-12, "r {r} θ {theta}: {x} vs {y}");
-                    }
-                    let with_slope = |phi: f64| {
-                        let pd = StationFlow {
-                            vx: Dual::<1>::cst(p.vx),
-                            vy: Dual::<1>::cst(p.vy),
-                            r: Dual::<1>::cst(p.r),
-                            chord: p.chord,
-                            theta: Dual::<1>::cst(p.theta),
-                            re: None,
-                        };
-                        rotor.residual(Dual::<1>::var(phi, 0), &pd, &airfoil)
-                    };
-                    warm += usize::from(rotor.newton_root(hint, &with_slope).is_some());
+                })
+            })
+    }
+
+    /// `p` in one-direction dual numbers (no direction set).
+    fn dual_flow(p: &StationFlow<f64>) -> StationFlow<Dual<1>> {
+        StationFlow {
+            vx: Dual::<1>::cst(p.vx),
+            vy: Dual::<1>::cst(p.vy),
+            r: Dual::<1>::cst(p.r),
+            chord: p.chord,
+            theta: Dual::<1>::cst(p.theta),
+            re: None,
+        }
+    }
+
+    /// The warm start finds the bracketed root: over [`sweep_flows`], from a hint 0.05 rad
+    /// off (a previous step's root) and from a far one (1.5 rad), φ, a, a' and F agree
+    /// with the bracketed solution. Both end with the same implicit-function (Newton)
+    /// step from a root converged to ≤ 1e-10 rad (warm) or 1e-14 rad (bracketing), so
+    /// they agree to rounding: 1e-12.
+    #[test]
+    fn warm_start_finds_the_bracketed_root() {
+        let rotor = sweep_rotor();
+        let airfoil = Airfoil::thin_plate_with_drag();
+        let mut warm = 0;
+        for p in sweep_flows() {
+            let (r, theta) = (p.r, p.theta);
+            let cold = rotor.solve(&p, &airfoil).unwrap();
+            for hint in [cold.phi + 0.05, cold.phi - 0.05, 1.5] {
+                let hot = rotor.solve_near(&p, &airfoil, Some(hint)).unwrap();
+                for (x, y) in [
+                    (hot.phi, cold.phi),
+                    (hot.a, cold.a),
+                    (hot.ap, cold.ap),
+                    (hot.loss, cold.loss),
+                ] {
+                    assert!((x - y).abs() <= 1e-12, "r {r} θ {theta}: {x} vs {y}");
                 }
+                let pd = dual_flow(&p);
+                let with_slope = |phi: f64| rotor.residual(Dual::<1>::var(phi, 0), &pd, &airfoil);
+                warm += usize::from(rotor.newton_root(hint, &with_slope).is_some());
             }
         }
         // The near hints converge by Newton (not by the fallback): at least the 48 near
@@ -508,56 +523,32 @@ mod tests {
     /// The values-only solve (f64: one dual Newton step from the hint, then f64 steps
     /// with the updated slope, [`BemRotor::chord_root`]) gives the values of the dual
     /// path (Newton in one-direction dual numbers to 1e-10 rad, then the implicit-function
-    /// step): over the sweep of `warm_start_finds_the_bracketed_root`, from hints 1e-2,
-    /// 1e-4 and 1e-6 rad off the root (a step's, an iteration's and a converged state's
-    /// change of φ), φ, a, a′ and F agree to 1e-13 (the values-only path stops at an
-    /// estimated 1e-15 rad, the dual one squares a ≤ 1e-10 step; both round differently).
+    /// step): over [`sweep_flows`], from hints 1e-2, 1e-4 and 1e-6 rad off the root (a
+    /// step's, an iteration's and a converged state's change of φ), φ, a, a′ and F agree
+    /// to 1e-13 (the values-only path stops at an estimated 1e-15 rad, the dual one
+    /// squares a ≤ 1e-10 step; both round differently).
     #[test]
     fn values_only_root_matches_the_dual_path() {
-        let rotor = BemRotor {
-            blades: 3,
-            hub_radius: 1.5,
-            tip_radius: 63.0,
-            tip_loss: true,
-            hub_loss: true,
-            tangential_induction: true,
-            skewed_wake: false,
-        };
+        let rotor = sweep_rotor();
         let airfoil = Airfoil::thin_plate_with_drag();
-        for r in [5.0, 12.0, 25.0, 40.0, 55.0, 62.0] {
-            for theta in [-0.05, 0.0, 0.1, 0.25] {
-                let p = StationFlow {
-                    vx: 11.4,
-                    vy: 1.267 * r,
-                    r,
-                    chord: 4.0 - 0.04 * r,
-                    theta,
-                    re: None,
-                };
-                let pd = StationFlow {
-                    vx: Dual::<1>::cst(p.vx),
-                    vy: Dual::<1>::cst(p.vy),
-                    r: Dual::<1>::cst(p.r),
-                    chord: p.chord,
-                    theta: Dual::<1>::cst(p.theta),
-                    re: None,
-                };
-                let root = rotor.solve(&p, &airfoil).unwrap().phi;
-                for off in [1e-2, -1e-2, 1e-4, -1e-6] {
-                    let hint = Some(root + off);
-                    let f = rotor.solve_near(&p, &airfoil, hint).unwrap();
-                    let d = rotor.solve_near(&pd, &airfoil, hint).unwrap();
-                    for (x, y) in [
-                        (f.phi, d.phi.v),
-                        (f.a, d.a.v),
-                        (f.ap, d.ap.v),
-                        (f.loss, d.loss.v),
-                    ] {
-                        assert!(
-                            (x - y).abs() <= 1e-13,
-                            "r {r} θ {theta} hint {off:e} off: {x} vs {y}"
-                        );
-                    }
+        for p in sweep_flows() {
+            let (r, theta) = (p.r, p.theta);
+            let pd = dual_flow(&p);
+            let root = rotor.solve(&p, &airfoil).unwrap().phi;
+            for off in [1e-2, -1e-2, 1e-4, -1e-6] {
+                let hint = Some(root + off);
+                let f = rotor.solve_near(&p, &airfoil, hint).unwrap();
+                let d = rotor.solve_near(&pd, &airfoil, hint).unwrap();
+                for (x, y) in [
+                    (f.phi, d.phi.v),
+                    (f.a, d.a.v),
+                    (f.ap, d.ap.v),
+                    (f.loss, d.loss.v),
+                ] {
+                    assert!(
+                        (x - y).abs() <= 1e-13,
+                        "r {r} θ {theta} hint {off:e} off: {x} vs {y}"
+                    );
                 }
             }
         }
