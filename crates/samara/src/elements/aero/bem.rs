@@ -575,17 +575,8 @@ mod tests {
             theta: 0.05,
             re: None,
         };
-        let with_slope = |phi: f64| {
-            let pd = StationFlow {
-                vx: Dual::<1>::cst(p.vx),
-                vy: Dual::<1>::cst(p.vy),
-                r: Dual::<1>::cst(p.r),
-                chord: p.chord,
-                theta: Dual::<1>::cst(p.theta),
-                re: None,
-            };
-            rotor.residual(Dual::<1>::var(phi, 0), &pd, &airfoil)
-        };
+        let pd = dual_flow(&p);
+        let with_slope = |phi: f64| rotor.residual(Dual::<1>::var(phi, 0), &pd, &airfoil);
         let cold = rotor.solve(&p, &airfoil).unwrap();
         for hint in [-0.3, 2.0, f64::NAN] {
             assert!(rotor.newton_root(hint, &with_slope).is_none());
