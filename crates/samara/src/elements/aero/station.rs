@@ -1353,29 +1353,30 @@ impl Element for AeroStation {
         }
     }
 
+    /// The power of the loads on the nodes, Σᵢ (wᵢF)·vᵢ + wᵢ(dᵢ × RᵢᵀF + RᵢᵀM)·Ωᵢ, summed
+    /// over the nodes first: `P = F·ṗ + M·ω̄`, ṗ = Σ wᵢ (vᵢ + Rᵢ (Ωᵢ × dᵢ)) the station's
+    /// velocity and ω̄ = Σ wᵢ Rᵢ Ωᵢ (global), without the node rows.
     fn external_power(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
-        let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
         let mut zrows = [0.0; MAX_STATES];
         let (z, zd) = self.state_values(x);
         let ns = self.unsteady.states();
         let sv = self.signal_values(x);
-        self.compute(
+        let kin = self.kinematics(x.nodes);
+        let r = self.loads::<f64>(
             ctx.time,
-            x.nodes,
+            &kin,
             &z[..ns],
             &zd[..ns],
             &sv[..self.inputs.len()],
-            &mut rows,
             &mut zrows,
         );
-        // Power of the loads on the nodes' velocities.
-        let mut p = 0.0;
-        for (i, &n) in self.nodes.iter().enumerate() {
-            let ns = &x.nodes[n];
-            let f = Vector3::from(rows[2 * i]);
-            let m = Vector3::from(rows[2 * i + 1]);
-            p += f.dot(&ns.v) + m.dot(&ns.w);
+        let mut omega = Vector3::zeros();
+        for (&n, at) in self.nodes.iter().zip(&self.attach) {
+            let nd = &x.nodes[n];
+            omega += at.weight * (nd.r() * nd.w);
         }
+        let p = Vector3::from(r.force).dot(&Vector3::from(kin.pd))
+            + Vector3::from(r.moment).dot(&omega);
         ctx.load_factor * p
     }
 
