@@ -56,8 +56,14 @@
 //! it rounds to 1; Øye's curves from the loads' own table lookup; cl and cd only in the
 //! momentum balance): callgrind over 10 s 9.05G → 7.88G (−12.9 %), over 2 s 2120.9M →
 //! 1845.4M; CPU 0.79–0.80 → 0.69–0.70 ms per step (12.6× → 14.3× real time, builds
-//! interleaved, load average ≈ 1.5); power, thrust and tip deflection unchanged.
-//! Short of 20×. The history is in docs/aerodynamics.md, "Performance".
+//! interleaved, load average ≈ 1.5); power, thrust and tip deflection unchanged. Ninth
+//! round (the energy balance's station power as F·ṗ + M·ω̄ from the loads, without the
+//! node rows): callgrind over 10 s 7.89G → 7.80G (−1.1 %); CPU 0.742, 0.714, 0.789 →
+//! 0.716, 0.721, 0.779 ms per step (≈ 14×, builds interleaved at load average ≈ 3: within
+//! the noise); last line unchanged. Short of 20×: the
+//! predictor's error (≈ 10³ tolerances, spread over tip motion, rotations and the Øye
+//! states) sets the ≈ 2.7 iterations per step. The history is in docs/aerodynamics.md,
+//! "Performance".
 //!
 //! The run ends by printing the aerodynamic power, the thrust and blade 1's tip deflection
 //! (hub frame) at its last step, to compare builds.
