@@ -262,6 +262,7 @@ impl Joint {
     }
 
     /// Current frames (positions, arms, axes); velocities left at zero.
+    #[inline]
     fn frames(&self, nodes: &[NodeState]) -> FramePair {
         let mut f = FramePair {
             x: [Vector3::zeros(); 2],
@@ -288,6 +289,7 @@ impl Joint {
         f
     }
 
+    #[inline]
     fn row_value(&self, f: &FramePair, coords: &[Coordinate], t: f64, row: &Row) -> RowValue {
         match row {
             Row::Displacement { axis, coord } => RowValue {
@@ -318,6 +320,7 @@ impl Joint {
     }
 
     /// `Φ` of a row only (no Jacobian), for constraint-violation checks.
+    #[inline]
     fn row_phi(&self, f: &FramePair, coords: &[Coordinate], t: f64, row: &Row) -> f64 {
         match row {
             Row::Displacement { axis, coord } => {
@@ -329,6 +332,7 @@ impl Joint {
         }
     }
 
+    #[inline]
     fn rotation_of(&self, side: usize, nodes: &[NodeState]) -> Matrix3<f64> {
         match self.sides[side].node {
             Some(i) => *nodes[i].r(),
@@ -337,6 +341,7 @@ impl Joint {
     }
 
     /// Writes a spatial 12-row into the material local row `out` (length 6·nodes + nc).
+    #[inline]
     fn to_local(&self, b12: &Row12, rots: &[Matrix3<f64>; 2], mut put: impl FnMut(usize, f64)) {
         for (x, s) in self.sides.iter().enumerate() {
             if s.node.is_none() {
