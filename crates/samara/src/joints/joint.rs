@@ -262,7 +262,7 @@ impl Joint {
     }
 
     /// Current frames (positions, arms, axes); velocities left at zero.
-    #[inline]
+    #[inline(always)]
     fn frames(&self, nodes: &[NodeState]) -> FramePair {
         let mut f = FramePair {
             x: [Vector3::zeros(); 2],
@@ -289,7 +289,7 @@ impl Joint {
         f
     }
 
-    #[inline]
+    #[inline(always)]
     fn row_value(&self, f: &FramePair, coords: &[Coordinate], t: f64, row: &Row) -> RowValue {
         match row {
             Row::Displacement { axis, coord } => RowValue {
