@@ -106,7 +106,7 @@ pub mod displacement {
     }
 
     /// `b = [−eᵀ, (e × w)ᵀ, eᵀ, (r_B × e)ᵀ]` with `w = uᴮ − xᴬ`.
-    #[inline]
+    #[inline(always)]
     pub fn jacobian(f: &FramePair, i: usize) -> Row12 {
         let e: Vector3<f64> = f.axes[0].column(i).into();
         let w = f.origin(1) - f.x[0];
@@ -165,14 +165,14 @@ pub mod direction_cosine {
         (f.axes[0].column(p).into(), f.axes[1].column(q).into())
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn value(f: &FramePair, p: usize, q: usize) -> f64 {
         let (e, g) = pair(f, p, q);
         e.dot(&g)
     }
 
     /// `b = [0, nᵀ, 0, −nᵀ]` with `n = e_pᴬ × e_qᴮ`.
-    #[inline]
+    #[inline(always)]
     pub fn jacobian(f: &FramePair, p: usize, q: usize) -> Row12 {
         let (e, g) = pair(f, p, q);
         let n = e.cross(&g);
@@ -321,7 +321,7 @@ impl AngleRow {
     }
 
     /// `Φ`, `∂Φ/∂ν`, `∂²Φ/∂ν²` at the frames `f` and coordinate ν.
-    #[inline]
+    #[inline(always)]
     pub fn value(&self, f: &FramePair, nu: f64) -> [f64; 3] {
         if let Some((p, q)) = self.plain() {
             return [direction_cosine::value(f, p, q), 0.0, 0.0];
@@ -341,7 +341,7 @@ impl AngleRow {
     }
 
     /// `Σ a_t^{(d)}(ν) b_t`: the q-Jacobian row for d = 0, its ν-derivative for d = 1.
-    #[inline]
+    #[inline(always)]
     pub fn jacobian(&self, f: &FramePair, nu: f64, d: usize) -> Row12 {
         if let Some((p, q)) = self.plain() {
             return if d == 0 {

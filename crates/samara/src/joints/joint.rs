@@ -264,29 +264,25 @@ impl Joint {
     /// Current frames (positions, arms, axes); velocities left at zero.
     #[inline(always)]
     fn frames(&self, nodes: &[NodeState]) -> FramePair {
-        let mut f = FramePair {
-            x: [Vector3::zeros(); 2],
-            arm: [Vector3::zeros(); 2],
-            axes: [Matrix3::identity(); 2],
+        // Each side built whole (no zeroed frame overwritten field by field: the partial
+        // overwrites stalled the loads that followed on store forwarding).
+        let side = |s: &Side| match s.node {
+            None => (Vector3::zeros(), s.offset, s.axes),
+            Some(i) => {
+                let n = &nodes[i];
+                let r = n.r();
+                (n.x, r * s.offset, r * s.axes)
+            }
+        };
+        let (xa, arm_a, axes_a) = side(&self.sides[0]);
+        let (xb, arm_b, axes_b) = side(&self.sides[1]);
+        FramePair {
+            x: [xa, xb],
+            arm: [arm_a, arm_b],
+            axes: [axes_a, axes_b],
             v: [Vector3::zeros(); 2],
             omega: [Vector3::zeros(); 2],
-        };
-        for (k, s) in self.sides.iter().enumerate() {
-            match s.node {
-                None => {
-                    f.arm[k] = s.offset;
-                    f.axes[k] = s.axes;
-                }
-                Some(i) => {
-                    let n = &nodes[i];
-                    let r = n.r();
-                    f.x[k] = n.x;
-                    f.arm[k] = r * s.offset;
-                    f.axes[k] = r * s.axes;
-                }
-            }
         }
-        f
     }
 
     #[inline(always)]
