@@ -797,20 +797,34 @@ impl BlockLu {
     }
 }
 
+/// The blocks `rhs[a..a + la]` (read) and `rhs[b..b + lb]` (written) of one vector: two
+/// different blocks of the partition, so disjoint (a slice panics if they are not). The
+/// substitutions read `y_k` in place through it instead of copying it aside: a copy made
+/// with overlapping wide moves stalls the narrow loads that follow on store forwarding.
+#[inline(always)]
+fn block_pair(rhs: &mut [f64], a: usize, la: usize, b: usize, lb: usize) -> (&[f64], &mut [f64]) {
+    if a < b {
+        let (lo, hi) = rhs.split_at_mut(b);
+        (&lo[a..a + la], &mut hi[..lb])
+    } else {
+        let (lo, hi) = rhs.split_at_mut(a);
+        (&hi[..la], &mut lo[b..b + lb])
+    }
+}
+
 /// Forward substitution of block column `k` (pivot size `S`, `y_k` at `rk`):
 /// `y_i −= L_ik y_k` for every off-diagonal block `i` of the column.
 #[inline(always)]
 fn forward_column<const S: usize>(ents: &[OffDiag], vals: &[f64], rk: usize, rhs: &mut [f64]) {
-    let yk: [f64; S] = rhs[rk..rk + S].try_into().unwrap();
     for e in ents {
         let lb = &vals[e.l..e.l + e.size * S];
-        let yi = &mut rhs[e.roff..e.roff + e.size];
-        matvec_acc(lb, &yk, yi, e.size, S, -1.0);
+        let (yk, yi) = block_pair(rhs, rk, S, e.roff, e.size);
+        matvec_acc(lb, yk, yi, e.size, S, -1.0);
     }
 }
 
 /// Backward substitution of block row `k` (pivot size `S`, LU of `D_k` at `d`, `x_k` at
-/// `rk`): `x_k = D_k⁻¹ (y_k − Σ_i U_ki x_i)`.
+/// `rk`): `x_k = D_k⁻¹ (y_k − Σ_i U_ki x_i)`, accumulated in place.
 #[inline(always)]
 fn backward_row<const S: usize>(
     ents: &[OffDiag],
@@ -820,19 +834,18 @@ fn backward_row<const S: usize>(
     rk: usize,
     rhs: &mut [f64],
 ) {
-    let mut t: [f64; S] = rhs[rk..rk + S].try_into().unwrap();
     for e in ents {
         let ub = &vals[e.u..e.u + S * e.size];
-        matvec_acc(ub, &rhs[e.roff..e.roff + e.size], &mut t, S, e.size, -1.0);
+        let (xi, t) = block_pair(rhs, e.roff, e.size, rk, S);
+        matvec_acc(ub, xi, t, S, e.size, -1.0);
     }
-    d_solve(
-        &vals[d..d + S * S],
-        perm,
-        S,
-        &t,
-        &mut rhs[rk..rk + S],
-        &mut [],
-    );
+    let x: &mut [f64; S] = (&mut rhs[rk..rk + S]).try_into().unwrap();
+    let mut y = [0.0f64; S];
+    for c in 0..S {
+        y[c] = x[perm[c] as usize];
+    }
+    d_substitute::<S>(&vals[d..d + S * S], &mut y);
+    *x = y;
 }
 
 // ----------------------------------------------------------------------------
@@ -915,25 +928,11 @@ fn lu_impl(a: &mut [f64], piv: &mut [u32], perm: &mut [u32], s: usize, thr: f64)
 fn d_solve(lu: &[f64], perm: &[u32], s: usize, b: &[f64], x: &mut [f64], tmp: &mut [f64]) {
     #[inline(always)]
     fn fixed<const S: usize>(lu: &[f64], perm: &[u32], b: &[f64], x: &mut [f64]) {
-        let lu = as_rows::<S>(&lu[..S * S]);
         let mut y = [0.0f64; S];
         for c in 0..S {
             y[c] = b[perm[c] as usize];
         }
-        for r in 1..S {
-            let mut acc = y[r];
-            for q in 0..r {
-                acc -= lu[r][q] * y[q];
-            }
-            y[r] = acc;
-        }
-        for r in (0..S).rev() {
-            let mut acc = y[r];
-            for q in r + 1..S {
-                acc -= lu[r][q] * y[q];
-            }
-            y[r] = acc * lu[r][r];
-        }
+        d_substitute::<S>(lu, &mut y);
         x[..S].copy_from_slice(&y);
     }
     match s {
@@ -964,6 +963,26 @@ fn d_solve(lu: &[f64], perm: &[u32], s: usize, b: &[f64], x: &mut [f64], tmp: &m
             }
             x[..s].copy_from_slice(y);
         }
+    }
+}
+
+/// `y ← U⁻¹ L⁻¹ y` for the in-block LU of a pivot block (`y` already permuted, `P b`).
+#[inline(always)]
+fn d_substitute<const S: usize>(lu: &[f64], y: &mut [f64; S]) {
+    let lu = as_rows::<S>(&lu[..S * S]);
+    for r in 1..S {
+        let mut acc = y[r];
+        for q in 0..r {
+            acc -= lu[r][q] * y[q];
+        }
+        y[r] = acc;
+    }
+    for r in (0..S).rev() {
+        let mut acc = y[r];
+        for q in r + 1..S {
+            acc -= lu[r][q] * y[q];
+        }
+        y[r] = acc * lu[r][r];
     }
 }
 
