@@ -37,6 +37,21 @@ struct Side {
     local: usize,
 }
 
+impl Side {
+    /// Node position, arm `R s` and axes `R A` of the frame (the ground's as given).
+    #[inline(always)]
+    fn frame(&self, nodes: &[NodeState]) -> (Vector3<f64>, Vector3<f64>, Matrix3<f64>) {
+        match self.node {
+            None => (Vector3::zeros(), self.offset, self.axes),
+            Some(i) => {
+                let n = &nodes[i];
+                let r = n.r();
+                (n.x, r * self.offset, r * self.axes)
+            }
+        }
+    }
+}
+
 /// A row evaluated in spatial components.
 struct RowValue {
     phi: f64,
@@ -266,16 +281,8 @@ impl Joint {
     fn frames(&self, nodes: &[NodeState]) -> FramePair {
         // Each side built whole (no zeroed frame overwritten field by field: the partial
         // overwrites stalled the loads that followed on store forwarding).
-        let side = |s: &Side| match s.node {
-            None => (Vector3::zeros(), s.offset, s.axes),
-            Some(i) => {
-                let n = &nodes[i];
-                let r = n.r();
-                (n.x, r * s.offset, r * s.axes)
-            }
-        };
-        let (xa, arm_a, axes_a) = side(&self.sides[0]);
-        let (xb, arm_b, axes_b) = side(&self.sides[1]);
+        let (xa, arm_a, axes_a) = self.sides[0].frame(nodes);
+        let (xb, arm_b, axes_b) = self.sides[1].frame(nodes);
         FramePair {
             x: [xa, xb],
             arm: [arm_a, arm_b],
