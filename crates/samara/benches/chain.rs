@@ -14,10 +14,12 @@
 //!
 //! Issue #17's targets, N = 100 revolute, ρ∞ = 0.9: 0.3 s with full Newton, 0.15 s with
 //! modified Newton. On the 2-core VM of 2026-11-27 (1.43× slower than the earlier
-//! sessions', where the fifth round's code ran 0.289 / 0.139 s), after the sixth round:
-//! 0.374 / 0.184 s (best of 8 interleaved runs of this bench, load average 2.8–3.6; 0.417 /
-//! 0.194 s before it); callgrind `-- 100 revolute rho0.9 full t_end=0.1 repeats=1`
-//! 597.4M instructions (655.3M before). README "Benchmarks", docs/integrators.md.
+//! sessions', where the fifth round's code ran 0.289 / 0.139 s), after the seventh round:
+//! 0.351 / 0.162 s (best of 8 interleaved runs of this bench, medians 0.358 / 0.164 s, load
+//! average 0.6–0.9; 0.379 / 0.185 s for the sixth round's code in the same runs); callgrind
+//! `-- 100 revolute rho0.9 full t_end=0.1 repeats=1` 582.7M instructions, `-- 100 revolute
+//! rho0.9 modified repeats=1` 2161.4M (597.4M / 2346.4M before). Targets not met on this
+//! machine. README "Benchmarks", docs/integrators.md.
 
 use samara::analysis::{History, run_analysis};
 use samara::model::Model;
