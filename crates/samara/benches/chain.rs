@@ -7,14 +7,19 @@
 //! drift, max constraint violation; then the fitted growth exponent of wall time with N.
 //! Words keep only the runs whose joint kind, analysis name or Newton variant they name
 //! (`revolute rho0.9 full`); `t_end` shortens the runs and `repeats` overrides the
-//! repetitions (for profiling and instruction counts).
+//! repetitions (for profiling and instruction counts); `digest=1` also prints a digest of
+//! the bits of every recorded frame's state (positions, rotations, velocities,
+//! accelerations, coordinates, multipliers) and of the iteration counts, to check that an
+//! optimization leaves the results identical to the bit.
 //!
 //! Issue #17's targets, N = 100 revolute, ρ∞ = 0.9: 0.3 s with full Newton, 0.15 s with
 //! modified Newton. On the 2-core VM of 2026-11-27 (1.43× slower than the earlier
-//! sessions', where the fifth round's code ran 0.289 / 0.139 s), after the sixth round:
-//! 0.374 / 0.184 s (best of 8 interleaved runs of this bench, load average 2.8–3.6; 0.417 /
-//! 0.194 s before it); callgrind `-- 100 revolute rho0.9 full t_end=0.1 repeats=1`
-//! 597.4M instructions (655.3M before). README "Benchmarks", docs/integrators.md.
+//! sessions', where the fifth round's code ran 0.289 / 0.139 s), after the seventh round:
+//! 0.351 / 0.162 s (best of 8 interleaved runs of this bench, medians 0.358 / 0.164 s, load
+//! average 0.6–0.9; 0.379 / 0.185 s for the sixth round's code in the same runs); callgrind
+//! `-- 100 revolute rho0.9 full t_end=0.1 repeats=1` 582.7M instructions, `-- 100 revolute
+//! rho0.9 modified repeats=1` 2161.4M (597.4M / 2346.4M before). Targets not met on this
+//! machine. README "Benchmarks", docs/integrators.md.
 
 use samara::analysis::{History, run_analysis};
 use samara::model::Model;
@@ -37,6 +42,7 @@ fn main() {
             .find_map(|w| w.strip_prefix(key)?.strip_prefix('=')?.parse::<f64>().ok())
     };
     let (t_end, repeats_set) = (setting("t_end"), setting("repeats"));
+    let digest = setting("digest").is_some_and(|d| d != 0.0);
     let filters: Vec<&String> = words.iter().filter(|w| !w.contains('=')).collect();
     let wanted = |kind: &str| filters.is_empty() || filters.iter().any(|f| *f == kind);
     let sizes = if args.is_empty() {
@@ -146,6 +152,9 @@ fn main() {
                     format!("({:.4}, {:.4}, {:.4})", tip.x, tip.y, tip.z),
                     s.max_constraint_violation
                 );
+                if digest {
+                    println!("  digest {:016x}", state_digest(&hist, &s));
+                }
                 let key = format!("{kind} ρ∞={rho} {newton} Newton");
                 match growth.iter_mut().find(|(k, _)| *k == key) {
                     Some((_, v)) => v.push((n as f64, wall)),
@@ -168,4 +177,33 @@ fn main() {
             );
         }
     }
+}
+
+/// FNV-1a over the bits of every recorded frame's state and the solver counts: equal
+/// digests mean results identical to the bit.
+fn state_digest(hist: &History, s: &samara::analysis::AnalysisSummary) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: u64| {
+        for b in x.to_le_bytes() {
+            h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    eat(s.steps as u64);
+    eat(s.newton_iterations as u64);
+    eat(s.factorizations as u64);
+    for f in &hist.frames {
+        let st = &f.state;
+        for n in &st.nodes {
+            let q = n.rot.wxyz();
+            for v in [&n.x, &n.v, &n.w, &n.a, &n.wd] {
+                v.iter().for_each(|x| eat(x.to_bits()));
+            }
+            q.iter().for_each(|x| eat(x.to_bits()));
+        }
+        for c in &st.coords {
+            [c.q, c.v, c.a].iter().for_each(|x| eat(x.to_bits()));
+        }
+        st.lambda.iter().for_each(|x| eat(x.to_bits()));
+    }
+    h
 }

@@ -43,6 +43,7 @@ pub struct FramePair {
 
 impl FramePair {
     /// Frame origins uᴬ, uᴮ.
+    #[inline]
     pub fn origin(&self, side: usize) -> Vector3<f64> {
         self.x[side] + self.arm[side]
     }
@@ -74,11 +75,13 @@ impl FramePair {
     }
 
     /// Relative displacement `d = uᴮ − uᴬ`.
+    #[inline]
     pub fn d(&self) -> Vector3<f64> {
         self.origin(1) - self.origin(0)
     }
 }
 
+#[inline]
 fn put3(row: &mut Row12, at: usize, v: &Vector3<f64>) {
     for i in 0..3 {
         row[at + i] = v[i];
@@ -97,11 +100,13 @@ fn add33(k: &mut Mat12, r: usize, c: usize, b: &Matrix3<f64>) {
 pub mod displacement {
     use super::*;
 
+    #[inline]
     pub fn value(f: &FramePair, i: usize) -> f64 {
         f.axes[0].column(i).dot(&f.d())
     }
 
     /// `b = [−eᵀ, (e × w)ᵀ, eᵀ, (r_B × e)ᵀ]` with `w = uᴮ − xᴬ`.
+    #[inline(always)]
     pub fn jacobian(f: &FramePair, i: usize) -> Row12 {
         let e: Vector3<f64> = f.axes[0].column(i).into();
         let w = f.origin(1) - f.x[0];
@@ -155,16 +160,19 @@ pub mod displacement {
 pub mod direction_cosine {
     use super::*;
 
+    #[inline]
     fn pair(f: &FramePair, p: usize, q: usize) -> (Vector3<f64>, Vector3<f64>) {
         (f.axes[0].column(p).into(), f.axes[1].column(q).into())
     }
 
+    #[inline(always)]
     pub fn value(f: &FramePair, p: usize, q: usize) -> f64 {
         let (e, g) = pair(f, p, q);
         e.dot(&g)
     }
 
     /// `b = [0, nᵀ, 0, −nᵀ]` with `n = e_pᴬ × e_qᴮ`.
+    #[inline(always)]
     pub fn jacobian(f: &FramePair, p: usize, q: usize) -> Row12 {
         let (e, g) = pair(f, p, q);
         let n = e.cross(&g);
@@ -313,6 +321,7 @@ impl AngleRow {
     }
 
     /// `Φ`, `∂Φ/∂ν`, `∂²Φ/∂ν²` at the frames `f` and coordinate ν.
+    #[inline(always)]
     pub fn value(&self, f: &FramePair, nu: f64) -> [f64; 3] {
         if let Some((p, q)) = self.plain() {
             return [direction_cosine::value(f, p, q), 0.0, 0.0];
@@ -332,6 +341,7 @@ impl AngleRow {
     }
 
     /// `Σ a_t^{(d)}(ν) b_t`: the q-Jacobian row for d = 0, its ν-derivative for d = 1.
+    #[inline(always)]
     pub fn jacobian(&self, f: &FramePair, nu: f64, d: usize) -> Row12 {
         if let Some((p, q)) = self.plain() {
             return if d == 0 {

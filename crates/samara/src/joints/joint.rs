@@ -37,6 +37,21 @@ struct Side {
     local: usize,
 }
 
+impl Side {
+    /// Node position, arm `R s` and axes `R A` of the frame (the ground's as given).
+    #[inline(always)]
+    fn frame(&self, nodes: &[NodeState]) -> (Vector3<f64>, Vector3<f64>, Matrix3<f64>) {
+        match self.node {
+            None => (Vector3::zeros(), self.offset, self.axes),
+            Some(i) => {
+                let n = &nodes[i];
+                let r = n.r();
+                (n.x, r * self.offset, r * self.axes)
+            }
+        }
+    }
+}
+
 /// A row evaluated in spatial components.
 struct RowValue {
     phi: f64,
@@ -262,32 +277,22 @@ impl Joint {
     }
 
     /// Current frames (positions, arms, axes); velocities left at zero.
+    #[inline(always)]
     fn frames(&self, nodes: &[NodeState]) -> FramePair {
-        let mut f = FramePair {
-            x: [Vector3::zeros(); 2],
-            arm: [Vector3::zeros(); 2],
-            axes: [Matrix3::identity(); 2],
+        // Each side built whole (no zeroed frame overwritten field by field: the partial
+        // overwrites stalled the loads that followed on store forwarding).
+        let (xa, arm_a, axes_a) = self.sides[0].frame(nodes);
+        let (xb, arm_b, axes_b) = self.sides[1].frame(nodes);
+        FramePair {
+            x: [xa, xb],
+            arm: [arm_a, arm_b],
+            axes: [axes_a, axes_b],
             v: [Vector3::zeros(); 2],
             omega: [Vector3::zeros(); 2],
-        };
-        for (k, s) in self.sides.iter().enumerate() {
-            match s.node {
-                None => {
-                    f.arm[k] = s.offset;
-                    f.axes[k] = s.axes;
-                }
-                Some(i) => {
-                    let n = &nodes[i];
-                    let r = n.r();
-                    f.x[k] = n.x;
-                    f.arm[k] = r * s.offset;
-                    f.axes[k] = r * s.axes;
-                }
-            }
         }
-        f
     }
 
+    #[inline(always)]
     fn row_value(&self, f: &FramePair, coords: &[Coordinate], t: f64, row: &Row) -> RowValue {
         match row {
             Row::Displacement { axis, coord } => RowValue {
@@ -318,6 +323,7 @@ impl Joint {
     }
 
     /// `Φ` of a row only (no Jacobian), for constraint-violation checks.
+    #[inline]
     fn row_phi(&self, f: &FramePair, coords: &[Coordinate], t: f64, row: &Row) -> f64 {
         match row {
             Row::Displacement { axis, coord } => {
@@ -329,6 +335,7 @@ impl Joint {
         }
     }
 
+    #[inline]
     fn rotation_of(&self, side: usize, nodes: &[NodeState]) -> Matrix3<f64> {
         match self.sides[side].node {
             Some(i) => *nodes[i].r(),
@@ -337,6 +344,7 @@ impl Joint {
     }
 
     /// Writes a spatial 12-row into the material local row `out` (length 6·nodes + nc).
+    #[inline]
     fn to_local(&self, b12: &Row12, rots: &[Matrix3<f64>; 2], mut put: impl FnMut(usize, f64)) {
         for (x, s) in self.sides.iter().enumerate() {
             if s.node.is_none() {

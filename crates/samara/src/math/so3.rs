@@ -112,6 +112,7 @@ const EXP_SERIES_LIMIT: f64 = 0.04;
 /// Exponential map `exp(ψ̃)` as a unit quaternion: `(cos(ψ/2), sin(ψ/2) ψ/ψ)`. Small
 /// rotations (below [`EXP_SERIES_LIMIT`]) need neither the square root nor the
 /// trigonometric functions.
+#[inline]
 pub fn exp_map(psi: &Vector3<f64>) -> UnitQuaternion<f64> {
     let p2 = psi.norm_squared();
     let (c, s) = if p2 < EXP_SERIES_LIMIT {
@@ -154,6 +155,7 @@ pub fn log_map(q: &UnitQuaternion<f64>) -> Vector3<f64> {
 }
 
 /// Tangent operator `T(ψ)` (right Jacobian of the exponential map).
+#[inline]
 pub fn tangent_operator(psi: &Vector3<f64>) -> Matrix3<f64> {
     let angle = psi.norm();
     let p = skew(psi);
@@ -244,6 +246,7 @@ impl Rotation {
         }
     }
 
+    #[inline]
     pub fn from_quaternion(q: UnitQuaternion<f64>) -> Self {
         // Renormalize to keep |q| = 1 to machine precision over millions of updates.
         let q = UnitQuaternion::new_normalize(q.into_inner());
@@ -273,6 +276,7 @@ impl Rotation {
     }
 
     /// Material (right) update `R exp(ψ̃)`.
+    #[inline]
     pub fn compose_exp(&self, psi: &Vector3<f64>) -> Self {
         Self::from_quaternion(self.q * exp_map(psi))
     }

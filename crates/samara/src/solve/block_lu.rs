@@ -672,43 +672,59 @@ impl BlockLu {
         assert_eq!(rhs.len(), sym.dim);
         let vals = &self.values[..];
         let work = &mut self.work[..];
+        let perm = &self.perm[..];
         // forward: L y = b (column oriented)
         for k in 0..sym.n {
-            let sk = sym.size[k];
-            let rk = sym.roff[k];
             let ents = &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]];
             if ents.is_empty() {
                 continue;
             }
-            let yk = &mut work[..sk];
-            yk.copy_from_slice(&rhs[rk..rk + sk]);
-            for e in ents {
-                let lb = &vals[e.l..e.l + e.size * sk];
-                let yi = &mut rhs[e.roff..e.roff + e.size];
-                matvec_acc(lb, yk, yi, e.size, sk, -1.0);
+            let rk = sym.roff[k];
+            // The pivot's size as a constant for the whole block column (node and joint
+            // blocks): y_k is then copied and read without run-time lengths.
+            match sym.size[k] {
+                6 => forward_column::<6>(ents, vals, rk, rhs),
+                5 => forward_column::<5>(ents, vals, rk, rhs),
+                3 => forward_column::<3>(ents, vals, rk, rhs),
+                sk => {
+                    let yk = &mut work[..sk];
+                    yk.copy_from_slice(&rhs[rk..rk + sk]);
+                    for e in ents {
+                        let lb = &vals[e.l..e.l + e.size * sk];
+                        let yi = &mut rhs[e.roff..e.roff + e.size];
+                        matvec_acc(lb, yk, yi, e.size, sk, -1.0);
+                    }
+                }
             }
         }
         // backward: U x = y (row oriented)
         for k in (0..sym.n).rev() {
-            let sk = sym.size[k];
             let rk = sym.roff[k];
-            let t = &mut work[..sk];
-            t.copy_from_slice(&rhs[rk..rk + sk]);
-            for e in &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]] {
-                let ub = &vals[e.u..e.u + sk * e.size];
-                matvec_acc(ub, &rhs[e.roff..e.roff + e.size], t, sk, e.size, -1.0);
-            }
             let d = sym.d_off[k];
-            let (t, tmp) = work.split_at_mut(sk);
-            // x_k = D⁻¹ t
-            d_solve(
-                &vals[d..d + sk * sk],
-                &self.perm[rk..rk + sk],
-                sk,
-                t,
-                &mut rhs[rk..rk + sk],
-                tmp,
-            );
+            let ents = &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]];
+            match sym.size[k] {
+                6 => backward_row::<6>(ents, vals, d, &perm[rk..rk + 6], rk, rhs),
+                5 => backward_row::<5>(ents, vals, d, &perm[rk..rk + 5], rk, rhs),
+                3 => backward_row::<3>(ents, vals, d, &perm[rk..rk + 3], rk, rhs),
+                sk => {
+                    let t = &mut work[..sk];
+                    t.copy_from_slice(&rhs[rk..rk + sk]);
+                    for e in ents {
+                        let ub = &vals[e.u..e.u + sk * e.size];
+                        matvec_acc(ub, &rhs[e.roff..e.roff + e.size], t, sk, e.size, -1.0);
+                    }
+                    let (t, tmp) = work.split_at_mut(sk);
+                    // x_k = D⁻¹ t
+                    d_solve(
+                        &vals[d..d + sk * sk],
+                        &perm[rk..rk + sk],
+                        sk,
+                        t,
+                        &mut rhs[rk..rk + sk],
+                        tmp,
+                    );
+                }
+            }
         }
     }
 
@@ -779,6 +795,57 @@ impl BlockLu {
             rhs[rk..rk + sk].copy_from_slice(t);
         }
     }
+}
+
+/// The blocks `rhs[a..a + la]` (read) and `rhs[b..b + lb]` (written) of one vector: two
+/// different blocks of the partition, so disjoint (a slice panics if they are not). The
+/// substitutions read `y_k` in place through it instead of copying it aside: a copy made
+/// with overlapping wide moves stalls the narrow loads that follow on store forwarding.
+#[inline(always)]
+fn block_pair(rhs: &mut [f64], a: usize, la: usize, b: usize, lb: usize) -> (&[f64], &mut [f64]) {
+    if a < b {
+        let (lo, hi) = rhs.split_at_mut(b);
+        (&lo[a..a + la], &mut hi[..lb])
+    } else {
+        let (lo, hi) = rhs.split_at_mut(a);
+        (&hi[..la], &mut lo[b..b + lb])
+    }
+}
+
+/// Forward substitution of block column `k` (pivot size `S`, `y_k` at `rk`):
+/// `y_i −= L_ik y_k` for every off-diagonal block `i` of the column.
+#[inline(always)]
+fn forward_column<const S: usize>(ents: &[OffDiag], vals: &[f64], rk: usize, rhs: &mut [f64]) {
+    for e in ents {
+        let lb = &vals[e.l..e.l + e.size * S];
+        let (yk, yi) = block_pair(rhs, rk, S, e.roff, e.size);
+        matvec_acc(lb, yk, yi, e.size, S, -1.0);
+    }
+}
+
+/// Backward substitution of block row `k` (pivot size `S`, LU of `D_k` at `d`, `x_k` at
+/// `rk`): `x_k = D_k⁻¹ (y_k − Σ_i U_ki x_i)`, accumulated in place.
+#[inline(always)]
+fn backward_row<const S: usize>(
+    ents: &[OffDiag],
+    vals: &[f64],
+    d: usize,
+    perm: &[u32],
+    rk: usize,
+    rhs: &mut [f64],
+) {
+    for e in ents {
+        let ub = &vals[e.u..e.u + S * e.size];
+        let (xi, t) = block_pair(rhs, e.roff, e.size, rk, S);
+        matvec_acc(ub, xi, t, S, e.size, -1.0);
+    }
+    let x: &mut [f64; S] = (&mut rhs[rk..rk + S]).try_into().unwrap();
+    let mut y = [0.0f64; S];
+    for c in 0..S {
+        y[c] = x[perm[c] as usize];
+    }
+    d_substitute::<S>(&vals[d..d + S * S], &mut y);
+    *x = y;
 }
 
 // ----------------------------------------------------------------------------
@@ -861,25 +928,11 @@ fn lu_impl(a: &mut [f64], piv: &mut [u32], perm: &mut [u32], s: usize, thr: f64)
 fn d_solve(lu: &[f64], perm: &[u32], s: usize, b: &[f64], x: &mut [f64], tmp: &mut [f64]) {
     #[inline(always)]
     fn fixed<const S: usize>(lu: &[f64], perm: &[u32], b: &[f64], x: &mut [f64]) {
-        let lu = as_rows::<S>(&lu[..S * S]);
         let mut y = [0.0f64; S];
         for c in 0..S {
             y[c] = b[perm[c] as usize];
         }
-        for r in 1..S {
-            let mut acc = y[r];
-            for q in 0..r {
-                acc -= lu[r][q] * y[q];
-            }
-            y[r] = acc;
-        }
-        for r in (0..S).rev() {
-            let mut acc = y[r];
-            for q in r + 1..S {
-                acc -= lu[r][q] * y[q];
-            }
-            y[r] = acc * lu[r][r];
-        }
+        d_substitute::<S>(lu, &mut y);
         x[..S].copy_from_slice(&y);
     }
     match s {
@@ -910,6 +963,26 @@ fn d_solve(lu: &[f64], perm: &[u32], s: usize, b: &[f64], x: &mut [f64], tmp: &m
             }
             x[..s].copy_from_slice(y);
         }
+    }
+}
+
+/// `y ← U⁻¹ L⁻¹ y` for the in-block LU of a pivot block (`y` already permuted, `P b`).
+#[inline(always)]
+fn d_substitute<const S: usize>(lu: &[f64], y: &mut [f64; S]) {
+    let lu = as_rows::<S>(&lu[..S * S]);
+    for r in 1..S {
+        let mut acc = y[r];
+        for q in 0..r {
+            acc -= lu[r][q] * y[q];
+        }
+        y[r] = acc;
+    }
+    for r in (0..S).rev() {
+        let mut acc = y[r];
+        for q in r + 1..S {
+            acc -= lu[r][q] * y[q];
+        }
+        y[r] = acc * lu[r][r];
     }
 }
 

@@ -1029,7 +1029,10 @@ impl Assembler {
             let n = cn.len();
             let nq = 6 * n;
             let nl = nq + nc;
-            local_velocities(&mut w.vel, cn, state, coords);
+            // The velocities enter the stabilized formulation only (B v and ∂(B v)/∂q).
+            if stabilized {
+                local_velocities(&mut w.vel, cn, state, coords);
+            }
             let p = &w.place;
             if stabilized {
                 // λ rows: s_v (B v + Φ_t); η rows: Φ.
