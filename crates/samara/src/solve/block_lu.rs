@@ -681,7 +681,7 @@ impl BlockLu {
             }
             let rk = sym.roff[k];
             // The pivot's size as a constant for the whole block column (node and joint
-            // blocks): y_k is then copied and read without run-time lengths.
+            // blocks): y_k is then read in place at a compile-time length.
             match sym.size[k] {
                 6 => forward_column::<6>(ents, vals, rk, rhs),
                 5 => forward_column::<5>(ents, vals, rk, rhs),
