@@ -472,9 +472,6 @@ impl Integrator<'_> {
             reuse_jacobian: self.settings.jacobian == JacobianUpdate::Modified,
             // Granular sets: damped Newton (the pair friction's stick–slip kinks).
             line_search: !self.sys.granular.is_empty(),
-            // Steps are similar solves: a fresh matrix's first correction is judged by
-            // the rate measured in earlier steps.
-            carry_rate: true,
         };
         // A step ending on a breakpoint sees the forcing's left limit there.
         let ctx_time = if self.on_breakpoint(t1) {

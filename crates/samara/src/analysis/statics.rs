@@ -253,8 +253,6 @@ pub fn run_static(
         constraint_tolerance: settings.solver.tolerance,
         reuse_jacobian: false,
         line_search: false,
-        // Load steps differ too much for a rate carried from one to the next.
-        carry_rate: false,
     };
     // The first record is the unloaded state (load factor 0): the assembled reference
     // configuration, reactions as the least-squares multipliers there.

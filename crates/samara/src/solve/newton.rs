@@ -9,12 +9,7 @@
 //!    of a solve that reuses a matrix J̃ factored earlier is never accepted: its size says
 //!    nothing about the error, −J̃⁻¹r against −J⁻¹r (accepting it let modified Newton on
 //!    the pendulum of tests/options.rs end 2.6e-5 m from the exact answer of the step
-//!    equations at tolerance 1e-10). With `carry_rate` a fresh matrix's first correction
-//!    is judged by the rate measured in earlier solves: the error it leaves is ≈ ε η with
-//!    η = θ/(1 − θ) of the last fresh matrix whose contraction was measured (its second
-//!    correction against its first), grown as η ← max(η, u)^0.8 at every solve so that
-//!    an old estimate soon forces a second iteration that measures it again (Hairer &
-//!    Wanner, Solving ODEs II, §IV.8, the starting value of η in a new step); and
+//!    equations at tolerance 1e-10); and
 //! 2. the constraint violation `max |Φ|` at the updated iterate is ≤ the tolerance.
 //!
 //! With `reuse_jacobian` (modified Newton) the factorization is kept while the correction
@@ -49,11 +44,6 @@ pub const SLOW_CONTRACTION: f64 = 0.5;
 /// 0.05 and 0.2 come close.
 pub const STALE_CONTRACTION: f64 = 0.1;
 
-/// Exponent of the growth of a carried η per solve, η ← max(η, u)^0.8 (Hairer & Wanner,
-/// Solving ODEs II, §IV.8): from the chain benchmark's η ≈ 2·10⁻⁵ a second iteration
-/// comes back after three or four solves accepted at their first correction.
-const CARRIED_RATE_GROWTH: f64 = 0.8;
-
 /// A nonlinear problem `r(y) = 0` with iteration matrix `J ≈ ∂r/∂y`.
 pub trait NewtonSystem {
     /// Residual at the current iterate; the iteration matrix too if `matrix` is given.
@@ -74,9 +64,6 @@ pub struct NewtonSettings {
     pub reuse_jacobian: bool,
     /// Damped Newton: backtrack corrections that do not lower the residual norm.
     pub line_search: bool,
-    /// A sequence of similar solves (time steps): a fresh matrix's first correction may be
-    /// accepted on the contraction rate measured in earlier solves (module doc).
-    pub carry_rate: bool,
 }
 
 /// Armijo constant and the smallest step fraction of the line search.
@@ -127,9 +114,6 @@ pub enum NewtonFailure {
 pub struct NewtonWork {
     pub residual: Vec<f64>,
     pub delta: Vec<f64>,
-    /// η = θ/(1 − θ) carried from earlier solves (`carry_rate`), none before the first
-    /// measurement and after a failure.
-    carried: Option<f64>,
 }
 
 impl NewtonWork {
@@ -137,7 +121,6 @@ impl NewtonWork {
         Self {
             residual: vec![0.0; n],
             delta: vec![0.0; n],
-            carried: None,
         }
     }
 }
@@ -157,16 +140,6 @@ pub fn newton(
     let mut report = NewtonReport::default();
     let mut previous = f64::INFINITY;
     let mut refactor = !settings.reuse_jacobian || !lin.is_factored();
-    // η of earlier solves, grown by one solve (module doc); a failure forgets it.
-    let carried = if settings.carry_rate && !settings.line_search {
-        work.carried
-            .map(|eta| eta.max(0.5 * f64::EPSILON).powf(CARRIED_RATE_GROWTH))
-    } else {
-        None
-    };
-    work.carried = None;
-    let mut measured = carried;
-    let mut previous_fresh = false;
     for it in 1..=settings.max_iterations {
         report.iterations = it;
         let fresh = refactor;
@@ -228,15 +201,8 @@ pub fn newton(
         // Error left after this correction: ≈ eps·θ/(1 − θ) for a contraction rate θ
         // (Hairer & Wanner, Solving ODEs II, §IV.8); before θ is known, eps itself.
         let theta = eps / previous;
-        if it > 1 && previous_fresh && theta < 1.0 {
-            // The previous correction came from a matrix factored for it.
-            measured = Some(theta / (1.0 - theta));
-        }
-        previous_fresh = fresh;
         let remaining = if it > 1 && theta < 0.9 {
             eps * theta / (1.0 - theta)
-        } else if it == 1 && fresh {
-            carried.map_or(eps, |eta| eps * eta)
         } else {
             eps
         };
@@ -249,7 +215,6 @@ pub fn newton(
                 if settings.reuse_jacobian && !fresh && it >= 3 && theta > STALE_CONTRACTION {
                     lin.invalidate();
                 }
-                work.carried = measured;
                 return Ok(report);
             }
         }
