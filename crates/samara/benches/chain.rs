@@ -18,7 +18,10 @@
 //! 0.351 / 0.162 s (best of 8 interleaved runs of this bench, medians 0.358 / 0.164 s, load
 //! average 0.6–0.9; 0.379 / 0.185 s for the sixth round's code in the same runs); callgrind
 //! `-- 100 revolute rho0.9 full t_end=0.1 repeats=1` 582.7M instructions, `-- 100 revolute
-//! rho0.9 modified repeats=1` 2161.4M (597.4M / 2346.4M before). Targets not met on this
+//! rho0.9 modified repeats=1` 2161.4M (597.4M / 2346.4M before). The eighth round kept
+//! nothing (full Newton's second iteration is needed for the accuracy the energy balances
+//! rely on; a quadratic predictor and explicit pivot inverses did not pay); the same code
+//! measured 0.364 / 0.164–0.170 s there (load average 3.4–3.9). Targets not met on this
 //! machine. README "Benchmarks", docs/integrators.md.
 
 use samara::analysis::{History, run_analysis};
