@@ -3,6 +3,7 @@
 
 use super::generalized_alpha::{FirstOrderAlpha, GeneralizedAlpha};
 use super::initial::consistent_accelerations;
+use super::trend_feedback::TrendFeedback;
 use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
@@ -216,6 +217,8 @@ struct Integrator<'a> {
     /// The `Trend` prediction of hΔq for the current step (valid when `trended_valid`).
     trended: Vec<f64>,
     trended_valid: bool,
+    /// The `Trend` predictor's misses, fed back into its next prediction.
+    feedback: TrendFeedback,
     /// v̇_{n−1} (6 per node, then one per coordinate, then ż per state), for `Trend`;
     /// `trend_ok`: it belongs to the same run of the scheme (false at the start and after
     /// a restart of the accelerations).
@@ -333,6 +336,8 @@ impl Integrator<'_> {
         // Predicts one unknown: returns (hΔq, v_{n+1}, v̇_{n+1}) from v_n, v̇_n, a_n (and
         // records the `Extrapolate` and `Trend` predictions of hΔq).
         let last_vdot = &self.last_vdot;
+        // The misses are fed back only between steps of one size (module trend_feedback).
+        let feedback = same_step(h, self.last_h).then_some(&self.feedback);
         let predict =
             |k: usize, v: f64, vd: f64, an: f64, extrapolated: &mut [f64], trended: &mut [f64]| {
                 let increment = |vd1: f64| {
@@ -350,7 +355,14 @@ impl Integrator<'_> {
                 trended[k] = hdq_trend;
                 let (hdq, a1, vd1) = match predictor {
                     Predictor::Extrapolate => (hdq, a1, vd),
-                    Predictor::Trend => (hdq_trend, a1_trend, vd_trend),
+                    Predictor::Trend => match feedback.map(|f| f.correction(k)) {
+                        Some(c) if c != 0.0 => {
+                            let hdq = hdq_trend + c;
+                            let a1 = (hdq / (h * h) - v / h - (0.5 - ga.beta) * an) / ga.beta;
+                            (hdq, a1, ga.derivative_of(an, vd, a1))
+                        }
+                        _ => (hdq_trend, a1_trend, vd_trend),
+                    },
                     Predictor::Repeat | Predictor::Hold => {
                         let hdq = if predictor == Predictor::Repeat {
                             self.last_hdq[k] * ratio
@@ -432,7 +444,14 @@ impl Integrator<'_> {
             };
             (self.hdq[k], z.zd) = match predictor {
                 Predictor::Extrapolate => (self.extrapolated[k], p.zd),
-                Predictor::Trend => (self.trended[k], zd_trend),
+                Predictor::Trend => match feedback.map(|f| f.correction(k)) {
+                    Some(c) if c != 0.0 => {
+                        let dz = self.trended[k] + c;
+                        let w1 = (dz / h - (1.0 - fo.gamma) * wn) / fo.gamma;
+                        (dz, fo.rate_of(wn, p.zd, w1))
+                    }
+                    _ => (self.trended[k], zd_trend),
+                },
                 Predictor::Repeat | Predictor::Hold => {
                     let dz = if predictor == Predictor::Repeat {
                         self.last_hdq[k] * ratio
@@ -746,6 +765,11 @@ impl Integrator<'_> {
         } else {
             Predictor::Repeat
         };
+        if self.trended_valid {
+            self.feedback.record(&self.hdq, &self.trended);
+        } else {
+            self.feedback.reset();
+        }
         self.last_hdq.copy_from_slice(&self.hdq);
         self.last_h = h;
         // v̇_n becomes the previous step's for the next `Trend` prediction.
@@ -844,6 +868,7 @@ fn start<'a>(
         extrapolated: vec![0.0; sys.n_config()],
         trended: vec![0.0; sys.n_config()],
         trended_valid: false,
+        feedback: TrendFeedback::new(sys.n_config()),
         last_vdot: vec![0.0; sys.n_config()],
         trend_ok: false,
         last_hdq: vec![0.0; sys.n_config()],
