@@ -63,6 +63,9 @@ fn same_step(h: f64, factored: f64) -> bool {
 /// have come closest (max-norm) to the converged increment (`Trend` only once two steps
 /// of the same scheme lie behind: not across a restart of the accelerations); a step
 /// whose Newton fails is retried once at the same size with `Hold` before it is cut.
+/// Between steps of one size, `Trend` adds to each unknown its last miss times the
+/// regression of its misses on the previous ones when that is negative ([`TrendFeedback`]):
+/// the ringing of unresolved modes, which `Trend` amplifies, is then predicted too.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Predictor {
     Extrapolate,
