@@ -63,8 +63,8 @@
 //! the noise); last line unchanged. Tenth round (the `Trend` predictor's misses fed back
 //! per unknown when they alternate, `analysis/trend_feedback.rs`: the ringing of the blade
 //! tips' torsion and of the root nodes near the Nyquist rate is predicted): 2.74 → 2.54
-//! iterations and 0.17 → 0.10 factorizations per step, callgrind over 10 s 7.74G → 6.39G
-//! (−17.5 %); CPU 0.713, 0.732, 0.770 → 0.609, 0.616, 0.637 ms per step (13.6× → 16.1×
+//! iterations and 0.17 → 0.10 factorizations per step, callgrind over 10 s 7.74G → 6.37G
+//! (−17.7 %); CPU 0.713, 0.732, 0.770 → 0.609, 0.616, 0.637 ms per step (13.6× → 16.1×
 //! real time, builds interleaved, load average ≈ 3.8); `modified` (quasi-steady, steady
 //! wind) 0.56–0.60 → 0.44–0.46 ms (22×); full Newton unchanged; thrust 728.321 → 728.304 kN
 //! (full Newton 728.258 kN). Short of 20× for the configuration: 2.54 iterations per step

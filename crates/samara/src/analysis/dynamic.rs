@@ -34,6 +34,24 @@ fn same_step(h: f64, factored: f64) -> bool {
     (h - factored).abs() <= SAME_STEP * h
 }
 
+/// v_{n+1} and v̇_{n+1} of the scheme for a given increment: hΔq = h v_n + h²(½ − β) a_n +
+/// h²β a_{n+1} solved for a_{n+1}, then v_{n+1} = v_n + h(1 − γ) a_n + hγ a_{n+1}.
+#[inline]
+fn rates_of_increment(
+    ga: &GeneralizedAlpha,
+    h: f64,
+    v: f64,
+    vdot: f64,
+    a_n: f64,
+    hdq: f64,
+) -> (f64, f64) {
+    let a1 = (hdq / (h * h) - v / h - (0.5 - ga.beta) * a_n) / ga.beta;
+    (
+        v + h * (1.0 - ga.gamma) * a_n + h * ga.gamma * a1,
+        ga.derivative_of(a_n, vdot, a1),
+    )
+}
+
 /// How a step's first Newton iterate is predicted (λ_{n+1} = λ_n always).
 ///
 /// - `Extrapolate`: v̇_{n+1} = v̇_n, exact for constant accelerations — the best guess for
@@ -340,7 +358,10 @@ impl Integrator<'_> {
         // records the `Extrapolate` and `Trend` predictions of hΔq).
         let last_vdot = &self.last_vdot;
         // The misses are fed back only between steps of one size (module trend_feedback).
-        let feedback = same_step(h, self.last_h).then_some(&self.feedback);
+        let feedback =
+            (predictor == Predictor::Trend && same_step(h, self.last_h)).then_some(&self.feedback);
+        // The feedback for unknown k, if any (applied after the plain prediction).
+        let trend_feedback = |k: usize| feedback.map(|f| f.correction(k)).filter(|&c| c != 0.0);
         let predict =
             |k: usize, v: f64, vd: f64, an: f64, extrapolated: &mut [f64], trended: &mut [f64]| {
                 let increment = |vd1: f64| {
@@ -358,14 +379,7 @@ impl Integrator<'_> {
                 trended[k] = hdq_trend;
                 let (hdq, a1, vd1) = match predictor {
                     Predictor::Extrapolate => (hdq, a1, vd),
-                    Predictor::Trend => match feedback.map(|f| f.correction(k)) {
-                        Some(c) if c != 0.0 => {
-                            let hdq = hdq_trend + c;
-                            let a1 = (hdq / (h * h) - v / h - (0.5 - ga.beta) * an) / ga.beta;
-                            (hdq, a1, ga.derivative_of(an, vd, a1))
-                        }
-                        _ => (hdq_trend, a1_trend, vd_trend),
-                    },
+                    Predictor::Trend => (hdq_trend, a1_trend, vd_trend),
                     Predictor::Repeat | Predictor::Hold => {
                         let hdq = if predictor == Predictor::Repeat {
                             self.last_hdq[k] * ratio
@@ -400,6 +414,10 @@ impl Integrator<'_> {
                     &mut self.extrapolated,
                     &mut self.trended,
                 );
+                if let Some(c) = trend_feedback(j) {
+                    self.hdq[j] += c;
+                    (v1[k], vd1[k]) = rates_of_increment(&ga, h, v[k], vd[k], an, self.hdq[j]);
+                }
             }
             n.v = Vector3::new(v1[0], v1[1], v1[2]);
             n.w = Vector3::new(v1[3], v1[4], v1[5]);
@@ -424,6 +442,10 @@ impl Integrator<'_> {
                 &mut self.extrapolated,
                 &mut self.trended,
             );
+            if let Some(f) = trend_feedback(n6 + j) {
+                self.hdq[n6 + j] += f;
+                (c.v, c.a) = rates_of_increment(&ga, h, p.v, p.a, an, self.hdq[n6 + j]);
+            }
         }
         // Element states: the same predictors in the first-order scheme.
         let fo = self.fo;
@@ -447,8 +469,8 @@ impl Integrator<'_> {
             };
             (self.hdq[k], z.zd) = match predictor {
                 Predictor::Extrapolate => (self.extrapolated[k], p.zd),
-                Predictor::Trend => match feedback.map(|f| f.correction(k)) {
-                    Some(c) if c != 0.0 => {
+                Predictor::Trend => match trend_feedback(k) {
+                    Some(c) => {
                         let dz = self.trended[k] + c;
                         let w1 = (dz / h - (1.0 - fo.gamma) * wn) / fo.gamma;
                         (dz, fo.rate_of(wn, p.zd, w1))
