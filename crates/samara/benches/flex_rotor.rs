@@ -60,10 +60,16 @@
 //! round (the energy balance's station power as F·ṗ + M·ω̄ from the loads, without the
 //! node rows): callgrind over 10 s 7.89G → 7.80G (−1.1 %); CPU 0.742, 0.714, 0.789 →
 //! 0.716, 0.721, 0.779 ms per step (≈ 14×, builds interleaved at load average ≈ 3: within
-//! the noise); last line unchanged. Short of 20×: the
-//! predictor's error (≈ 10³ tolerances, spread over tip motion, rotations and the Øye
-//! states) sets the ≈ 2.7 iterations per step. The history is in docs/aerodynamics.md,
-//! "Performance".
+//! the noise); last line unchanged. Tenth round (the `Trend` predictor's misses fed back
+//! per unknown when they alternate, `analysis/trend_feedback.rs`: the ringing of the blade
+//! tips' torsion and of the root nodes near the Nyquist rate is predicted): 2.74 → 2.54
+//! iterations and 0.17 → 0.10 factorizations per step, callgrind over 10 s 7.74G → 6.37G
+//! (−17.7 %); CPU 0.713, 0.732, 0.770 → 0.609, 0.616, 0.637 ms per step (13.6× → 16.1×
+//! real time, builds interleaved, load average ≈ 3.8); `modified` (quasi-steady, steady
+//! wind) 0.56–0.60 → 0.44–0.46 ms (22×); full Newton unchanged; thrust 728.321 → 728.304 kN
+//! (full Newton 728.258 kN). Short of 20× for the configuration: 2.54 iterations per step
+//! against a floor of 2, the Øye states' misses (≈ 10³ tolerances) and the energy
+//! balance's station pass (12 %). The history is in docs/aerodynamics.md, "Performance".
 //!
 //! The run ends by printing the aerodynamic power, the thrust and blade 1's tip deflection
 //! (hub frame) at its last step, to compare builds.

@@ -3,6 +3,7 @@
 
 use super::generalized_alpha::{FirstOrderAlpha, GeneralizedAlpha};
 use super::initial::consistent_accelerations;
+use super::trend_feedback::TrendFeedback;
 use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
@@ -31,6 +32,24 @@ const SAME_STEP: f64 = 1e-9;
 /// Whether a matrix assembled for the step `factored` still serves the step `h`.
 fn same_step(h: f64, factored: f64) -> bool {
     (h - factored).abs() <= SAME_STEP * h
+}
+
+/// v_{n+1} and v̇_{n+1} of the scheme for a given increment: hΔq = h v_n + h²(½ − β) a_n +
+/// h²β a_{n+1} solved for a_{n+1}, then v_{n+1} = v_n + h(1 − γ) a_n + hγ a_{n+1}.
+#[inline]
+fn rates_of_increment(
+    ga: &GeneralizedAlpha,
+    h: f64,
+    v: f64,
+    vdot: f64,
+    a_n: f64,
+    hdq: f64,
+) -> (f64, f64) {
+    let a1 = (hdq / (h * h) - v / h - (0.5 - ga.beta) * a_n) / ga.beta;
+    (
+        v + h * (1.0 - ga.gamma) * a_n + h * ga.gamma * a1,
+        ga.derivative_of(a_n, vdot, a1),
+    )
 }
 
 /// How a step's first Newton iterate is predicted (λ_{n+1} = λ_n always).
@@ -62,6 +81,9 @@ fn same_step(h: f64, factored: f64) -> bool {
 /// have come closest (max-norm) to the converged increment (`Trend` only once two steps
 /// of the same scheme lie behind: not across a restart of the accelerations); a step
 /// whose Newton fails is retried once at the same size with `Hold` before it is cut.
+/// Between steps of one size, `Trend` adds to each unknown its last miss times the
+/// regression of its misses on the previous ones when that is negative ([`TrendFeedback`]):
+/// the ringing of unresolved modes, which `Trend` amplifies, is then predicted too.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Predictor {
     Extrapolate,
@@ -216,6 +238,8 @@ struct Integrator<'a> {
     /// The `Trend` prediction of hΔq for the current step (valid when `trended_valid`).
     trended: Vec<f64>,
     trended_valid: bool,
+    /// The `Trend` predictor's misses, fed back into its next prediction.
+    feedback: TrendFeedback,
     /// v̇_{n−1} (6 per node, then one per coordinate, then ż per state), for `Trend`;
     /// `trend_ok`: it belongs to the same run of the scheme (false at the start and after
     /// a restart of the accelerations).
@@ -333,6 +357,11 @@ impl Integrator<'_> {
         // Predicts one unknown: returns (hΔq, v_{n+1}, v̇_{n+1}) from v_n, v̇_n, a_n (and
         // records the `Extrapolate` and `Trend` predictions of hΔq).
         let last_vdot = &self.last_vdot;
+        // The misses are fed back only between steps of one size (module trend_feedback).
+        let feedback =
+            (predictor == Predictor::Trend && same_step(h, self.last_h)).then_some(&self.feedback);
+        // The feedback for unknown k, if any (applied after the plain prediction).
+        let trend_feedback = |k: usize| feedback.map(|f| f.correction(k)).filter(|&c| c != 0.0);
         let predict =
             |k: usize, v: f64, vd: f64, an: f64, extrapolated: &mut [f64], trended: &mut [f64]| {
                 let increment = |vd1: f64| {
@@ -385,6 +414,10 @@ impl Integrator<'_> {
                     &mut self.extrapolated,
                     &mut self.trended,
                 );
+                if let Some(c) = trend_feedback(j) {
+                    self.hdq[j] += c;
+                    (v1[k], vd1[k]) = rates_of_increment(&ga, h, v[k], vd[k], an, self.hdq[j]);
+                }
             }
             n.v = Vector3::new(v1[0], v1[1], v1[2]);
             n.w = Vector3::new(v1[3], v1[4], v1[5]);
@@ -409,6 +442,10 @@ impl Integrator<'_> {
                 &mut self.extrapolated,
                 &mut self.trended,
             );
+            if let Some(f) = trend_feedback(n6 + j) {
+                self.hdq[n6 + j] += f;
+                (c.v, c.a) = rates_of_increment(&ga, h, p.v, p.a, an, self.hdq[n6 + j]);
+            }
         }
         // Element states: the same predictors in the first-order scheme.
         let fo = self.fo;
@@ -432,7 +469,14 @@ impl Integrator<'_> {
             };
             (self.hdq[k], z.zd) = match predictor {
                 Predictor::Extrapolate => (self.extrapolated[k], p.zd),
-                Predictor::Trend => (self.trended[k], zd_trend),
+                Predictor::Trend => match trend_feedback(k) {
+                    Some(c) => {
+                        let dz = self.trended[k] + c;
+                        let w1 = (dz / h - (1.0 - fo.gamma) * wn) / fo.gamma;
+                        (dz, fo.rate_of(wn, p.zd, w1))
+                    }
+                    _ => (self.trended[k], zd_trend),
+                },
                 Predictor::Repeat | Predictor::Hold => {
                     let dz = if predictor == Predictor::Repeat {
                         self.last_hdq[k] * ratio
@@ -746,6 +790,11 @@ impl Integrator<'_> {
         } else {
             Predictor::Repeat
         };
+        if self.trended_valid {
+            self.feedback.record(&self.hdq, &self.trended);
+        } else {
+            self.feedback.reset();
+        }
         self.last_hdq.copy_from_slice(&self.hdq);
         self.last_h = h;
         // v̇_n becomes the previous step's for the next `Trend` prediction.
@@ -844,6 +893,7 @@ fn start<'a>(
         extrapolated: vec![0.0; sys.n_config()],
         trended: vec![0.0; sys.n_config()],
         trended_valid: false,
+        feedback: TrendFeedback::new(sys.n_config()),
         last_vdot: vec![0.0; sys.n_config()],
         trend_ok: false,
         last_hdq: vec![0.0; sys.n_config()],

@@ -19,6 +19,7 @@ mod output_grid;
 mod sparse_differences;
 mod stage;
 mod statics;
+mod trend_feedback;
 
 pub use chain::{Capture, Chain};
 pub use check::check_analyses;
