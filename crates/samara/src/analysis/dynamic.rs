@@ -34,24 +34,6 @@ fn same_step(h: f64, factored: f64) -> bool {
     (h - factored).abs() <= SAME_STEP * h
 }
 
-/// v_{n+1} and v̇_{n+1} of the scheme for a given increment: hΔq = h v_n + h²(½ − β) a_n +
-/// h²β a_{n+1} solved for a_{n+1}, then v_{n+1} = v_n + h(1 − γ) a_n + hγ a_{n+1}.
-#[inline]
-fn rates_of_increment(
-    ga: &GeneralizedAlpha,
-    h: f64,
-    v: f64,
-    vdot: f64,
-    a_n: f64,
-    hdq: f64,
-) -> (f64, f64) {
-    let a1 = (hdq / (h * h) - v / h - (0.5 - ga.beta) * a_n) / ga.beta;
-    (
-        v + h * (1.0 - ga.gamma) * a_n + h * ga.gamma * a1,
-        ga.derivative_of(a_n, vdot, a1),
-    )
-}
-
 /// How a step's first Newton iterate is predicted (λ_{n+1} = λ_n always).
 ///
 /// - `Extrapolate`: v̇_{n+1} = v̇_n, exact for constant accelerations — the best guess for
@@ -377,21 +359,20 @@ impl Integrator<'_> {
                     (hdq, a1)
                 };
                 trended[k] = hdq_trend;
-                let (hdq, a1, vd1) = match predictor {
-                    Predictor::Extrapolate => (hdq, a1, vd),
-                    Predictor::Trend => (hdq_trend, a1_trend, vd_trend),
+                let rate = |a1: f64| v + h * (1.0 - ga.gamma) * an + h * ga.gamma * a1;
+                match predictor {
+                    Predictor::Extrapolate => (hdq, rate(a1), vd),
+                    Predictor::Trend => (hdq_trend, rate(a1_trend), vd_trend),
                     Predictor::Repeat | Predictor::Hold => {
                         let hdq = if predictor == Predictor::Repeat {
                             self.last_hdq[k] * ratio
                         } else {
                             0.0
                         };
-                        // hΔq = h v_n + h²(½ − β) a_n + h²β a_{n+1}, solved for a_{n+1}.
-                        let a1 = (hdq / (h * h) - v / h - (0.5 - ga.beta) * an) / ga.beta;
-                        (hdq, a1, ga.derivative_of(an, vd, a1))
+                        let (v1, vd1) = ga.rates_of_increment(h, v, vd, an, hdq);
+                        (hdq, v1, vd1)
                     }
-                };
-                (hdq, v + h * (1.0 - ga.gamma) * an + h * ga.gamma * a1, vd1)
+                }
             };
         for (i, (n, p)) in self
             .trial
@@ -416,7 +397,7 @@ impl Integrator<'_> {
                 );
                 if let Some(c) = trend_feedback(j) {
                     self.hdq[j] += c;
-                    (v1[k], vd1[k]) = rates_of_increment(&ga, h, v[k], vd[k], an, self.hdq[j]);
+                    (v1[k], vd1[k]) = ga.rates_of_increment(h, v[k], vd[k], an, self.hdq[j]);
                 }
             }
             n.v = Vector3::new(v1[0], v1[1], v1[2]);
@@ -444,7 +425,7 @@ impl Integrator<'_> {
             );
             if let Some(f) = trend_feedback(n6 + j) {
                 self.hdq[n6 + j] += f;
-                (c.v, c.a) = rates_of_increment(&ga, h, p.v, p.a, an, self.hdq[n6 + j]);
+                (c.v, c.a) = ga.rates_of_increment(h, p.v, p.a, an, self.hdq[n6 + j]);
             }
         }
         // Element states: the same predictors in the first-order scheme.
@@ -472,8 +453,7 @@ impl Integrator<'_> {
                 Predictor::Trend => match trend_feedback(k) {
                     Some(c) => {
                         let dz = self.trended[k] + c;
-                        let w1 = (dz / h - (1.0 - fo.gamma) * wn) / fo.gamma;
-                        (dz, fo.rate_of(wn, p.zd, w1))
+                        (dz, fo.rate_of_increment(h, wn, p.zd, dz))
                     }
                     _ => (self.trended[k], zd_trend),
                 },
@@ -483,8 +463,7 @@ impl Integrator<'_> {
                     } else {
                         0.0
                     };
-                    let w1 = (dz / h - (1.0 - fo.gamma) * wn) / fo.gamma;
-                    (dz, fo.rate_of(wn, p.zd, w1))
+                    (dz, fo.rate_of_increment(h, wn, p.zd, dz))
                 }
             };
         }

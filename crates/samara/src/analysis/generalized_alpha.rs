@@ -61,6 +61,24 @@ impl GeneralizedAlpha {
             / (1.0 - self.alpha_f)
     }
 
+    /// v_{n+1} and v̇_{n+1} for the increment `hdq`: hΔq = h v_n + h²(½ − β) a_n + h²β a_{n+1}
+    /// solved for a_{n+1}, then v_{n+1} = v_n + h(1 − γ) a_n + hγ a_{n+1}.
+    #[inline]
+    pub fn rates_of_increment(
+        &self,
+        h: f64,
+        v_n: f64,
+        vdot_n: f64,
+        a_n: f64,
+        hdq: f64,
+    ) -> (f64, f64) {
+        let a_np1 = (hdq / (h * h) - v_n / h - (0.5 - self.beta) * a_n) / self.beta;
+        (
+            v_n + h * (1.0 - self.gamma) * a_n + h * self.gamma * a_np1,
+            self.derivative_of(a_n, vdot_n, a_np1),
+        )
+    }
+
     /// Algorithmic acceleration from the recurrence.
     #[inline]
     pub fn algorithmic_acceleration(&self, a_n: f64, vdot_n: f64, vdot_np1: f64) -> f64 {
@@ -114,6 +132,14 @@ impl FirstOrderAlpha {
     pub fn rate_of(&self, w_n: f64, zd_n: f64, w_np1: f64) -> f64 {
         ((1.0 - self.alpha_m) * w_np1 + self.alpha_m * w_n - self.alpha_f * zd_n)
             / (1.0 - self.alpha_f)
+    }
+
+    /// The rate ż_{n+1} for the increment `dz` = z_{n+1} − z_n (the inverse of
+    /// [`Self::increment`] followed by [`Self::rate_of`]).
+    #[inline]
+    pub fn rate_of_increment(&self, h: f64, w_n: f64, zd_n: f64, dz: f64) -> f64 {
+        let w_np1 = (dz / h - (1.0 - self.gamma) * w_n) / self.gamma;
+        self.rate_of(w_n, zd_n, w_np1)
     }
 
     /// The increment z_{n+1} − z_n for the algorithmic rate `w_np1`.
