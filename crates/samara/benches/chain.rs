@@ -21,7 +21,11 @@
 //! rho0.9 modified repeats=1` 2161.4M (597.4M / 2346.4M before). The eighth round kept
 //! nothing (full Newton's second iteration is needed for the accuracy the energy balances
 //! rely on; a quadratic predictor and explicit pivot inverses did not pay); the same code
-//! measured 0.364 / 0.164–0.170 s there (load average 3.4–3.9). Targets not met on this
+//! measured 0.364 / 0.164–0.170 s there (load average 3.4–3.9). The ninth round kept
+//! nothing either (the factorization taking the assembled matrix, ρBᵀB without its skip,
+//! cheaper scatter kernels: same bits, no gain in time); at its start, 2026-11-28: 0.354 /
+//! 0.163 s best, 0.359 / 0.166 s median (6–10 runs, load average 2.2–3.9), callgrind
+//! 588.8M / 2210.4M instructions (2.00 / 2.95 iterations per step). Targets not met on this
 //! machine. README "Benchmarks", docs/integrators.md.
 
 use samara::analysis::{History, run_analysis};
