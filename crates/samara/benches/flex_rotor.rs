@@ -67,9 +67,13 @@
 //! (−17.7 %); CPU 0.713, 0.732, 0.770 → 0.609, 0.616, 0.637 ms per step (13.6× → 16.1×
 //! real time, builds interleaved, load average ≈ 3.8); `modified` (quasi-steady, steady
 //! wind) 0.56–0.60 → 0.44–0.46 ms (22×); full Newton unchanged; thrust 728.321 → 728.304 kN
-//! (full Newton 728.258 kN). Short of 20× for the configuration: 2.54 iterations per step
-//! against a floor of 2, the Øye states' misses (≈ 10³ tolerances) and the energy
-//! balance's station pass (12 %). The history is in docs/aerodynamics.md, "Performance".
+//! (full Newton 728.258 kN). Eleventh round (the energy balance takes the stations' power at
+//! each step's last Newton iterate instead of a second pass over the stations; the box's
+//! sample with one range test; the stations' residual in an AVX copy): callgrind over
+//! 10 s 6.41G → 5.42G (−15.4 %), 2.54 → 2.53 iterations and 0.10 → 0.09 factorizations per
+//! step; CPU 0.596–0.700 → 0.512–0.568 ms per step (median 0.640 → 0.536 ms, 15.6× → 18.7×; builds interleaved, load average ≈ 0.5; fastest 0.504 ms, 19.8×); quasi-steady `modified` 0.45–0.49 → 0.38–0.40 ms (26×); thrust 728.304 → 728.302 kN (rounding-level change of the BEM root
+//! hints). Left: 2.53 iterations per step against a floor of 2 and the Øye states' misses
+//! (≈ 10³ tolerances). The history is in docs/aerodynamics.md, "Performance".
 //!
 //! The run ends by printing the aerodynamic power, the thrust and blade 1's tip deflection
 //! (hub frame) at its last step, to compare builds.

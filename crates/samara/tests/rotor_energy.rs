@@ -19,7 +19,9 @@ use samara::system::System;
 /// Measured against |W_aero| over 0.4 s: 7.5e-4, 1.4e-5, 7.0e-6, 2.3e-6, 6.6e-7 at
 /// h = 10, 5, 2.5, 1.25, 0.625 ms — ratios 3.1 and 3.4 over the last two halvings, still
 /// approaching 4 (the blades' high bending and torsion modes are resolved only at the
-/// finest steps). Tolerances: each of those halvings at least 2.8× (order > 1.5), and the
+/// finest steps); with the stations' power taken at each step's last Newton iterate
+/// (issue #15's eleventh round) 7.5e-4, 6.4e-6, 2.0e-6, 5.3e-7 at 10, 2.5, 1.25,
+/// 0.625 ms (ratios 3.1, 3.9). Tolerances: each of those halvings at least 2.8× (order > 1.5), and the
 /// balance closed to 1e-6 of the aerodynamic work at 0.625 ms.
 /// The rotor of examples/rotor/nrel5mw_flexible.toml over 0.4 s at `step`, ρ∞ = 1, with
 /// full or modified Newton: the balance error |Δ(T + V + D − W_ext)| / |W_aero|, W_aero
