@@ -69,10 +69,13 @@
 //! wind) 0.56–0.60 → 0.44–0.46 ms (22×); full Newton unchanged; thrust 728.321 → 728.304 kN
 //! (full Newton 728.258 kN). Eleventh round (the energy balance takes the stations' power at
 //! each step's last Newton iterate instead of a second pass over the stations; the box's
-//! sample with one range test; the stations' residual in an AVX copy): callgrind over
-//! 10 s 6.41G → 5.42G (−15.4 %), 2.54 → 2.53 iterations and 0.10 → 0.09 factorizations per
-//! step; CPU 0.596–0.700 → 0.512–0.568 ms per step (median 0.640 → 0.536 ms, 15.6× → 18.7×; builds interleaved, load average ≈ 0.5; fastest 0.504 ms, 19.8×); quasi-steady `modified` 0.45–0.49 → 0.38–0.40 ms (26×); thrust 728.304 → 728.302 kN (rounding-level change of the BEM root
-//! hints). Left: 2.53 iterations per step against a floor of 2 and the Øye states' misses
+//! sample with one range test; the stations' residual and the beams' evaluation in AVX
+//! copies): callgrind over 10 s 6.41G → 5.28G (−17.7 %), 2.54 → 2.53 iterations and
+//! 0.10 → 0.09 factorizations per step; CPU median 0.588 → 0.504 ms per step (17.0× →
+//! 19.8×; 12 runs each, builds interleaved, load average ≈ 1.3; 0.500 ms in 3 runs);
+//! quasi-steady `modified` 0.44–0.50 → 0.38–0.40 ms (26×), `modified turbulent` 0.41 ms
+//! (24×); thrust 728.304 → 728.302 kN (rounding-level change of the BEM root hints).
+//! Left: 2.53 iterations per step against a floor of 2 and the Øye states' misses
 //! (≈ 10³ tolerances). The history is in docs/aerodynamics.md, "Performance".
 //!
 //! The run ends by printing the aerodynamic power, the thrust and blade 1's tip deflection

@@ -1128,7 +1128,7 @@ mod tests {
                     NodeState {
                         x: x0[k] + Vector3::new(0.01 * f, -0.02, 0.03 * f.sin()),
                         rot: sec0[k].compose_exp(&Vector3::new(0.1 * f, -0.2, 0.05 * f)),
-                        v: Vector3::new(0.5, -1.0 * f, 0.2),
+                        v: Vector3::new(0.5, -f, 0.2),
                         w: Vector3::new(0.3, 0.1 * f, -0.7),
                         a: Vector3::new(1.0, 2.0, -0.5 * f),
                         wd: Vector3::new(-0.4, 0.6, 0.2 * f),
