@@ -67,9 +67,16 @@
 //! (−17.7 %); CPU 0.713, 0.732, 0.770 → 0.609, 0.616, 0.637 ms per step (13.6× → 16.1×
 //! real time, builds interleaved, load average ≈ 3.8); `modified` (quasi-steady, steady
 //! wind) 0.56–0.60 → 0.44–0.46 ms (22×); full Newton unchanged; thrust 728.321 → 728.304 kN
-//! (full Newton 728.258 kN). Short of 20× for the configuration: 2.54 iterations per step
-//! against a floor of 2, the Øye states' misses (≈ 10³ tolerances) and the energy
-//! balance's station pass (12 %). The history is in docs/aerodynamics.md, "Performance".
+//! (full Newton 728.258 kN). Eleventh round (the energy balance takes the stations' power at
+//! each step's last Newton iterate instead of a second pass over the stations; the box's
+//! sample with one range test; the stations' residual and the beams' evaluation in AVX
+//! copies): callgrind over 10 s 6.41G → 5.28G (−17.7 %), 2.54 → 2.53 iterations and
+//! 0.10 → 0.09 factorizations per step; CPU median 0.588 → 0.504 ms per step (17.0× →
+//! 19.8×; 12 runs each, builds interleaved, load average ≈ 1.3; 0.500 ms in 3 runs);
+//! quasi-steady `modified` 0.44–0.50 → 0.38–0.40 ms (26×), `modified turbulent` 0.41 ms
+//! (24×); thrust 728.304 → 728.302 kN (rounding-level change of the BEM root hints).
+//! Left: 2.53 iterations per step against a floor of 2 and the Øye states' misses
+//! (≈ 10³ tolerances). The history is in docs/aerodynamics.md, "Performance".
 //!
 //! The run ends by printing the aerodynamic power, the thrust and blade 1's tip deflection
 //! (hub frame) at its last step, to compare builds.

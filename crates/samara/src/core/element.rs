@@ -232,6 +232,13 @@ pub trait Element: Send + Sync {
     fn external_power(&self, _ctx: &EvalContext, _x: &ElementInput) -> f64 {
         0.0
     }
+    /// [`Self::external_power`] for the energy balance after a converged step: an element
+    /// whose loads are costly may return the power at its last residual evaluation (the
+    /// last Newton iterate, one correction from `x`) instead of evaluating them again;
+    /// by default the power at `x`.
+    fn evaluated_power(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
+        self.external_power(ctx, x)
+    }
     /// Power dissipated by dampers (≥ 0).
     fn dissipated_power(&self, _x: &ElementInput) -> f64 {
         0.0

@@ -796,6 +796,23 @@ impl System {
     }
 
     pub fn external_power(&self, ctx: &EvalContext, s: &State) -> f64 {
+        self.power_of(ctx, s, |e, x| e.external_power(ctx, x))
+    }
+
+    /// [`Self::external_power`] with each element's [`Element::evaluated_power`]: the
+    /// energy balance's power at a step's converged state `s`, right after its Newton
+    /// solve.
+    pub fn evaluated_external_power(&self, ctx: &EvalContext, s: &State) -> f64 {
+        self.power_of(ctx, s, |e, x| e.evaluated_power(ctx, x))
+    }
+
+    /// The coordinates' input power plus `element` summed over the elements.
+    fn power_of(
+        &self,
+        ctx: &EvalContext,
+        s: &State,
+        element: impl Fn(&dyn Element, &ElementInput) -> f64,
+    ) -> f64 {
         let signals = self.signal_values(ctx, s);
         let coordinate_inputs: f64 = self
             .constraints
@@ -809,7 +826,7 @@ impl System {
                 )
             })
             .sum();
-        self.element_sum(s, &signals, |e, x| e.external_power(ctx, x)) + coordinate_inputs
+        self.element_sum(s, &signals, element) + coordinate_inputs
     }
 
     /// The sorted, distinct breakpoints of every time function in the model (loads,

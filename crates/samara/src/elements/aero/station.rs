@@ -52,31 +52,28 @@ use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// The station's last BEM root φ (f64 bits; NaN: none yet), the warm start of its next
-/// solve ([`BemRotor::solve_near`]). Every solve converges to rounding from any start, so
-/// the results depend on it only at rounding level; it is cleared as each analysis starts
-/// ([`Element::begin_analysis`]), and each station is evaluated in the same sequence
-/// whatever the number of threads, so a run gives the same bits every time. (Parallel
-/// linearizations of one system — Campbell, Floquet — share it between threads.)
+/// An f64 kept by the station between evaluations and shared between threads (its bits
+/// in an atomic; NaN: none yet): the warm start of the BEM root and the power of the last
+/// residual evaluation (the fields' docs).
 #[derive(Debug)]
-struct RootHint(AtomicU64);
+struct Slot(AtomicU64);
 
-impl RootHint {
+impl Slot {
     fn new() -> Self {
         Self(AtomicU64::new(f64::NAN.to_bits()))
     }
     fn get(&self) -> Option<f64> {
         Some(f64::from_bits(self.0.load(Ordering::Relaxed))).filter(|x| x.is_finite())
     }
-    fn set(&self, phi: f64) {
-        self.0.store(phi.to_bits(), Ordering::Relaxed);
+    fn set(&self, value: f64) {
+        self.0.store(value.to_bits(), Ordering::Relaxed);
     }
     fn clear(&self) {
         self.set(f64::NAN);
     }
 }
 
-impl Clone for RootHint {
+impl Clone for Slot {
     fn clone(&self) -> Self {
         Self(AtomicU64::new(self.0.load(Ordering::Relaxed)))
     }
@@ -189,8 +186,17 @@ pub struct AeroStation {
     /// Signals read (the rotor's inflow states) and produced (the thrust), Pitt–Peters.
     inputs: Vec<String>,
     outputs: Vec<String>,
-    /// Warm start of the BEM root.
-    root_hint: RootHint,
+    /// The station's last BEM root φ, the warm start of its next solve
+    /// ([`BemRotor::solve_near`]). Every solve converges to rounding from any start, so
+    /// the results depend on it only at rounding level; it is cleared as each analysis
+    /// starts ([`Element::begin_analysis`]), and each station is evaluated in the same
+    /// sequence whatever the number of threads, so a run gives the same bits every time.
+    /// (Parallel linearizations of one system — Campbell, Floquet — share it between
+    /// threads.)
+    root_hint: Slot,
+    /// The power of the loads at the last residual evaluation, F·ṗ + M·ω̄ scaled by the
+    /// load factor ([`Element::evaluated_power`]); cleared as each analysis starts.
+    last_power: Slot,
     /// Distance of the station from its line's root [m] (the input's `span`; an output,
     /// the abscissa of span-wise plots).
     span: f64,
@@ -319,7 +325,8 @@ impl AeroStation {
             initial: [0.0; MAX_STATES],
             inputs,
             outputs,
-            root_hint: RootHint::new(),
+            root_hint: Slot::new(),
+            last_power: Slot::new(),
             span: 0.0,
             gust_x: 0.0,
             user_property: None,
@@ -830,6 +837,34 @@ impl AeroStation {
         r
     }
 
+    /// The power of the loads F, M at p on the nodes, Σᵢ (wᵢF)·vᵢ + wᵢ(dᵢ × RᵢᵀF + RᵢᵀM)·Ωᵢ,
+    /// summed over the nodes first: `P = F·ṗ + M·ω̄`, ṗ = Σ wᵢ (vᵢ + Rᵢ (Ωᵢ × dᵢ)) the
+    /// station's velocity and ω̄ = Σ wᵢ Rᵢ Ωᵢ (global), without the node rows.
+    #[inline(always)]
+    fn power(&self, nodes: &[NodeState], f: &V3<f64>, m: &V3<f64>, pd: &V3<f64>) -> f64 {
+        let mut omega = Vector3::zeros();
+        for (&n, at) in self.nodes.iter().zip(&self.attach) {
+            let nd = &nodes[n];
+            omega += at.weight * (nd.r() * nd.w);
+        }
+        Vector3::from(*f).dot(&Vector3::from(*pd)) + Vector3::from(*m).dot(&omega)
+    }
+
+    /// The same power from the node rows (force, moment per node, node components):
+    /// Σᵢ rowsᵢ,F·vᵢ + rowsᵢ,M·Ωᵢ, six products per node and no rotation (equal to
+    /// [`Self::power`] up to rounding).
+    #[inline(always)]
+    fn rows_power(&self, nodes: &[NodeState], rows: &[V3<f64>; 2 * MAX_NODES]) -> f64 {
+        let mut p = 0.0;
+        for (i, &n) in self.nodes.iter().enumerate() {
+            let nd = &nodes[n];
+            let (f, m) = (&rows[2 * i], &rows[2 * i + 1]);
+            p += f[0] * nd.v[0] + f[1] * nd.v[1] + f[2] * nd.v[2];
+            p += m[0] * nd.w[0] + m[1] * nd.w[1] + m[2] * nd.w[2];
+        }
+        p
+    }
+
     /// Point p, force F and moment M (global, at p) of the station: the rotor outputs'
     /// view of it ([`super::rotor_performance`]).
     pub fn point_loads(
@@ -1111,6 +1146,7 @@ impl AeroStation {
         let m = r.moment.map(|s| s.v);
         let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
         self.node_rows(x.nodes, &f, &m, &mut rows);
+        self.last_power.set(lf * self.rows_power(x.nodes, &rows));
         for (b, row) in rows.iter().take(2 * nn).enumerate() {
             for (k, rk) in row.iter().enumerate() {
                 out.r[3 * b + k] -= lf * rk;
@@ -1217,23 +1253,31 @@ impl AeroStation {
         }
     }
 
-    /// Residual only (f64).
-    fn residual(&self, ctx: &EvalContext, x: &ElementInput, out: &mut LocalTerms) {
+    /// Residual only (f64); with `INLINE` the load kernel inlined (the AVX copy,
+    /// [`Self::residual_avx`]).
+    #[inline(always)]
+    fn residual<const INLINE: bool>(
+        &self,
+        ctx: &EvalContext,
+        x: &ElementInput,
+        out: &mut LocalTerms,
+    ) {
         let nn = self.nodes.len();
         let ns = self.unsteady.states();
         let mut rows = [[0.0f64; 3]; 2 * MAX_NODES];
         let mut zrows = [0.0; MAX_STATES];
         let (z, zd) = self.state_values(x);
         let sv = self.signal_values(x);
-        self.compute(
-            ctx.time,
-            x.nodes,
-            &z[..ns],
-            &zd[..ns],
-            &sv[..self.inputs.len()],
-            &mut rows,
-            &mut zrows,
-        );
+        let (z, zd, sig) = (&z[..ns], &zd[..ns], &sv[..self.inputs.len()]);
+        if INLINE {
+            let kin = self.kinematics(x.nodes);
+            let r = self.loads_body::<f64>(ctx.time, &kin, z, zd, sig, &mut zrows);
+            self.node_rows(x.nodes, &r.force, &r.moment, &mut rows);
+        } else {
+            self.compute(ctx.time, x.nodes, z, zd, sig, &mut rows, &mut zrows);
+        }
+        self.last_power
+            .set(ctx.load_factor * self.rows_power(x.nodes, &rows));
         for (b, row) in rows.iter().take(2 * nn).enumerate() {
             for (k, rk) in row.iter().enumerate() {
                 out.r[3 * b + k] -= ctx.load_factor * rk;
@@ -1274,6 +1318,16 @@ impl AeroStation {
     #[target_feature(enable = "avx")]
     fn tangents_avx(&self, ctx: &EvalContext, x: &ElementInput, out: &mut LocalTerms) {
         self.tangents_of_size::<true>(ctx, x, out)
+    }
+
+    /// The residual in a copy compiled for AVX, the load kernel inlined into it (the
+    /// kinematics and node rows over the element's nodes run four lanes wide); the same
+    /// operations in the same order, so the same results to the bit, as
+    /// [`Self::tangents_avx`].
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn residual_avx(&self, ctx: &EvalContext, x: &ElementInput, out: &mut LocalTerms) {
+        self.residual::<true>(ctx, x, out)
     }
 }
 
@@ -1316,14 +1370,20 @@ impl Element for AeroStation {
 
     fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
         // Loads are applied loads: scaled by the load factor in statics.
-        if need == Need::Residual {
-            self.residual(ctx, x, out);
-            return;
-        }
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU supports AVX (checked at run time).
-            return unsafe { self.tangents_avx(ctx, x, out) };
+            return unsafe {
+                if need == Need::Residual {
+                    self.residual_avx(ctx, x, out)
+                } else {
+                    self.tangents_avx(ctx, x, out)
+                }
+            };
+        }
+        if need == Need::Residual {
+            self.residual::<false>(ctx, x, out);
+            return;
         }
         self.tangents_of_size::<false>(ctx, x, out)
     }
@@ -1353,9 +1413,7 @@ impl Element for AeroStation {
         }
     }
 
-    /// The power of the loads on the nodes, Σᵢ (wᵢF)·vᵢ + wᵢ(dᵢ × RᵢᵀF + RᵢᵀM)·Ωᵢ, summed
-    /// over the nodes first: `P = F·ṗ + M·ω̄`, ṗ = Σ wᵢ (vᵢ + Rᵢ (Ωᵢ × dᵢ)) the station's
-    /// velocity and ω̄ = Σ wᵢ Rᵢ Ωᵢ (global), without the node rows.
+    /// The power of the loads on the nodes ([`Self::power`]) at `x`.
     fn external_power(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
         let mut zrows = [0.0; MAX_STATES];
         let (z, zd) = self.state_values(x);
@@ -1370,14 +1428,15 @@ impl Element for AeroStation {
             &sv[..self.inputs.len()],
             &mut zrows,
         );
-        let mut omega = Vector3::zeros();
-        for (&n, at) in self.nodes.iter().zip(&self.attach) {
-            let nd = &x.nodes[n];
-            omega += at.weight * (nd.r() * nd.w);
-        }
-        let p = Vector3::from(r.force).dot(&Vector3::from(kin.pd))
-            + Vector3::from(r.moment).dot(&omega);
-        ctx.load_factor * p
+        ctx.load_factor * self.power(x.nodes, &r.force, &r.moment, &kin.pd)
+    }
+
+    /// The power at the station's last residual evaluation (the last Newton iterate of a
+    /// step), kept by the evaluation; at `x` before the first.
+    fn evaluated_power(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
+        self.last_power
+            .get()
+            .unwrap_or_else(|| self.external_power(ctx, x))
     }
 
     fn output_names(&self) -> Vec<(String, &'static str)> {
@@ -1438,6 +1497,7 @@ impl Element for AeroStation {
 
     fn begin_analysis(&self) {
         self.root_hint.clear();
+        self.last_power.clear();
     }
 
     fn runtime_error(&self) -> Option<(String, String)> {
@@ -1472,7 +1532,7 @@ mod tests {
     /// element, at generic node states (reference: the baseline copy itself; tolerance
     /// zero, since the AVX copy only widens the vectors — no fused multiply–add).
     #[test]
-    fn avx_and_baseline_tangents_agree_to_the_bit() {
+    fn avx_and_baseline_copies_agree_to_the_bit() {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             let airfoil = Arc::new(Airfoil::thin_plate_with_drag());
@@ -1562,6 +1622,27 @@ mod tests {
             };
             assert!(wide.k.iter().any(|&v| v != 0.0));
             assert_eq!(bits(&wide), bits(&base));
+            // The residual-only copies too, and the power each keeps.
+            let mut powers = Vec::new();
+            for t in [&mut wide, &mut base] {
+                t.clear(Need::Residual);
+            }
+            e.begin_analysis();
+            e.evaluate(&ctx, &x, Need::Residual, &mut wide);
+            powers.push(e.evaluated_power(&ctx, &x));
+            e.begin_analysis();
+            e.residual::<false>(&ctx, &x, &mut base);
+            powers.push(e.evaluated_power(&ctx, &x));
+            let r_bits = |t: &LocalTerms| -> Vec<u64> { t.r.iter().map(|v| v.to_bits()).collect() };
+            assert!(wide.r.iter().any(|&v| v != 0.0));
+            assert_eq!(r_bits(&wide), r_bits(&base));
+            assert_eq!(powers[0].to_bits(), powers[1].to_bits());
+            // The kept power is the loads' power at x, up to rounding.
+            let exact = e.external_power(&ctx, &x);
+            assert!(
+                (powers[0] - exact).abs() <= 1e-12 * exact.abs(),
+                "{powers:?} {exact}"
+            );
         }
     }
 }

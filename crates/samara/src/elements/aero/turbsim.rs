@@ -319,16 +319,20 @@ impl FullField {
 
     /// The stored value of component c at time step it, row iz, column iy [m/s].
     pub fn value(&self, it: usize, iz: usize, iy: usize, c: usize) -> f64 {
-        let raw = self.raw[(it * self.nz + iz) * self.ny + iy][c] as f64;
-        (raw - self.offset[c]) / self.slope[c]
+        self.decode(&self.raw[(it * self.nz + iz) * self.ny + iy], c)
+    }
+
+    /// Component c of a stored sample [m/s]: (raw − offset)/slope.
+    #[inline(always)]
+    fn decode(&self, raw: &[i16; 3], c: usize) -> f64 {
+        (raw[c] as f64 - self.offset[c]) / self.slope[c]
     }
 
     /// The stored value of component c at time step it, tower point k (height
     /// z_bottom − k dz, k = 0 at the grid's bottom row, as openfast_toolbox's reader places
     /// them) [m/s].
     pub fn tower_value(&self, it: usize, k: usize, c: usize) -> f64 {
-        let raw = self.tower_raw[it * self.n_tower + k][c] as f64;
-        (raw - self.offset[c]) / self.slope[c]
+        self.decode(&self.tower_raw[it * self.n_tower + k], c)
     }
 
     /// Height of tower point k [m].
@@ -358,6 +362,18 @@ impl FullField {
             }
         }
         Some(out)
+    }
+
+    /// Whether grid coordinates fy, fz (in cells) and box time τ are inside the box: the
+    /// tests of [`Self::outside`], without its messages.
+    fn in_box(&self, fy: f64, fz: f64, tau: f64) -> bool {
+        let ft = tau / self.dt;
+        fy >= -GRID_TOL
+            && fy <= (self.ny - 1) as f64 + GRID_TOL
+            && fz >= -GRID_TOL
+            && fz <= (self.nz - 1) as f64 + GRID_TOL
+            && (self.periodic || ft >= -GRID_TOL && ft <= (self.nt - 1) as f64 + GRID_TOL)
+            && ft.is_finite()
     }
 
     /// Why (y, z, τ) is outside the box, if it is.
@@ -411,11 +427,13 @@ impl FullField {
     /// (u, v, w) [m/s] at lateral position y, height z and box time τ, trilinear in the
     /// cell; `None` outside the box.
     pub fn sample<S: Scalar>(&self, y: S, z: S, tau: S) -> Option<[S; 3]> {
-        if self.outside(y.re(), z.re(), tau.re()).is_some() {
+        let fy = (y + self.half_width()) / self.dy;
+        let fz = (z - self.grid_bottom) / self.dz;
+        if !self.in_box(fy.re(), fz.re(), tau.re()) {
             return None;
         }
-        let (iy, xy) = Self::cell((y + self.half_width()) / self.dy, self.ny);
-        let (iz, xz) = Self::cell((z - self.grid_bottom) / self.dz, self.nz);
+        let (iy, xy) = Self::cell(fy, self.ny);
+        let (iz, xz) = Self::cell(fz, self.nz);
         let (it0, it1, xt) = if self.periodic {
             let period = self.span();
             let wraps = (tau.re() / period).floor();
@@ -433,10 +451,13 @@ impl FullField {
         let mut out = [S::cst(0.0); 3];
         for (kt, it) in [it0, it1].into_iter().enumerate() {
             for (kz, &wzk) in wz.iter().enumerate() {
-                for (ky, &wyk) in wy.iter().enumerate() {
+                // The two columns iy, iy + 1 of row iz + kz at step it.
+                let at = (it * self.nz + iz + kz) * self.ny + iy;
+                let pair = &self.raw[at..at + 2];
+                for (&wyk, v) in wy.iter().zip(pair) {
                     let w = wt[kt] * wzk * wyk;
                     for (c, o) in out.iter_mut().enumerate() {
-                        *o += w * self.value(it, iz + kz, iy + ky, c);
+                        *o += w * self.decode(v, c);
                     }
                 }
             }
