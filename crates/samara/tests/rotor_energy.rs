@@ -8,21 +8,6 @@ use samara::analysis::Frame;
 use samara::model::{AnalysisKind, JacobianUpdate};
 use samara::system::System;
 
-/// examples/rotor/nrel5mw_flexible.toml: three BeamDyn blades (two order-6 elements each)
-/// clamped to a hub driven at 12.1 rpm, quasi-steady BEM at 11.4 m/s, no gravity. The
-/// blades start straight at speed, so they swing and twist under the first loads while
-/// the wind drives the rotor and the shaft drive takes the power out. Over the run `T + V + D − W_ext` is constant, W_ext the work
-/// of the aerodynamic loads and of the shaft drive and V the strain energy; the air's part
-/// `W_aero` (the stations' power Σ F·v + M·ω) is integrated from the frames by the
-/// trapezoidal rule. ρ∞ = 1 (no numerical dissipation). Reference: the balance itself;
-/// its residual is the error of the power quadrature and of the integrator, O(h²).
-/// Measured against |W_aero| over 0.4 s: 7.5e-4, 1.4e-5, 7.0e-6, 2.3e-6, 6.6e-7 at
-/// h = 10, 5, 2.5, 1.25, 0.625 ms — ratios 3.1 and 3.4 over the last two halvings, still
-/// approaching 4 (the blades' high bending and torsion modes are resolved only at the
-/// finest steps); with the stations' power taken at each step's last Newton iterate
-/// (issue #15's eleventh round) 7.5e-4, 6.4e-6, 2.0e-6, 5.3e-7 at 10, 2.5, 1.25,
-/// 0.625 ms (ratios 3.1, 3.9). Tolerances: each of those halvings at least 2.8× (order > 1.5), and the
-/// balance closed to 1e-6 of the aerodynamic work at 0.625 ms.
 /// The rotor of examples/rotor/nrel5mw_flexible.toml over 0.4 s at `step`, ρ∞ = 1, with
 /// full or modified Newton: the balance error |Δ(T + V + D − W_ext)| / |W_aero|, W_aero
 /// from the frames, and the run's frames.
@@ -50,6 +35,21 @@ fn balance(step: f64, modified: bool) -> (f64, f64, samara::analysis::History) {
     (err, w_aero, hist)
 }
 
+/// examples/rotor/nrel5mw_flexible.toml: three BeamDyn blades (two order-6 elements each)
+/// clamped to a hub driven at 12.1 rpm, quasi-steady BEM at 11.4 m/s, no gravity. The
+/// blades start straight at speed, so they swing and twist under the first loads while the
+/// wind drives the rotor and the shaft drive takes the power out. Over the run `T + V + D −
+/// W_ext` is constant, W_ext the work of the aerodynamic loads and of the shaft drive and V
+/// the strain energy; the air's part `W_aero` (the stations' power Σ F·v + M·ω) is
+/// integrated from the frames by the trapezoidal rule. ρ∞ = 1 (no numerical dissipation).
+/// Reference: the balance itself; its residual is the error of the power quadrature and of
+/// the integrator, O(h²). Measured against |W_aero| over 0.4 s: 7.5e-4, 1.4e-5, 7.0e-6,
+/// 2.3e-6, 6.6e-7 at h = 10, 5, 2.5, 1.25, 0.625 ms — ratios 3.1 and 3.4 over the last two
+/// halvings, still approaching 4 (the blades' high bending and torsion modes are resolved
+/// only at the finest steps); with the stations' power taken at each step's last Newton
+/// iterate (issue #15's eleventh round) 7.5e-4, 6.4e-6, 2.0e-6, 5.3e-7 at 10, 2.5, 1.25,
+/// 0.625 ms (ratios 3.1, 3.9). Tolerances: each of those halvings at least 2.8× (order >
+/// 1.5), and the balance closed to 1e-6 of the aerodynamic work at 0.625 ms.
 #[test]
 fn flexible_rotor_energy_balance_closes_at_second_order() {
     let mut errors = Vec::new();
