@@ -72,7 +72,11 @@
 //! sample with one range test; the stations' residual and the beams' evaluation in AVX
 //! copies): callgrind over 10 s 6.41G → 5.28G (−17.7 %), 2.54 → 2.53 iterations and
 //! 0.10 → 0.09 factorizations per step; CPU median 0.588 → 0.504 ms per step (17.0× →
-//! 19.8×; 12 runs each, builds interleaved, load average ≈ 1.3; 0.500 ms in 3 runs);
+//! 19.8×; 12 runs each, builds interleaved, load average ≈ 1.3; 0.500 ms in 3 runs).
+//! Twelfth round (the beams' dissipated power kept from the last iterate too): 5.278G →
+//! 5.231G (−0.9 %), CPU median 0.509 → 0.5005 ms per step (≈ 20.0×, 0.500 ms or less in
+//! 8 of 16 runs; 16 runs each, interleaved, load average 2.4–2.7; 0.512 → 0.510 ms in an
+//! earlier set of 12 at a coarser clock), last line unchanged;
 //! quasi-steady `modified` 0.44–0.50 → 0.38–0.40 ms (26×), `modified turbulent` 0.41 ms
 //! (24×); thrust 728.304 → 728.302 kN (rounding-level change of the BEM root hints).
 //! Left: 2.53 iterations per step against a floor of 2 and the Øye states' misses

@@ -76,10 +76,12 @@ fn flexible_rotor_energy_balance_closes_at_second_order() {
     assert!(errors[2] < 1e-6, "{errors:?}");
 }
 
-/// The integrator takes the stations' power at each step's last Newton iterate, one
-/// correction from the accepted state ([`samara::core::Element::evaluated_power`]); with
-/// modified Newton that correction is largest (up to ≈ 10 tolerances). Measured at
-/// h = 1.25 ms: 2.2e-6 of |W_aero| (2.2e-6 with the power evaluated at the accepted
+/// The integrator takes the stations' power and the beams' dissipated power at each
+/// step's last Newton iterate, one correction from the accepted state
+/// ([`samara::core::Element::evaluated_power`],
+/// [`samara::core::Element::evaluated_dissipated_power`]); with modified Newton that
+/// correction is largest (up to ≈ 10 tolerances). Measured at h = 1.25 ms: 2.3e-6 of
+/// |W_aero| (2.2e-6 with the dissipated power, and with both, evaluated at the accepted
 /// states; full Newton 2.0e-6), at 2.5 ms 5.5e-5 (5.7e-5; both mostly the stops of
 /// modified Newton at its tolerance). Tolerance 1e-5.
 #[test]

@@ -1261,10 +1261,11 @@ pub fn run_dynamic(
                 it.settle();
                 let ctx = sys.context(it.state.time, 1.0);
                 // The elements' power at the last Newton iterate where they keep it
-                // (aerodynamic stations; docs/aerodynamics.md, "Performance").
+                // (aerodynamic stations, damped beams; docs/aerodynamics.md,
+                // "Performance").
                 let p_ext1 = sys.evaluated_external_power(&ctx, &it.state)
                     + sys.drive_power(&it.state, &it.mu);
-                let p_dis1 = sys.dissipated_power(&it.state);
+                let p_dis1 = sys.evaluated_dissipated_power(&it.state);
                 energy.external_work += 0.5 * h_try * (p_ext + p_ext1);
                 energy.dissipated += 0.5 * h_try * (p_dis + p_dis1);
                 p_ext = p_ext1;

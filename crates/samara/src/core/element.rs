@@ -243,6 +243,12 @@ pub trait Element: Send + Sync {
     fn dissipated_power(&self, _x: &ElementInput) -> f64 {
         0.0
     }
+    /// [`Self::dissipated_power`] for the energy balance after a converged step, as
+    /// [`Self::evaluated_power`]: the power at the last residual evaluation where the
+    /// element keeps it; by default the power at `x`.
+    fn evaluated_dissipated_power(&self, x: &ElementInput) -> f64 {
+        self.dissipated_power(x)
+    }
     /// Names and units of the element's output quantities (`("tension", "N")`; written
     /// as `element_output` named `<element>.tension`). Outputs are for the results only:
     /// no equation depends on them.

@@ -14,6 +14,7 @@ mod maxwell;
 mod node_dual;
 mod rigid_body;
 mod rolling;
+mod slot;
 mod sphere_pair;
 mod spring_damper;
 pub mod terrain;

@@ -878,9 +878,26 @@ impl System {
     }
 
     pub fn dissipated_power(&self, s: &State) -> f64 {
+        self.dissipation_of(s, |e, x| e.dissipated_power(x))
+    }
+
+    /// [`Self::dissipated_power`] with each element's
+    /// [`Element::evaluated_dissipated_power`]: the energy balance's dissipation at a
+    /// step's converged state `s`, right after its Newton solve.
+    pub fn evaluated_dissipated_power(&self, s: &State) -> f64 {
+        self.dissipation_of(s, |e, x| e.evaluated_dissipated_power(x))
+    }
+
+    /// The coordinates' and granular sets' dissipation plus `element` summed over the
+    /// elements.
+    fn dissipation_of(
+        &self,
+        s: &State,
+        element: impl Fn(&dyn Element, &ElementInput) -> f64,
+    ) -> f64 {
         let ctx = self.context(s.time, 1.0);
         let signals = self.signal_values(&ctx, s);
-        self.element_sum(s, &signals, |e, x| e.dissipated_power(x))
+        self.element_sum(s, &signals, element)
             + self.coordinate_sum(s, |c, q| c.dissipated_power(q))
             + self
                 .granular

@@ -47,37 +47,10 @@ use super::hgm::{Hgm, HgmFlow};
 use super::unsteady::{AttachedFlow, JONES_A, JONES_B, KUSSNER_A, KUSSNER_B, OyeStall};
 use super::wind::Wind;
 use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, NodeState, SignalTerms};
+use crate::elements::slot::Slot;
 use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
 use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
-
-/// An f64 kept by the station between evaluations and shared between threads (its bits
-/// in an atomic; NaN: none yet): the warm start of the BEM root and the power of the last
-/// residual evaluation (the fields' docs).
-#[derive(Debug)]
-struct Slot(AtomicU64);
-
-impl Slot {
-    fn new() -> Self {
-        Self(AtomicU64::new(f64::NAN.to_bits()))
-    }
-    fn get(&self) -> Option<f64> {
-        Some(f64::from_bits(self.0.load(Ordering::Relaxed))).filter(|x| x.is_finite())
-    }
-    fn set(&self, value: f64) {
-        self.0.store(value.to_bits(), Ordering::Relaxed);
-    }
-    fn clear(&self) {
-        self.set(f64::NAN);
-    }
-}
-
-impl Clone for Slot {
-    fn clone(&self) -> Self {
-        Self(AtomicU64::new(self.0.load(Ordering::Relaxed)))
-    }
-}
 
 /// The induced velocity model of a line.
 #[derive(Clone, Debug, Default)]

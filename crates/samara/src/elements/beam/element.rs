@@ -20,6 +20,7 @@ use super::kernel::{
 use super::quaternion::{Quat, conj, dg_w, dgt_f, from_rotation, g_mat, mul, rotation};
 use super::section::{SectionTable, damping_matrix_from_roots};
 use crate::core::{ElementInput, NodeState};
+use crate::elements::slot::Slot;
 use crate::elements::{Element, EvalContext, LocalTerms, Need};
 use crate::math::Rotation;
 use crate::math::TimeFunction;
@@ -167,6 +168,9 @@ pub struct BeamElement {
     root_damping: Option<[f64; 6]>,
     loads: Arc<Vec<DistributedLoad>>,
     lumped: Vec<LumpedNode>,
+    /// The dissipated power Σ w ε̇ᵀ D ε̇ at the last residual evaluation, damped elements
+    /// only ([`Element::evaluated_dissipated_power`]); cleared as each analysis starts.
+    last_dissipation: Slot,
 }
 
 /// Aligns `s` with `r` (s and −s are the same rotation).
@@ -295,6 +299,7 @@ impl BeamElement {
             table: spec.table,
             loads: spec.loads,
             lumped,
+            last_dissipation: Slot::new(),
         }
     }
 
@@ -530,6 +535,7 @@ impl BeamElement {
         let ld = 6 * nn;
         // Elastic points.
         let eo = &mut g.eo;
+        let mut dissipated = 0.0;
         for ep in &self.elastic {
             let (hs, dhs) = self.shape_of(ep);
             let f = {
@@ -556,6 +562,7 @@ impl BeamElement {
             };
             kernel::elastic(&f, &sec, tangents, eo);
             let w = ep.w;
+            dissipated += w * eo.dissipation;
             for j in 0..nn {
                 out.add_r(6 * j, &(eo.f_xp * (w * dhs[j])));
                 g.fq[j] += (eo.f_q * hs[j] + eo.f_qp * dhs[j]) * w;
@@ -621,6 +628,9 @@ impl BeamElement {
                     }
                 }
             }
+        }
+        if self.root_damping.is_some() {
+            self.last_dissipation.set(dissipated);
         }
         // Inertial points.
         let grav = ctx.gravity * ctx.load_factor;
@@ -1007,10 +1017,25 @@ impl Element for BeamElement {
                     k0: ep.k0,
                 };
                 kernel::elastic(&f, &sec, false, &mut eo);
-                p += ep.w * eo.strain_rate.dot(&(d * eo.strain_rate));
+                p += ep.w * eo.dissipation;
             }
             p
         })
+    }
+
+    /// The dissipated power at the element's last residual evaluation (the last Newton
+    /// iterate of a step), kept by the evaluation; at `x` before the first.
+    fn evaluated_dissipated_power(&self, x: &ElementInput) -> f64 {
+        if self.root_damping.is_none() {
+            return 0.0;
+        }
+        self.last_dissipation
+            .get()
+            .unwrap_or_else(|| self.dissipated_power(x))
+    }
+
+    fn begin_analysis(&self) {
+        self.last_dissipation.clear();
     }
 }
 
@@ -1035,6 +1060,12 @@ impl Element for Arc<BeamElement> {
     }
     fn dissipated_power(&self, x: &ElementInput) -> f64 {
         self.as_ref().dissipated_power(x)
+    }
+    fn evaluated_dissipated_power(&self, x: &ElementInput) -> f64 {
+        self.as_ref().evaluated_dissipated_power(x)
+    }
+    fn begin_analysis(&self) {
+        self.as_ref().begin_analysis()
     }
     fn breakpoints(&self, out: &mut Vec<f64>) {
         self.as_ref().breakpoints(out)
@@ -1070,7 +1101,8 @@ mod tests {
     /// The AVX copy of the element's evaluation ([`BeamElement::evaluate_gathered_avx`])
     /// and the baseline body give the same bits: an order-4 element on a curved line,
     /// fully populated stiffness, mass offsets, damping, a follower load and gravity, in
-    /// a displaced, rotated and moving state.
+    /// a displaced, rotated and moving state. The dissipated power each copy keeps
+    /// ([`Element::evaluated_dissipated_power`]) is [`Element::dissipated_power`]'s.
     #[test]
     fn avx_and_baseline_evaluations_agree_to_the_bit() {
         #[cfg(target_arch = "x86_64")]
@@ -1146,11 +1178,20 @@ mod tests {
                     (LocalTerms::for_element(&e), LocalTerms::for_element(&e));
                 wide.clear(need);
                 base.clear(need);
+                e.begin_analysis();
                 e.evaluate(&ctx, &x, need, &mut wide);
+                let kept_wide = e.evaluated_dissipated_power(&x);
+                e.begin_analysis();
                 with_work(e.nodes.len(), |g| {
                     e.gather(&nodes, g);
                     e.evaluate_gathered(&ctx, need, g, &mut base);
                 });
+                let kept_base = e.evaluated_dissipated_power(&x);
+                // The dissipated power kept by either copy is the exact one, to the bit.
+                let exact = e.dissipated_power(&x);
+                assert!(exact > 0.0);
+                assert_eq!(kept_wide.to_bits(), exact.to_bits(), "{need:?}");
+                assert_eq!(kept_base.to_bits(), exact.to_bits(), "{need:?}");
                 let bits = |t: &LocalTerms| -> Vec<u64> {
                     [
                         t.r.as_slice(),

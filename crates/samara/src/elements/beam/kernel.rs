@@ -123,6 +123,8 @@ pub struct ElasticOut {
     pub strain: Vector6<f64>,
     pub strain_rate: Vector6<f64>,
     pub stress: Vector6<f64>,
+    /// Dissipation density `ε̇ᵀ D ε̇` of the damping (0 undamped).
+    pub dissipation: f64,
     pub f_xp: Vector3<f64>,
     pub f_q: Quat,
     pub f_qp: Quat,
@@ -153,6 +155,7 @@ pub fn elastic(f: &ElasticFields, s: &ElasticSection, jac: bool, out: &mut Elast
     let mut sigma = s.c * e;
     // Rates (stiffness-proportional damping).
     let mut edot = Vector6::zeros();
+    let mut dissipation = 0.0;
     let damped = s.d.is_some();
     let (mut omega, mut cc, mut y, mut rtxpd) =
         (Vector3::zeros(), 0.0, Vector3::zeros(), Vector3::zeros());
@@ -166,7 +169,9 @@ pub fn elastic(f: &ElasticFields, s: &ElasticSection, jac: bool, out: &mut Elast
         let kd = p * f.qpd + y - k * cc;
         edot.fixed_rows_mut::<3>(0).copy_from(&gd);
         edot.fixed_rows_mut::<3>(3).copy_from(&kd);
-        sigma += d * edot;
+        let sigma_d = d * edot;
+        sigma += sigma_d;
+        dissipation = edot.dot(&sigma_d);
     }
     let nf: Vector3<f64> = sigma.fixed_rows::<3>(0).into();
     let mm: Vector3<f64> = sigma.fixed_rows::<3>(3).into();
@@ -177,6 +182,7 @@ pub fn elastic(f: &ElasticFields, s: &ElasticSection, jac: bool, out: &mut Elast
     out.strain = e;
     out.strain_rate = edot;
     out.stress = sigma;
+    out.dissipation = dissipation;
     out.f_xp = r * nf;
     out.f_q = pt * t + pprime.transpose() * mm;
     out.f_qp = pt * mm;
