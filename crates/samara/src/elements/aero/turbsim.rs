@@ -35,6 +35,11 @@ use std::sync::OnceLock;
 /// (InflowWind's `GridTol`).
 const GRID_TOL: f64 = 1e-3;
 
+/// Whether grid coordinate f (in cells) lies on a grid of n points, within [`GRID_TOL`].
+fn on_grid(f: f64, n: usize) -> bool {
+    f >= -GRID_TOL && f <= (n - 1) as f64 + GRID_TOL
+}
+
 /// Largest grid accepted (values per time step and time steps), keeping every index and
 /// byte count far inside `usize` on any platform.
 const MAX_POINTS: usize = 1 << 24;
@@ -368,11 +373,9 @@ impl FullField {
     /// tests of [`Self::outside`], without its messages.
     fn in_box(&self, fy: f64, fz: f64, tau: f64) -> bool {
         let ft = tau / self.dt;
-        fy >= -GRID_TOL
-            && fy <= (self.ny - 1) as f64 + GRID_TOL
-            && fz >= -GRID_TOL
-            && fz <= (self.nz - 1) as f64 + GRID_TOL
-            && (self.periodic || ft >= -GRID_TOL && ft <= (self.nt - 1) as f64 + GRID_TOL)
+        on_grid(fy, self.ny)
+            && on_grid(fz, self.nz)
+            && (self.periodic || on_grid(ft, self.nt))
             && ft.is_finite()
     }
 
@@ -381,12 +384,12 @@ impl FullField {
         let hw = self.half_width();
         let fy = (y + hw) / self.dy;
         let fz = (z - self.grid_bottom) / self.dz;
-        if !(fy >= -GRID_TOL && fy <= (self.ny - 1) as f64 + GRID_TOL) {
+        if !on_grid(fy, self.ny) {
             return Some(format!(
                 "lateral position y = {y:.4} m is outside the grid's −{hw:.4} … {hw:.4} m"
             ));
         }
-        if !(fz >= -GRID_TOL && fz <= (self.nz - 1) as f64 + GRID_TOL) {
+        if !on_grid(fz, self.nz) {
             return Some(format!(
                 "height z = {z:.4} m is outside the grid's {:.4} … {:.4} m",
                 self.grid_bottom,
@@ -394,7 +397,7 @@ impl FullField {
             ));
         }
         let ft = tau / self.dt;
-        let in_time = ft >= -GRID_TOL && ft <= (self.nt - 1) as f64 + GRID_TOL;
+        let in_time = on_grid(ft, self.nt);
         if !self.periodic && !in_time {
             return Some(format!(
                 "box time τ = {tau:.4} s is outside the file's 0 … {:.4} s",
