@@ -220,6 +220,12 @@ pub trait Element: Send + Sync {
     fn accumulates(&self) -> bool {
         false
     }
+    /// Whether the element only applies loads: its kinetic and potential energy and its
+    /// dissipated power (and their discrete and evaluated forms) are zero at every state,
+    /// so the energy sums skip it (an aerodynamic station). Only its power remains.
+    fn loads_only(&self) -> bool {
+        false
+    }
     /// Kinetic energy.
     fn kinetic_energy(&self, _x: &ElementInput) -> f64 {
         0.0

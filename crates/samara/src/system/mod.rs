@@ -760,6 +760,26 @@ impl System {
             .sum()
     }
 
+    /// [`Self::element_sum`] of an energy or a dissipated power: the elements that apply
+    /// loads only ([`Element::loads_only`]) add exact zeros and are skipped, so the sum is
+    /// the same (+0 for an empty sum, as a sum of zeros gives).
+    fn energy_sum(
+        &self,
+        s: &State,
+        signals: &[f64],
+        f: impl Fn(&dyn Element, &ElementInput) -> f64,
+    ) -> f64 {
+        let mut scratch = Vec::new();
+        let sum: f64 = (0..self.elements.len())
+            .filter(|&k| !self.elements[k].loads_only())
+            .map(|k| {
+                let x = self.element_input(k, s, signals, &mut scratch);
+                f(self.elements[k].as_ref(), &x)
+            })
+            .sum();
+        sum + 0.0
+    }
+
     /// The first element whose state in `s` is outside its range
     /// ([`Element::range_violation`], which sees nodes and states, no signals), named
     /// with its message.
@@ -781,12 +801,12 @@ impl System {
         // Elements see their input signals in every evaluation (kinetic energy
         // included), so the signals are evaluated at the state's time.
         let signals = self.signal_values(&self.context(s.time, 1.0), s);
-        self.element_sum(s, &signals, |e, x| e.kinetic_energy(x))
+        self.energy_sum(s, &signals, |e, x| e.kinetic_energy(x))
     }
 
     pub fn potential_energy(&self, ctx: &EvalContext, s: &State) -> f64 {
         let signals = self.signal_values(ctx, s);
-        self.element_sum(s, &signals, |e, x| e.potential_energy(ctx, x))
+        self.energy_sum(s, &signals, |e, x| e.potential_energy(ctx, x))
             + self.coordinate_sum(s, |c, q| c.potential_energy(q))
             + self
                 .granular
@@ -897,7 +917,7 @@ impl System {
     ) -> f64 {
         let ctx = self.context(s.time, 1.0);
         let signals = self.signal_values(&ctx, s);
-        self.element_sum(s, &signals, element)
+        self.energy_sum(s, &signals, element)
             + self.coordinate_sum(s, |c, q| c.dissipated_power(q))
             + self
                 .granular
@@ -946,8 +966,8 @@ impl System {
     /// balance ([`Element::discrete_kinetic_energy`]: a beam's inertia lumped at its nodes).
     pub fn discrete_energies(&self, ctx: &EvalContext, s: &State) -> (f64, f64) {
         let signals = self.signal_values(ctx, s);
-        let t = self.element_sum(s, &signals, |e, x| e.discrete_kinetic_energy(x));
-        let v = self.element_sum(s, &signals, |e, x| e.discrete_potential_energy(ctx, x))
+        let t = self.energy_sum(s, &signals, |e, x| e.discrete_kinetic_energy(x));
+        let v = self.energy_sum(s, &signals, |e, x| e.discrete_potential_energy(ctx, x))
             + self.coordinate_sum(s, |c, q| c.potential_energy(q));
         (t, v)
     }

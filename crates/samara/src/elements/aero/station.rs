@@ -1365,6 +1365,11 @@ impl Element for AeroStation {
         true
     }
 
+    /// Loads only: no kinetic or potential energy, no dissipation (the default zeros).
+    fn loads_only(&self) -> bool {
+        true
+    }
+
     fn signal_inputs(&self) -> &[String] {
         &self.inputs
     }
