@@ -1504,6 +1504,67 @@ mod tests {
         }
     }
 
+    /// A station with Øye's stall near a spinning blade at r ≈ 2 (BEM finds its windmill
+    /// root), on seven generic nodes.
+    fn spinning_station() -> (AeroStation, Vec<NodeState>) {
+        let airfoil = Arc::new(Airfoil::thin_plate_with_drag());
+        let stall = Arc::new(OyeStall::new(&airfoil).expect("a lifting airfoil"));
+        let wind = Arc::new(Wind {
+            speed: 9.0,
+            direction: Vector3::new(1.0, 0.2, -0.1).normalize(),
+            shear_exponent: 0.2,
+            reference_height: 2.0,
+            ..Default::default()
+        });
+        let inflow = Arc::new(Inflow::Bem {
+            rotor: BemRotor {
+                blades: 3,
+                hub_radius: 0.2,
+                tip_radius: 4.0,
+                tip_loss: true,
+                hub_loss: true,
+                tangential_induction: true,
+                skewed_wake: false,
+            },
+            centre: Vector3::zeros(),
+            axis: Vector3::x(),
+        });
+        let section = Section {
+            chord: 0.4,
+            width: 0.3,
+            airfoil,
+            viscosity: None,
+        };
+        // Nodes near a spinning blade station at r ≈ 2 (BEM finds its windmill root).
+        let nodes: Vec<NodeState> = (0..7)
+            .map(|i| {
+                let mut n = generic_node(900 + i);
+                n.x = Vector3::new(0.05, 0.1, 2.0) + 0.02 * n.x;
+                n.v = Vector3::new(0.3, -12.0, 0.2) + 0.1 * n.v;
+                n.w *= 0.3;
+                n
+            })
+            .collect();
+        let attach: Vec<Attachment> = (0..7)
+            .map(|i| Attachment {
+                weight: (1.0 + 0.3 * (i as f64).sin()) / 7.0,
+                offset: Vector3::new(0.1 * i as f64, -0.2, 0.3),
+                chord_dir: Vector3::new(0.0, 1.0, 0.1 * i as f64).normalize(),
+                normal_dir: Vector3::new(1.0, 0.0, 0.05).normalize(),
+            })
+            .collect();
+        let unsteady = Unsteady {
+            attached: AttachedFlow::QuasiSteady,
+            stall: Some((stall, 4.0)),
+            dynamic_wake: false,
+            hgm: None,
+            kussner: false,
+        };
+        let e = AeroStation::new("aero", (0..7).collect(), attach, section, 1.2, wind, inflow)
+            .with_unsteady(unsteady, 0.0, &nodes);
+        (e, nodes)
+    }
+
     /// The AVX copy of the tangents ([`AeroStation::tangents_avx`], taken by `evaluate`
     /// on CPUs with AVX) and the baseline copy give the same residual and tangents to the
     /// bit: a BEM station with Øye's dynamic stall on the 7 nodes of an order-6 beam
@@ -1513,61 +1574,7 @@ mod tests {
     fn avx_and_baseline_copies_agree_to_the_bit() {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
-            let airfoil = Arc::new(Airfoil::thin_plate_with_drag());
-            let stall = Arc::new(OyeStall::new(&airfoil).expect("a lifting airfoil"));
-            let wind = Arc::new(Wind {
-                speed: 9.0,
-                direction: Vector3::new(1.0, 0.2, -0.1).normalize(),
-                shear_exponent: 0.2,
-                reference_height: 2.0,
-                ..Default::default()
-            });
-            let inflow = Arc::new(Inflow::Bem {
-                rotor: BemRotor {
-                    blades: 3,
-                    hub_radius: 0.2,
-                    tip_radius: 4.0,
-                    tip_loss: true,
-                    hub_loss: true,
-                    tangential_induction: true,
-                    skewed_wake: false,
-                },
-                centre: Vector3::zeros(),
-                axis: Vector3::x(),
-            });
-            let section = Section {
-                chord: 0.4,
-                width: 0.3,
-                airfoil,
-                viscosity: None,
-            };
-            // Nodes near a spinning blade station at r ≈ 2 (BEM finds its windmill root).
-            let nodes: Vec<NodeState> = (0..7)
-                .map(|i| {
-                    let mut n = generic_node(900 + i);
-                    n.x = Vector3::new(0.05, 0.1, 2.0) + 0.02 * n.x;
-                    n.v = Vector3::new(0.3, -12.0, 0.2) + 0.1 * n.v;
-                    n.w *= 0.3;
-                    n
-                })
-                .collect();
-            let attach: Vec<Attachment> = (0..7)
-                .map(|i| Attachment {
-                    weight: (1.0 + 0.3 * (i as f64).sin()) / 7.0,
-                    offset: Vector3::new(0.1 * i as f64, -0.2, 0.3),
-                    chord_dir: Vector3::new(0.0, 1.0, 0.1 * i as f64).normalize(),
-                    normal_dir: Vector3::new(1.0, 0.0, 0.05).normalize(),
-                })
-                .collect();
-            let unsteady = Unsteady {
-                attached: AttachedFlow::QuasiSteady,
-                stall: Some((stall, 4.0)),
-                dynamic_wake: false,
-                hgm: None,
-                kussner: false,
-            };
-            let e = AeroStation::new("aero", (0..7).collect(), attach, section, 1.2, wind, inflow)
-                .with_unsteady(unsteady, 0.0, &nodes);
+            let (e, nodes) = spinning_station();
             let states = [ElementState { z: 0.6, zd: 0.05 }];
             let x = ElementInput {
                 states: &states,
@@ -1621,6 +1628,35 @@ mod tests {
                 (powers[0] - exact).abs() <= 1e-12 * exact.abs(),
                 "{powers:?} {exact}"
             );
+        }
+    }
+
+    /// A station applies loads only ([`Element::loads_only`]): the energy sums skip it, so
+    /// its energies and dissipated power must be zero.
+    #[test]
+    fn a_station_stores_and_dissipates_no_energy() {
+        let (e, nodes) = spinning_station();
+        let states = [ElementState { z: 0.6, zd: 0.05 }];
+        let x = ElementInput {
+            states: &states,
+            ..ElementInput::nodes(&nodes)
+        };
+        let ctx = EvalContext {
+            time: 0.3,
+            gravity: Vector3::new(0.0, 0.0, -9.81),
+            load_factor: 1.0,
+        };
+        assert!(e.loads_only());
+        assert_ne!(e.external_power(&ctx, &x), 0.0);
+        for v in [
+            e.kinetic_energy(&x),
+            e.potential_energy(&ctx, &x),
+            e.discrete_kinetic_energy(&x),
+            e.discrete_potential_energy(&ctx, &x),
+            e.dissipated_power(&x),
+            e.evaluated_dissipated_power(&x),
+        ] {
+            assert_eq!(v, 0.0);
         }
     }
 }

@@ -377,31 +377,58 @@ impl BeamElement {
 
     /// Nodal kinematics in section frames, sign-aligned with the middle node.
     fn gather(&self, nodes: &[NodeState], g: &mut Work) {
+        self.gather_positions(nodes, g);
         let nn = self.nodes.len();
         for k in 0..nn {
             let nd = &nodes[self.nodes[k]];
-            let q = from_rotation(&nd.rot);
-            let (s, w, wd) = match &self.offsets[k] {
-                None => (q, nd.w, nd.wd),
-                Some((o, om)) => (mul(&q, o), om.transpose() * nd.w, om.transpose() * nd.wd),
+            let (w, wd) = match &self.offsets[k] {
+                None => (nd.w, nd.wd),
+                Some((_, om)) => (om.transpose() * nd.w, om.transpose() * nd.wd),
             };
-            g.s[k] = s;
             g.w[k] = w;
             g.wd[k] = wd;
-            g.x[k] = nd.x;
             g.v[k] = nd.v;
             g.a[k] = nd.a;
-        }
-        let r = g.s[self.middle];
-        for k in 0..nn {
-            g.s[k] = aligned(g.s[k], &r);
             let gm = g_mat(&g.s[k]);
             g.sd[k] = gm * g.w[k];
             g.sdd[k] = gm * g.wd[k] - g.s[k] * (0.25 * g.w[k].norm_squared());
         }
     }
 
+    /// The positions and the (aligned) orientation quaternions of [`Self::gather`] only.
+    fn gather_positions(&self, nodes: &[NodeState], g: &mut Work) {
+        let nn = self.nodes.len();
+        for k in 0..nn {
+            let nd = &nodes[self.nodes[k]];
+            let q = from_rotation(&nd.rot);
+            g.s[k] = match &self.offsets[k] {
+                None => q,
+                Some((o, _)) => mul(&q, o),
+            };
+            g.x[k] = nd.x;
+        }
+        let r = g.s[self.middle];
+        for k in 0..nn {
+            g.s[k] = aligned(g.s[k], &r);
+        }
+    }
+
     fn elastic_fields(&self, ep: &ElasticPoint, g: &Work) -> ElasticFields {
+        let mut f = self.elastic_positions(ep, g);
+        if self.root_damping.is_some() {
+            let (hs, dhs) = self.shape_of(ep);
+            for k in 0..self.nodes.len() {
+                let (h, dh) = (hs[k], dhs[k]);
+                f.xpd += g.v[k] * dh;
+                f.qd += g.sd[k] * h;
+                f.qpd += g.sd[k] * dh;
+            }
+        }
+        f
+    }
+
+    /// x′, Q and Q′ of [`Self::elastic_fields`] (the rates zero).
+    fn elastic_positions(&self, ep: &ElasticPoint, g: &Work) -> ElasticFields {
         let mut f = ElasticFields::default();
         let (hs, dhs) = self.shape_of(ep);
         for k in 0..self.nodes.len() {
@@ -409,11 +436,6 @@ impl BeamElement {
             f.xp += g.x[k] * dh;
             f.q += g.s[k] * h;
             f.qp += g.s[k] * dh;
-            if self.root_damping.is_some() {
-                f.xpd += g.v[k] * dh;
-                f.qd += g.sd[k] * h;
-                f.qpd += g.sd[k] * dh;
-            }
         }
         f
     }
@@ -940,31 +962,28 @@ impl Element for BeamElement {
 
     fn potential_energy(&self, ctx: &EvalContext, x: &ElementInput) -> f64 {
         let nodes = x.nodes;
+        // Positions and orientations only: the same operations on them as the residual's.
         with_work(self.nodes.len(), |g| {
-            self.gather(nodes, g);
-            let mut eo = ElasticOut::default();
+            self.gather_positions(nodes, g);
             let mut u = 0.0;
             for ep in &self.elastic {
-                let f = self.elastic_fields(ep, g);
+                let f = self.elastic_positions(ep, g);
                 let c = self.table.stiffness_at(ep.eta);
-                let sec = ElasticSection {
-                    c: &c,
-                    d: None,
-                    eps0: ep.eps0,
-                    k0: ep.k0,
-                };
-                kernel::elastic(&f, &sec, false, &mut eo);
-                u += 0.5 * ep.w * eo.strain.dot(&(c * eo.strain));
+                let e = kernel::strain(&f, &ep.eps0, &ep.k0);
+                u += 0.5 * ep.w * e.dot(&(c * e));
             }
             let grav = ctx.gravity * ctx.load_factor;
             for ip in &self.inertial {
-                let f = self.inertial_fields(ip, g);
                 let h = self.inertial_shape(ip);
+                let mut q = Quat::zeros();
+                for (s, hk) in g.s.iter().zip(h).take(self.nodes.len()) {
+                    q += s * *hk;
+                }
                 let x: Vector3<f64> = (0..self.nodes.len()).map(|k| g.x[k] * h[k]).sum();
                 let m6 = self.mass_of(ip);
                 let m = m6[(0, 0)];
                 let m_eta = Vector3::new(m6[(5, 1)], m6[(3, 2)], m6[(4, 0)]);
-                u -= ip.w * grav.dot(&(x * m + rotation(&f.q) * m_eta));
+                u -= ip.w * grav.dot(&(x * m + rotation(&q) * m_eta));
             }
             u
         })

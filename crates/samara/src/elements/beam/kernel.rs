@@ -139,19 +139,58 @@ fn dpw(p: &Matrix3x4<f64>, w: &Quat, q2n: &RowVector4<f64>, n: f64) -> Matrix3x4
     -(e_mat(w) * (2.0 / n)) - (p * w) * q2n
 }
 
-/// Elastic point: forces and (if `jac`) Jacobians.
-pub fn elastic(f: &ElasticFields, s: &ElasticSection, jac: bool, out: &mut ElasticOut) {
+/// Γ = Rᵀx′ and k = P Q′ at an elastic point (n = |Q|², P = (2/n) E(Q), R = R(Q)): the
+/// strain measures [`elastic`] starts from.
+struct StrainMeasures {
+    n: f64,
+    p: Matrix3x4<f64>,
+    r: Matrix3<f64>,
+    rt: Matrix3<f64>,
+    gamma: Vector3<f64>,
+    k: Vector3<f64>,
+}
+
+#[inline(always)]
+fn strain_measures(f: &ElasticFields) -> StrainMeasures {
     let q = &f.q;
     let n = q.norm_squared();
     let p = e_mat(q) * (2.0 / n);
     let r = rotation(q);
     let rt = r.transpose();
-    let q2n = q.transpose() * (2.0 / n);
     let gamma = rt * f.xp;
     let k = p * f.qp;
+    StrainMeasures {
+        n,
+        p,
+        r,
+        rt,
+        gamma,
+        k,
+    }
+}
+
+/// The section strain e = (Γ − ε₀, k − k₀).
+#[inline(always)]
+fn strain_of(m: &StrainMeasures, eps0: &Vector3<f64>, k0: &Vector3<f64>) -> Vector6<f64> {
     let mut e = Vector6::zeros();
-    e.fixed_rows_mut::<3>(0).copy_from(&(gamma - s.eps0));
-    e.fixed_rows_mut::<3>(3).copy_from(&(k - s.k0));
+    e.fixed_rows_mut::<3>(0).copy_from(&(m.gamma - eps0));
+    e.fixed_rows_mut::<3>(3).copy_from(&(m.k - k0));
+    e
+}
+
+/// The section strain alone from the positional fields x′, Q, Q′ (the strain energy's
+/// ½ eᵀC e): the same operations as [`elastic`]'s, so the same bits.
+pub fn strain(f: &ElasticFields, eps0: &Vector3<f64>, k0: &Vector3<f64>) -> Vector6<f64> {
+    strain_of(&strain_measures(f), eps0, k0)
+}
+
+/// Elastic point: forces and (if `jac`) Jacobians.
+pub fn elastic(f: &ElasticFields, s: &ElasticSection, jac: bool, out: &mut ElasticOut) {
+    let q = &f.q;
+    let m = strain_measures(f);
+    let (n, p, r, rt, gamma, k) = (m.n, m.p, m.r, m.rt, m.gamma, m.k);
+    let q2n = q.transpose() * (2.0 / n);
+    let e = strain_of(&m, &s.eps0, &s.k0);
     let mut sigma = s.c * e;
     // Rates (stiffness-proportional damping).
     let mut edot = Vector6::zeros();
@@ -483,6 +522,46 @@ mod tests {
             11..14 => c.xpd.column(j - 11).into(),
             14..18 => c.qd.column(j - 14).into(),
             _ => c.qpd.column(j - 18).into(),
+        }
+    }
+
+    /// The strain alone ([`strain`], the strain energy's) is the elastic kernel's to the
+    /// bit, with and without the rates (which the strain does not read).
+    #[test]
+    fn strain_alone_is_the_elastic_kernels_to_the_bit() {
+        let f = ElasticFields {
+            xp: Vector3::new(0.9, 0.2, -0.1),
+            q: rq(0.1) * 1.3,
+            qp: rq(0.7) * 0.4,
+            xpd: Vector3::new(0.3, -0.4, 0.2),
+            qd: rq(-0.3) * 0.5,
+            qpd: rq(0.5) * 0.2,
+        };
+        let positions = ElasticFields {
+            xpd: Vector3::zeros(),
+            qd: Quat::zeros(),
+            qpd: Quat::zeros(),
+            ..f
+        };
+        let c = full_matrix(0.3);
+        let d = full_matrix(0.9) * 0.1;
+        let (eps0, k0) = (
+            Vector3::new(1.0, 0.01, -0.02),
+            Vector3::new(0.05, 0.1, -0.2),
+        );
+        let bits = |e: &Vector6<f64>| e.map(f64::to_bits);
+        for damping in [Some(&d), None] {
+            let sec = ElasticSection {
+                c: &c,
+                d: damping,
+                eps0,
+                k0,
+            };
+            let mut out = ElasticOut::default();
+            elastic(&f, &sec, false, &mut out);
+            assert!(out.strain.iter().all(|&v| v != 0.0));
+            assert_eq!(bits(&strain(&f, &eps0, &k0)), bits(&out.strain));
+            assert_eq!(bits(&strain(&positions, &eps0, &k0)), bits(&out.strain));
         }
     }
 
