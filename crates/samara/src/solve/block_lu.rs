@@ -39,6 +39,13 @@
 //!   337 Schur updates per sphere on a 1,000-sphere column. Given up (AMD kept) past a
 //!   work budget of about one numeric factorization.
 //!
+//! From [`SPLIT_MIN_BLOCKS`] blocks on, a third: one level of nested dissection
+//! (`dissect`), minimum fill with the separator held last and the two parts eliminated
+//! one after the other, kept when it costs at most 2 % more. Its parts are factored and
+//! solved on two threads (on one of rayon's, with more than one): a part's updates into the
+//! separator's blocks are held back and applied after both parts in step order, so every
+//! block gets the same operations in the same order as on one thread (the same bits).
+//!
 //! Either way a multiplier's pivot is the (nonsingular) Schur complement
 //! `-B M^{-1} B^T (+ C)`. The symbolic factorization is made once per block pattern.
 //!
@@ -150,6 +157,14 @@ pub struct BlockLuSymbolic {
 impl BlockLuSymbolic {
     /// Ordering + symbolic factorization of the block pattern of `s`.
     pub fn new(s: &BlockStructure) -> Result<Self, StructureError> {
+        Self::with_split_from(s, SPLIT_MIN_BLOCKS)
+    }
+
+    /// [`Self::new`], a separator order tried from `split_min_blocks` blocks on.
+    fn with_split_from(
+        s: &BlockStructure,
+        split_min_blocks: usize,
+    ) -> Result<Self, StructureError> {
         let n = s.n_blocks();
         // ---- block adjacency (original numbering, no diagonal) ----
         let adj: Vec<Vec<usize>> = (0..n)
@@ -165,7 +180,7 @@ impl BlockLuSymbolic {
             }
         }
 
-        let (order, srows, split) = Self::constrained_order(s, &adj)?;
+        let (order, srows, split) = Self::constrained_order(s, &adj, split_min_blocks)?;
         let mut pos = vec![0usize; n];
         for (k, &b) in order.iter().enumerate() {
             pos[b] = k;
@@ -353,6 +368,7 @@ impl BlockLuSymbolic {
     fn constrained_order(
         s: &BlockStructure,
         adj: &[Vec<usize>],
+        split_min_blocks: usize,
     ) -> Result<(Vec<usize>, Vec<Vec<usize>>, Option<[usize; 2]>), StructureError> {
         let amd = Self::defer_multipliers(s, adj, &Self::amd_order(adj)?);
         let amd_rows = fill_rows(adj, &amd);
@@ -391,7 +407,7 @@ impl BlockLuSymbolic {
                 (best, best_rows, best_cost) = (mf, mf_rows, mf_cost);
             }
         }
-        if adj.len() >= SPLIT_MIN_BLOCKS
+        if adj.len() >= split_min_blocks
             && let Some(part) = dissect(adj, &|b| s.block_size(b), &is_mult)
             // The separator's elimination alone, a dense front of its size w (≈ w³/3 in
             // the measure of `cost`), within the slack: else (a granular column's layer) the
@@ -563,8 +579,14 @@ fn fill_rows(adj: &[Vec<usize>], order: &[usize]) -> Vec<Vec<usize>> {
 }
 
 /// Blocks from which the symbolic factorization tries a separator order (two parts
-/// factored on two threads).
-pub const SPLIT_MIN_BLOCKS: usize = 128;
+/// factored on two threads, the Newton iterations handed to rayon's pool once per step):
+/// the 1,000-element beam (1,002 blocks) gains, the 100-link chain (200 blocks, 0.19 ms a
+/// step) loses (docs/integrators.md, the chain's tenth round).
+pub const SPLIT_MIN_BLOCKS: usize = 1000;
+
+/// The separator order's threshold in the tests (chains of a few hundred blocks).
+#[cfg(test)]
+const TEST_SPLIT_MIN_BLOCKS: usize = 128;
 
 /// Whether the solves also run a separator order's parts on two threads.
 const SPLIT_SOLVE: bool = true;
@@ -1984,9 +2006,8 @@ mod tests {
     #[test]
     fn split_chain_same_bits_on_one_and_two_threads() {
         let (s, _) = kkt_tree(&chain_parent(90), &[5, 3, 7], true);
-        check_against_dense(s.clone(), 11, false);
         let s = Arc::new(s);
-        let sym = Arc::new(BlockLuSymbolic::new(&s).unwrap());
+        let sym = Arc::new(BlockLuSymbolic::with_split_from(&s, TEST_SPLIT_MIN_BLOCKS).unwrap());
         let [a, b] = sym.split().expect("separator order");
         assert!(
             a.abs_diff(b - a) <= 4 && b + 4 >= sym.n,
@@ -2016,6 +2037,13 @@ mod tests {
         let one = run(1);
         let two = run(2);
         assert!(one == two, "one and two threads differ");
+        let n = s.dim();
+        let xr = dense_of(&m)
+            .partial_piv_lu()
+            .solve(Mat::from_fn(n, 1, |r, _| rhs[r]));
+        let x: Vec<f64> = one.2.iter().map(|&b| f64::from_bits(b)).collect();
+        let e = rel_err(&x, &xr);
+        assert!(e < 1e-10, "against a dense LU: rel err {e}");
     }
 
     /// A singular pivot in the second part is reported as on one thread.
@@ -2023,7 +2051,7 @@ mod tests {
     fn split_chain_singular_block() {
         let (s, _) = kkt_tree(&chain_parent(80), &[5], true);
         let s = Arc::new(s);
-        let sym = Arc::new(BlockLuSymbolic::new(&s).unwrap());
+        let sym = Arc::new(BlockLuSymbolic::with_split_from(&s, TEST_SPLIT_MIN_BLOCKS).unwrap());
         let [a, b] = sym.split().expect("separator order");
         let bad = sym.order[(a + b) / 2];
         let mut m = BlockMatrix::zeros(s.clone());
