@@ -9,6 +9,13 @@
 //! `newton=modified` runs one variant only (`modified`: the dynamics alone); the elements are
 //! evaluated on rayon's threads (`RAYON_NUM_THREADS`) from `PARALLEL_MIN_ELEMENTS` on.
 //!
+//! From 1,000 blocks on the block LU factors and solves two halves on two threads (a
+//! separator order, the same bits with any thread count; the iterations run inside
+//! `rayon::scope` once per step). `-- 1000 t_end=0.1`, dynamics, 6 interleaved runs, load
+//! average 1.5–1.7, 2026-11-28, best / median wall: two threads, full Newton 0.557 / 0.611 →
+//! 0.489 / 0.594 s, modified 0.401 / 0.426 → 0.300 / 0.350 s; one thread unchanged within
+//! the noise (0.705 / 0.877 → 0.721 / 0.847 s, 0.440 / 0.522 → 0.467 / 0.502 s).
+//!
 //! 1,000 → 10,000 elements (`-- 1000 10000 t_end=0.1`, one thread, CPU per step, load
 //! average 1–3, 2026-11-27): full Newton 5.65 → 71.8 ms (exponent 1.10), modified 3.02 →
 //! 39.5 ms (1.12); before the parallel path's 128-element window (run inside

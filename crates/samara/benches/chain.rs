@@ -25,8 +25,12 @@
 //! nothing either (the factorization taking the assembled matrix, ρBᵀB without its skip,
 //! cheaper scatter kernels: same bits, no gain in time); at its start, 2026-11-28: 0.354 /
 //! 0.163 s best, 0.359 / 0.166 s median (6–10 runs, load average 2.2–3.9), callgrind
-//! 588.8M / 2210.4M instructions (2.00 / 2.95 iterations per step). Targets not met on this
-//! machine. README "Benchmarks", docs/integrators.md.
+//! 588.8M / 2210.4M instructions (2.00 / 2.95 iterations per step). The tenth round
+//! (2026-11-28, the machine idle, load average 0–1, 6 interleaved runs): 0.372 / 0.178 s
+//! best, 0.390 / 0.189 s median, one thread or two alike (callgrind 589.7M / 2220.5M); the
+//! block LU's two-thread separator order measured 0.439 / 0.221 s best with two threads (a
+//! loss) and is used from 1,000 blocks on only. Targets not met on this machine, with one
+//! thread or two. README "Benchmarks", docs/integrators.md.
 
 use samara::analysis::{History, run_analysis};
 use samara::model::Model;

@@ -502,6 +502,7 @@ impl Integrator<'_> {
         } else {
             t1
         };
+        let lin_splits = self.lin.splits();
         let mut problem = StepProblem {
             sys: self.sys,
             asm: &mut self.asm,
@@ -521,13 +522,16 @@ impl Integrator<'_> {
             rtol: self.settings.solver.relative_tolerance,
         };
         problem.update_configuration();
-        let result = newton(
-            &mut problem,
-            &mut self.lin,
-            &mut self.matrix,
-            &mut self.work,
-            &settings,
-        );
+        let (lin, matrix, work) = (&mut self.lin, &mut self.matrix, &mut self.work);
+        let mut solve = || newton(&mut problem, lin, matrix, work, &settings);
+        // A block LU with two parts factors them on two threads from within rayon's pool:
+        // the iterations then run on one of its threads (`scope`), once per step rather
+        // than a hand-over from outside the pool per factorization.
+        let result = if lin_splits && rayon::current_thread_index().is_none() {
+            rayon::scope(|_| solve())
+        } else {
+            solve()
+        };
         if result.as_ref().is_ok_and(|r| r.factorizations > 0) || self.lin.is_factored() {
             self.factored_h = h;
         }

@@ -39,6 +39,13 @@
 //!   337 Schur updates per sphere on a 1,000-sphere column. Given up (AMD kept) past a
 //!   work budget of about one numeric factorization.
 //!
+//! From [`SPLIT_MIN_BLOCKS`] blocks on, a third: one level of nested dissection
+//! (`dissect`), minimum fill with the separator held last and the two parts eliminated
+//! one after the other, kept when it costs at most 2 % more. Its parts are factored and
+//! solved on two threads (on one of rayon's, with more than one): a part's updates into the
+//! separator's blocks are held back and applied after both parts in step order, so every
+//! block gets the same operations in the same order as on one thread (the same bits).
+//!
 //! Either way a multiplier's pivot is the (nonsingular) Schur complement
 //! `-B M^{-1} B^T (+ C)`. The symbolic factorization is made once per block pattern.
 //!
@@ -131,6 +138,15 @@ pub struct BlockLuSymbolic {
     s_ent: Vec<OffDiag>,
     upd_ptr: Vec<usize>,
     upd: Vec<Update>,
+    /// With a separator order: the positions `[a, b)` of the second part (the first is
+    /// `[0, a)`, the separator `[b, n)`).
+    split: Option<[usize; 2]>,
+    /// Per position `k` of a part: where the entries of column `k` in the separator start
+    /// (`s_ent[s_mid[k]..s_ptr[k + 1]]`) and where the Schur updates into the separator
+    /// start (`upd[upd_mid[k]..upd_ptr[k + 1]]`); for the separator's positions, `s_ptr[k]`
+    /// and `upd_ptr[k]`.
+    s_mid: Vec<usize>,
+    upd_mid: Vec<usize>,
     scatter: Vec<Scatter>,
     /// Storage ranges (offset, len) of fill blocks that must be zeroed.
     fill: Vec<(usize, usize)>,
@@ -141,6 +157,14 @@ pub struct BlockLuSymbolic {
 impl BlockLuSymbolic {
     /// Ordering + symbolic factorization of the block pattern of `s`.
     pub fn new(s: &BlockStructure) -> Result<Self, StructureError> {
+        Self::with_split_from(s, SPLIT_MIN_BLOCKS)
+    }
+
+    /// [`Self::new`], a separator order tried from `split_min_blocks` blocks on.
+    fn with_split_from(
+        s: &BlockStructure,
+        split_min_blocks: usize,
+    ) -> Result<Self, StructureError> {
         let n = s.n_blocks();
         // ---- block adjacency (original numbering, no diagonal) ----
         let adj: Vec<Vec<usize>> = (0..n)
@@ -156,7 +180,7 @@ impl BlockLuSymbolic {
             }
         }
 
-        let (order, srows) = Self::constrained_order(s, &adj)?;
+        let (order, srows, split) = Self::constrained_order(s, &adj, split_min_blocks)?;
         let mut pos = vec![0usize; n];
         for (k, &b) in order.iter().enumerate() {
             pos[b] = k;
@@ -213,22 +237,46 @@ impl BlockLuSymbolic {
             }
         };
 
-        // ---- Schur updates ----
+        // ---- Schur updates; with a separator order, in each step of a part those into
+        // blocks of the part first, those into the separator's blocks after them (each
+        // block gets one update per step, so their order within a step does not matter) ----
+        let sep_start = split.map_or(0, |[_, b]| b);
         let mut upd_ptr = Vec::with_capacity(n + 1);
+        let mut upd_mid = Vec::with_capacity(n);
+        let mut s_mid = Vec::with_capacity(n);
         let mut upd = Vec::new();
         upd_ptr.push(0);
         for k in 0..n {
             let ents = &s_ent[s_ptr[k]..s_ptr[k + 1]];
-            for (a, &i) in srows[k].iter().enumerate() {
-                for (b, &j) in srows[k].iter().enumerate() {
-                    upd.push(Update {
-                        dst: locate(i, j),
-                        l: ents[a].l,
-                        u: ents[b].u,
-                        si: size[i] as u32,
-                        sj: size[j] as u32,
-                        diag: a == b,
-                    });
+            let rows = &srows[k];
+            let mid = if k < sep_start {
+                rows.partition_point(|&i| i < sep_start)
+            } else {
+                0
+            };
+            debug_assert!(split.is_none_or(|[a, b]| {
+                let part = if k < a { 0..a } else { a..b };
+                k >= b || rows[..mid].iter().all(|i| part.contains(i))
+            }));
+            s_mid.push(s_ptr[k] + mid);
+            for shared in [false, true] {
+                if shared {
+                    upd_mid.push(upd.len());
+                }
+                for (a, &i) in rows.iter().enumerate() {
+                    for (b, &j) in rows.iter().enumerate() {
+                        if (a >= mid && b >= mid) != shared {
+                            continue;
+                        }
+                        upd.push(Update {
+                            dst: locate(i, j),
+                            l: ents[a].l,
+                            u: ents[b].u,
+                            si: size[i] as u32,
+                            sj: size[j] as u32,
+                            diag: a == b,
+                        });
+                    }
                 }
             }
             upd_ptr.push(upd.len());
@@ -298,6 +346,9 @@ impl BlockLuSymbolic {
             s_ent,
             upd_ptr,
             upd,
+            split,
+            s_mid,
+            upd_mid,
             scatter,
             fill,
             n_values,
@@ -308,12 +359,17 @@ impl BlockLuSymbolic {
     /// The elimination order and its filled pattern: of AMD on the block graph (with every
     /// multiplier deferred until all its coupled primaries have been eliminated) and of the
     /// minimum-fill order (multipliers held back likewise), the one whose Schur updates
-    /// cost fewer flops (Σ_k s_k (Σ_{i ∈ S_k} s_i)²); AMD on a tie.
+    /// cost fewer flops (Σ_k s_k (Σ_{i ∈ S_k} s_i)²); AMD on a tie. On graphs of
+    /// [`SPLIT_MIN_BLOCKS`] blocks or more, a third candidate: minimum fill with a
+    /// separator kept last ([`dissect`]), its two parts eliminated one after the other, is
+    /// preferred when it costs at most [`SPLIT_COST_SLACK`] more (the parts are then
+    /// factored on two threads); the split positions are returned with it.
     #[allow(clippy::type_complexity)]
     fn constrained_order(
         s: &BlockStructure,
         adj: &[Vec<usize>],
-    ) -> Result<(Vec<usize>, Vec<Vec<usize>>), StructureError> {
+        split_min_blocks: usize,
+    ) -> Result<(Vec<usize>, Vec<Vec<usize>>, Option<[usize; 2]>), StructureError> {
         let amd = Self::defer_multipliers(s, adj, &Self::amd_order(adj)?);
         let amd_rows = fill_rows(adj, &amd);
         let cost = |order: &[usize], rows: &[Vec<usize>]| -> f64 {
@@ -342,13 +398,42 @@ impl BlockLuSymbolic {
                 }
             })
             .collect();
-        if let Some(mf) = super::min_fill::min_fill_order(adj, &gates, budget) {
+        let (mut best, mut best_rows) = (amd, amd_rows);
+        let mut best_cost = amd_cost;
+        if let Some(mf) = super::min_fill::min_fill_order(adj, &gates, &[], budget) {
             let mf_rows = fill_rows(adj, &mf);
-            if cost(&mf, &mf_rows) < amd_cost {
-                return Ok((mf, mf_rows));
+            let mf_cost = cost(&mf, &mf_rows);
+            if mf_cost < best_cost {
+                (best, best_rows, best_cost) = (mf, mf_rows, mf_cost);
             }
         }
-        Ok((amd, amd_rows))
+        if adj.len() >= split_min_blocks
+            && let Some(part) = dissect(adj, &|b| s.block_size(b), &is_mult)
+            // The separator's elimination alone, a dense front of its size w (≈ w³/3 in
+            // the measure of `cost`), within the slack: else (a granular column's layer) the
+            // order is not worth the second minimum-fill pass.
+            && {
+                let w: usize = (0..adj.len()).filter(|&b| part[b] == 2).map(|b| s.block_size(b)).sum();
+                (w * w * w) as f64 / 3.0 <= SPLIT_COST_SLACK * best_cost
+            }
+        {
+            let held: Vec<bool> = part.iter().map(|&p| p == 2).collect();
+            if let Some(mf) = super::min_fill::min_fill_order(adj, &gates, &held, budget) {
+                // The parts are not coupled and the separator goes last: eliminating one
+                // part after the other makes the same fill as the interleaved order.
+                let mut nd = Vec::with_capacity(mf.len());
+                for p in 0..3 {
+                    nd.extend(mf.iter().copied().filter(|&b| part[b] == p));
+                }
+                let nd_rows = fill_rows(adj, &nd);
+                if cost(&nd, &nd_rows) <= (1.0 + SPLIT_COST_SLACK) * best_cost {
+                    let a_end = part.iter().filter(|&&p| p == 0).count();
+                    let b_end = a_end + part.iter().filter(|&&p| p == 1).count();
+                    return Ok((nd, nd_rows, Some([a_end, b_end])));
+                }
+            }
+        }
+        Ok((best, best_rows, None))
     }
 
     /// AMD (faer) on the block graph: `perm[new] = old`.
@@ -457,6 +542,12 @@ impl BlockLuSymbolic {
     pub fn n_updates(&self) -> usize {
         self.upd.len()
     }
+
+    /// With a separator order, the positions `[a, b)` of its second part (the first is
+    /// `[0, a)`, the separator `[b, n)`): the two parts are factored on two threads.
+    pub fn split(&self) -> Option<[usize; 2]> {
+        self.split
+    }
 }
 
 /// The filled off-diagonal pattern of the block LU for the elimination order `order`: per
@@ -487,6 +578,92 @@ fn fill_rows(adj: &[Vec<usize>], order: &[usize]) -> Vec<Vec<usize>> {
     srows
 }
 
+/// Blocks from which the symbolic factorization tries a separator order (two parts
+/// factored on two threads, the Newton iterations handed to rayon's pool once per step):
+/// the 1,000-element beam (1,002 blocks) gains, the 100-link chain (200 blocks, 0.19 ms a
+/// step) loses (docs/integrators.md, the chain's tenth round).
+pub const SPLIT_MIN_BLOCKS: usize = 1000;
+
+/// The separator order's threshold in the tests (chains of a few hundred blocks).
+#[cfg(test)]
+const TEST_SPLIT_MIN_BLOCKS: usize = 128;
+
+/// Whether the solves also run a separator order's parts on two threads.
+const SPLIT_SOLVE: bool = true;
+
+/// Relative Schur-update cost the separator order may add over the cheapest order.
+const SPLIT_COST_SLACK: f64 = 0.02;
+
+/// One level of nested dissection of the block graph `adj` (George 1973): the level sets of
+/// a breadth-first search from a pseudo-peripheral block, the level that splits the total
+/// block size most evenly taken as the separator. A multiplier in a part coupled to a
+/// primary of the separator joins the separator (a multiplier follows its primaries).
+/// Per block: 0 and 1 for the parts (never coupled to each other), 2 for the separator.
+/// `None` for a disconnected graph or one without two non-empty parts.
+fn dissect(
+    adj: &[Vec<usize>],
+    size: &dyn Fn(usize) -> usize,
+    is_mult: &dyn Fn(usize) -> bool,
+) -> Option<Vec<u8>> {
+    let n = adj.len();
+    let levels = |root: usize| -> Vec<usize> {
+        let mut level = vec![usize::MAX; n];
+        let mut queue = std::collections::VecDeque::from([root]);
+        level[root] = 0;
+        while let Some(v) = queue.pop_front() {
+            for &w in &adj[v] {
+                if level[w] == usize::MAX {
+                    level[w] = level[v] + 1;
+                    queue.push_back(w);
+                }
+            }
+        }
+        level
+    };
+    let first = levels(0);
+    if first.contains(&usize::MAX) {
+        return None;
+    }
+    let far = (0..n).max_by_key(|&v| (first[v], std::cmp::Reverse(v)))?;
+    let level = levels(far);
+    let depth = level.iter().copied().max()? + 1;
+    let mut weight = vec![0usize; depth];
+    for v in 0..n {
+        weight[level[v]] += size(v);
+    }
+    let total: usize = weight.iter().sum();
+    let mut below = 0usize;
+    let mut sep = None;
+    let mut best = usize::MAX;
+    for (l, &w) in weight.iter().enumerate() {
+        let above = total - below - w;
+        if l > 0 && l + 1 < depth && below.abs_diff(above) < best {
+            best = below.abs_diff(above);
+            sep = Some(l);
+        }
+        below += w;
+    }
+    let sep = sep?;
+    let mut part: Vec<u8> = level
+        .iter()
+        .map(|&l| match l.cmp(&sep) {
+            std::cmp::Ordering::Less => 0,
+            std::cmp::Ordering::Greater => 1,
+            std::cmp::Ordering::Equal => 2,
+        })
+        .collect();
+    for v in 0..n {
+        if level[v] == sep && !is_mult(v) {
+            for &m in &adj[v] {
+                if is_mult(m) {
+                    part[m] = 2;
+                }
+            }
+        }
+    }
+    (part.contains(&0) && part.contains(&1)).then_some(part)
+}
+
 /// Numeric block LU. All storage is allocated in [`BlockLu::new`].
 pub struct BlockLu {
     sym: Arc<BlockLuSymbolic>,
@@ -502,6 +679,9 @@ pub struct BlockLu {
     colmax: Vec<f64>,
     /// Scratch, `2 * max_size` values.
     work: Vec<f64>,
+    /// Scratch of the second part's thread (`piv`, `work`).
+    piv2: Vec<u32>,
+    work2: Vec<f64>,
     factored: bool,
 }
 
@@ -517,8 +697,10 @@ impl BlockLu {
             sym,
             values,
             perm,
+            piv2: piv.clone(),
             piv,
             colmax,
+            work2: work.clone(),
             work,
             factored: false,
         }
@@ -595,54 +777,33 @@ impl BlockLu {
         }
 
         // ---- elimination ----
-        for k in 0..sym.n {
-            let sk = sym.size[k];
-            let d = sym.d_off[k];
-            let rk = sym.roff[k];
-            let (head, tail) = vals.split_at_mut(d + sk * sk);
-            let db = &mut head[d..];
-            let pk = &mut perm[rk..rk + sk];
-            {
-                let bmax = db.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-                let thr = PIVOT_RTOL * colmax[k].max(bmax);
-                if !lu_block(db, &mut piv[..sk], pk, sk, thr) {
-                    return Err(SingularBlock {
-                        block: sym.order[k],
-                    });
+        let vp = Shared(vals.as_mut_ptr());
+        let pp = Shared(perm.as_mut_ptr());
+        let colmax = &*colmax;
+        match sym.split {
+            Some([a, b]) if parallel() => {
+                // The two parts on two threads, their updates into the separator's blocks
+                // held back and applied after them in step order: the same operations on
+                // every block in the same order as one thread's, so the same bits.
+                let (piv2, work2) = (&mut self.piv2[..], &mut self.work2[..]);
+                let (ra, rb) = rayon::join(
+                    // SAFETY: a part's steps read and write only its own blocks (pivots,
+                    // multipliers, Schur updates within the part) and its blocks'
+                    // permutation entries; the parts share no block.
+                    || unsafe { eliminate_steps(sym, 0..a, true, vp, pp, colmax, piv, work) },
+                    || unsafe { eliminate_steps(sym, a..b, true, vp, pp, colmax, piv2, work2) },
+                );
+                ra?;
+                rb?;
+                for k in 0..b {
+                    // SAFETY: the parts are done; one thread.
+                    unsafe { schur_updates(sym, k, sym.upd_mid[k], vp) };
                 }
+                // SAFETY: one thread.
+                unsafe { eliminate_steps(sym, b..sym.n, false, vp, pp, colmax, piv, work)? };
             }
-            let db = &*db;
-            let pk = &*pk;
-            let ents = &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]];
-            if ents.is_empty() {
-                continue;
-            }
-            // L_ik = A_ik D_k^{-1}
-            let base = d + sk * sk;
-            for e in ents {
-                let lo = e.l - base;
-                rsolve_block(&mut tail[lo..lo + e.size * sk], db, pk, e.size, sk, work);
-            }
-            // Schur updates
-            let ups = &sym.upd[sym.upd_ptr[k]..sym.upd_ptr[k + 1]];
-            let bp = vals.as_mut_ptr();
-            for up in ups {
-                // SAFETY: dst is a block (i, j) with positions i, j > k while
-                // l and u are blocks of column/row k, so the three ranges are
-                // disjoint and all lie within `vals` (layout built by the
-                // symbolic phase).
-                unsafe {
-                    gemm_sub(
-                        bp.add(up.dst),
-                        bp.add(up.l),
-                        bp.add(up.u),
-                        up.si as usize,
-                        sk,
-                        up.sj as usize,
-                        !up.diag,
-                    );
-                }
-            }
+            // SAFETY: one thread.
+            _ => unsafe { eliminate_steps(sym, 0..sym.n, false, vp, pp, colmax, piv, work)? },
         }
         self.factored = true;
         Ok(())
@@ -671,58 +832,40 @@ impl BlockLu {
         assert!(self.factored, "BlockLu::solve_in_place: not factored");
         assert_eq!(rhs.len(), sym.dim);
         let vals = &self.values[..];
-        let work = &mut self.work[..];
         let perm = &self.perm[..];
-        // forward: L y = b (column oriented)
-        for k in 0..sym.n {
-            let ents = &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]];
-            if ents.is_empty() {
-                continue;
-            }
-            let rk = sym.roff[k];
-            // The pivot's size as a constant for the whole block column (node and joint
-            // blocks): y_k is then read in place at a compile-time length.
-            match sym.size[k] {
-                6 => forward_column::<6>(ents, vals, rk, rhs),
-                5 => forward_column::<5>(ents, vals, rk, rhs),
-                3 => forward_column::<3>(ents, vals, rk, rhs),
-                sk => {
-                    let yk = &mut work[..sk];
-                    yk.copy_from_slice(&rhs[rk..rk + sk]);
-                    for e in ents {
-                        let lb = &vals[e.l..e.l + e.size * sk];
-                        let yi = &mut rhs[e.roff..e.roff + e.size];
-                        matvec_acc(lb, yk, yi, e.size, sk, -1.0);
-                    }
+        let x = Shared(rhs.as_mut_ptr());
+        let n = sym.n;
+        match sym.split {
+            Some([a, b]) if parallel() && SPLIT_SOLVE => {
+                // The parts' substitutions on two threads, the forward one's updates of the
+                // separator's blocks held back and applied after them in step order (the
+                // same operations in the same order as one thread's).
+                let (work, work2) = (&mut self.work[..], &mut self.work2[..]);
+                // SAFETY: a part's steps write only its own blocks of `rhs` and read its own
+                // and (backward) the separator's, which no thread writes meanwhile.
+                rayon::join(
+                    || unsafe { forward_steps(sym, vals, 0..a, true, x) },
+                    || unsafe { forward_steps(sym, vals, a..b, true, x) },
+                );
+                for k in 0..b {
+                    let ents = &sym.s_ent[sym.s_mid[k]..sym.s_ptr[k + 1]];
+                    // SAFETY: one thread.
+                    unsafe { forward_dyn(ents, vals, sym.roff[k], sym.size[k], x) };
                 }
+                // SAFETY: one thread, then as above.
+                unsafe { forward_steps(sym, vals, b..n, false, x) };
+                unsafe { backward_steps(sym, vals, perm, b..n, x, work) };
+                rayon::join(
+                    || unsafe { backward_steps(sym, vals, perm, 0..a, x, work) },
+                    || unsafe { backward_steps(sym, vals, perm, a..b, x, work2) },
+                );
             }
-        }
-        // backward: U x = y (row oriented)
-        for k in (0..sym.n).rev() {
-            let rk = sym.roff[k];
-            let d = sym.d_off[k];
-            let ents = &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]];
-            match sym.size[k] {
-                6 => backward_row::<6>(ents, vals, d, &perm[rk..rk + 6], rk, rhs),
-                5 => backward_row::<5>(ents, vals, d, &perm[rk..rk + 5], rk, rhs),
-                3 => backward_row::<3>(ents, vals, d, &perm[rk..rk + 3], rk, rhs),
-                sk => {
-                    let t = &mut work[..sk];
-                    t.copy_from_slice(&rhs[rk..rk + sk]);
-                    for e in ents {
-                        let ub = &vals[e.u..e.u + sk * e.size];
-                        matvec_acc(ub, &rhs[e.roff..e.roff + e.size], t, sk, e.size, -1.0);
-                    }
-                    let (t, tmp) = work.split_at_mut(sk);
-                    // x_k = D⁻¹ t
-                    d_solve(
-                        &vals[d..d + sk * sk],
-                        &perm[rk..rk + sk],
-                        sk,
-                        t,
-                        &mut rhs[rk..rk + sk],
-                        tmp,
-                    );
+            _ => {
+                let work = &mut self.work[..];
+                // SAFETY: one thread.
+                unsafe {
+                    forward_steps(sym, vals, 0..n, false, x);
+                    backward_steps(sym, vals, perm, 0..n, x, work);
                 }
             }
         }
@@ -797,55 +940,325 @@ impl BlockLu {
     }
 }
 
-/// The blocks `rhs[a..a + la]` (read) and `rhs[b..b + lb]` (written) of one vector: two
-/// different blocks of the partition, so disjoint (a slice panics if they are not). The
-/// substitutions read `y_k` in place through it instead of copying it aside: a copy made
-/// with overlapping wide moves stalls the narrow loads that follow on store forwarding.
+/// A pointer into the factor storage (or a vector) handed to the second part's thread:
+/// the two threads touch disjoint blocks of it.
+#[derive(Clone, Copy)]
+struct Shared<T>(*mut T);
+// SAFETY: only dereferenced for blocks one thread owns at a time (see the callers).
+unsafe impl<T> Send for Shared<T> {}
+// SAFETY: as above.
+unsafe impl<T> Sync for Shared<T> {}
+
+/// Whether a separator order's parts are factored and solved on two threads: on one of
+/// rayon's threads, when it has more than one (`RAYON_NUM_THREADS=1` keeps one; the results
+/// are the same). From outside the pool a `join` is handed over to it and waited for, two
+/// thread wake-ups per call, more than the half of a factorization it would save.
+fn parallel() -> bool {
+    rayon::current_num_threads() > 1 && rayon::current_thread_index().is_some()
+}
+
+/// Elimination steps `ks`: LU of the pivot block `D_k`, `L_ik = A_ik D_k⁻¹`, and the Schur
+/// updates `A_ij −= L_ik U_kj`; with `part_only`, not those into the separator's blocks.
+///
+/// # Safety
+/// `vals` and `perm` are the factor storage and the pivot permutations of `sym`; no other
+/// thread touches the blocks of the steps `ks` or their updates' destinations.
+#[allow(clippy::too_many_arguments)]
+unsafe fn eliminate_steps(
+    sym: &BlockLuSymbolic,
+    ks: std::ops::Range<usize>,
+    part_only: bool,
+    vals: Shared<f64>,
+    perm: Shared<u32>,
+    colmax: &[f64],
+    piv: &mut [u32],
+    work: &mut [f64],
+) -> Result<(), SingularBlock> {
+    #[cfg(target_arch = "x86_64")]
+    if avx() {
+        // SAFETY: the CPU supports AVX; the rest is the caller's.
+        return unsafe { eliminate_steps_avx(sym, ks, part_only, vals, perm, colmax, piv, work) };
+    }
+    // SAFETY: the caller's.
+    unsafe { eliminate_steps_impl(sym, ks, part_only, vals, perm, colmax, piv, work) }
+}
+
+/// [`eliminate_steps`] compiled for AVX (bit-identical results).
+///
+/// # Safety
+/// As [`eliminate_steps`]; the CPU supports AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn eliminate_steps_avx(
+    sym: &BlockLuSymbolic,
+    ks: std::ops::Range<usize>,
+    part_only: bool,
+    vals: Shared<f64>,
+    perm: Shared<u32>,
+    colmax: &[f64],
+    piv: &mut [u32],
+    work: &mut [f64],
+) -> Result<(), SingularBlock> {
+    // SAFETY: the caller's.
+    unsafe { eliminate_steps_impl(sym, ks, part_only, vals, perm, colmax, piv, work) }
+}
+
 #[inline(always)]
-fn block_pair(rhs: &mut [f64], a: usize, la: usize, b: usize, lb: usize) -> (&[f64], &mut [f64]) {
-    if a < b {
-        let (lo, hi) = rhs.split_at_mut(b);
-        (&lo[a..a + la], &mut hi[..lb])
-    } else {
-        let (lo, hi) = rhs.split_at_mut(a);
-        (&hi[..la], &mut lo[b..b + lb])
+#[allow(clippy::too_many_arguments)]
+unsafe fn eliminate_steps_impl(
+    sym: &BlockLuSymbolic,
+    ks: std::ops::Range<usize>,
+    part_only: bool,
+    vals: Shared<f64>,
+    perm: Shared<u32>,
+    colmax: &[f64],
+    piv: &mut [u32],
+    work: &mut [f64],
+) -> Result<(), SingularBlock> {
+    for k in ks {
+        let sk = sym.size[k];
+        let d = sym.d_off[k];
+        let rk = sym.roff[k];
+        // SAFETY: block k's pivot and permutation are this step's own (caller).
+        let (db, pk) = unsafe {
+            (
+                std::slice::from_raw_parts_mut(vals.0.add(d), sk * sk),
+                std::slice::from_raw_parts_mut(perm.0.add(rk), sk),
+            )
+        };
+        let bmax = db.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let thr = PIVOT_RTOL * colmax[k].max(bmax);
+        if !lu_block(db, &mut piv[..sk], pk, sk, thr) {
+            return Err(SingularBlock {
+                block: sym.order[k],
+            });
+        }
+        let (db, pk) = (&*db, &*pk);
+        // L_ik = A_ik D_k^{-1}
+        for e in &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]] {
+            // SAFETY: L_ik is block column k's, disjoint from D_k.
+            let lb = unsafe { std::slice::from_raw_parts_mut(vals.0.add(e.l), e.size * sk) };
+            rsolve_block(lb, db, pk, e.size, sk, work);
+        }
+        let end = if part_only {
+            sym.upd_mid[k]
+        } else {
+            sym.upd_ptr[k + 1]
+        };
+        // SAFETY: the caller's.
+        unsafe { schur_range(sym, k, sym.upd_ptr[k]..end, vals) };
+    }
+    Ok(())
+}
+
+/// The Schur updates of step `k` from `from` on (those into the separator's blocks, for a
+/// part's step).
+///
+/// # Safety
+/// As [`eliminate_steps`], for step `k`'s updates.
+unsafe fn schur_updates(sym: &BlockLuSymbolic, k: usize, from: usize, vals: Shared<f64>) {
+    #[cfg(target_arch = "x86_64")]
+    if avx() {
+        #[target_feature(enable = "avx")]
+        unsafe fn wide(sym: &BlockLuSymbolic, k: usize, r: std::ops::Range<usize>, v: Shared<f64>) {
+            // SAFETY: the caller's.
+            unsafe { schur_range(sym, k, r, v) }
+        }
+        // SAFETY: the CPU supports AVX; the rest is the caller's.
+        return unsafe { wide(sym, k, from..sym.upd_ptr[k + 1], vals) };
+    }
+    // SAFETY: the caller's.
+    unsafe { schur_range(sym, k, from..sym.upd_ptr[k + 1], vals) }
+}
+
+/// `A_ij −= L_ik U_kj` for the updates `r` of step `k`.
+///
+/// # Safety
+/// As [`eliminate_steps`].
+#[inline(always)]
+unsafe fn schur_range(
+    sym: &BlockLuSymbolic,
+    k: usize,
+    r: std::ops::Range<usize>,
+    vals: Shared<f64>,
+) {
+    let sk = sym.size[k];
+    let bp = vals.0;
+    for up in &sym.upd[r] {
+        // SAFETY: dst is a block (i, j) with positions i, j > k while l and u are blocks
+        // of column/row k, so the three ranges are disjoint and all lie within the
+        // storage (layout built by the symbolic phase).
+        unsafe {
+            gemm_sub(
+                bp.add(up.dst),
+                bp.add(up.l),
+                bp.add(up.u),
+                up.si as usize,
+                sk,
+                up.sj as usize,
+                !up.diag,
+            );
+        }
+    }
+}
+
+/// Forward substitution `L y = b` (column oriented), block columns `ks`: `y_i −= L_ik y_k`
+/// for the off-diagonal blocks `i` of column `k`; with `part_only`, not those in the
+/// separator.
+///
+/// # Safety
+/// `x` is the right-hand side of `sym`'s dimension; no other thread touches the blocks
+/// written (those of the columns' entries) or `y_k`.
+#[inline(always)]
+unsafe fn forward_steps(
+    sym: &BlockLuSymbolic,
+    vals: &[f64],
+    ks: std::ops::Range<usize>,
+    part_only: bool,
+    x: Shared<f64>,
+) {
+    for k in ks {
+        let end = if part_only {
+            sym.s_mid[k]
+        } else {
+            sym.s_ptr[k + 1]
+        };
+        let ents = &sym.s_ent[sym.s_ptr[k]..end];
+        // SAFETY: the caller's.
+        unsafe { forward_dyn(ents, vals, sym.roff[k], sym.size[k], x) };
+    }
+}
+
+/// [`forward_column`] with the pivot's size as a constant for node and joint blocks.
+///
+/// # Safety
+/// As [`forward_steps`].
+#[inline(always)]
+unsafe fn forward_dyn(ents: &[OffDiag], vals: &[f64], rk: usize, sk: usize, x: Shared<f64>) {
+    if ents.is_empty() {
+        return;
+    }
+    // SAFETY: the caller's.
+    unsafe {
+        match sk {
+            6 => forward_column::<6>(ents, vals, rk, x),
+            5 => forward_column::<5>(ents, vals, rk, x),
+            3 => forward_column::<3>(ents, vals, rk, x),
+            sk => {
+                let yk = std::slice::from_raw_parts(x.0.add(rk), sk);
+                for e in ents {
+                    let lb = &vals[e.l..e.l + e.size * sk];
+                    let yi = std::slice::from_raw_parts_mut(x.0.add(e.roff), e.size);
+                    matvec_acc(lb, yk, yi, e.size, sk, -1.0);
+                }
+            }
+        }
     }
 }
 
 /// Forward substitution of block column `k` (pivot size `S`, `y_k` at `rk`):
-/// `y_i −= L_ik y_k` for every off-diagonal block `i` of the column.
+/// `y_i −= L_ik y_k` for the off-diagonal blocks `ents` of the column, `y_k` read in
+/// place (a copy made with overlapping wide moves stalls the narrow loads that follow on
+/// store forwarding).
+///
+/// # Safety
+/// As [`forward_steps`]; the blocks `i` differ from `k`.
 #[inline(always)]
-fn forward_column<const S: usize>(ents: &[OffDiag], vals: &[f64], rk: usize, rhs: &mut [f64]) {
-    for e in ents {
-        let lb = &vals[e.l..e.l + e.size * S];
-        let (yk, yi) = block_pair(rhs, rk, S, e.roff, e.size);
-        matvec_acc(lb, yk, yi, e.size, S, -1.0);
+unsafe fn forward_column<const S: usize>(
+    ents: &[OffDiag],
+    vals: &[f64],
+    rk: usize,
+    x: Shared<f64>,
+) {
+    // SAFETY: the caller's; `y_k` and the `y_i` are different blocks of the vector.
+    unsafe {
+        let yk = std::slice::from_raw_parts(x.0.add(rk), S);
+        for e in ents {
+            let lb = &vals[e.l..e.l + e.size * S];
+            let yi = std::slice::from_raw_parts_mut(x.0.add(e.roff), e.size);
+            matvec_acc(lb, yk, yi, e.size, S, -1.0);
+        }
+    }
+}
+
+/// Backward substitution `U x = y` (row oriented), block rows `ks` from the last:
+/// `x_k = D_k⁻¹ (y_k − Σ_i U_ki x_i)`.
+///
+/// # Safety
+/// `x` is the right-hand side of `sym`'s dimension; no other thread touches the blocks
+/// `x_k` of `ks`, nor writes the blocks they read.
+#[inline(always)]
+unsafe fn backward_steps(
+    sym: &BlockLuSymbolic,
+    vals: &[f64],
+    perm: &[u32],
+    ks: std::ops::Range<usize>,
+    x: Shared<f64>,
+    work: &mut [f64],
+) {
+    for k in ks.rev() {
+        let rk = sym.roff[k];
+        let d = sym.d_off[k];
+        let ents = &sym.s_ent[sym.s_ptr[k]..sym.s_ptr[k + 1]];
+        // SAFETY: the caller's.
+        unsafe {
+            match sym.size[k] {
+                6 => backward_row::<6>(ents, vals, d, &perm[rk..rk + 6], rk, x),
+                5 => backward_row::<5>(ents, vals, d, &perm[rk..rk + 5], rk, x),
+                3 => backward_row::<3>(ents, vals, d, &perm[rk..rk + 3], rk, x),
+                sk => {
+                    let t = &mut work[..sk];
+                    t.copy_from_slice(std::slice::from_raw_parts(x.0.add(rk), sk));
+                    for e in ents {
+                        let ub = &vals[e.u..e.u + sk * e.size];
+                        let xi = std::slice::from_raw_parts(x.0.add(e.roff), e.size);
+                        matvec_acc(ub, xi, t, sk, e.size, -1.0);
+                    }
+                    let (t, tmp) = work.split_at_mut(sk);
+                    // x_k = D⁻¹ t
+                    d_solve(
+                        &vals[d..d + sk * sk],
+                        &perm[rk..rk + sk],
+                        sk,
+                        t,
+                        std::slice::from_raw_parts_mut(x.0.add(rk), sk),
+                        tmp,
+                    );
+                }
+            }
+        }
     }
 }
 
 /// Backward substitution of block row `k` (pivot size `S`, LU of `D_k` at `d`, `x_k` at
 /// `rk`): `x_k = D_k⁻¹ (y_k − Σ_i U_ki x_i)`, accumulated in place.
+///
+/// # Safety
+/// As [`backward_steps`]; the blocks `i` differ from `k`.
 #[inline(always)]
-fn backward_row<const S: usize>(
+unsafe fn backward_row<const S: usize>(
     ents: &[OffDiag],
     vals: &[f64],
     d: usize,
     perm: &[u32],
     rk: usize,
-    rhs: &mut [f64],
+    x: Shared<f64>,
 ) {
+    // SAFETY: the caller's; `x_k` and the `x_i` are different blocks of the vector.
+    let xk: &mut [f64; S] = unsafe { &mut *(x.0.add(rk) as *mut [f64; S]) };
     for e in ents {
         let ub = &vals[e.u..e.u + S * e.size];
-        let (xi, t) = block_pair(rhs, e.roff, e.size, rk, S);
-        matvec_acc(ub, xi, t, S, e.size, -1.0);
+        // SAFETY: as above.
+        let xi = unsafe { std::slice::from_raw_parts(x.0.add(e.roff), e.size) };
+        matvec_acc(ub, xi, xk, S, e.size, -1.0);
     }
-    let x: &mut [f64; S] = (&mut rhs[rk..rk + S]).try_into().unwrap();
     let mut y = [0.0f64; S];
     for c in 0..S {
-        y[c] = x[perm[c] as usize];
+        y[c] = xk[perm[c] as usize];
     }
     d_substitute::<S>(&vals[d..d + S * S], &mut y);
-    *x = y;
+    *xk = y;
 }
 
 // ----------------------------------------------------------------------------
@@ -1585,6 +1998,80 @@ mod tests {
             base.solve_transpose_impl(&mut x0);
             unsafe { wide.solve_transpose_avx(&mut x1) };
             assert_eq!(bits(&x0), bits(&x1));
+        }
+    }
+
+    /// A long chain gets the separator order (two parts of about the same size), matches a
+    /// dense LU, and gives the same bits factored and solved on one thread and on two.
+    #[test]
+    fn split_chain_same_bits_on_one_and_two_threads() {
+        let (s, _) = kkt_tree(&chain_parent(90), &[5, 3, 7], true);
+        let s = Arc::new(s);
+        let sym = Arc::new(BlockLuSymbolic::with_split_from(&s, TEST_SPLIT_MIN_BLOCKS).unwrap());
+        let [a, b] = sym.split().expect("separator order");
+        assert!(
+            a.abs_diff(b - a) <= 4 && b + 4 >= sym.n,
+            "parts {a}, {b}, {}",
+            sym.n
+        );
+        assert_mult_after_primaries(&s, &sym);
+        let mut rng = Rng(77);
+        let mut m = BlockMatrix::zeros(s.clone());
+        fill_random(&mut m, &mut rng, true);
+        let rhs: Vec<f64> = (0..s.dim()).map(|_| rng.uniform()).collect();
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                assert_eq!(parallel(), threads > 1);
+                let mut lu = BlockLu::new(sym.clone());
+                lu.factor(&m).unwrap();
+                let mut x = rhs.clone();
+                lu.solve_in_place(&mut x);
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                (bits(&lu.values), lu.perm.clone(), bits(&x))
+            })
+        };
+        let one = run(1);
+        let two = run(2);
+        assert!(one == two, "one and two threads differ");
+        let n = s.dim();
+        let xr = dense_of(&m)
+            .partial_piv_lu()
+            .solve(Mat::from_fn(n, 1, |r, _| rhs[r]));
+        let x: Vec<f64> = one.2.iter().map(|&b| f64::from_bits(b)).collect();
+        let e = rel_err(&x, &xr);
+        assert!(e < 1e-10, "against a dense LU: rel err {e}");
+    }
+
+    /// A singular pivot in the second part is reported as on one thread.
+    #[test]
+    fn split_chain_singular_block() {
+        let (s, _) = kkt_tree(&chain_parent(80), &[5], true);
+        let s = Arc::new(s);
+        let sym = Arc::new(BlockLuSymbolic::with_split_from(&s, TEST_SPLIT_MIN_BLOCKS).unwrap());
+        let [a, b] = sym.split().expect("separator order");
+        let bad = sym.order[(a + b) / 2];
+        let mut m = BlockMatrix::zeros(s.clone());
+        fill_random(&mut m, &mut Rng(5), false);
+        for v in m.block_mut(bad, bad).unwrap() {
+            *v = 0.0;
+        }
+        for &j in s.row_cols(bad) {
+            if j != bad {
+                m.block_mut(bad, j).unwrap().fill(0.0);
+                m.block_mut(j, bad).unwrap().fill(0.0);
+            }
+        }
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let err = pool.install(|| BlockLu::new(sym.clone()).factor(&m).unwrap_err());
+            assert_eq!(err.block, bad, "{threads} threads");
         }
     }
 

@@ -75,6 +75,12 @@ impl LinearSolver {
         }
     }
 
+    /// Whether the block LU factors and solves two parts on two threads (a separator order
+    /// and more than one rayon thread; only from within rayon's pool).
+    pub fn splits(&self) -> bool {
+        self.block.symbolic().split().is_some() && rayon::current_num_threads() > 1
+    }
+
     pub fn is_factored(&self) -> bool {
         self.active != Active::None
     }

@@ -21,11 +21,13 @@ use std::collections::BinaryHeap;
 /// Minimum-fill order of the graph `adj` (symmetric, no self loops): `order[k]` is the
 /// vertex eliminated at step `k`. A vertex `v` with `eligible_after[v] > 0` may only be
 /// eliminated after that many of its neighbours listed in `gates[v]` have been (used to
-/// keep a multiplier after the primaries it couples). `None` if more than `budget`
-/// adjacency operations would be needed.
+/// keep a multiplier after the primaries it couples). A vertex with `held[v]` (if `held`
+/// is not empty) waits until every vertex not held is eliminated (a separator kept last).
+/// `None` if more than `budget` adjacency operations would be needed.
 pub(crate) fn min_fill_order(
     adj: &[Vec<usize>],
     gates: &[Vec<usize>],
+    held: &[bool],
     budget: usize,
 ) -> Option<Vec<usize>> {
     let n = adj.len();
@@ -39,7 +41,13 @@ pub(crate) fn min_fill_order(
         })
         .collect();
     // Vertices waiting for their gates, and the vertices each vertex gates.
-    let mut waiting: Vec<usize> = gates.iter().map(Vec::len).collect();
+    let is_held = |v: usize| held.get(v).copied().unwrap_or(false);
+    let mut waiting: Vec<usize> = gates
+        .iter()
+        .enumerate()
+        .map(|(v, g)| g.len() + usize::from(is_held(v)))
+        .collect();
+    let mut free = (0..n).filter(|&v| !is_held(v)).count();
     let mut gated_by: Vec<Vec<usize>> = vec![Vec::new(); n];
     for (v, gs) in gates.iter().enumerate() {
         for &p in gs {
@@ -148,6 +156,17 @@ pub(crate) fn min_fill_order(
         for &w in &gated_by[v] {
             waiting[w] -= 1;
         }
+        if !is_held(v) {
+            free -= 1;
+            if free == 0 {
+                for w in (0..n).filter(|&w| is_held(w)) {
+                    waiting[w] -= 1;
+                    if waiting[w] == 0 {
+                        heap.push(Reverse((score[w].0, score[w].1, w)));
+                    }
+                }
+            }
+        }
         for &(u, fewer) in &joined {
             score[u].0 -= fewer;
             if waiting[u] == 0 {
@@ -190,7 +209,7 @@ mod tests {
     #[test]
     fn star_eliminates_leaves_first() {
         let adj = graph(5, &[(0, 1), (0, 2), (0, 3), (0, 4)]);
-        let o = min_fill_order(&adj, &vec![Vec::new(); 5], usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &vec![Vec::new(); 5], &[], usize::MAX).unwrap();
         assert_eq!(o, [1, 2, 3, 0, 4]);
     }
 
@@ -199,13 +218,17 @@ mod tests {
     fn path_and_gates() {
         let adj = graph(4, &[(0, 1), (1, 2), (2, 3)]);
         let none = vec![Vec::new(); 4];
-        let o = min_fill_order(&adj, &none, usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &none, &[], usize::MAX).unwrap();
         assert!(o[0] == 0 || o[0] == 3, "{o:?}");
         let mut gates = none.clone();
         gates[0] = vec![1];
-        let o = min_fill_order(&adj, &gates, usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &gates, &[], usize::MAX).unwrap();
         let p = |v: usize| o.iter().position(|&x| x == v).unwrap();
         assert!(p(0) > p(1), "{o:?}");
-        assert!(min_fill_order(&adj, &none, 3).is_none());
+        assert!(min_fill_order(&adj, &none, &[], 3).is_none());
+        // Vertex 1 held back: the others go first.
+        let held = [false, true, false, false];
+        let o = min_fill_order(&adj, &none, &held, usize::MAX).unwrap();
+        assert_eq!(o[3], 1, "{o:?}");
     }
 }
