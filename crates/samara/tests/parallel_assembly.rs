@@ -9,7 +9,10 @@ mod common;
 use common::model;
 use samara::analysis::{History, run_analysis};
 use samara::model::{AnalysisKind, JacobianUpdate, Model};
-use samara::system::{PARALLEL_MIN_ELEMENTS, PARALLEL_WINDOW, State, System};
+use samara::solve::{BlockLuSymbolic, SPLIT_MIN_BLOCKS};
+use samara::system::{
+    Assembler, Formulation, PARALLEL_MIN_ELEMENTS, PARALLEL_WINDOW, State, System,
+};
 
 /// Steel cantilever (L = 1 m, 10 mm square) in 300 two-node elements, a 0.5 N tip load
 /// and a small tip mass (a second element size in the same model).
@@ -209,4 +212,49 @@ fn aeroelastic_rotor_is_deterministic_across_threads() {
         bits(&one) == bits(&two),
         "modified Newton: 1 and 2 threads differ"
     );
+}
+
+/// Issue #17, tenth round: from `SPLIT_MIN_BLOCKS` blocks on, the block LU may take a
+/// separator order and factor and solve its two parts on two threads. The cantilever in
+/// 1,000 elements (1,001 node blocks and the clamp's multipliers) takes it; its static and
+/// dynamic runs (full and modified Newton) through the split factorization give the same
+/// bits with 1 and 2 threads, and its static tip deflection is Timoshenko's (as above, to
+/// 1e-4; 1,000 elements resolve the deflection line better than 300).
+#[test]
+fn split_factorization_is_deterministic_end_to_end() {
+    let text = CANTILEVER
+        .replace("elements = 300", "elements = 1000")
+        .replace("t_end = 0.01", "t_end = 0.004");
+    let mut m = model(&text);
+    let sys = System::new(&m);
+    let asm = Assembler::new(&sys, Formulation::Index3);
+    let structure = asm.structure();
+    assert!(
+        structure.n_blocks() >= SPLIT_MIN_BLOCKS,
+        "{}",
+        structure.n_blocks()
+    );
+    let sym = BlockLuSymbolic::new(structure).expect("block structure");
+    assert!(sym.split().is_some(), "the separator order is taken");
+    for k in 0..m.analyses.len() {
+        let one = run_with_threads(&m, &sys, k, 1);
+        let two = run_with_threads(&m, &sys, k, 2);
+        assert!(bits(&one) == bits(&two), "analysis {}", m.analyses[k].name);
+        if k == 0 {
+            let tip = m.node_index("tip").expect("tip node");
+            let w = -two.nodes[tip].x.z;
+            let exact = 0.5 / (3.0 * 210e9 * 8.333333333333334e-10)
+                + 0.5 / (0.8333333333333334 * 80769230769.23077 * 1e-4);
+            assert!(
+                ((w - exact) / exact).abs() < 1e-4,
+                "tip {w:e}, Timoshenko {exact:e}"
+            );
+        }
+    }
+    if let AnalysisKind::Dynamic(d) = &mut m.analyses[1].kind {
+        d.jacobian = JacobianUpdate::Modified;
+    }
+    let one = run_with_threads(&m, &sys, 1, 1);
+    let two = run_with_threads(&m, &sys, 1, 2);
+    assert!(bits(&one) == bits(&two), "dynamic, modified Newton");
 }

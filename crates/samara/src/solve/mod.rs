@@ -16,7 +16,7 @@ mod min_fill;
 pub mod newton;
 mod sparse_lu;
 
-pub use block_lu::{BlockLu, BlockLuSymbolic, SingularBlock};
+pub use block_lu::{BlockLu, BlockLuSymbolic, SPLIT_MIN_BLOCKS, SingularBlock};
 pub use block_matrix::{BlockKind, BlockMatrix, BlockStructure, StructureError};
 pub use linear::{LinearError, LinearSolver, LinearSolverType, LinearStats};
 pub use newton::{NewtonFailure, NewtonReport, NewtonSettings, NewtonSystem, newton};
