@@ -1145,14 +1145,7 @@ unsafe fn forward_dyn(ents: &[OffDiag], vals: &[f64], rk: usize, sk: usize, x: S
             6 => forward_column::<6>(ents, vals, rk, x),
             5 => forward_column::<5>(ents, vals, rk, x),
             3 => forward_column::<3>(ents, vals, rk, x),
-            sk => {
-                let yk = std::slice::from_raw_parts(x.0.add(rk), sk);
-                for e in ents {
-                    let lb = &vals[e.l..e.l + e.size * sk];
-                    let yi = std::slice::from_raw_parts_mut(x.0.add(e.roff), e.size);
-                    matvec_acc(lb, yk, yi, e.size, sk, -1.0);
-                }
-            }
+            sk => forward_entries(ents, vals, rk, sk, x),
         }
     }
 }
@@ -1171,13 +1164,24 @@ unsafe fn forward_column<const S: usize>(
     rk: usize,
     x: Shared<f64>,
 ) {
+    // SAFETY: the caller's.
+    unsafe { forward_entries(ents, vals, rk, S, x) }
+}
+
+/// `y_i −= L_ik y_k` for the blocks `ents` of column `k` (pivot size `sk`, a constant when
+/// inlined from [`forward_column`]).
+///
+/// # Safety
+/// As [`forward_steps`]; the blocks `i` differ from `k`.
+#[inline(always)]
+unsafe fn forward_entries(ents: &[OffDiag], vals: &[f64], rk: usize, sk: usize, x: Shared<f64>) {
     // SAFETY: the caller's; `y_k` and the `y_i` are different blocks of the vector.
     unsafe {
-        let yk = std::slice::from_raw_parts(x.0.add(rk), S);
+        let yk = std::slice::from_raw_parts(x.0.add(rk), sk);
         for e in ents {
-            let lb = &vals[e.l..e.l + e.size * S];
+            let lb = &vals[e.l..e.l + e.size * sk];
             let yi = std::slice::from_raw_parts_mut(x.0.add(e.roff), e.size);
-            matvec_acc(lb, yk, yi, e.size, S, -1.0);
+            matvec_acc(lb, yk, yi, e.size, sk, -1.0);
         }
     }
 }

@@ -744,40 +744,35 @@ impl System {
             .sum()
     }
 
-    /// Σ f(element, input) over the elements.
+    /// Σ f(element, input) over the elements; with `energy`, the elements that apply loads
+    /// only ([`Element::loads_only`]: zero energies and dissipation) are skipped — the sum
+    /// is the same (+0 for an empty sum, as a sum of zeros gives).
     fn element_sum(
         &self,
         s: &State,
         signals: &[f64],
-        f: impl Fn(&dyn Element, &ElementInput) -> f64,
-    ) -> f64 {
-        let mut scratch = Vec::new();
-        (0..self.elements.len())
-            .map(|k| {
-                let x = self.element_input(k, s, signals, &mut scratch);
-                f(self.elements[k].as_ref(), &x)
-            })
-            .sum()
-    }
-
-    /// [`Self::element_sum`] of an energy or a dissipated power: the elements that apply
-    /// loads only ([`Element::loads_only`]) add exact zeros and are skipped, so the sum is
-    /// the same (+0 for an empty sum, as a sum of zeros gives).
-    fn energy_sum(
-        &self,
-        s: &State,
-        signals: &[f64],
+        energy: bool,
         f: impl Fn(&dyn Element, &ElementInput) -> f64,
     ) -> f64 {
         let mut scratch = Vec::new();
         let sum: f64 = (0..self.elements.len())
-            .filter(|&k| !self.elements[k].loads_only())
+            .filter(|&k| !(energy && self.elements[k].loads_only()))
             .map(|k| {
                 let x = self.element_input(k, s, signals, &mut scratch);
                 f(self.elements[k].as_ref(), &x)
             })
             .sum();
         sum + 0.0
+    }
+
+    /// [`Self::element_sum`] of an energy or a dissipated power.
+    fn energy_sum(
+        &self,
+        s: &State,
+        signals: &[f64],
+        f: impl Fn(&dyn Element, &ElementInput) -> f64,
+    ) -> f64 {
+        self.element_sum(s, signals, true, f)
     }
 
     /// The first element whose state in `s` is outside its range
@@ -846,7 +841,7 @@ impl System {
                 )
             })
             .sum();
-        self.element_sum(s, &signals, element) + coordinate_inputs
+        self.element_sum(s, &signals, false, element) + coordinate_inputs
     }
 
     /// The sorted, distinct breakpoints of every time function in the model (loads,
