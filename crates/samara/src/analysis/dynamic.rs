@@ -170,9 +170,19 @@ impl NewtonSystem for StepProblem<'_> {
             z.zd += d * self.coef.state_rate;
         }
         let mut worst: f64 = 0.0;
-        for (q, c) in self.hdq.iter_mut().zip(self.change.iter()) {
+        // A configuration unknown's correction is weighed against its step increment
+        // (positions have no natural origin); an element state's against the larger of its
+        // increment and its value (a state has a natural zero — inflow, a stall fraction, a
+        // pressure — so its own size sets the relative tolerance, as in ODE codes).
+        let z0 = n6 + nc;
+        for (k, (q, c)) in self.hdq.iter_mut().zip(self.change.iter()).enumerate() {
             *q += c;
-            worst = worst.max(c.abs() / (self.atol + self.rtol * q.abs()));
+            let scale = if k >= z0 {
+                q.abs().max(self.cur.states[k - z0].z.abs())
+            } else {
+                q.abs()
+            };
+            worst = worst.max(c.abs() / (self.atol + self.rtol * scale));
         }
         self.update_configuration();
         let s = 1.0 / self.coef.multiplier_scale;
