@@ -327,8 +327,11 @@ impl Integrator<'_> {
         self.settings.solver.penalty * self.sys.characteristic_mass / (self.ga.beta * h * h)
     }
 
-    /// One generalized-α step of size h from `self.state` into `self.trial`.
+    /// One generalized-α step of size h from `self.state` into `self.trial`. `Hold` is
+    /// asked for only to retry a step whose Newton failed; the retry refreshes the matrix
+    /// at every iteration, also under modified Newton.
     fn step(&mut self, h: f64, predictor: Predictor) -> Result<NewtonReport, NewtonFailure> {
+        let retry = predictor == Predictor::Hold;
         let ga = self.ga;
         let t1 = self.state.time + h;
         self.trial_step = h;
@@ -502,7 +505,9 @@ impl Integrator<'_> {
         let settings = NewtonSettings {
             max_iterations: self.settings.solver.max_iterations,
             constraint_tolerance: self.settings.solver.tolerance,
-            reuse_jacobian: self.settings.jacobian == JacobianUpdate::Modified,
+            // A retried step is one where a reused matrix (or its refresh rule) failed:
+            // full Newton.
+            reuse_jacobian: self.settings.jacobian == JacobianUpdate::Modified && !retry,
             // Granular sets: damped Newton (the pair friction's stick–slip kinks).
             line_search: !self.sys.granular.is_empty(),
         };

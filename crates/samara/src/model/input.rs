@@ -177,7 +177,8 @@ pub enum JacobianUpdate {
     #[default]
     Full,
     /// Modified Newton: keep the factorization across iterations and steps while Newton
-    /// contracts fast; refactor when it slows down, fails, or the step size changes.
+    /// contracts fast; refactor when it slows down, fails, or the step size changes. A
+    /// step retried after a failure runs full Newton.
     Modified,
 }
 
