@@ -89,6 +89,10 @@
 //! Then an element state's Newton correction weighed against max(|hΔz|, |z|) (its value,
 //! not only its increment): 2.36 iterations per step, callgrind 5.072G → 4.799G (−5.4 %,
 //! `--toggle-collect='*run_analysis*'`), last line 6152.82 kW, 728.260 kN.
+//! Fourteenth round (the BEM root's start at a step's first evaluation on the line through
+//! the last two steps' roots; cl, cd without their derivatives in the f64 root): callgrind
+//! 4.800G → 4.747G (−1.1 %), CPU median 0.474 → 0.459 ms per step (0.467–0.485 against
+//! 0.454–0.467, 12 runs each interleaved, load average 5.0; ≈ 21.8×); last line unchanged.
 //! The history is in docs/aerodynamics.md, "Performance".
 //!
 //! The run ends by printing the aerodynamic power, the thrust and blade 1's tip deflection

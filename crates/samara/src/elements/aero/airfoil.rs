@@ -412,11 +412,10 @@ impl Table {
         k
     }
 
-    /// The cubic Hermite pieces at α [rad] (any angle: wrapped to −π … π): the interval
-    /// i, its width h, and the basis functions and their α-derivatives
-    /// (h₀₀, h₁₀, h₀₁, h₁₁, then d/dα of each).
+    /// The interval i of α [rad] (any angle: wrapped to −π … π), its width h and the
+    /// local coordinate t = (α − αᵢ)/h.
     #[inline(always)]
-    fn hermite(&self, alpha: f64) -> (usize, f64, [f64; 4], [f64; 4]) {
+    fn place(&self, alpha: f64) -> (usize, f64, f64) {
         let a = wrap(alpha);
         let n = self.alpha.len();
         let i = match self.interval(a) {
@@ -425,16 +424,30 @@ impl Table {
             k => k - 1,
         };
         let h = self.alpha[i + 1] - self.alpha[i];
-        let t = (a - self.alpha[i]) / h;
+        (i, h, (a - self.alpha[i]) / h)
+    }
+
+    /// The cubic Hermite basis h₀₀, h₁₀, h₀₁, h₁₁ at t.
+    #[inline(always)]
+    fn basis(t: f64) -> [f64; 4] {
+        [
+            (1.0 + 2.0 * t) * (1.0 - t) * (1.0 - t),
+            t * (1.0 - t) * (1.0 - t),
+            t * t * (3.0 - 2.0 * t),
+            t * t * (t - 1.0),
+        ]
+    }
+
+    /// The cubic Hermite pieces at α [rad] (any angle: wrapped to −π … π): the interval
+    /// i, its width h, and the basis functions and their α-derivatives
+    /// (h₀₀, h₁₀, h₀₁, h₁₁, then d/dα of each).
+    #[inline(always)]
+    fn hermite(&self, alpha: f64) -> (usize, f64, [f64; 4], [f64; 4]) {
+        let (i, h, t) = self.place(alpha);
         (
             i,
             h,
-            [
-                (1.0 + 2.0 * t) * (1.0 - t) * (1.0 - t),
-                t * (1.0 - t) * (1.0 - t),
-                t * t * (3.0 - 2.0 * t),
-                t * t * (t - 1.0),
-            ],
+            Self::basis(t),
             [
                 6.0 * t * (t - 1.0) / h,
                 (1.0 - t) * (1.0 - 3.0 * t) / h,
@@ -444,6 +457,15 @@ impl Table {
         )
     }
 
+    /// Coefficient c (cl, cd, cm) on the basis b of interval i (width h):
+    /// y = h₀₀ yᵢ + h₁₀ h mᵢ + h₀₁ yᵢ₊₁ + h₁₁ h mᵢ₊₁.
+    #[inline(always)]
+    fn value(&self, c: usize, i: usize, h: f64, b: &[f64; 4]) -> f64 {
+        let (y0, y1) = (self.values[c][i], self.values[c][i + 1]);
+        let (m0, m1) = (self.slopes[c][i], self.slopes[c][i + 1]);
+        b[0] * y0 + b[1] * h * m0 + b[2] * y1 + b[3] * h * m1
+    }
+
     /// Coefficient c (cl, cd, cm) and its α-derivative on the pieces of [`Self::hermite`].
     #[inline(always)]
     fn piece(&self, c: usize, (i, h, b, d): &(usize, f64, [f64; 4], [f64; 4])) -> (f64, f64) {
@@ -451,7 +473,7 @@ impl Table {
         let (y0, y1) = (self.values[c][i], self.values[c][i + 1]);
         let (m0, m1) = (self.slopes[c][i], self.slopes[c][i + 1]);
         (
-            b[0] * y0 + b[1] * h * m0 + b[2] * y1 + b[3] * h * m1,
+            self.value(c, i, h, b),
             d[0] * y0 + d[1] * h * m0 + d[2] * y1 + d[3] * h * m1,
         )
     }
@@ -476,6 +498,14 @@ impl Table {
     fn eval_lift_drag(&self, alpha: f64) -> [(f64, f64); 2] {
         let at = self.hermite(alpha);
         [self.piece(0, &at), self.piece(1, &at)]
+    }
+
+    /// cl and cd at α without their derivatives (the same values as
+    /// [`Self::eval_lift_drag`]'s).
+    fn lift_drag_values(&self, alpha: f64) -> [f64; 2] {
+        let (i, h, t) = self.place(alpha);
+        let b = Self::basis(t);
+        [self.value(0, i, h, &b), self.value(1, i, h, &b)]
     }
 }
 
@@ -585,6 +615,7 @@ impl Airfoil {
     /// the momentum balance's lookup).
     pub fn lift_drag<S: Scalar>(&self, alpha: S, re: Option<S>) -> [S; 2] {
         match re {
+            None if S::DIRECTIONS == 0 => self.tables[0].lift_drag_values(alpha.re()).map(S::cst),
             None => {
                 let [(cl, dcl), (cd, dcd)] = self.tables[0].eval_lift_drag(alpha.re());
                 [alpha.chain(cl, dcl), alpha.chain(cd, dcd)]
@@ -953,6 +984,27 @@ fn parse_aerodyn(text: &str) -> Result<AeroDynTables, AirfoilError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The values-only lift and drag (f64) are the bits of the values the dual path reads.
+    #[test]
+    fn values_only_lift_drag_equals_the_differentiated_one() {
+        let foil = Airfoil::thin_plate_with_drag();
+        for k in -2000..=2000 {
+            let alpha = 0.0017 * k as f64 + 1e-3;
+            let [cl, cd] = foil.lift_drag(alpha, None);
+            let [(vl, _), (vd, _)] = foil.tables[0].eval_lift_drag(alpha);
+            assert_eq!(
+                (cl.to_bits(), cd.to_bits()),
+                (vl.to_bits(), vd.to_bits()),
+                "{alpha}"
+            );
+            let c = foil.eval(alpha);
+            assert_eq!(
+                (cl.to_bits(), cd.to_bits()),
+                (c.cl.to_bits(), c.cd.to_bits())
+            );
+        }
+    }
 
     #[test]
     fn binned_interval_search_equals_bisection() {

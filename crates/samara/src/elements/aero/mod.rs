@@ -5,6 +5,7 @@ pub mod airfoil;
 pub mod bem;
 pub mod dynamic_inflow;
 pub mod hgm;
+mod root_hint;
 pub mod rotor_performance;
 pub mod station;
 pub mod turbsim;

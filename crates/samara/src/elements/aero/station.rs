@@ -44,6 +44,7 @@ use super::airfoil::Airfoil;
 use super::bem::{BemRotor, SKEW_CONSTANT, StationFlow};
 use super::dynamic_inflow::{RotorDisc, inflow_signals, thrust_signals};
 use super::hgm::{Hgm, HgmFlow};
+use super::root_hint::RootHint;
 use super::unsteady::{AttachedFlow, JONES_A, JONES_B, KUSSNER_A, KUSSNER_B, OyeStall};
 use super::wind::Wind;
 use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, NodeState, SignalTerms};
@@ -159,14 +160,14 @@ pub struct AeroStation {
     /// Signals read (the rotor's inflow states) and produced (the thrust), Pitt–Peters.
     inputs: Vec<String>,
     outputs: Vec<String>,
-    /// The station's last BEM root φ, the warm start of its next solve
-    /// ([`BemRotor::solve_near`]). Every solve converges to rounding from any start, so
+    /// The station's last BEM roots, the warm start of its next solve
+    /// ([`BemRotor::solve_near`], [`RootHint`]). Every solve converges to rounding from any start, so
     /// the results depend on it only at rounding level; it is cleared as each analysis
     /// starts ([`Element::begin_analysis`]), and each station is evaluated in the same
     /// sequence whatever the number of threads, so a run gives the same bits every time.
     /// (Parallel linearizations of one system — Campbell, Floquet — share it between
     /// threads.)
-    root_hint: Slot,
+    root_hint: RootHint,
     /// The power of the loads at the last residual evaluation, F·ṗ + M·ω̄ scaled by the
     /// load factor ([`Element::evaluated_power`]); cleared as each analysis starts.
     last_power: Slot,
@@ -298,7 +299,7 @@ impl AeroStation {
             initial: [0.0; MAX_STATES],
             inputs,
             outputs,
-            root_hint: Slot::new(),
+            root_hint: RootHint::new(),
             last_power: Slot::new(),
             span: 0.0,
             gust_x: 0.0,
@@ -537,9 +538,10 @@ impl AeroStation {
                     theta,
                     re: re_bem,
                 };
-                let mut ind = rotor.solve_near(&flow, &self.section.airfoil, self.root_hint.get());
+                let mut ind =
+                    rotor.solve_near(&flow, &self.section.airfoil, self.root_hint.start(t));
                 if let Some(i) = &mut ind {
-                    self.root_hint.set(i.phi.re());
+                    self.root_hint.record(t, i.phi.re());
                     if rotor.skewed_wake {
                         // Pitt–Peters/Glauert: a ← a [1 + (15π/32)(r/R) tan(χ/2) cos ψ],
                         // χ = (1 + 0.6a) γ the wake skew, γ the wind's angle to the axis,
