@@ -161,12 +161,12 @@ pub struct AeroStation {
     inputs: Vec<String>,
     outputs: Vec<String>,
     /// The station's last BEM roots, the warm start of its next solve
-    /// ([`BemRotor::solve_near`], [`RootHint`]). Every solve converges to rounding from any start, so
-    /// the results depend on it only at rounding level; it is cleared as each analysis
-    /// starts ([`Element::begin_analysis`]), and each station is evaluated in the same
-    /// sequence whatever the number of threads, so a run gives the same bits every time.
-    /// (Parallel linearizations of one system — Campbell, Floquet — share it between
-    /// threads.)
+    /// ([`BemRotor::solve_near`], [`RootHint`]). Every solve converges to rounding from
+    /// any start, so the results depend on it only at rounding level; it is cleared as
+    /// each analysis starts ([`Element::begin_analysis`]), and each station is evaluated
+    /// in the same sequence whatever the number of threads, so a run gives the same bits
+    /// every time. (Parallel linearizations of one system — Campbell, Floquet — share it
+    /// between threads.)
     root_hint: RootHint,
     /// The power of the loads at the last residual evaluation, F·ṗ + M·ω̄ scaled by the
     /// load factor ([`Element::evaluated_power`]); cleared as each analysis starts.
