@@ -34,7 +34,7 @@ fn same_step(h: f64, factored: f64) -> bool {
     (h - factored).abs() <= SAME_STEP * h
 }
 
-/// How a step's first Newton iterate is predicted (the multipliers: [`predict_multipliers`]).
+/// How a step's first Newton iterate is predicted (λ_{n+1} = λ_n always).
 ///
 /// - `Extrapolate`: v̇_{n+1} = v̇_n, exact for constant accelerations — the best guess for
 ///   motion the step resolves.
@@ -72,30 +72,6 @@ enum Predictor {
     Trend,
     Repeat,
     Hold,
-}
-
-/// Modified Newton's prediction of the multipliers, λ_{n+1} = λ_n + r (λ_{n−1} − λ_{n−2})
-/// (r = h_{n+1}/h_n): the increment of the step before last again.
-///
-/// Newton's test weighs configuration corrections only, so a reused matrix leaves λ with
-/// an error that alternates in sign from step to step (the N = 100 revolute chain's
-/// ground pin at ρ∞ = 0.9: second differences of λ ~1 N on ~20 N with modified Newton,
-/// ~0.05 N with full Newton). Held (λ_{n+1} = λ_n) or extrapolated linearly, the
-/// prediction misses by that error; the increment of two steps back carries the same
-/// phase of the alternation and the trend. Measured on that chain (1 s): largest miss of
-/// four multipliers, median 0.43 N held, 0.77 N linear, 0.034 N here; 2.95 → 2.47 Newton
-/// iterations and 0.235 → 0.169 factorizations per step (docs/integrators.md). Full
-/// Newton, whose fresh matrix removes λ's error in its first correction, holds λ.
-fn predict_multipliers(
-    lambda: &mut [f64],
-    current: &[f64],
-    last: &[f64],
-    before: &[f64],
-    ratio: f64,
-) {
-    for (l1, ((l, lp), lpp)) in lambda.iter_mut().zip(current.iter().zip(last).zip(before)) {
-        *l1 = l + ratio * (lp - lpp);
-    }
 }
 
 /// The nonlinear problem of one step, from `prev` (at t_n) to `cur` (at t_{n+1}).
@@ -261,11 +237,6 @@ struct Integrator<'a> {
     /// a restart of the accelerations).
     last_vdot: Vec<f64>,
     trend_ok: bool,
-    /// λ_{n−1} and λ_{n−2} for [`predict_multipliers`]; `multipliers_ok`: both belong to
-    /// the same run of the scheme as λ_n.
-    last_lambda: Vec<f64>,
-    before_lambda: Vec<f64>,
-    multipliers_ok: bool,
     /// hΔq and h of the last accepted step (h = 0: none yet).
     last_hdq: Vec<f64>,
     last_h: f64,
@@ -528,20 +499,10 @@ impl Integrator<'_> {
         if !same_step(h, self.factored_h) {
             self.lin.invalidate();
         }
-        let modified = self.settings.jacobian == JacobianUpdate::Modified;
-        if modified && predictor == Predictor::Trend && self.multipliers_ok {
-            predict_multipliers(
-                &mut self.trial.lambda,
-                &self.state.lambda,
-                &self.last_lambda,
-                &self.before_lambda,
-                ratio,
-            );
-        }
         let settings = NewtonSettings {
             max_iterations: self.settings.solver.max_iterations,
             constraint_tolerance: self.settings.solver.tolerance,
-            reuse_jacobian: modified,
+            reuse_jacobian: self.settings.jacobian == JacobianUpdate::Modified,
             // Granular sets: damped Newton (the pair friction's stick–slip kinks).
             line_search: !self.sys.granular.is_empty(),
         };
@@ -677,7 +638,6 @@ impl Integrator<'_> {
         let sys = self.sys;
         // The accelerations before the restart are not the trend of those after it.
         self.trend_ok = false;
-        self.multipliers_ok = false;
         for (i, nd) in self.state.nodes.iter().enumerate() {
             let v = [nd.a.x, nd.a.y, nd.a.z, nd.wd.x, nd.wd.y, nd.wd.z];
             self.acc[6 * i..6 * i + 6].copy_from_slice(&v);
@@ -849,9 +809,6 @@ impl Integrator<'_> {
         for (j, z) in self.state.states.iter().enumerate() {
             self.last_vdot[z0 + j] = z.zd;
         }
-        std::mem::swap(&mut self.before_lambda, &mut self.last_lambda);
-        self.last_lambda.copy_from_slice(&self.state.lambda);
-        self.multipliers_ok = self.trend_ok;
         self.trend_ok = true;
         for (i, (n, p)) in self.trial.nodes.iter().zip(&self.state.nodes).enumerate() {
             let vd1 = [n.a.x, n.a.y, n.a.z, n.wd.x, n.wd.y, n.wd.z];
@@ -931,9 +888,6 @@ fn start<'a>(
         trended_valid: false,
         feedback: TrendFeedback::new(sys.n_config()),
         last_vdot: vec![0.0; sys.n_config()],
-        last_lambda: vec![0.0; sys.n_multipliers],
-        before_lambda: vec![0.0; sys.n_multipliers],
-        multipliers_ok: false,
         trend_ok: false,
         last_hdq: vec![0.0; sys.n_config()],
         last_h: 0.0,
