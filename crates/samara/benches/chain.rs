@@ -30,7 +30,11 @@
 //! best, 0.390 / 0.189 s median, one thread or two alike (callgrind 589.7M / 2220.5M); the
 //! block LU's two-thread separator order measured 0.439 / 0.221 s best with two threads (a
 //! loss) and is used from 1,000 blocks on only. Targets not met on this machine, with one
-//! thread or two. README "Benchmarks", docs/integrators.md.
+//! thread or two. The eleventh round kept nothing: predicting modified Newton's multipliers
+//! by the increment of the step before last gave 2.47 iterations and 0.169 factorizations
+//! per step (2179.4M → 1838.2M instructions) but stops too early for tests/options.rs's
+//! pendulum (docs/integrators.md).
+//! README "Benchmarks", docs/integrators.md.
 
 use samara::analysis::{History, run_analysis};
 use samara::model::Model;
