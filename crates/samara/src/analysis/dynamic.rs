@@ -670,7 +670,7 @@ impl Integrator<'_> {
             self.contacts.elements(self.sys),
         );
         self.lin = LinearSolver::new(self.asm.structure(), self.settings.solver.linear_solver);
-        self.matrix = BlockMatrix::zeros(self.asm.structure().clone());
+        self.matrix = iteration_matrix(&self.lin, self.asm.structure(), self.settings);
         self.factored_h = f64::NAN;
         self.restart = None;
     }
@@ -853,6 +853,21 @@ impl Integrator<'_> {
 /// Sets up the integrator from `initial` at time `t0` with consistent initial
 /// conditions (assembly, velocities, accelerations and state rates). On failure the reason
 /// is in `summary` and the state reached is returned.
+/// The matrix the steps assemble into: the block LU's factor storage, factored in place
+/// (`LinearSolver::assembly_matrix`), unless the diagnostics read the assembled matrix
+/// after the solve (the condition number): then row-major, copied into the factor.
+fn iteration_matrix(
+    lin: &LinearSolver,
+    structure: &std::sync::Arc<crate::solve::BlockStructure>,
+    settings: &DynamicSettings,
+) -> BlockMatrix {
+    if settings.solver.diagnostics {
+        BlockMatrix::zeros(structure.clone())
+    } else {
+        lin.assembly_matrix(structure)
+    }
+}
+
 fn start<'a>(
     sys: &'a System,
     settings: &'a DynamicSettings,
@@ -867,13 +882,15 @@ fn start<'a>(
     };
     let asm = Assembler::new(sys, formulation);
     let n = asm.n_unknowns();
+    let lin = LinearSolver::new(asm.structure(), settings.solver.linear_solver);
+    let matrix = iteration_matrix(&lin, asm.structure(), settings);
     let mut it = Integrator {
         sys,
         settings,
         ga: GeneralizedAlpha::from_rho_inf(settings.rho_inf),
         fo: FirstOrderAlpha::from_rho_inf(settings.rho_inf),
-        lin: LinearSolver::new(asm.structure(), settings.solver.linear_solver),
-        matrix: BlockMatrix::zeros(asm.structure().clone()),
+        lin,
+        matrix,
         asm,
         work: NewtonWork::new(n),
         trial: initial.clone(),

@@ -66,7 +66,7 @@
 
 use std::sync::Arc;
 
-use super::{BlockKind, BlockMatrix, BlockStructure, StructureError};
+use super::{BlockKind, BlockMatrix, BlockSlot, BlockStructure, StructureError};
 
 /// Relative pivot tolerance (see module docs).
 const PIVOT_RTOL: f64 = 1e-14;
@@ -148,6 +148,10 @@ pub struct BlockLuSymbolic {
     s_mid: Vec<usize>,
     upd_mid: Vec<usize>,
     scatter: Vec<Scatter>,
+    /// Where each input block lives in the factor storage (`BlockStructure::entry_index`
+    /// order): a pivot block row-major, an off-diagonal one column-major. An assembly
+    /// into these places is the scatter done by the assembler ([`BlockLu::factor_in_place`]).
+    placement: Arc<[BlockSlot]>,
     /// Storage ranges (offset, len) of fill blocks that must be zeroed.
     fill: Vec<(usize, usize)>,
     n_values: usize,
@@ -285,9 +289,17 @@ impl BlockLuSymbolic {
         // ---- scatter map and fill blocks ----
         let mut covered = vec![false; n_values];
         let mut scatter = Vec::with_capacity(s.nnz_values());
+        let mut placement = Vec::with_capacity(s.n_entries());
         for bi in 0..n {
             for (&bj, &src) in s.row_cols(bi).iter().zip(s.row_offsets(bi)) {
                 let dst = locate(pos[bi], pos[bj]);
+                let (rows, cols) = (s.block_size(bi), s.block_size(bj));
+                placement.push(BlockSlot {
+                    offset: dst,
+                    row_stride: if bi == bj { cols } else { 1 },
+                    col_stride: if bi == bj { 1 } else { rows },
+                    len: rows * cols,
+                });
                 scatter.push(Scatter {
                     src,
                     dst,
@@ -350,6 +362,7 @@ impl BlockLuSymbolic {
             s_mid,
             upd_mid,
             scatter,
+            placement: placement.into(),
             fill,
             n_values,
             max_size,
@@ -536,6 +549,14 @@ impl BlockLuSymbolic {
     /// Number of scalar values stored for the factors.
     pub fn n_factor_values(&self) -> usize {
         self.n_values
+    }
+
+    /// Where each input block lives in the factor storage, by
+    /// [`BlockStructure::entry_index`]: an assembly target for
+    /// [`BlockLu::factor_in_place`] (`BlockMatrix::with_placement` with
+    /// [`Self::n_factor_values`] values).
+    pub fn placement(&self) -> &Arc<[BlockSlot]> {
+        &self.placement
     }
 
     /// Number of block Schur updates performed by `factor`.
@@ -738,13 +759,11 @@ impl BlockLu {
             sym.nnz_a,
             "BlockLu::factor: matrix does not match the symbolic structure"
         );
+        assert!(a.is_row_major(), "BlockLu::factor: a row-major matrix");
         assert_eq!(a.structure.dim(), sym.dim);
         self.factored = false;
         let vals = &mut self.values[..];
         let colmax = &mut self.colmax[..];
-        let work = &mut self.work[..];
-        let piv = &mut self.piv[..];
-        let perm = &mut self.perm[..];
 
         // ---- scatter ----
         colmax.fill(0.0);
@@ -757,16 +776,7 @@ impl BlockLu {
             let len = rows * cols;
             let src = &av[sc.src..sc.src + len];
             let dst = &mut vals[sc.dst..sc.dst + len];
-            // Column maximum: the same value as a fold of `f64::max` (NaN entries are
-            // skipped either way; the maximum does not depend on the order), in a form the
-            // compiler vectorizes.
-            let mut m = 0.0f64;
-            for &x in src {
-                let a = x.abs();
-                if a > m {
-                    m = a;
-                }
-            }
+            let m = abs_max(src);
             if sc.transpose {
                 transpose_into(src, dst, rows, cols);
             } else {
@@ -775,11 +785,68 @@ impl BlockLu {
             let c = &mut colmax[sc.col];
             *c = c.max(m);
         }
+        self.eliminate()
+    }
+
+    /// Numeric factorization of the matrix assembled straight into the factor storage:
+    /// `values` holds every input block at its place in [`BlockLuSymbolic::placement`] and
+    /// zeros elsewhere (the fill blocks), [`BlockLuSymbolic::n_factor_values`] of them. It
+    /// becomes the factor storage and `values` gets the previous one (the assembly
+    /// overwrites it); the same operations in the same order as [`Self::factor`] of the
+    /// row-major matrix, so the same bits, without its copy. Performs no heap allocation.
+    pub fn factor_in_place(&mut self, values: &mut Vec<f64>) -> Result<(), SingularBlock> {
+        assert_eq!(
+            values.len(),
+            self.sym.n_values,
+            "BlockLu::factor_in_place: storage does not match the symbolic factorization"
+        );
+        std::mem::swap(&mut self.values, values);
+        #[cfg(target_arch = "x86_64")]
+        if avx() {
+            // SAFETY: the CPU supports AVX (checked at run time).
+            return unsafe { self.factor_in_place_avx() };
+        }
+        self.factor_in_place_impl()
+    }
+
+    /// [`Self::factor_in_place`] compiled for AVX (bit-identical results).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn factor_in_place_avx(&mut self) -> Result<(), SingularBlock> {
+        self.factor_in_place_impl()
+    }
+
+    #[inline(always)]
+    fn factor_in_place_impl(&mut self) -> Result<(), SingularBlock> {
+        let sym = &*self.sym;
+        self.factored = false;
+        let vals = &self.values[..];
+        let colmax = &mut self.colmax[..];
+        // The pivot test's column maxima over the input blocks, in the scatter's order
+        // (the blocks the elimination needs first are read last).
+        colmax.fill(0.0);
+        for sc in &sym.scatter {
+            let len = sc.rows as usize * sc.cols as usize;
+            let m = abs_max(&vals[sc.dst..sc.dst + len]);
+            let c = &mut colmax[sc.col];
+            *c = c.max(m);
+        }
+        self.eliminate()
+    }
+
+    /// The elimination on the scattered factor storage and its column maxima.
+    #[inline(always)]
+    fn eliminate(&mut self) -> Result<(), SingularBlock> {
+        let sym = &*self.sym;
+        let vals = &mut self.values[..];
+        let colmax = &self.colmax[..];
+        let work = &mut self.work[..];
+        let piv = &mut self.piv[..];
+        let perm = &mut self.perm[..];
 
         // ---- elimination ----
         let vp = Shared(vals.as_mut_ptr());
         let pp = Shared(perm.as_mut_ptr());
-        let colmax = &*colmax;
         match sym.split {
             Some([a, b]) if parallel() => {
                 // The two parts on two threads, their updates into the separator's blocks
@@ -938,6 +1005,20 @@ impl BlockLu {
             rhs[rk..rk + sk].copy_from_slice(t);
         }
     }
+}
+
+/// Largest `|x|` of a block: the same value as a fold of `f64::max` (NaN entries are skipped
+/// either way; the maximum does not depend on the order), in a form the compiler vectorizes.
+#[inline(always)]
+fn abs_max(block: &[f64]) -> f64 {
+    let mut m = 0.0f64;
+    for &x in block {
+        let a = x.abs();
+        if a > m {
+            m = a;
+        }
+    }
+    m
 }
 
 /// A pointer into the factor storage (or a vector) handed to the second part's thread:

@@ -35,7 +35,43 @@ pub struct BlockStructure {
     cols: Vec<usize>,
     /// Offset into `values` of each block entry (row-major block storage).
     val_off: Vec<usize>,
+    /// Each block entry's place in the row-major storage (`val_off`, row stride = its
+    /// columns, column stride 1).
+    slots: Vec<BlockSlot>,
     nnz_values: usize,
+}
+
+/// Where one block of a matrix's values lives: entry (r, c) of the block is
+/// `values[offset + r · row_stride + c · col_stride]` (row-major: `(cols, 1)`;
+/// column-major: `(1, rows)`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BlockSlot {
+    pub offset: usize,
+    pub row_stride: usize,
+    pub col_stride: usize,
+    /// Number of values of the block.
+    pub len: usize,
+}
+
+/// One block of a matrix's values with its strides ([`BlockSlot`]), for adding to.
+pub struct BlockView<'a> {
+    pub values: &'a mut [f64],
+    pub row_stride: usize,
+    pub col_stride: usize,
+}
+
+impl BlockView<'_> {
+    /// Index of entry (r, c) in `values`.
+    #[inline(always)]
+    pub fn at(&self, r: usize, c: usize) -> usize {
+        r * self.row_stride + c * self.col_stride
+    }
+
+    /// Whether the block is stored row-major (column stride 1).
+    #[inline(always)]
+    pub fn row_major(&self) -> bool {
+        self.col_stride == 1
+    }
 }
 
 impl BlockStructure {
@@ -121,13 +157,22 @@ impl BlockStructure {
             row_ptr.push(cols.len());
         }
         let mut val_off = Vec::with_capacity(cols.len());
+        let mut slots = Vec::with_capacity(cols.len());
         let mut nnz = 0usize;
         for i in 0..n {
             for &j in &cols[row_ptr[i]..row_ptr[i + 1]] {
                 val_off.push(nnz);
-                nnz = sizes[i]
+                let len = sizes[i]
                     .checked_mul(sizes[j])
-                    .and_then(|b| nnz.checked_add(b))
+                    .ok_or_else(|| StructureError("value count overflow".into()))?;
+                slots.push(BlockSlot {
+                    offset: nnz,
+                    row_stride: sizes[j],
+                    col_stride: 1,
+                    len,
+                });
+                nnz = nnz
+                    .checked_add(len)
                     .ok_or_else(|| StructureError("value count overflow".into()))?;
             }
         }
@@ -138,6 +183,7 @@ impl BlockStructure {
             row_ptr,
             cols,
             val_off,
+            slots,
             nnz_values: nnz,
         })
     }
@@ -188,6 +234,30 @@ impl BlockStructure {
             .map(|p| self.val_off[lo + p])
     }
 
+    /// Index of block `(i, j)` among the stored blocks (block rows in order, each by
+    /// column), or `None` if not in the pattern: the key of [`BlockMatrix::view`].
+    #[inline]
+    pub fn entry_index(&self, i: usize, j: usize) -> Option<usize> {
+        if i >= self.sizes.len() {
+            return None;
+        }
+        let lo = self.row_ptr[i];
+        let hi = self.row_ptr[i + 1];
+        self.cols[lo..hi].binary_search(&j).ok().map(|p| lo + p)
+    }
+
+    /// Number of stored blocks.
+    #[inline]
+    pub fn n_entries(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// Row-major place of each stored block ([`Self::entry_index`] order).
+    #[inline]
+    pub fn slots(&self) -> &[BlockSlot] {
+        &self.slots
+    }
+
     /// Total number of stored scalar values.
     #[inline]
     pub fn nnz_values(&self) -> usize {
@@ -207,10 +277,15 @@ impl BlockStructure {
     }
 }
 
-/// Block-sparse matrix: a shared [`BlockStructure`] plus the block values.
+/// Block-sparse matrix: a shared [`BlockStructure`] plus the block values, stored
+/// row-major block by block as the structure lays them out — or, as an assembly target
+/// only, at the places a factorization gives them ([`Self::with_placement`]).
 pub struct BlockMatrix {
     pub structure: Arc<BlockStructure>,
     pub values: Vec<f64>,
+    /// The blocks' places when not the structure's row-major layout (the block LU's factor
+    /// storage: the matrix is assembled where the factorization works on it).
+    placement: Option<Arc<[BlockSlot]>>,
 }
 
 impl BlockMatrix {
@@ -220,7 +295,56 @@ impl BlockMatrix {
         Self {
             structure: s,
             values,
+            placement: None,
         }
+    }
+
+    /// All-zero assembly target of `len` values whose blocks live at `placement`
+    /// (one per stored block, [`BlockStructure::entry_index`] order). Only
+    /// [`Self::view`] and [`Self::fill_zero`] work on it; the matrix-level operations
+    /// need the row-major layout.
+    pub fn with_placement(s: Arc<BlockStructure>, placement: Arc<[BlockSlot]>, len: usize) -> Self {
+        assert_eq!(placement.len(), s.n_entries(), "one place per stored block");
+        debug_assert!(placement.iter().all(|p| p.offset + p.len <= len));
+        Self {
+            structure: s,
+            values: vec![0.0; len],
+            placement: Some(placement),
+        }
+    }
+
+    /// Whether the blocks are at the structure's row-major places (the matrix-level
+    /// operations work).
+    #[inline]
+    pub fn is_row_major(&self) -> bool {
+        self.placement.is_none()
+    }
+
+    /// The place of stored block `e` ([`BlockStructure::entry_index`]).
+    #[inline(always)]
+    pub fn slot(&self, e: usize) -> BlockSlot {
+        match &self.placement {
+            Some(p) => p[e],
+            None => self.structure.slots[e],
+        }
+    }
+
+    /// Stored block `e` ([`BlockStructure::entry_index`]) with its strides.
+    #[inline(always)]
+    pub fn view(&mut self, e: usize) -> BlockView<'_> {
+        let s = self.slot(e);
+        BlockView {
+            values: &mut self.values[s.offset..s.offset + s.len],
+            row_stride: s.row_stride,
+            col_stride: s.col_stride,
+        }
+    }
+
+    fn assert_row_major(&self) {
+        assert!(
+            self.placement.is_none(),
+            "BlockMatrix: a matrix in a factorization's layout is an assembly target only"
+        );
     }
 
     /// Set all stored values to zero.
@@ -231,6 +355,7 @@ impl BlockMatrix {
     /// Row-major values of block `(i, j)`, if present.
     #[inline]
     pub fn block(&self, i: usize, j: usize) -> Option<&[f64]> {
+        self.assert_row_major();
         let s = &*self.structure;
         if j >= s.n_blocks() {
             return None;
@@ -243,6 +368,7 @@ impl BlockMatrix {
     /// Mutable row-major values of block `(i, j)`, if present.
     #[inline]
     pub fn block_mut(&mut self, i: usize, j: usize) -> Option<&mut [f64]> {
+        self.assert_row_major();
         let s = &*self.structure;
         if j >= s.n_blocks() {
             return None;
@@ -254,6 +380,7 @@ impl BlockMatrix {
 
     /// Dense `n x n` row-major copy (tests / debugging only).
     pub fn to_dense_rowmajor(&self) -> Vec<f64> {
+        self.assert_row_major();
         let s = &*self.structure;
         let n = s.dim();
         let mut d = vec![0.0; n * n];
@@ -272,6 +399,7 @@ impl BlockMatrix {
 
     /// Matrix 1-norm (maximum absolute column sum), computed sparsely.
     pub fn norm_1(&self) -> f64 {
+        self.assert_row_major();
         let s = &*self.structure;
         let mut colsum = vec![0.0f64; s.dim()];
         for i in 0..s.n_blocks() {
@@ -292,6 +420,7 @@ impl BlockMatrix {
 
     /// `y = A x`.
     pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        self.assert_row_major();
         let s = &*self.structure;
         let n = s.dim();
         assert_eq!(x.len(), n, "mul_vec: x has wrong length");
@@ -318,6 +447,7 @@ impl BlockMatrix {
     /// Convert to a faer compressed-sparse-column matrix (all stored block
     /// entries become explicit entries, zeros included; rows sorted).
     pub fn to_faer_csc(&self) -> faer::sparse::SparseColMat<usize, f64> {
+        self.assert_row_major();
         let s = &*self.structure;
         let n = s.dim();
         let nnz = s.nnz_values();

@@ -3,6 +3,11 @@
 //! `Auto` factorizes with the block LU (no inter-block pivoting, symbolic analysis reused)
 //! and falls back to faer's pivoting sparse LU for a factorization whose pivot block is
 //! singular; `Block` and `SparseLu` force one of them.
+//!
+//! With the block LU, the matrix of [`LinearSolver::assembly_matrix`] is assembled straight
+//! into the factor storage and factored there (no copy). The sparse LU needs the matrix
+//! row-major: when the block LU rejects such a matrix, the matrix is switched to the
+//! row-major layout and [`LinearSolver::needs_assembly`] asks for it to be assembled again.
 
 use super::block_lu::{BlockLu, BlockLuSymbolic};
 use super::sparse_lu::SparseLu;
@@ -56,6 +61,9 @@ pub struct LinearSolver {
     active: Active,
     /// The block whose singular pivot sent the current factorization to the sparse LU.
     fallback_from: Option<usize>,
+    /// The last factorization failed on a matrix in the factor layout, now row-major and
+    /// to be assembled again for the fallback.
+    reassemble: bool,
     pub stats: LinearStats,
 }
 
@@ -71,6 +79,7 @@ impl LinearSolver {
             sparse: SparseLu::default(),
             active: Active::None,
             fallback_from: None,
+            reassemble: false,
             stats: LinearStats::default(),
         }
     }
@@ -90,10 +99,58 @@ impl LinearSolver {
         self.active = Active::None;
     }
 
-    pub fn factor(&mut self, a: &BlockMatrix) -> Result<(), LinearError> {
-        self.stats.factorizations += 1;
+    /// A zero matrix to assemble the iteration matrix into: with the block LU, in its
+    /// factor storage ([`LinearSolver::factor`] then factors it in place), else row-major.
+    pub fn assembly_matrix(&self, structure: &Arc<BlockStructure>) -> BlockMatrix {
+        match self.kind {
+            LinearSolverType::SparseLu => BlockMatrix::zeros(structure.clone()),
+            LinearSolverType::Block | LinearSolverType::Auto => {
+                let sym = self.block.symbolic();
+                BlockMatrix::with_placement(
+                    structure.clone(),
+                    sym.placement().clone(),
+                    sym.n_factor_values(),
+                )
+            }
+        }
+    }
+
+    /// Whether the last [`LinearSolver::factor`] failed on a matrix assembled into the
+    /// factor storage that the sparse LU may still factor: the matrix is row-major now and
+    /// wants assembling again before the next `factor` (asked once; the matrix stays
+    /// row-major).
+    pub fn needs_assembly(&mut self) -> bool {
+        std::mem::take(&mut self.reassemble)
+    }
+
+    /// Factors `a`: a row-major matrix is copied into the solver's storage and kept; one
+    /// assembled into the block LU's factor storage ([`Self::assembly_matrix`]) is
+    /// factored in place, and its values are garbage afterwards.
+    pub fn factor(&mut self, a: &mut BlockMatrix) -> Result<(), LinearError> {
         self.active = Active::None;
         self.fallback_from = None;
+        self.reassemble = false;
+        if !a.is_row_major() {
+            return match self.block.factor_in_place(&mut a.values) {
+                Ok(()) => {
+                    self.stats.factorizations += 1;
+                    self.active = Active::Block;
+                    Ok(())
+                }
+                Err(e) if self.kind == LinearSolverType::Block => {
+                    self.stats.factorizations += 1;
+                    Err(LinearError::Singular { block: e.block })
+                }
+                Err(e) => {
+                    // The fallback needs the matrix, which the elimination overwrote:
+                    // row-major from now on, assembled again by the caller.
+                    *a = BlockMatrix::zeros(a.structure.clone());
+                    self.reassemble = true;
+                    Err(LinearError::Singular { block: e.block })
+                }
+            };
+        }
+        self.stats.factorizations += 1;
         let block_err = match self.kind {
             LinearSolverType::SparseLu => None,
             LinearSolverType::Block | LinearSolverType::Auto => match self.block.factor(a) {

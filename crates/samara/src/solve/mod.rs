@@ -17,6 +17,8 @@ pub mod newton;
 mod sparse_lu;
 
 pub use block_lu::{BlockLu, BlockLuSymbolic, SPLIT_MIN_BLOCKS, SingularBlock};
-pub use block_matrix::{BlockKind, BlockMatrix, BlockStructure, StructureError};
+pub use block_matrix::{
+    BlockKind, BlockMatrix, BlockSlot, BlockStructure, BlockView, StructureError,
+};
 pub use linear::{LinearError, LinearSolver, LinearSolverType, LinearStats};
 pub use newton::{NewtonFailure, NewtonReport, NewtonSettings, NewtonSystem, newton};

@@ -157,7 +157,14 @@ pub fn newton(
         }
         report.last_residual = rn;
         if refactor {
-            lin.factor(matrix).map_err(|e| match e {
+            let mut factored = lin.factor(matrix);
+            if lin.needs_assembly() {
+                // The block LU rejected a matrix assembled into its storage: the fallback
+                // gets it assembled again, row-major (the same iterate, the same values).
+                problem.evaluate(&mut work.residual, Some(matrix));
+                factored = lin.factor(matrix);
+            }
+            factored.map_err(|e| match e {
                 LinearError::Singular { block } => NewtonFailure::Singular { block },
             })?;
             report.factorizations += 1;

@@ -40,7 +40,7 @@ use super::{SignalValues, State, System};
 use crate::core::{ElementInput, RowTerms};
 use crate::elements::{Element, EvalContext, LocalTerms, Need, SpherePair};
 use crate::joints::CoordinateTangents;
-use crate::solve::{BlockKind, BlockMatrix, BlockStructure};
+use crate::solve::{BlockKind, BlockMatrix, BlockStructure, BlockView};
 use nalgebra::{DMatrix, Matrix3};
 use std::ops::Range;
 use std::sync::Arc;
@@ -175,13 +175,12 @@ struct LocalBlock {
 }
 
 /// Where a signal's derivative with respect to one support unknown lands for one consumer:
-/// the support position, the column within its block and that block's size, and the value
-/// offset of (each consumer row block, that block).
+/// the support position, the column within its block, and the stored block
+/// ([`BlockStructure::entry_index`]) of (each consumer row block, that block).
 #[derive(Clone, Debug)]
 struct SupportSlot {
     pos: usize,
     col: usize,
-    width: usize,
     slots: Vec<usize>,
 }
 
@@ -441,7 +440,7 @@ impl Assembler {
             }
         }
         let slot =
-            |i: usize, j: usize| s.entry(i, j).expect("pattern contains every coupled block");
+            |i: usize, j: usize| s.entry_index(i, j).expect("pattern contains every coupled block");
         let mut sizes_seen: Vec<(usize, usize)> = Vec::new();
         // Index of a (local unknowns, input signals) size among those seen.
         let mut index_of = |key: (usize, usize)| match sizes_seen.iter().position(|&m| m == key) {
@@ -493,7 +492,6 @@ impl Assembler {
                     SupportSlot {
                         pos,
                         col,
-                        width: s.block_size(b),
                         slots: rows.iter().map(|&r| slot(r, b)).collect(),
                     }
                 })
@@ -764,16 +762,17 @@ impl Assembler {
     ) {
         let s = matrix.structure.clone();
         for i in 0..sys.n_nodes() {
-            let o = s.entry(i, i).expect("diagonal blocks exist");
+            let e = s.entry_index(i, i).expect("diagonal blocks exist");
+            let v = matrix.view(e);
             for (k, w) in w_node.iter().enumerate() {
-                matrix.values[o + 7 * k] += w;
+                v.values[v.at(k, k)] += w;
             }
         }
         for w in &self.constraints {
-            let size = w.m + w.nc;
+            let v = matrix.view(w.diag);
             for c in 0..w.nc {
                 let d = w.m + c;
-                matrix.values[w.diag + d * size + d] += w_coord;
+                v.values[v.at(d, d)] += w_coord;
             }
         }
         // Element states do not enter the constraints: keep them (unit weight).
@@ -783,10 +782,9 @@ impl Assembler {
             }
             let blocks = &self.element_blocks[k];
             let nb = blocks.len();
-            let o = self.element_slots[k][nb * nb - 1];
-            let nz = e.n_states();
-            for i in 0..nz {
-                matrix.values[o + i * nz + i] += 1.0;
+            let v = matrix.view(self.element_slots[k][nb * nb - 1]);
+            for i in 0..e.n_states() {
+                v.values[v.at(i, i)] += 1.0;
             }
         }
     }
@@ -991,8 +989,7 @@ impl Assembler {
             combine_node_terms(t, en, tg);
             for a in 0..2 {
                 for b in 0..2 {
-                    let off = slots[2 * a + b];
-                    add_block6(&mut mat.values[off..off + 36], t.k.as_slice(), 12, a, b);
+                    add_block6(mat.view(slots[2 * a + b]), t.k.as_slice(), 12, a, b);
                 }
             }
         }
@@ -1098,7 +1095,6 @@ impl Assembler {
                 // Every row dropped as redundant and no coordinates: nothing to add.
                 continue;
             }
-            let size = m + nc;
             if coef.penalty != 0.0 {
                 add_gram(
                     w.k.as_mut_slice(),
@@ -1119,10 +1115,8 @@ impl Assembler {
             // (config, config): s_r c_K (K_c + ρ BᵀB) T, plus the coordinate elements.
             for a in 0..n {
                 for b in 0..n {
-                    let o = w.node_slots[a * n + b];
                     add_node_columns(
-                        &mut mat.values[o..o + 36],
-                        6,
+                        &mut mat.view(w.node_slots[a * n + b]),
                         (0, 0),
                         w.k.as_slice(),
                         nl,
@@ -1135,10 +1129,8 @@ impl Assembler {
             }
             if nc > 0 {
                 for a in 0..n {
-                    let (oc, or) = (w.lam_col[a], w.lam_row[a]);
                     add_sub(
-                        &mut mat.values[oc..oc + 6 * size],
-                        size,
+                        &mut mat.view(w.lam_col[a]),
                         (0, m),
                         w.k.as_slice(),
                         nl,
@@ -1147,8 +1139,7 @@ impl Assembler {
                         skk,
                     );
                     add_node_columns(
-                        &mut mat.values[or..or + size * 6],
-                        6,
+                        &mut mat.view(w.lam_row[a]),
                         (m, 0),
                         w.k.as_slice(),
                         nl,
@@ -1158,11 +1149,11 @@ impl Assembler {
                         skk,
                     );
                 }
-                let d = &mut mat.values[w.diag..w.diag + size * size];
-                add_sub(d, size, (m, m), w.k.as_slice(), nl, (nq, nq), (nc, nc), skk);
+                let d = &mut mat.view(w.diag);
+                add_sub(d, (m, m), w.k.as_slice(), nl, (nq, nq), (nc, nc), skk);
                 for j in 0..nc {
-                    d[(m + j) * size + m + j] +=
-                        sr * (coef.stiffness * w.cf_k[j] + coef.damping * w.cf_c[j]);
+                    let i = d.at(m + j, m + j);
+                    d.values[i] += sr * (coef.stiffness * w.cf_k[j] + coef.damping * w.cf_c[j]);
                 }
                 // Chain rule through the input ports' signals.
                 for (i, supports) in self.constraint_signal_slots[k].iter().enumerate() {
@@ -1171,8 +1162,8 @@ impl Assembler {
                         for j in 0..nc {
                             let ds = self.cf_ds[j * n_in + i];
                             if ds != 0.0 {
-                                mat.values[sp.slots[0] + (m + j) * sp.width + sp.col] +=
-                                    sr * ds * g[sp.pos];
+                                let v = mat.view(sp.slots[0]);
+                                v.values[v.at(m + j, sp.col)] += sr * ds * g[sp.pos];
                             }
                         }
                     }
@@ -1194,19 +1185,17 @@ impl Assembler {
                     );
                     for sp in &self.constraint_signal_slots[k][j] {
                         let g = self.servo_grad[sp.pos];
-                        mat.values[sp.slots[0] + i * sp.width + sp.col] -= g;
-                        mat.values[sp.slots[0] + (m + cc) * sp.width + sp.col] -=
-                            sr * coef.penalty * g;
+                        let v = mat.view(sp.slots[0]);
+                        v.values[v.at(i, sp.col)] -= g;
+                        v.values[v.at(m + cc, sp.col)] -= sr * coef.penalty * g;
                     }
                 }
             }
             // (config, λ): (s_r/s_λ) Bᵀ.
             let cs = sr / coef.multiplier_scale;
             for a in 0..n {
-                let o = w.lam_col[a];
                 add_sub_t(
-                    &mut mat.values[o..o + 6 * size],
-                    size,
+                    &mut mat.view(w.lam_col[a]),
                     (0, 0),
                     w.b.as_slice(),
                     m,
@@ -1216,8 +1205,8 @@ impl Assembler {
                 );
             }
             if nc > 0 {
-                let d = &mut mat.values[w.diag..w.diag + size * size];
-                add_sub_t(d, size, (m, 0), w.b.as_slice(), m, (0, nq), (nc, m), cs);
+                let d = &mut mat.view(w.diag);
+                add_sub_t(d, (m, 0), w.b.as_slice(), m, (0, nq), (nc, m), cs);
             }
             if stabilized {
                 // ∂(B v)/∂q, row r = vᵀ ∂(B_rᵀ)/∂q = vᵀ K(e_r), then times T.
@@ -1240,10 +1229,8 @@ impl Assembler {
             // apply T to the node columns of `src` on the way.
             let mut lam_rows = |src: &DMatrix<f64>, scale: f64, with_t: bool| {
                 for a in 0..n {
-                    let o = w.lam_row[a];
                     add_node_columns(
-                        &mut mat.values[o..o + size * 6],
-                        6,
+                        &mut mat.view(w.lam_row[a]),
                         (0, 0),
                         src.as_slice(),
                         m,
@@ -1254,8 +1241,8 @@ impl Assembler {
                     );
                 }
                 if nc > 0 {
-                    let d = &mut mat.values[w.diag..w.diag + size * size];
-                    add_sub(d, size, (0, m), src.as_slice(), m, (0, nq), (m, nc), scale);
+                    let d = &mut mat.view(w.diag);
+                    add_sub(d, (0, m), src.as_slice(), m, (0, nq), (m, nc), scale);
                 }
             };
             if stabilized {
@@ -1267,10 +1254,8 @@ impl Assembler {
             if stabilized && p.projection.is_some() {
                 // (η, config): B T; (η, η): B T Bᵀ.
                 for a in 0..n {
-                    let o = w.proj_row[a];
                     add_sub(
-                        &mut mat.values[o..o + m * 6],
-                        6,
+                        &mut mat.view(w.proj_row[a]),
                         (0, 0),
                         w.bt.as_slice(),
                         m,
@@ -1280,10 +1265,8 @@ impl Assembler {
                     );
                 }
                 if nc > 0 {
-                    let o = w.proj_blk;
                     add_sub(
-                        &mut mat.values[o..o + m * size],
-                        size,
+                        &mut mat.view(w.proj_blk),
                         (0, m),
                         w.bt.as_slice(),
                         m,
@@ -1292,15 +1275,14 @@ impl Assembler {
                         1.0,
                     );
                 }
-                let o = w.proj_diag;
-                let dst = &mut mat.values[o..o + m * m];
+                let dst = mat.view(w.proj_diag);
                 for r in 0..m {
                     for s in 0..m {
                         let mut acc = 0.0;
                         for j in 0..nl {
                             acc += w.bt[(r, j)] * w.b[(s, j)];
                         }
-                        dst[m * r + s] += acc;
+                        dst.values[dst.at(r, s)] += acc;
                     }
                 }
             }
@@ -1363,17 +1345,14 @@ impl Assembler {
             let n = en.len();
             for a in 0..n {
                 for b in 0..n {
-                    let off = slots[a * n + b];
-                    add_block6(&mut mat.values[off..off + 36], t.k.as_slice(), nl, a, b);
+                    add_block6(mat.view(slots[a * n + b]), t.k.as_slice(), nl, a, b);
                 }
             }
         } else {
             for (a, ra) in blocks.iter().enumerate() {
                 for (b, cb) in blocks.iter().enumerate() {
-                    let off = slots[a * nb + b];
                     add_sub(
-                        &mut mat.values[off..off + ra.size * cb.size],
-                        cb.size,
+                        &mut mat.view(slots[a * nb + b]),
                         (0, 0),
                         t.k.as_slice(),
                         nl,
@@ -1398,9 +1377,10 @@ impl Assembler {
                     } else {
                         coef.state_row_scale
                     };
+                    let v = mat.view(sp.slots[a]);
                     for i in 0..ra.size {
                         let d = t.ds[(ra.local + i, j)];
-                        mat.values[sp.slots[a] + i * sp.width + sp.col] += rs * d * gv;
+                        v.values[v.at(i, sp.col)] += rs * d * gv;
                     }
                 }
             }
@@ -1428,8 +1408,7 @@ impl Assembler {
             let slots = &self.element_slots[k];
             for a in 0..n {
                 for b in 0..n {
-                    let off = slots[a * nb + b];
-                    add_block6(&mut mat.values[off..off + 36], src, nl, a, b);
+                    add_block6(mat.view(slots[a * nb + b]), src, nl, a, b);
                 }
             }
         }
@@ -1451,10 +1430,8 @@ impl Assembler {
                     if ra.local < n6 && cb.local < n6 {
                         continue;
                     }
-                    let off = slots[a * nb + b];
                     add_sub(
-                        &mut mat.values[off..off + ra.size * cb.size],
-                        cb.size,
+                        &mut mat.view(slots[a * nb + b]),
                         (0, 0),
                         src,
                         nl,
@@ -1495,14 +1472,14 @@ impl Assembler {
         for &(k, l, o, a, b) in &self.nu_pairs {
             let (wk, wl) = (&self.constraints[k], &self.constraints[l]);
             let (mk, ml) = (wk.m, wl.m);
-            let dst = &mut matrix.values[o..o + mk * ml];
+            let dst = matrix.view(o);
             for r in 0..mk {
                 for s in 0..ml {
                     let mut acc = 0.0;
                     for j in 0..6 {
                         acc += wk.bt[(r, 6 * a + j)] * wl.b[(s, 6 * b + j)];
                     }
-                    dst[ml * r + s] += acc;
+                    dst.values[dst.at(r, s)] += acc;
                 }
             }
         }
@@ -1755,15 +1732,22 @@ fn combine_node_terms(t: &mut LocalTerms, en: &[usize], tg: &TangentInputs) {
 }
 
 /// `dst += src[6a.., 6b..]` for the 6×6 block (a, b) of a column-major `src` with `nr`
-/// rows; `dst` row-major.
+/// rows; `dst` row-major or column-major.
 #[inline(always)]
-fn add_block6(dst: &mut [f64], src: &[f64], nr: usize, a: usize, b: usize) {
-    let dst: &mut [f64; 36] = (&mut dst[..36]).try_into().expect("6×6 block");
+fn add_block6(dst: BlockView, src: &[f64], nr: usize, a: usize, b: usize) {
+    let row_major = dst.row_major();
+    let dst: &mut [f64; 36] = (&mut dst.values[..36]).try_into().expect("6×6 block");
     for c in 0..6 {
         let o = (6 * b + c) * nr + 6 * a;
         let col: &[f64; 6] = src[o..o + 6].try_into().expect("6 rows");
-        for (r, v) in col.iter().enumerate() {
-            dst[6 * r + c] += v;
+        if row_major {
+            for (r, v) in col.iter().enumerate() {
+                dst[6 * r + c] += v;
+            }
+        } else {
+            for (d, v) in dst[6 * c..6 * c + 6].iter_mut().zip(col) {
+                *d += v;
+            }
         }
     }
 }
@@ -1900,14 +1884,12 @@ fn local_velocities(
     }
 }
 
-/// `dst[(r0 + r) · stride + c0 + c] += scale · src[sr0 + r, sc0 + c]` for an
-/// `rows × cols` block; `dst` row-major with row length `stride`, `src` column-major
-/// with `nr` rows.
+/// `dst[r0 + r, c0 + c] += scale · src[sr0 + r, sc0 + c]` for a `rows × cols` block;
+/// `src` column-major with `nr` rows.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn add_sub(
-    dst: &mut [f64],
-    stride: usize,
+    dst: &mut BlockView,
     (r0, c0): (usize, usize),
     src: &[f64],
     nr: usize,
@@ -1918,7 +1900,8 @@ fn add_sub(
     for c in 0..cols {
         let col = &src[(sc0 + c) * nr + sr0..(sc0 + c) * nr + sr0 + rows];
         for (r, v) in col.iter().enumerate() {
-            dst[(r0 + r) * stride + c0 + c] += scale * v;
+            let i = dst.at(r0 + r, c0 + c);
+            dst.values[i] += scale * v;
         }
     }
 }
@@ -1929,8 +1912,7 @@ fn add_sub(
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn add_node_columns(
-    dst: &mut [f64],
-    stride: usize,
+    dst: &mut BlockView,
     (r0, c0): (usize, usize),
     src: &[f64],
     nr: usize,
@@ -1942,7 +1924,8 @@ fn add_node_columns(
     let col = |c: usize| &src[(sc0 + c) * nr + sr0..(sc0 + c) * nr + sr0 + rows];
     for c in 0..3 {
         for (r, v) in col(c).iter().enumerate() {
-            dst[(r0 + r) * stride + c0 + c] += scale * v;
+            let i = dst.at(r0 + r, c0 + c);
+            dst.values[i] += scale * v;
         }
     }
     let (x, y, z) = (col(3), col(4), col(5));
@@ -1950,7 +1933,8 @@ fn add_node_columns(
         None => {
             for (c, v3) in [x, y, z].into_iter().enumerate() {
                 for (r, v) in v3.iter().enumerate() {
-                    dst[(r0 + r) * stride + c0 + 3 + c] += scale * v;
+                    let i = dst.at(r0 + r, c0 + 3 + c);
+                    dst.values[i] += scale * v;
                 }
             }
         }
@@ -1959,7 +1943,8 @@ fn add_node_columns(
                 let row = [x[r], y[r], z[r]];
                 for j in 0..3 {
                     let v = row[0] * t[(0, j)] + row[1] * t[(1, j)] + row[2] * t[(2, j)];
-                    dst[(r0 + r) * stride + c0 + 3 + j] += scale * v;
+                    let i = dst.at(r0 + r, c0 + 3 + j);
+                    dst.values[i] += scale * v;
                 }
             }
         }
@@ -1970,8 +1955,7 @@ fn add_node_columns(
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn add_sub_t(
-    dst: &mut [f64],
-    stride: usize,
+    dst: &mut BlockView,
     (r0, c0): (usize, usize),
     src: &[f64],
     nr: usize,
@@ -1981,9 +1965,16 @@ fn add_sub_t(
 ) {
     for r in 0..rows {
         let col = &src[(sc0 + r) * nr + sr0..(sc0 + r) * nr + sr0 + cols];
-        let d = &mut dst[(r0 + r) * stride + c0..(r0 + r) * stride + c0 + cols];
-        for (x, v) in d.iter_mut().zip(col) {
-            *x += scale * v;
+        if dst.row_major() {
+            let o = dst.at(r0 + r, c0);
+            for (x, v) in dst.values[o..o + cols].iter_mut().zip(col) {
+                *x += scale * v;
+            }
+        } else {
+            for (c, v) in col.iter().enumerate() {
+                let i = dst.at(r0 + r, c0 + c);
+                dst.values[i] += scale * v;
+            }
         }
     }
 }
