@@ -1737,15 +1737,19 @@ fn combine_node_terms(t: &mut LocalTerms, en: &[usize], tg: &TangentInputs) {
 fn add_block6(dst: BlockView, src: &[f64], nr: usize, a: usize, b: usize) {
     let row_major = dst.row_major();
     let dst: &mut [f64; 36] = (&mut dst.values[..36]).try_into().expect("6×6 block");
-    for c in 0..6 {
+    let col = |c: usize| -> &[f64; 6] {
         let o = (6 * b + c) * nr + 6 * a;
-        let col: &[f64; 6] = src[o..o + 6].try_into().expect("6 rows");
-        if row_major {
-            for (r, v) in col.iter().enumerate() {
+        src[o..o + 6].try_into().expect("6 rows")
+    };
+    if row_major {
+        for c in 0..6 {
+            for (r, v) in col(c).iter().enumerate() {
                 dst[6 * r + c] += v;
             }
-        } else {
-            for (d, v) in dst[6 * c..6 * c + 6].iter_mut().zip(col) {
+        }
+    } else {
+        for (c, d) in dst.as_chunks_mut::<6>().0.iter_mut().enumerate() {
+            for (d, v) in d.iter_mut().zip(col(c)) {
                 *d += v;
             }
         }
@@ -1899,9 +1903,16 @@ fn add_sub(
 ) {
     for c in 0..cols {
         let col = &src[(sc0 + c) * nr + sr0..(sc0 + c) * nr + sr0 + rows];
-        for (r, v) in col.iter().enumerate() {
-            let i = dst.at(r0 + r, c0 + c);
-            dst.values[i] += scale * v;
+        if dst.row_major() {
+            for (r, v) in col.iter().enumerate() {
+                let i = dst.at(r0 + r, c0 + c);
+                dst.values[i] += scale * v;
+            }
+        } else {
+            let o = dst.at(r0, c0 + c);
+            for (d, v) in dst.values[o..o + rows].iter_mut().zip(col) {
+                *d += scale * v;
+            }
         }
     }
 }
@@ -1922,19 +1933,50 @@ fn add_node_columns(
     scale: f64,
 ) {
     let col = |c: usize| &src[(sc0 + c) * nr + sr0..(sc0 + c) * nr + sr0 + rows];
+    let (x, y, z) = (col(3), col(4), col(5));
+    if !dst.row_major() {
+        // Column-major: each column of the block is contiguous.
+        let ld = dst.col_stride;
+        let dst = &mut *dst.values;
+        let at = |c: usize| (c0 + c) * ld + r0..(c0 + c) * ld + r0 + rows;
+        for c in 0..3 {
+            for (d, v) in dst[at(c)].iter_mut().zip(col(c)) {
+                *d += scale * v;
+            }
+        }
+        match t {
+            None => {
+                for (c, v3) in [x, y, z].into_iter().enumerate() {
+                    for (d, v) in dst[at(3 + c)].iter_mut().zip(v3) {
+                        *d += scale * v;
+                    }
+                }
+            }
+            Some(t) => {
+                for j in 0..3 {
+                    let (t0, t1, t2) = (t[(0, j)], t[(1, j)], t[(2, j)]);
+                    let xyz = x.iter().zip(y).zip(z);
+                    for (d, ((a, b), c)) in dst[at(3 + j)].iter_mut().zip(xyz) {
+                        let v = a * t0 + b * t1 + c * t2;
+                        *d += scale * v;
+                    }
+                }
+            }
+        }
+        return;
+    }
+    let stride = dst.row_stride;
+    let dst = &mut *dst.values;
     for c in 0..3 {
         for (r, v) in col(c).iter().enumerate() {
-            let i = dst.at(r0 + r, c0 + c);
-            dst.values[i] += scale * v;
+            dst[(r0 + r) * stride + c0 + c] += scale * v;
         }
     }
-    let (x, y, z) = (col(3), col(4), col(5));
     match t {
         None => {
             for (c, v3) in [x, y, z].into_iter().enumerate() {
                 for (r, v) in v3.iter().enumerate() {
-                    let i = dst.at(r0 + r, c0 + 3 + c);
-                    dst.values[i] += scale * v;
+                    dst[(r0 + r) * stride + c0 + 3 + c] += scale * v;
                 }
             }
         }
@@ -1943,8 +1985,7 @@ fn add_node_columns(
                 let row = [x[r], y[r], z[r]];
                 for j in 0..3 {
                     let v = row[0] * t[(0, j)] + row[1] * t[(1, j)] + row[2] * t[(2, j)];
-                    let i = dst.at(r0 + r, c0 + 3 + j);
-                    dst.values[i] += scale * v;
+                    dst[(r0 + r) * stride + c0 + 3 + j] += scale * v;
                 }
             }
         }
@@ -1963,17 +2004,21 @@ fn add_sub_t(
     (rows, cols): (usize, usize),
     scale: f64,
 ) {
-    for r in 0..rows {
-        let col = &src[(sc0 + r) * nr + sr0..(sc0 + r) * nr + sr0 + cols];
-        if dst.row_major() {
+    if dst.row_major() {
+        for r in 0..rows {
+            let col = &src[(sc0 + r) * nr + sr0..(sc0 + r) * nr + sr0 + cols];
             let o = dst.at(r0 + r, c0);
             for (x, v) in dst.values[o..o + cols].iter_mut().zip(col) {
                 *x += scale * v;
             }
-        } else {
-            for (c, v) in col.iter().enumerate() {
-                let i = dst.at(r0 + r, c0 + c);
-                dst.values[i] += scale * v;
+        }
+    } else {
+        // Column-major: column c of the block is row sr0 + c of `src` (stride nr).
+        for c in 0..cols {
+            let o = dst.at(r0, c0 + c);
+            let row = src[sc0 * nr + sr0 + c..].iter().step_by(nr);
+            for (d, v) in dst.values[o..o + rows].iter_mut().zip(row) {
+                *d += scale * v;
             }
         }
     }
