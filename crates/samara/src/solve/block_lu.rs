@@ -2102,6 +2102,65 @@ mod tests {
         }
     }
 
+    /// A matrix placed block by block at the factor's places (`placement`: pivot blocks
+    /// row-major, off-diagonal blocks column-major, fill zero) and factored in place gives
+    /// the same factor, permutations and solutions to the bit as the row-major matrix
+    /// copied in by `factor`, on one order and on a separator order; the storage handed
+    /// back is the previous factor's, of the same length.
+    #[test]
+    fn in_place_factor_matches_the_copying_one_to_the_bit() {
+        for split in [usize::MAX, TEST_SPLIT_MIN_BLOCKS] {
+            let (s, _) = kkt_tree(&chain_parent(70), &[5, 3, 1, 2, 4, 6, 7], true);
+            let s = Arc::new(s);
+            let sym = Arc::new(BlockLuSymbolic::with_split_from(&s, split).unwrap());
+            assert_eq!(sym.split().is_some(), split != usize::MAX);
+            let (mut copied, mut in_place) = (BlockLu::new(sym.clone()), BlockLu::new(sym.clone()));
+            let mut rng = Rng(77);
+            let mut a = BlockMatrix::zeros(s.clone());
+            fill_random(&mut a, &mut rng, true);
+            let mut placed = BlockMatrix::with_placement(
+                s.clone(),
+                sym.placement().clone(),
+                sym.n_factor_values(),
+            );
+            assert!(!placed.is_row_major());
+            for (e, rm) in s.slots().iter().enumerate() {
+                let src = &a.values[rm.offset..rm.offset + rm.len];
+                let (rows, cols) = (rm.len / rm.row_stride, rm.row_stride);
+                let v = placed.view(e);
+                for r in 0..rows {
+                    for c in 0..cols {
+                        let i = v.at(r, c);
+                        v.values[i] = src[r * cols + c];
+                    }
+                }
+            }
+            copied.factor(&a).unwrap();
+            in_place.factor_in_place(&mut placed.values).unwrap();
+            assert_eq!(placed.values.len(), sym.n_factor_values());
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&copied.values), bits(&in_place.values));
+            assert_eq!(copied.perm, in_place.perm);
+            let b: Vec<f64> = (0..s.dim()).map(|_| rng.uniform()).collect();
+            let (mut x0, mut x1) = (b.clone(), b);
+            copied.solve_in_place(&mut x0);
+            in_place.solve_in_place(&mut x1);
+            assert_eq!(bits(&x0), bits(&x1));
+            // A zero matrix is found singular in place at the same block.
+            placed.fill_zero();
+            assert_eq!(
+                in_place
+                    .factor_in_place(&mut placed.values)
+                    .unwrap_err()
+                    .block,
+                copied
+                    .factor(&BlockMatrix::zeros(s.clone()))
+                    .unwrap_err()
+                    .block
+            );
+        }
+    }
+
     /// A long chain gets the separator order (two parts of about the same size), matches a
     /// dense LU, and gives the same bits factored and solved on one thread and on two.
     #[test]

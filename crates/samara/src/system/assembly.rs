@@ -439,8 +439,10 @@ impl Assembler {
                 p.proj = s.block_offset(b);
             }
         }
-        let slot =
-            |i: usize, j: usize| s.entry_index(i, j).expect("pattern contains every coupled block");
+        let slot = |i: usize, j: usize| {
+            s.entry_index(i, j)
+                .expect("pattern contains every coupled block")
+        };
         let mut sizes_seen: Vec<(usize, usize)> = Vec::new();
         // Index of a (local unknowns, input signals) size among those seen.
         let mut index_of = |key: (usize, usize)| match sizes_seen.iter().position(|&m| m == key) {
@@ -2013,7 +2015,20 @@ fn add_sub_t(
             }
         }
     } else {
-        // Column-major: column c of the block is row sr0 + c of `src` (stride nr).
+        // Column-major: column c of the block is row sr0 + c of `src` (stride nr); a node's
+        // six rows at a compile-time count.
+        if rows == 6 {
+            for c in 0..cols {
+                let o = dst.at(r0, c0 + c);
+                let d: &mut [f64; 6] = (&mut dst.values[o..o + 6]).try_into().expect("6 rows");
+                let base = sc0 * nr + sr0 + c;
+                let col = &src[base..=base + 5 * nr];
+                for (r, d) in d.iter_mut().enumerate() {
+                    *d += scale * col[r * nr];
+                }
+            }
+            return;
+        }
         for c in 0..cols {
             let o = dst.at(r0, c0 + c);
             let row = src[sc0 * nr + sr0 + c..].iter().step_by(nr);
