@@ -33,7 +33,14 @@
 //! thread or two. The eleventh round kept nothing: predicting modified Newton's multipliers
 //! by the increment of the step before last gave 2.47 iterations and 0.169 factorizations
 //! per step (2179.4M → 1838.2M instructions) but stops too early for tests/options.rs's
-//! pendulum (docs/integrators.md).
+//! pendulum (docs/integrators.md). The twelfth round assembles the dynamic steps' matrix
+//! straight into the block LU's factor storage (no copy; the same bits, digests
+//! 7b5cfb5783245daa / a84884afb7a69216): `perf stat` task-clock of one 1 s run, 10
+//! interleaved runs each, one thread, load average 1.6–2.3, full Newton 369.0 / 373.7 ms →
+//! 360.2 / 366.6 ms (best / median), modified 181.9 / 183.8 → 181.2 / 183.1 ms; the bench's
+//! best of 3, 10 runs each: 0.364 / 0.175 s → 0.359 / 0.174 s best, 0.372 / 0.182 →
+//! 0.371 / 0.178 s median; callgrind 565.9M → 566.8M (full, `t_end=0.1 repeats=1`),
+//! 2160.9M → 2157.4M (modified, 1 s). Targets not met.
 //! README "Benchmarks", docs/integrators.md.
 
 use samara::analysis::{History, run_analysis};
