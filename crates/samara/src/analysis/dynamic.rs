@@ -850,9 +850,6 @@ impl Integrator<'_> {
     }
 }
 
-/// Sets up the integrator from `initial` at time `t0` with consistent initial
-/// conditions (assembly, velocities, accelerations and state rates). On failure the reason
-/// is in `summary` and the state reached is returned.
 /// The matrix the steps assemble into: the block LU's factor storage, factored in place
 /// (`LinearSolver::assembly_matrix`), unless the diagnostics read the assembled matrix
 /// after the solve (the condition number): then row-major, copied into the factor.
@@ -868,6 +865,9 @@ fn iteration_matrix(
     }
 }
 
+/// Sets up the integrator from `initial` at time `t0` with consistent initial
+/// conditions (assembly, velocities, accelerations and state rates). On failure the reason
+/// is in `summary` and the state reached is returned.
 fn start<'a>(
     sys: &'a System,
     settings: &'a DynamicSettings,
