@@ -269,13 +269,18 @@ fn modified_newton_converges_to_the_full_newton_answer() {
     assert!(errors[2] < 1e-10 && errors[3] < 1e-10, "{errors:?}");
 }
 
-/// Modified Newton's reactions: the ground pin of a 10-link chain (examples/bench, ρ∞ = 0.9,
-/// 0.3 s at h = 1 ms, default tolerances) against full Newton at tolerance 1e-12, at every
-/// step. A stop that weighs the configuration corrections alone leaves the multipliers'
-/// error, to which the configuration norm is blind: the reaction alternated about the
-/// reference from step to step, off by up to PLACEHOLDER. Asserted: the largest difference
-/// ≤ 1e-3 of the largest reference force, and the step-to-step alternation (largest second
-/// difference of the force) within 1e-3 of the force of the reference's own.
+/// Modified Newton's reactions: the ground pin of a 10-link chain (examples/bench, links of
+/// m = 0.0785 kg, ρ∞ = 0.9, 0.3 s at h = 1 ms, default tolerances) against full Newton at
+/// tolerance 1e-12, at every step. Newton's stop weighs a multiplier correction against
+/// m̄ β' atol = 3.1e-3 N here (β' = (1 − α_m)/((1 − α_f) β h²): the force that moves the
+/// accelerations as much as a configuration correction of atol does). Asserted: the force
+/// within that of the reference at every step, and its step-to-step alternation (largest
+/// second difference) within that of the reference's own. Measured: off by 1.5e-3 N,
+/// second differences 1.26e-2 N against 1.07e-2 N; with a stop that weighed the
+/// configuration alone (blind to λ's error, which a reused matrix maps onto λ alone) the
+/// force alternated about the reference: off by 1.8e-2 N, second differences 8.0e-2 N.
+/// (Both are inside what the configuration tolerance alone admits at this pin, the ten
+/// links' masses times β' atol, 3.1e-2 N.)
 #[test]
 fn modified_newton_reactions_match_full_newton() {
     let text = std::fs::read_to_string(
@@ -284,20 +289,25 @@ fn modified_newton_reactions_match_full_newton() {
     )
     .unwrap();
     let model_part = &text[..text.find("[[analyses]]").unwrap()];
+    let (rho, h, atol, mass) = (0.9, 1e-3, 1e-8, 0.0785);
     let run = |extra: &str| {
-        let (s, h) = attempt(&format!(
-            "{model_part}[[analyses]]\nname = \"drop\"\ntype = \"dynamic\"\nt_end = 0.3\nstep = 1e-3\nrho_inf = 0.9\n{extra}"
+        let (s, hist) = attempt(&format!(
+            "{model_part}[[analyses]]\nname = \"drop\"\ntype = \"dynamic\"\nt_end = 0.3\nstep = {h:e}\nrho_inf = {rho}\n{extra}"
         ));
         assert!(s.failure.is_none());
-        h.frames
+        hist.frames
             .iter()
             .map(|f| f.reactions[0].0)
             .collect::<Vec<_>>()
     };
     let reference = run("tolerance = 1e-12\nrelative_tolerance = 1e-12\n");
-    let modified = run("jacobian = \"modified\"\n");
+    let modified = run(&format!("tolerance = {atol:e}\njacobian = \"modified\"\n"));
     assert_eq!(reference.len(), modified.len());
-    let scale = reference.iter().map(|f| f.norm()).fold(0.0, f64::max);
+    // Generalized-α (Chung & Hulbert 1993) and β' of the scheme.
+    let (alpha_m, alpha_f) = ((2.0 * rho - 1.0) / (rho + 1.0), rho / (rho + 1.0));
+    let beta = 0.25 * (0.5 + alpha_f - alpha_m + 0.5_f64).powi(2);
+    let beta_prime = (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h);
+    let bound = mass * beta_prime * atol;
     let error = reference
         .iter()
         .zip(&modified)
@@ -311,13 +321,10 @@ fn modified_newton_reactions_match_full_newton() {
     };
     let (alt_ref, alt_mod) = (alternation(&reference), alternation(&modified));
     println!(
-        "ground pin force: largest {scale:.3e} N, modified off by {error:.3e} N; second differences {alt_ref:.3e} N (full, 1e-12) vs {alt_mod:.3e} N (modified)"
+        "ground pin force: modified off by {error:.3e} N (bound {bound:.3e} N); second differences {alt_ref:.3e} N (full, 1e-12) vs {alt_mod:.3e} N (modified)"
     );
-    assert!(error <= 1e-3 * scale, "{error:e} vs {scale:e}");
-    assert!(
-        alt_mod <= alt_ref + 1e-3 * scale,
-        "{alt_mod:e} vs {alt_ref:e}"
-    );
+    assert!(error <= bound, "{error:e} vs {bound:e}");
+    assert!(alt_mod <= alt_ref + bound, "{alt_mod:e} vs {alt_ref:e}");
 }
 
 /// `scaling` scales rows and multipliers by βh² — there is no step in a static analysis,
