@@ -95,10 +95,6 @@ struct StepProblem<'a> {
     gamma_p: f64,
     atol: f64,
     rtol: f64,
-    /// Absolute tolerance of a multiplier correction, m̄ β' atol (force units; see `apply`).
-    multiplier_atol: f64,
-    /// Weighted norm of the last correction's multiplier part.
-    multiplier_norm: f64,
 }
 
 impl StepProblem<'_> {
@@ -189,29 +185,12 @@ impl NewtonSystem for StepProblem<'_> {
             worst = worst.max(c.abs() / (self.atol + self.rtol * scale));
         }
         self.update_configuration();
-        // A multiplier's correction δλ is weighed against the force the configuration test
-        // already admits: a correction δq within it moves the accelerations by β' δq, so a
-        // reaction error of m̄ β' (atol) — the characteristic mass times that — is consistent
-        // with it; relative to the multiplier's own size beyond that (a reaction has a
-        // natural zero). Without this term the stop is blind to λ's error: with a reused
-        // matrix the residual Gᵀ δλ it leaves is mapped onto λ alone, and modified Newton's
-        // reactions alternated about the converged ones from step to step (≈ 5 % at the
-        // ground pin of the chain benchmark).
         let s = 1.0 / self.coef.multiplier_scale;
         self.asm.multipliers_of(self.sys, delta, self.dlam);
-        let mut worst_lambda: f64 = 0.0;
         for (l, d) in self.cur.lambda.iter_mut().zip(self.dlam.iter()) {
-            let dl = d * s;
-            *l += dl;
-            worst_lambda =
-                worst_lambda.max(dl.abs() / (self.multiplier_atol + self.rtol * l.abs()));
+            *l += d * s;
         }
-        self.multiplier_norm = worst_lambda;
         worst
-    }
-
-    fn multiplier_correction(&self) -> f64 {
-        self.multiplier_norm
     }
 
     fn constraint_violation(&mut self) -> f64 {
@@ -556,10 +535,6 @@ impl Integrator<'_> {
             gamma_p: coef.damping,
             atol: self.settings.solver.tolerance,
             rtol: self.settings.solver.relative_tolerance,
-            multiplier_atol: self.sys.characteristic_mass
-                * coef.mass
-                * self.settings.solver.tolerance,
-            multiplier_norm: 0.0,
         };
         problem.update_configuration();
         let (lin, matrix, work) = (&mut self.lin, &mut self.matrix, &mut self.work);

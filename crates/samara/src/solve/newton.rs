@@ -51,11 +51,6 @@ pub trait NewtonSystem {
     /// Applies the correction `Δ` and returns the weighted norm of the configuration
     /// change it made (≤ 1 means small enough).
     fn apply(&mut self, delta: &[f64]) -> f64;
-    /// Weighted norm of the multiplier part of the correction last applied (≤ 1 means
-    /// small enough; 0 for a problem that does not weigh its multipliers).
-    fn multiplier_correction(&self) -> f64 {
-        0.0
-    }
     /// `max |Φ|` at the current iterate.
     fn constraint_violation(&mut self) -> f64;
 }
@@ -143,11 +138,8 @@ pub fn newton(
     settings: &NewtonSettings,
 ) -> Result<NewtonReport, NewtonFailure> {
     let mut report = NewtonReport::default();
-    let (mut previous, mut previous_lambda) = (f64::INFINITY, f64::INFINITY);
+    let mut previous = f64::INFINITY;
     let mut refactor = !settings.reuse_jacobian || !lin.is_factored();
-    // The solve began with a matrix factored earlier: its second correction's rate against
-    // the first is not an estimate of the contraction (module doc).
-    let started_stale = !refactor;
     for it in 1..=settings.max_iterations {
         report.iterations = it;
         let fresh = refactor;
@@ -182,14 +174,7 @@ pub fn newton(
             });
         }
         let eps = problem.apply(&work.delta);
-        // A reused matrix maps the residual of a multiplier error onto the multipliers
-        // alone: modified Newton weighs them too (module doc).
-        let eps_lambda = if settings.reuse_jacobian {
-            problem.multiplier_correction()
-        } else {
-            0.0
-        };
-        report.last_correction = eps.max(eps_lambda);
+        report.last_correction = eps;
         if settings.line_search && eps > 1.0 {
             // Backtrack while the residual norm does not drop enough.
             let mut alpha = 1.0;
@@ -215,20 +200,14 @@ pub fn newton(
         }
         // Error left after this correction: ≈ eps·θ/(1 − θ) for a contraction rate θ
         // (Hairer & Wanner, Solving ODEs II, §IV.8); before θ is known, eps itself.
-        // Each part (configuration, multipliers) with its own rate.
-        let rate_known = it > 1 && !(it == 2 && started_stale);
-        let remaining = |eps: f64, previous: f64| {
-            let theta = eps / previous;
-            if rate_known && theta < 0.9 {
-                eps.min(eps * theta / (1.0 - theta))
-            } else {
-                eps
-            }
-        };
-        let left = remaining(eps, previous).max(remaining(eps_lambda, previous_lambda));
         let theta = eps / previous;
+        let remaining = if it > 1 && theta < 0.9 {
+            eps * theta / (1.0 - theta)
+        } else {
+            eps
+        };
         // A reused matrix's first correction is not judged (module doc).
-        if (fresh || it > 1) && left <= 1.0 {
+        if (fresh || it > 1) && (eps <= 1.0 || remaining <= 1.0) {
             let viol = problem.constraint_violation();
             report.constraint_violation = viol;
             if viol <= settings.constraint_tolerance {
@@ -249,7 +228,6 @@ pub fn newton(
         }
         refactor = !settings.reuse_jacobian || rate > SLOW_CONTRACTION;
         previous = eps;
-        previous_lambda = eps_lambda;
     }
     let violation = problem.constraint_violation();
     Err(NewtonFailure::NotConverged {
