@@ -33,7 +33,12 @@
 //! thread or two. The eleventh round kept nothing: predicting modified Newton's multipliers
 //! by the increment of the step before last gave 2.47 iterations and 0.169 factorizations
 //! per step (2179.4M → 1838.2M instructions) but stops too early for tests/options.rs's
-//! pendulum (docs/integrators.md).
+//! pendulum (docs/integrators.md). The twelfth kept nothing in the solver: weighing the
+//! multipliers in modified Newton's stop (2.81 iterations, 0.267 factorizations per step)
+//! and judging a reused matrix's second correction on its size (2.87 / 0.217) cost the
+//! flexible rotor 58 % more iterations and 44 % more factorizations respectively; the
+//! unchanged code ran 0.178 s modified, 0.426 s full (one run each, load average ≈ 2),
+//! callgrind `-- 100 revolute rho0.9 modified repeats=1` 2160.9M.
 //! README "Benchmarks", docs/integrators.md.
 
 use samara::analysis::{History, run_analysis};
