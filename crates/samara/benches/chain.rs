@@ -40,7 +40,12 @@
 //! 360.2 / 366.6 ms (best / median), modified 181.9 / 183.8 → 181.2 / 183.1 ms; the bench's
 //! best of 3, 10 runs each: 0.364 / 0.175 s → 0.359 / 0.174 s best, 0.372 / 0.182 →
 //! 0.371 / 0.178 s median; callgrind 565.9M → 566.8M (full, `t_end=0.1 repeats=1`),
-//! 2160.9M → 2157.4M (modified, 1 s). Targets not met.
+//! 2160.9M → 2157.4M (modified, 1 s). Targets not met. In the stop test it kept
+//! nothing: weighing the multipliers in modified Newton's stop (2.81 iterations, 0.267 factorizations per step)
+//! and judging a reused matrix's second correction on its size (2.87 / 0.217) cost the
+//! flexible rotor 58 % more iterations and 44 % more factorizations respectively; the
+//! unchanged code ran 0.178 s modified, 0.426 s full (one run each, load average ≈ 2),
+//! callgrind `-- 100 revolute rho0.9 modified repeats=1` 2160.9M.
 //! README "Benchmarks", docs/integrators.md.
 
 use samara::analysis::{History, run_analysis};
