@@ -216,8 +216,8 @@ fn block_and_sparse_lu_solve_the_same_steps() {
 /// over 0.5 s needs 8–298 factorizations instead of 502–1002, and its answer approaches
 /// the exact solution of the step equations (full Newton at tolerance 1e-15, which full
 /// Newton at 1e-12 reproduces bit for bit) as the tolerance tightens: the bob's final
-/// position is off by 9.7e-6, 5.6e-10, 6.9e-12, 7.2e-12 m at tolerance 1e-8, 1e-10, 1e-12,
-/// 1e-14 (1.4e-6, 2.8e-10, 3.1e-12, 3.1e-12 m with 48–326 factorizations while a step
+/// position is off by 6.1e-6, 7.3e-10, 6.9e-12, 7.2e-12 m at tolerance 1e-8, 1e-10, 1e-12,
+/// 1e-14 (measured 2026-11-28; 1.4e-6, 2.8e-10, 3.1e-12, 3.1e-12 m with 48–326 factorizations while a step
 /// size differing from the factorization's by round-off forced a refresh). Each stop is within the tolerance in configuration, but the velocities and
 /// accelerations carry δq/h and δq/(βh²) into the next step, so the stops accumulate over
 /// the 500 steps (not in proportion to the tolerance: where a stop falls depends on the
