@@ -223,15 +223,7 @@ impl BlockStructure {
     /// `O(log deg(i))`.
     #[inline]
     pub fn entry(&self, i: usize, j: usize) -> Option<usize> {
-        if i >= self.sizes.len() {
-            return None;
-        }
-        let lo = self.row_ptr[i];
-        let hi = self.row_ptr[i + 1];
-        self.cols[lo..hi]
-            .binary_search(&j)
-            .ok()
-            .map(|p| self.val_off[lo + p])
+        self.entry_index(i, j).map(|e| self.val_off[e])
     }
 
     /// Index of block `(i, j)` among the stored blocks (block rows in order, each by
