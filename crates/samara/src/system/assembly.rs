@@ -1774,17 +1774,17 @@ fn add_gram(k: &mut [f64], b: &[f64], rows: &mut [f64], m: usize, nl: usize, rho
                 rows[r * NL + j] = x;
             }
         }
+        let rows = rows.as_chunks::<NL>().0;
         let (k, _) = k[..NL * NL].as_chunks_mut::<NL>();
-        for row in rows.as_chunks::<NL>().0 {
-            for (kc, &bj) in k.iter_mut().zip(row) {
-                let s = rho * bj;
-                if s == 0.0 {
-                    continue;
-                }
-                for (kv, &bi) in kc.iter_mut().zip(row) {
-                    *kv += s * bi;
+        for (j, kc) in k.iter_mut().enumerate() {
+            let mut acc: [f64; NL] = *kc;
+            for row in rows {
+                let s = rho * row[j];
+                for (a, &bi) in acc.iter_mut().zip(row) {
+                    *a += s * bi;
                 }
             }
+            *kc = acc;
         }
     }
     match nl {
