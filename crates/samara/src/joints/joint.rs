@@ -443,31 +443,55 @@ impl Joint {
         if any_displacement {
             displacement::force_tangent_along(f, &along, &mut k12);
         }
+        // The 3 × 3 blocks of K₁₂ (column-major) read and added to `k` (column-major,
+        // `nrows` rows) by plain indexing; a block of K₁₂ that is zero (the displacement
+        // rows' translation–translation blocks, a side's blocks no row couples) is skipped
+        // with its rotation products: it would add zeros.
+        let k12 = k12.as_slice();
+        let blk = |r: usize, c: usize| -> Option<Matrix3<f64>> {
+            let b = Matrix3::from_fn(|i, j| k12[(c + j) * 12 + r + i]);
+            b.iter().any(|&v| v != 0.0).then_some(b)
+        };
+        let nr = k.nrows();
+        let kv = k.as_mut_slice();
+        let mut add = |r: usize, c: usize, b: &Matrix3<f64>| {
+            for j in 0..3 {
+                let o = (c + j) * nr + r;
+                for (kv, bv) in kv[o..o + 3].iter_mut().zip(b.column(j).iter()) {
+                    *kv += bv;
+                }
+            }
+        };
         for (x, sx) in self.sides.iter().enumerate() {
             if sx.node.is_none() {
                 continue;
             }
             let rx = 6 * sx.local;
+            let rxt = rots[x].transpose();
             for (y, sy) in self.sides.iter().enumerate() {
                 if sy.node.is_none() {
                     continue;
                 }
                 let cy = 6 * sy.local;
-                let blk = |r: usize, c: usize| -> Matrix3<f64> {
-                    k12.fixed_view::<3, 3>(6 * x + r, 6 * y + c).into_owned()
-                };
-                let tt = blk(0, 0);
-                let tr = blk(0, 3) * rots[y];
-                let rt = rots[x].transpose() * blk(3, 0);
-                let mut rr = rots[x].transpose() * blk(3, 3) * rots[y];
-                if x == y {
-                    let m_sp = Vector3::new(g12[6 * x + 3], g12[6 * x + 4], g12[6 * x + 5]);
-                    rr += skew(&(rots[x].transpose() * m_sp));
+                let (x6, y6) = (6 * x, 6 * y);
+                if let Some(tt) = blk(x6, y6) {
+                    add(rx, cy, &tt);
                 }
-                crate::core::add_block(k, rx, cy, &tt);
-                crate::core::add_block(k, rx, cy + 3, &tr);
-                crate::core::add_block(k, rx + 3, cy, &rt);
-                crate::core::add_block(k, rx + 3, cy + 3, &rr);
+                if let Some(b) = blk(x6, y6 + 3) {
+                    add(rx, cy + 3, &(b * rots[y]));
+                }
+                if let Some(b) = blk(x6 + 3, y6) {
+                    add(rx + 3, cy, &(rxt * b));
+                }
+                let mut rr = blk(x6 + 3, y6 + 3).map(|b| rxt * b * rots[y]);
+                if x == y {
+                    let m_sp = Vector3::new(g12[x6 + 3], g12[x6 + 4], g12[x6 + 5]);
+                    let s = skew(&(rxt * m_sp));
+                    *rr.get_or_insert_with(Matrix3::zeros) += s;
+                }
+                if let Some(rr) = rr {
+                    add(rx + 3, cy + 3, &rr);
+                }
             }
         }
     }
