@@ -101,6 +101,9 @@ struct Update {
     sj: u32,
     /// `dst` is a pivot block (row-major) rather than an off-diagonal one.
     diag: bool,
+    /// `dst` is a fill block and this its first update: `dst = −L U` (the block is not
+    /// zeroed before the factorization).
+    assign: bool,
 }
 
 /// Copy of an input block (row-major) into the factor storage: a pivot block as it is,
@@ -152,8 +155,9 @@ pub struct BlockLuSymbolic {
     /// order): a pivot block row-major, an off-diagonal one column-major. An assembly
     /// into these places is the scatter done by the assembler ([`BlockLu::factor_in_place`]).
     placement: Arc<[BlockSlot]>,
-    /// Storage ranges (offset, len) of fill blocks that must be zeroed.
-    fill: Vec<(usize, usize)>,
+    /// Values of the storage before the fill blocks (`[n_input, n_values)`): what an
+    /// assembly into the placement has to zero.
+    n_input: usize,
     n_values: usize,
     max_size: usize,
 }
@@ -193,9 +197,13 @@ impl BlockLuSymbolic {
 
         // ---- storage layout: per k: D_k, then U_ki for i in S_k; after all of them, per
         // k the L_ik: the forward solve streams through the L part alone, the backward
-        // solve through the D and U part alone ----
+        // solve through the D and U part alone. The fill blocks (not in the input
+        // pattern) come last, U then L, in the same orders: an assembly into the
+        // placement zeroes only what precedes them, and each fill block's first Schur
+        // update assigns it ----
         let size: Vec<usize> = order.iter().map(|&b| s.block_size(b)).collect();
         let roff: Vec<usize> = order.iter().map(|&b| s.block_offset(b)).collect();
+        let input = |i: usize, j: usize| s.entry(order[i], order[j]).is_some();
         let mut d_off = Vec::with_capacity(n);
         let mut s_ptr = Vec::with_capacity(n + 1);
         let mut s_ent = Vec::new();
@@ -207,20 +215,44 @@ impl BlockLuSymbolic {
             off += sk * sk;
             for &i in &srows[k] {
                 let si = size[i];
+                let u = if input(k, i) {
+                    off += si * sk;
+                    off - si * sk
+                } else {
+                    usize::MAX
+                };
                 s_ent.push(OffDiag {
                     roff: roff[i],
                     size: si,
-                    l: 0,
-                    u: off,
+                    l: usize::MAX,
+                    u,
                 });
-                off += si * sk;
             }
             s_ptr.push(s_ent.len());
         }
         for k in 0..n {
+            for (e, &i) in s_ent[s_ptr[k]..s_ptr[k + 1]].iter_mut().zip(&srows[k]) {
+                if input(i, k) {
+                    e.l = off;
+                    off += e.size * size[k];
+                }
+            }
+        }
+        let n_input = off;
+        for k in 0..n {
             for e in &mut s_ent[s_ptr[k]..s_ptr[k + 1]] {
-                e.l = off;
-                off += e.size * size[k];
+                if e.u == usize::MAX {
+                    e.u = off;
+                    off += e.size * size[k];
+                }
+            }
+        }
+        for k in 0..n {
+            for e in &mut s_ent[s_ptr[k]..s_ptr[k + 1]] {
+                if e.l == usize::MAX {
+                    e.l = off;
+                    off += e.size * size[k];
+                }
             }
         }
         let n_values = off;
@@ -249,6 +281,7 @@ impl BlockLuSymbolic {
         let mut upd_mid = Vec::with_capacity(n);
         let mut s_mid = Vec::with_capacity(n);
         let mut upd = Vec::new();
+        let mut assigned = vec![false; n_values - n_input];
         upd_ptr.push(0);
         for k in 0..n {
             let ents = &s_ent[s_ptr[k]..s_ptr[k + 1]];
@@ -272,13 +305,22 @@ impl BlockLuSymbolic {
                         if (a >= mid && b >= mid) != shared {
                             continue;
                         }
+                        let dst = locate(i, j);
+                        // A block's updates run in this list's order (a part's
+                        // updates into the separator are held back but keep their
+                        // order, and the separator's blocks get no others before them).
+                        let assign = dst >= n_input && !assigned[dst - n_input];
+                        if assign {
+                            assigned[dst - n_input] = true;
+                        }
                         upd.push(Update {
-                            dst: locate(i, j),
+                            dst,
                             l: ents[a].l,
                             u: ents[b].u,
                             si: size[i] as u32,
                             sj: size[j] as u32,
                             diag: a == b,
+                            assign,
                         });
                     }
                 }
@@ -286,8 +328,7 @@ impl BlockLuSymbolic {
             upd_ptr.push(upd.len());
         }
 
-        // ---- scatter map and fill blocks ----
-        let mut covered = vec![false; n_values];
+        // ---- scatter map ----
         let mut scatter = Vec::with_capacity(s.nnz_values());
         let mut placement = Vec::with_capacity(s.n_entries());
         for bi in 0..n {
@@ -309,31 +350,15 @@ impl BlockLuSymbolic {
                     row: bi as u32,
                     col: pos[bj],
                 });
-                covered[dst] = true;
+                debug_assert!(dst < n_input, "an input block among the fill");
             }
         }
-        // Block starts that were not covered are fill blocks.
-        let mut fill: Vec<(usize, usize)> = Vec::new();
-        let mut push_fill = |o: usize, len: usize| {
-            if let Some(last) = fill.last_mut()
-                && last.0 + last.1 == o
-            {
-                last.1 += len;
-                return;
-            }
-            fill.push((o, len));
-        };
-        for k in 0..n {
-            for e in &s_ent[s_ptr[k]..s_ptr[k + 1]] {
-                let len = e.size * size[k];
-                if !covered[e.l] {
-                    push_fill(e.l, len);
-                }
-                if !covered[e.u] {
-                    push_fill(e.u, len);
-                }
-            }
-        }
+        // Every fill block is written by an update before anything reads it.
+        debug_assert!(s_ent.iter().all(|e| {
+            [e.l, e.u]
+                .iter()
+                .all(|&o| o < n_input || assigned[o - n_input])
+        }));
         // Copy the blocks in the reverse of the order the elimination first needs them
         // (by the first step that touches them, then by destination; last first): the
         // blocks of the first steps are copied last and are still in the cache when the
@@ -363,7 +388,7 @@ impl BlockLuSymbolic {
             upd_mid,
             scatter,
             placement: placement.into(),
-            fill,
+            n_input,
             n_values,
             max_size,
         })
@@ -549,6 +574,13 @@ impl BlockLuSymbolic {
     /// Number of scalar values stored for the factors.
     pub fn n_factor_values(&self) -> usize {
         self.n_values
+    }
+
+    /// Number of values before the fill blocks: every input block is placed there, and
+    /// an assembly into the placement zeroes only these (a fill block's first Schur
+    /// update assigns it).
+    pub fn n_input_values(&self) -> usize {
+        self.n_input
     }
 
     /// Where each input block lives in the factor storage, by
@@ -767,9 +799,6 @@ impl BlockLu {
 
         // ---- scatter ----
         colmax.fill(0.0);
-        for &(o, len) in &sym.fill {
-            vals[o..o + len].fill(0.0);
-        }
         let av = &a.values[..];
         for sc in &sym.scatter {
             let (rows, cols) = (sc.rows as usize, sc.cols as usize);
@@ -789,8 +818,10 @@ impl BlockLu {
     }
 
     /// Numeric factorization of the matrix assembled straight into the factor storage:
-    /// `values` holds every input block at its place in [`BlockLuSymbolic::placement`] and
-    /// zeros elsewhere (the fill blocks), [`BlockLuSymbolic::n_factor_values`] of them. It
+    /// `values` holds every input block at its place in [`BlockLuSymbolic::placement`],
+    /// zeros elsewhere before [`BlockLuSymbolic::n_input_values`] and anything in the fill
+    /// blocks after it (their first Schur updates assign them),
+    /// [`BlockLuSymbolic::n_factor_values`] values in all. It
     /// becomes the factor storage and `values` gets the previous one (the assembly
     /// overwrites it); the same operations in the same order as [`Self::factor`] of the
     /// row-major matrix, so the same bits, without its copy. Performs no heap allocation.
@@ -1195,6 +1226,7 @@ unsafe fn schur_range(
                 sk,
                 up.sj as usize,
                 !up.diag,
+                up.assign,
             );
         }
     }
@@ -1731,10 +1763,13 @@ fn matvec_t_acc(mat: &[f64], x: &[f64], y: &mut [f64], m: usize, n: usize, alpha
 /// `C -= A B` with `C: m x n`, `A: m x k`, `B: k x n`, `A` and `B` column-major, `C`
 /// column-major (`c_col`) or row-major (a pivot block). Each entry of `C` has the
 /// products `A_rp B_pq` subtracted one by one in order of `p`, whatever the layout.
+/// With `assign` (a fill block's first update; column-major `C` only) `C` is not read:
+/// the products are subtracted from zero, `C = −A B`, the same values as from a zeroed `C`.
 ///
 /// # Safety
 /// The three ranges must be valid and `c` must not overlap `a` or `b`.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 unsafe fn gemm_sub(
     c: *mut f64,
     a: *const f64,
@@ -1743,7 +1778,9 @@ unsafe fn gemm_sub(
     k: usize,
     n: usize,
     c_col: bool,
+    assign: bool,
 ) {
+    debug_assert!(c_col || !assign, "pivot blocks are never fill");
     macro_rules! dispatch {
         ($f:ident, $d:ident, $($kk:literal),*; $($mm:literal),*) => {
             dispatch!(@k $f $d [$($kk),*] [$($mm),*])
@@ -1751,13 +1788,13 @@ unsafe fn gemm_sub(
         (@k $f:ident $d:ident [$($kk:literal),*] $ms:tt) => {
             match k {
                 $( $kk => dispatch!(@m $f $d $kk $ms), )*
-                _ => unsafe { $d(c, a, b, m, k, n) },
+                _ => unsafe { $d(c, a, b, m, k, n, assign) },
             }
         };
         (@m $f:ident $d:ident $kk:literal [$($mm:literal),*]) => {
             match m {
-                $( $mm => unsafe { $f::<$mm, $kk>(c, a, b, n) }, )*
-                _ => unsafe { $d(c, a, b, m, k, n) },
+                $( $mm => unsafe { $f::<$mm, $kk>(c, a, b, n, assign) }, )*
+                _ => unsafe { $d(c, a, b, m, k, n, assign) },
             }
         };
     }
@@ -1775,13 +1812,18 @@ unsafe fn gemm_sub_col<const M: usize, const K: usize>(
     a: *const f64,
     b: *const f64,
     n: usize,
+    assign: bool,
 ) {
     unsafe {
         let am: [[f64; M]; K] = core::ptr::read_unaligned(a as *const [[f64; M]; K]);
         for q in 0..n {
             let bq: [f64; K] = core::ptr::read_unaligned(b.add(q * K) as *const [f64; K]);
             let cp = c.add(q * M) as *mut [f64; M];
-            let mut acc: [f64; M] = core::ptr::read_unaligned(cp);
+            let mut acc: [f64; M] = if assign {
+                [0.0; M]
+            } else {
+                core::ptr::read_unaligned(cp)
+            };
             for p in 0..K {
                 let bv = bq[p];
                 for r in 0..M {
@@ -1800,6 +1842,7 @@ unsafe fn gemm_sub_row<const N: usize, const K: usize>(
     a: *const f64,
     b: *const f64,
     m: usize,
+    _assign: bool,
 ) {
     unsafe {
         let mut bm = [[0.0f64; N]; K];
@@ -1831,8 +1874,12 @@ unsafe fn gemm_sub_col_dyn(
     m: usize,
     k: usize,
     n: usize,
+    assign: bool,
 ) {
     unsafe {
+        if assign {
+            std::slice::from_raw_parts_mut(c, m * n).fill(0.0);
+        }
         for q in 0..n {
             for p in 0..k {
                 let bv = *b.add(q * k + p);
@@ -1855,6 +1902,7 @@ unsafe fn gemm_sub_row_dyn(
     m: usize,
     k: usize,
     n: usize,
+    _assign: bool,
 ) {
     unsafe {
         for r in 0..m {
@@ -2103,7 +2151,7 @@ mod tests {
     }
 
     /// A matrix placed block by block at the factor's places (`placement`: pivot blocks
-    /// row-major, off-diagonal blocks column-major, fill zero) and factored in place gives
+    /// row-major, off-diagonal blocks column-major, fill blocks left as garbage: their first updates assign them) and factored in place gives
     /// the same factor, permutations and solutions to the bit as the row-major matrix
     /// copied in by `factor`, on one order and on a separator order; the storage handed
     /// back is the previous factor's, of the same length.
@@ -2122,8 +2170,16 @@ mod tests {
                 s.clone(),
                 sym.placement().clone(),
                 sym.n_factor_values(),
+                sym.n_input_values(),
             );
             assert!(!placed.is_row_major());
+            assert!(
+                sym.n_input_values() < sym.n_factor_values(),
+                "a pattern with fill"
+            );
+            // The fill blocks are not zeroed: their first updates assign them.
+            placed.values[sym.n_input_values()..].fill(f64::NAN);
+            copied.values[sym.n_input_values()..].fill(f64::NAN);
             for (e, rm) in s.slots().iter().enumerate() {
                 let src = &a.values[rm.offset..rm.offset + rm.len];
                 let (rows, cols) = (rm.len / rm.row_stride, rm.row_stride);

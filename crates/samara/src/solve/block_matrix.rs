@@ -278,6 +278,9 @@ pub struct BlockMatrix {
     /// The blocks' places when not the structure's row-major layout (the block LU's factor
     /// storage: the matrix is assembled where the factorization works on it).
     placement: Option<Arc<[BlockSlot]>>,
+    /// [`Self::fill_zero`] zeroes `values[..zeroed]`: all of them row-major; in the factor
+    /// storage the part before the fill blocks, which the factorization assigns itself.
+    zeroed: usize,
 }
 
 impl BlockMatrix {
@@ -286,22 +289,31 @@ impl BlockMatrix {
         let values = vec![0.0; s.nnz_values()];
         Self {
             structure: s,
+            zeroed: values.len(),
             values,
             placement: None,
         }
     }
 
     /// All-zero assembly target of `len` values whose blocks live at `placement`
-    /// (one per stored block, [`BlockStructure::entry_index`] order). Only
-    /// [`Self::view`] and [`Self::fill_zero`] work on it; the matrix-level operations
-    /// need the row-major layout.
-    pub fn with_placement(s: Arc<BlockStructure>, placement: Arc<[BlockSlot]>, len: usize) -> Self {
+    /// (one per stored block, [`BlockStructure::entry_index`] order) within the first
+    /// `zeroed`, the only ones [`Self::fill_zero`] clears. Only [`Self::view`] and
+    /// [`Self::fill_zero`] work on it; the matrix-level operations need the row-major
+    /// layout.
+    pub fn with_placement(
+        s: Arc<BlockStructure>,
+        placement: Arc<[BlockSlot]>,
+        len: usize,
+        zeroed: usize,
+    ) -> Self {
         assert_eq!(placement.len(), s.n_entries(), "one place per stored block");
-        debug_assert!(placement.iter().all(|p| p.offset + p.len <= len));
+        assert!(zeroed <= len);
+        debug_assert!(placement.iter().all(|p| p.offset + p.len <= zeroed));
         Self {
             structure: s,
             values: vec![0.0; len],
             placement: Some(placement),
+            zeroed,
         }
     }
 
@@ -339,9 +351,9 @@ impl BlockMatrix {
         );
     }
 
-    /// Set all stored values to zero.
+    /// Set all stored values to zero (in a factor storage, those of the input blocks).
     pub fn fill_zero(&mut self) {
-        self.values.fill(0.0);
+        self.values[..self.zeroed].fill(0.0);
     }
 
     /// Row-major values of block `(i, j)`, if present.

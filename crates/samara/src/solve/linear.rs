@@ -110,6 +110,7 @@ impl LinearSolver {
                     structure.clone(),
                     sym.placement().clone(),
                     sym.n_factor_values(),
+                    sym.n_input_values(),
                 )
             }
         }
