@@ -1926,6 +1926,27 @@ fn add_sub(
 #[allow(clippy::too_many_arguments)]
 fn add_node_columns(
     dst: &mut BlockView,
+    at0: (usize, usize),
+    src: &[f64],
+    nr: usize,
+    src0: (usize, usize),
+    rows: usize,
+    t: Option<&Matrix3<f64>>,
+    scale: f64,
+) {
+    // A node's rows (6) and a five-row joint's λ rows with the count a constant: the
+    // column updates are then whole vector operations, not loops of run-time length.
+    match rows {
+        6 => add_node_columns_of(dst, at0, src, nr, src0, 6, t, scale),
+        5 => add_node_columns_of(dst, at0, src, nr, src0, 5, t, scale),
+        _ => add_node_columns_of(dst, at0, src, nr, src0, rows, t, scale),
+    }
+}
+
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn add_node_columns_of(
+    dst: &mut BlockView,
     (r0, c0): (usize, usize),
     src: &[f64],
     nr: usize,
