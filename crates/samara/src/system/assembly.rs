@@ -1762,8 +1762,11 @@ fn add_block6(dst: BlockView, src: &[f64], nr: usize, a: usize, b: usize) {
 /// rank-one updates `K[:, j] += ρ b_r[j] b_r` per row `b_r` of `B` (copied row-major into
 /// `rows`): contiguous column updates the compiler vectorizes, in place of nalgebra's
 /// `gemm_tr` (one short dot product per entry).
-/// One- and two-node constraints (`nl` = 6, 12) have the column length as a constant, so
-/// each column update unrolls into whole vector operations.
+/// One- and two-node constraints (`nl` = 6, 12) have the column length as a constant:
+/// each column of `K` is held in a local array (registers) while the rows' updates are
+/// added to it in row order (each entry gets the same sum in the same order as row by
+/// row), with no test for zero `b_r[j]` — written into `K` row by row with that test, the
+/// kernel had compiled to scalar multiply–adds behind a mispredicting branch.
 #[inline(always)]
 fn add_gram(k: &mut [f64], b: &[f64], rows: &mut [f64], m: usize, nl: usize, rho: f64) {
     #[inline(always)]
