@@ -23,6 +23,9 @@
 //! independent rows, with every sum still taken term by term in the same order. The storage
 //! holds, per position, `D_k` and the `U_ki`, then in a segment of its own all `L_ik`: the
 //! forward solve streams through the L blocks alone, the backward solve through the rest.
+//! The fill blocks (not in the input pattern) come last, U then L: an assembly into the
+//! factor storage zeroes only what precedes them, and each fill block's first Schur update
+//! assigns it (`A_ij = −L_ik U_kj`, the same values as from a zeroed block).
 //!
 //! # Ordering
 //!
@@ -2151,7 +2154,8 @@ mod tests {
     }
 
     /// A matrix placed block by block at the factor's places (`placement`: pivot blocks
-    /// row-major, off-diagonal blocks column-major, fill blocks left as garbage: their first updates assign them) and factored in place gives
+    /// row-major, off-diagonal blocks column-major, fill blocks left as garbage — NaN —
+    /// since their first updates assign them) and factored in place gives
     /// the same factor, permutations and solutions to the bit as the row-major matrix
     /// copied in by `factor`, on one order and on a separator order; the storage handed
     /// back is the previous factor's, of the same length.
