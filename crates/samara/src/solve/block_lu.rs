@@ -927,6 +927,9 @@ impl BlockLu {
             // SAFETY: the CPU supports AVX2 and FMA (checked at run time).
             #[cfg(target_arch = "x86_64")]
             Isa::Fma => unsafe { self.solve_fma(rhs) },
+            // SAFETY: the CPU supports AVX-512 F and VL and FMA (checked at run time).
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => unsafe { self.solve_avx512(rhs) },
             _ => self.solve_impl::<Plain>(rhs),
         }
     }
@@ -942,6 +945,13 @@ impl BlockLu {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,fma")]
     fn solve_fma(&mut self, rhs: &mut [f64]) {
+        self.solve_impl::<Fused>(rhs)
+    }
+
+    /// [`Self::solve_fma`] compiled for AVX-512 as well (the same bits as the FMA copy).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2,fma,avx512f,avx512vl")]
+    fn solve_avx512(&mut self, rhs: &mut [f64]) {
         self.solve_impl::<Fused>(rhs)
     }
 
@@ -999,6 +1009,9 @@ impl BlockLu {
             // SAFETY: the CPU supports AVX2 and FMA (checked at run time).
             #[cfg(target_arch = "x86_64")]
             Isa::Fma => unsafe { self.solve_transpose_fma(rhs) },
+            // SAFETY: the CPU supports AVX-512 F and VL and FMA (checked at run time).
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => unsafe { self.solve_transpose_avx512(rhs) },
             _ => self.solve_transpose_impl::<Plain>(rhs),
         }
     }
@@ -1014,6 +1027,13 @@ impl BlockLu {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,fma")]
     fn solve_transpose_fma(&mut self, rhs: &mut [f64]) {
+        self.solve_transpose_impl::<Fused>(rhs)
+    }
+
+    /// [`Self::solve_transpose_fma`] compiled for AVX-512 as well (the same bits).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2,fma,avx512f,avx512vl")]
+    fn solve_transpose_avx512(&mut self, rhs: &mut [f64]) {
         self.solve_transpose_impl::<Fused>(rhs)
     }
 
@@ -1141,6 +1161,10 @@ unsafe fn eliminate_steps(
             Isa::Avx => eliminate_steps_avx(sym, ks, part_only, vals, perm, colmax, piv, work),
             #[cfg(target_arch = "x86_64")]
             Isa::Fma => eliminate_steps_fma(sym, ks, part_only, vals, perm, colmax, piv, work),
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => {
+                eliminate_steps_avx512(sym, ks, part_only, vals, perm, colmax, piv, work)
+            }
             _ => eliminate_steps_impl::<Plain>(sym, ks, part_only, vals, perm, colmax, piv, work),
         }
     }
@@ -1175,6 +1199,29 @@ unsafe fn eliminate_steps_avx(
 #[target_feature(enable = "avx,avx2,fma")]
 #[allow(clippy::too_many_arguments)]
 unsafe fn eliminate_steps_fma(
+    sym: &BlockLuSymbolic,
+    ks: std::ops::Range<usize>,
+    part_only: bool,
+    vals: Shared<f64>,
+    perm: Shared<u32>,
+    colmax: &[f64],
+    piv: &mut [u32],
+    work: &mut [f64],
+) -> Result<(), SingularBlock> {
+    // SAFETY: the caller's.
+    unsafe { eliminate_steps_impl::<Fused>(sym, ks, part_only, vals, perm, colmax, piv, work) }
+}
+
+/// [`eliminate_steps_fma`] compiled for AVX-512 (F, VL) as well: the same operations,
+/// so the same bits; the compiler has 32 vector registers and masked moves for the 5- and
+/// 6-long columns.
+///
+/// # Safety
+/// As [`eliminate_steps`]; the CPU supports AVX-512 F and VL and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx,avx2,fma,avx512f,avx512vl")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn eliminate_steps_avx512(
     sym: &BlockLuSymbolic,
     ks: std::ops::Range<usize>,
     part_only: bool,
@@ -1254,6 +1301,12 @@ unsafe fn schur_updates(isa: Isa, sym: &BlockLuSymbolic, k: usize, from: usize, 
         // SAFETY: the caller's.
         unsafe { schur_range::<Fused>(sym, k, r, v) }
     }
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2,fma,avx512f,avx512vl")]
+    unsafe fn fused512(sym: &BlockLuSymbolic, k: usize, r: std::ops::Range<usize>, v: Shared<f64>) {
+        // SAFETY: the caller's.
+        unsafe { schur_range::<Fused>(sym, k, r, v) }
+    }
     let r = from..sym.upd_ptr[k + 1];
     // SAFETY: `isa` is supported by the CPU (checked at run time); the rest is the caller's.
     unsafe {
@@ -1262,6 +1315,8 @@ unsafe fn schur_updates(isa: Isa, sym: &BlockLuSymbolic, k: usize, from: usize, 
             Isa::Avx => wide(sym, k, r, vals),
             #[cfg(target_arch = "x86_64")]
             Isa::Fma => fused(sym, k, r, vals),
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => fused512(sym, k, r, vals),
             _ => schur_range::<Plain>(sym, k, r, vals),
         }
     }
@@ -1482,7 +1537,10 @@ unsafe fn backward_row<F: Arith, const S: usize>(
 /// no reordered sums — so they give the same bits (`tests::avx_and_baseline_agree_to_the_bit`).
 /// `Fma` (AVX2 and FMA) rounds every kernel's multiply–add `c ∓ a b` once instead of twice:
 /// other round-off, the same operations in the same order otherwise, so on one machine the
-/// results are the same for any thread count. One choice per [`BlockLu`], made from the CPU.
+/// results are the same for any thread count. `Avx512` is the `Fma` copy compiled with
+/// AVX-512 F and VL too (32 vector registers, masked moves): the same operations, so the
+/// same bits as `Fma` (`tests::fma_and_avx512_agree_to_the_bit`; valgrind, which has no
+/// AVX-512, runs the `Fma` copy). One choice per [`BlockLu`], made from the CPU.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Isa {
     Base,
@@ -1490,6 +1548,8 @@ enum Isa {
     Avx,
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     Fma,
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    Avx512,
 }
 
 impl Isa {
@@ -1500,6 +1560,11 @@ impl Isa {
             if std::arch::is_x86_feature_detected!("avx2")
                 && std::arch::is_x86_feature_detected!("fma")
             {
+                if std::arch::is_x86_feature_detected!("avx512f")
+                    && std::arch::is_x86_feature_detected!("avx512vl")
+                {
+                    return Isa::Avx512;
+                }
                 return Isa::Fma;
             }
             if std::arch::is_x86_feature_detected!("avx") {
@@ -2324,7 +2389,7 @@ mod tests {
     #[test]
     fn fma_and_baseline_agree_to_round_off() {
         #[cfg(target_arch = "x86_64")]
-        if Isa::detect() == Isa::Fma {
+        if matches!(Isa::detect(), Isa::Fma | Isa::Avx512) {
             let (s, _) = kkt_tree(&chain_parent(12), &[5, 3, 1, 2, 4, 6, 7], true);
             let s = Arc::new(s);
             let sym = Arc::new(BlockLuSymbolic::new(&s).unwrap());
@@ -2372,6 +2437,37 @@ mod tests {
                 assert!(e < 1e-12, "FMA transpose against baseline: rel diff {e}");
             }
             eprintln!("FMA against baseline: largest rel diff {worst:.2e}");
+        }
+    }
+
+    /// The AVX-512 copy is the FMA copy with wider registers: the same bits. Block sizes
+    /// 1–7 reach every fixed-size kernel and the generic one.
+    #[test]
+    fn fma_and_avx512_agree_to_the_bit() {
+        #[cfg(target_arch = "x86_64")]
+        if Isa::detect() == Isa::Avx512 {
+            let (s, _) = kkt_tree(&chain_parent(12), &[5, 3, 1, 2, 4, 6, 7], true);
+            let s = Arc::new(s);
+            let sym = Arc::new(BlockLuSymbolic::new(&s).unwrap());
+            let (mut fma, mut wide) = (BlockLu::new(sym.clone()), BlockLu::new(sym));
+            (fma.isa, wide.isa) = (Isa::Fma, Isa::Avx512);
+            let mut rng = Rng(2025);
+            let mut a = BlockMatrix::zeros(s.clone());
+            fill_random(&mut a, &mut rng, true);
+            fma.factor(&a).unwrap();
+            wide.factor(&a).unwrap();
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fma.values), bits(&wide.values));
+            assert_eq!(fma.perm, wide.perm);
+            let b: Vec<f64> = (0..s.dim()).map(|_| rng.uniform()).collect();
+            let (mut x0, mut x1) = (b.clone(), b.clone());
+            fma.solve_in_place(&mut x0);
+            wide.solve_in_place(&mut x1);
+            assert_eq!(bits(&x0), bits(&x1));
+            let (mut x0, mut x1) = (b.clone(), b);
+            fma.solve_transpose_in_place(&mut x0);
+            wide.solve_transpose_in_place(&mut x1);
+            assert_eq!(bits(&x0), bits(&x1));
         }
     }
 
