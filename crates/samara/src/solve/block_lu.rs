@@ -1720,7 +1720,7 @@ fn d_solve<F: Arith>(
             }
             for r in (0..s).rev() {
                 let mut acc = y[r];
-                for q in r + 1..s {
+                for q in (r + 1..s).rev() {
                     acc = F::sub_mul(acc, lu[r * s + q], y[q]);
                 }
                 y[r] = acc * lu[r * s + r];
@@ -1731,6 +1731,9 @@ fn d_solve<F: Arith>(
 }
 
 /// `y ← U⁻¹ L⁻¹ y` for the in-block LU of a pivot block (`y` already permuted, `P b`).
+/// Each sum is taken in the order its unknowns are found (`L`: `q` up, `U`: `q` down), so
+/// the one just computed enters last and a row waits one multiply–add for it (the solves
+/// are latency-bound; `U`'s sums from `q = r + 1` up waited `S − 1 − r`).
 #[inline(always)]
 fn d_substitute<F: Arith, const S: usize>(lu: &[f64], y: &mut [f64; S]) {
     let lu = as_rows::<S>(&lu[..S * S]);
@@ -1743,7 +1746,7 @@ fn d_substitute<F: Arith, const S: usize>(lu: &[f64], y: &mut [f64; S]) {
     }
     for r in (0..S).rev() {
         let mut acc = y[r];
-        for q in r + 1..S {
+        for q in (r + 1..S).rev() {
             acc = F::sub_mul(acc, lu[r][q], y[q]);
         }
         y[r] = acc * lu[r][r];
