@@ -783,7 +783,7 @@ impl BlockLu {
 
     /// [`Self::factor`]'s copy of the scatter compiled for AVX (moves only); the
     /// elimination runs in the copy of `self.isa` (`Avx`: the same bits as the baseline, no
-    /// fused multiply–add; `Fma`: fused).
+    /// fused multiply–add; `Fma`, `Avx512`: fused).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     fn factor_avx(&mut self, a: &BlockMatrix) -> Result<(), SingularBlock> {
