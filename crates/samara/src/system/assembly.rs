@@ -1229,29 +1229,45 @@ impl Assembler {
             }
             // (λ, config): B T (index 3) or s_v (γ' B + ∂(Bv)/∂q T) (stabilized); `with_t`:
             // apply T to the node columns of `src` on the way.
-            let mut lam_rows = |src: &DMatrix<f64>, scale: f64, with_t: bool| {
-                for a in 0..n {
+            // A function, not a closure: a closure called three times was not inlined and
+            // ran compiled for the baseline, outside this AVX copy.
+            #[inline(always)]
+            #[allow(clippy::too_many_arguments)]
+            fn lam_rows(
+                mat: &mut BlockMatrix,
+                (lam_row, diag): (&[usize], usize),
+                (m, nc): (usize, usize),
+                (cn, ops): (&[usize], &[Matrix3<f64>]),
+                src: &DMatrix<f64>,
+                scale: f64,
+                with_t: bool,
+            ) {
+                let nq = 6 * lam_row.len();
+                for (a, &slot) in lam_row.iter().enumerate() {
                     add_node_columns(
-                        &mut mat.view(w.lam_row[a]),
+                        &mut mat.view(slot),
                         (0, 0),
                         src.as_slice(),
                         m,
                         (0, 6 * a),
                         m,
-                        if with_t { t_of(a) } else { None },
+                        if with_t { ops.get(cn[a]) } else { None },
                         scale,
                     );
                 }
                 if nc > 0 {
-                    let d = &mut mat.view(w.diag);
+                    let d = &mut mat.view(diag);
                     add_sub(d, (0, m), src.as_slice(), m, (0, nq), (m, nc), scale);
                 }
-            };
+            }
+            let rows = (&w.lam_row[..], w.diag);
+            let ts = (cn, tangent_ops);
             if stabilized {
-                lam_rows(&w.b, coef.velocity_scale * coef.damping, false);
-                lam_rows(&w.dbv, coef.velocity_scale, false);
+                let sc = coef.velocity_scale * coef.damping;
+                lam_rows(mat, rows, (m, nc), ts, &w.b, sc, false);
+                lam_rows(mat, rows, (m, nc), ts, &w.dbv, coef.velocity_scale, false);
             } else {
-                lam_rows(&w.b, 1.0, true);
+                lam_rows(mat, rows, (m, nc), ts, &w.b, 1.0, true);
             }
             if stabilized && p.projection.is_some() {
                 // (η, config): B T; (η, η): B T Bᵀ.
@@ -1299,6 +1315,7 @@ impl Assembler {
     /// Adds the terms of the elements `ks` (one element, or a batch from [`batches`];
     /// from [`element_terms`]) into the residual and, if given, the iteration matrix,
     /// with the chain rule through the input signals.
+    #[inline(always)]
     fn scatter_element(
         &self,
         sys: &System,
@@ -1646,6 +1663,7 @@ fn batches(sys: &System) -> Vec<usize> {
 /// `s_r (c_M M + c_C C + c_K K T)` on node rows (`T` the tangent operators, plus
 /// `C A_v + M A₀` with rate maps), `s_z (c_K ∂r/∂z + (∂ż/∂Δz) ∂r/∂ż)` on state rows and
 /// columns. Pure: touches nothing but `t` and the input scratch.
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn element_terms(
     sys: &System,
