@@ -966,7 +966,10 @@ impl Assembler {
             // stays a window's (in the caches) however many elements there are. The loop
             // runs on one of rayon's threads (`scope`): the windows are then shared out
             // without handing each over from outside the pool (a thread wake-up per window,
-            // as much as a residual-only window costs).
+            // as much as a residual-only window costs). The closures run compiled for the
+            // baseline (they do not inherit this copy's target features), so their kernels
+            // take `Separate` multiply–adds: the windowed models' results are the same in
+            // every copy.
             use rayon::prelude::*;
             let tangents = tangents.as_ref();
             let mut matrix = matrix.as_deref_mut();
@@ -987,7 +990,7 @@ impl Assembler {
                         .with_min_len(PARALLEL_CHUNK)
                         .for_each(|(i, (slot, &size))| {
                             let k = start + i;
-                            element_terms::<M>(
+                            element_terms::<Separate>(
                                 sys,
                                 k..k + 1,
                                 state,
@@ -1001,7 +1004,7 @@ impl Assembler {
                     for (i, slot) in window[..len].iter().enumerate() {
                         let k = start + i;
                         let t = &slot.terms[this.alone_term_of[k]];
-                        this.scatter_element::<M>(
+                        this.scatter_element::<Separate>(
                             sys,
                             k..k + 1,
                             t,
