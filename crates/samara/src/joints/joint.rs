@@ -433,12 +433,14 @@ impl Joint {
         let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
         let nq = 6 * self.nodes.len();
         let m = b.nrows();
+        // Every row writes all node columns of `B` and `to_local` all node entries of the
+        // force: only the coordinate columns (entries) need clearing.
         let mut bs = (want_b || tangent.is_some()).then(|| {
             let bs = b.as_mut_slice();
-            bs.fill(0.0);
+            bs[nq * m..].fill(0.0);
             bs
         });
-        force.fill(0.0);
+        force[nq..].fill(0.0);
         // Σ μ_r b_r in spatial components: converted to the local columns once.
         let mut g12 = Row12::zeros();
         for (i, &r) in self.active.iter().enumerate() {
