@@ -72,16 +72,15 @@ impl RigidBody {
     }
 }
 
-impl Element for RigidBody {
-    fn name(&self) -> &str {
-        &self.name
+impl RigidBody {
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn evaluate_avx(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+        self.evaluate_impl(ctx, x, need, out)
     }
 
-    fn nodes(&self) -> &[usize] {
-        &self.node
-    }
-
-    fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+    #[inline(always)]
+    fn evaluate_impl(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
         let nodes = x.nodes;
         let n = &nodes[self.node[0]];
         let r = n.r();
@@ -113,6 +112,28 @@ impl Element for RigidBody {
         // K = ∂r/∂θ: δ(R w) = −R w̃ δθ; δ(Rᵀ b) = (Rᵀ b)~ δθ.
         add_block(&mut out.k, 0, 3, &(-(r * skew(&w_loc))));
         add_block(&mut out.k, 3, 3, &(st * skew(&rt_a) * m));
+    }
+}
+
+impl Element for RigidBody {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn nodes(&self) -> &[usize] {
+        &self.node
+    }
+
+    /// On x86-64 CPUs with AVX this runs in a copy compiled for AVX (called through
+    /// `dyn Element`, it would otherwise be compiled for the baseline only): the same
+    /// operations in the same order, no fused multiply–add, so the same results to the bit.
+    fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU supports AVX (checked at run time).
+            return unsafe { self.evaluate_avx(ctx, x, need, out) };
+        }
+        self.evaluate_impl(ctx, x, need, out)
     }
 
     fn kinetic_energy(&self, x: &ElementInput) -> f64 {

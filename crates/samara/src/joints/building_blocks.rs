@@ -21,10 +21,10 @@
 //! caller (`joint.rs`).
 
 use crate::math::skew;
-use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+use nalgebra::{Matrix3, SVector, Vector3};
+use std::mem::MaybeUninit;
 
 pub type Row12 = SVector<f64, 12>;
-pub type Mat12 = SMatrix<f64, 12, 12>;
 
 /// Current kinematics of the two frames of a joint, global components.
 #[derive(Clone, Debug)]
@@ -88,12 +88,59 @@ fn put3(row: &mut Row12, at: usize, v: &Vector3<f64>) {
     }
 }
 
-fn add33(k: &mut Mat12, r: usize, c: usize, b: &Matrix3<f64>) {
-    for j in 0..3 {
-        for i in 0..3 {
-            k[(r + i, c + j)] += b[(i, j)];
+/// A 12 × 12 spatial tangent (rows and columns `[δxᴬ, δφᴬ, δxᴮ, δφᴮ]`) as its 4 × 4 grid
+/// of 3 × 3 blocks with a mask of the blocks written: a block is assigned by its first term
+/// and added to after, so nothing is zeroed beforehand (1,152 bytes per joint and
+/// iteration) and the blocks no term reaches are known without testing their entries.
+/// The values are those of a zeroed 12 × 12 added into (`0 + x = x`, up to the sign of a
+/// zero entry).
+pub struct Blocks12 {
+    blocks: [[MaybeUninit<Matrix3<f64>>; 4]; 4],
+    used: u16,
+}
+
+impl Default for Blocks12 {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Blocks12 {
+    /// No block written.
+    #[inline(always)]
+    pub fn new() -> Self {
+        Self {
+            blocks: [[MaybeUninit::uninit(); 4]; 4],
+            used: 0,
         }
     }
+
+    /// Block (`r`, `c`) of the 4 × 4 grid, `None` if no term was added to it.
+    #[inline(always)]
+    pub fn get(&self, r: usize, c: usize) -> Option<&Matrix3<f64>> {
+        // SAFETY: a block whose bit is set was assigned by `add`.
+        (self.used & (1 << (4 * r + c)) != 0)
+            .then(|| unsafe { self.blocks[r][c].assume_init_ref() })
+    }
+
+    /// `K[3r.., 3c..] += b` (the first term assigned).
+    #[inline(always)]
+    fn add(&mut self, r: usize, c: usize, b: &Matrix3<f64>) {
+        let bit = 1 << (4 * r + c);
+        if self.used & bit == 0 {
+            self.blocks[r][c].write(*b);
+            self.used |= bit;
+        } else {
+            // SAFETY: the bit is set, so the block was assigned.
+            *unsafe { self.blocks[r][c].assume_init_mut() } += b;
+        }
+    }
+}
+
+/// `K += b` at rows `r`, columns `c` (multiples of 3) of the 12 × 12 spatial tangent.
+#[inline(always)]
+fn add33(k: &mut Blocks12, r: usize, c: usize, b: &Matrix3<f64>) {
+    k.add(r / 3, c / 3, b);
 }
 
 /// Eq. (12a) with d_i = 0 along axis `i` of frame A.
@@ -119,14 +166,15 @@ pub mod displacement {
     }
 
     /// `μ ∂(bᵀ)/∂q` (spatial).
-    pub fn force_tangent(f: &FramePair, i: usize, mu: f64, k: &mut Mat12) {
+    pub fn force_tangent(f: &FramePair, i: usize, mu: f64, k: &mut Blocks12) {
         let e: Vector3<f64> = f.axes[0].column(i).into();
         force_tangent_along(f, &(e * mu), k);
     }
 
     /// `Σ_i μ_i ∂(b_iᵀ)/∂q` of several axes at once, with `m = Σ_i μ_i e_iᴬ`: every term
     /// of [`force_tangent`] is linear in `μ ẽ`, and `w`, `r_B` are the same for all axes.
-    pub fn force_tangent_along(f: &FramePair, m: &Vector3<f64>, k: &mut Mat12) {
+    #[inline(always)]
+    pub fn force_tangent_along(f: &FramePair, m: &Vector3<f64>, k: &mut Blocks12) {
         let et = skew(m);
         let w = f.origin(1) - f.x[0];
         let wt = skew(&w);
@@ -183,7 +231,8 @@ pub mod direction_cosine {
     }
 
     /// `μ ∂(bᵀ)/∂q` (spatial): ∂n/∂φᴬ = g̃ ẽ, ∂n/∂φᴮ = −ẽ g̃.
-    pub fn force_tangent(f: &FramePair, p: usize, q: usize, mu: f64, k: &mut Mat12) {
+    #[inline(always)]
+    pub fn force_tangent(f: &FramePair, p: usize, q: usize, mu: f64, k: &mut Blocks12) {
         let (e, g) = pair(f, p, q);
         let (et, gt) = (skew(&e), skew(&g));
         let dn_a = gt * et * mu;
@@ -391,7 +440,8 @@ impl AngleRow {
     }
 
     /// `μ Σ a_t(ν) ∂(b_tᵀ)/∂q` (spatial).
-    pub fn force_tangent(&self, f: &FramePair, nu: f64, mu: f64, k: &mut Mat12) {
+    #[inline(always)]
+    pub fn force_tangent(&self, f: &FramePair, nu: f64, mu: f64, k: &mut Blocks12) {
         for &(a, p, q) in &self.terms {
             if a == Trig::Zero {
                 continue;

@@ -10,7 +10,7 @@
 //! include what the coordinate elements transmit (a spring on a free component is carried
 //! by the multiplier of the row that defines the coordinate).
 
-use super::building_blocks::{FramePair, Mat12, Row12, displacement};
+use super::building_blocks::{Blocks12, FramePair, Row12, displacement};
 use super::coordinate_loads::CoordinateLoads;
 use super::rows::{COMPONENT_NAMES, Row, measure, rows_of};
 use super::spec::{JointDef, JointType};
@@ -335,7 +335,7 @@ impl Joint {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn rotation_of(&self, side: usize, nodes: &[NodeState]) -> Matrix3<f64> {
         match self.sides[side].node {
             Some(i) => *nodes[i].r(),
@@ -344,7 +344,7 @@ impl Joint {
     }
 
     /// Writes a spatial 12-row into the material local row `out` (length 6·nodes + nc).
-    #[inline]
+    #[inline(always)]
     fn to_local(&self, b12: &Row12, rots: &[Matrix3<f64>; 2], mut put: impl FnMut(usize, f64)) {
         for (x, s) in self.sides.iter().enumerate() {
             if s.node.is_none() {
@@ -396,10 +396,88 @@ impl Joint {
         }
     }
 
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn evaluate_rows_avx(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        lambda: &[f64],
+        penalty: f64,
+        out: RowTerms,
+    ) {
+        self.evaluate_rows_impl(ctx, nodes, coords, lambda, penalty, out)
+    }
+
+    #[inline(always)]
+    fn evaluate_rows_impl(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        lambda: &[f64],
+        penalty: f64,
+        out: RowTerms,
+    ) {
+        let RowTerms {
+            phi,
+            mu,
+            force,
+            b,
+            want_b,
+            tangent,
+            targets,
+        } = out;
+        let f = self.frames(nodes);
+        let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
+        let nq = 6 * self.nodes.len();
+        let m = b.nrows();
+        // Every row writes all node columns of `B` and `to_local` all node entries of the
+        // force: only the coordinate columns (entries) need clearing.
+        let mut bs = (want_b || tangent.is_some()).then(|| {
+            let bs = b.as_mut_slice();
+            bs[nq * m..].fill(0.0);
+            bs
+        });
+        force[nq..].fill(0.0);
+        // Σ μ_r b_r in spatial components: converted to the local columns once.
+        let mut g12 = Row12::zeros();
+        for (i, &r) in self.active.iter().enumerate() {
+            let row = &self.rows[r];
+            let v = self.row_value(&f, coords, ctx.time, row);
+            phi[i] = match row {
+                Row::Servo { .. } if !targets.is_empty() => v.phi - targets[i],
+                _ => v.phi,
+            };
+            let mu_r = lambda[i] + penalty * phi[i];
+            mu[i] = mu_r;
+            if mu_r != 0.0 {
+                axpy12(&mut g12, mu_r, &v.b);
+            }
+            if let Some((c, d)) = v.dnu {
+                force[nq + c] += d * mu_r;
+            }
+            if let Some(bs) = bs.as_deref_mut() {
+                // Column-major: entry (i, c) at c·m + i.
+                self.to_local(&v.b, &rots, |c, x| bs[c * m + i] = x);
+                if let Some((c, d)) = v.dnu {
+                    bs[(nq + c) * m + i] = d;
+                }
+            }
+        }
+        self.to_local(&g12, &rots, |c, x| force[c] = x);
+        if let Some(k) = tangent {
+            k.as_mut_slice().fill(0.0);
+            self.add_reaction_tangent(&f, &rots, coords, mu, &g12, k);
+        }
+    }
+
     /// Adds `∂(Bᵀμ)/∂(q, ν)` at fixed `μ` into `k`, with `g12 = Σ μ_r b_r` (spatial) of
     /// the active rows already summed: the row force tangents `μ_r ∂(b_rᵀ)/∂q` (spatial,
     /// then to the material increments) plus the term of the rotation of the material
     /// columns themselves, `skew(Rᵀ m)` with `m` the moment part of `g12`.
+    #[inline(always)]
     fn add_reaction_tangent(
         &self,
         f: &FramePair,
@@ -410,7 +488,7 @@ impl Joint {
         k: &mut DMatrix<f64>,
     ) {
         let nq = 6 * self.nodes.len();
-        let mut k12 = Mat12::zeros();
+        let mut k12 = Blocks12::new();
         // The displacement rows together: one tangent along Σ μ_r e_r.
         let mut along = Vector3::zeros();
         let mut any_displacement = false;
@@ -443,15 +521,11 @@ impl Joint {
         if any_displacement {
             displacement::force_tangent_along(f, &along, &mut k12);
         }
-        // The 3 × 3 blocks of K₁₂ (column-major) read and added to `k` (column-major,
-        // `nrows` rows) by plain indexing; a block of K₁₂ that is zero (the displacement
-        // rows' translation–translation blocks, a side's blocks no row couples) is skipped
-        // with its rotation products: it would add zeros.
-        let k12 = k12.as_slice();
-        let blk = |r: usize, c: usize| -> Option<Matrix3<f64>> {
-            let b = Matrix3::from_fn(|i, j| k12[(c + j) * 12 + r + i]);
-            b.iter().any(|&v| v != 0.0).then_some(b)
-        };
+        // The 3 × 3 blocks of K₁₂ added to `k` (column-major, `nrows` rows) by plain
+        // indexing; a block of K₁₂ no term reached (the displacement rows'
+        // translation–translation blocks, a side's blocks no row couples) is skipped with
+        // its rotation products.
+        let blk = |r: usize, c: usize| k12.get(r, c);
         let nr = k.nrows();
         let kv = k.as_mut_slice();
         let mut add = |r: usize, c: usize, b: &Matrix3<f64>| {
@@ -473,17 +547,17 @@ impl Joint {
                     continue;
                 }
                 let cy = 6 * sy.local;
-                let (x6, y6) = (6 * x, 6 * y);
-                if let Some(tt) = blk(x6, y6) {
-                    add(rx, cy, &tt);
+                let (x6, x2, y2) = (6 * x, 2 * x, 2 * y);
+                if let Some(tt) = blk(x2, y2) {
+                    add(rx, cy, tt);
                 }
-                if let Some(b) = blk(x6, y6 + 3) {
+                if let Some(b) = blk(x2, y2 + 1) {
                     add(rx, cy + 3, &(b * rots[y]));
                 }
-                if let Some(b) = blk(x6 + 3, y6) {
+                if let Some(b) = blk(x2 + 1, y2) {
                     add(rx + 3, cy, &(rxt * b));
                 }
-                let mut rr = blk(x6 + 3, y6 + 3).map(|b| rxt * b * rots[y]);
+                let mut rr = blk(x2 + 1, y2 + 1).map(|b| rxt * b * rots[y]);
                 if x == y {
                     let m_sp = Vector3::new(g12[x6 + 3], g12[x6 + 4], g12[x6 + 5]);
                     let s = skew(&(rxt * m_sp));
@@ -609,6 +683,9 @@ impl Constraint for Joint {
         self.add_reaction_tangent(&f, &rots, coords, mu, &g12, k);
     }
 
+    /// On x86-64 CPUs with AVX the rows run in a copy compiled for AVX (called through
+    /// `dyn Constraint`, they would otherwise be compiled for the baseline only): the same
+    /// operations in the same order, no fused multiply–add, so the same results to the bit.
     fn evaluate_rows(
         &self,
         ctx: &EvalContext,
@@ -618,55 +695,12 @@ impl Constraint for Joint {
         penalty: f64,
         out: RowTerms,
     ) {
-        let RowTerms {
-            phi,
-            mu,
-            force,
-            b,
-            want_b,
-            tangent,
-            targets,
-        } = out;
-        let f = self.frames(nodes);
-        let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
-        let nq = 6 * self.nodes.len();
-        let m = b.nrows();
-        let mut bs = (want_b || tangent.is_some()).then(|| {
-            let bs = b.as_mut_slice();
-            bs.fill(0.0);
-            bs
-        });
-        force.fill(0.0);
-        // Σ μ_r b_r in spatial components: converted to the local columns once.
-        let mut g12 = Row12::zeros();
-        for (i, &r) in self.active.iter().enumerate() {
-            let row = &self.rows[r];
-            let v = self.row_value(&f, coords, ctx.time, row);
-            phi[i] = match row {
-                Row::Servo { .. } if !targets.is_empty() => v.phi - targets[i],
-                _ => v.phi,
-            };
-            let mu_r = lambda[i] + penalty * phi[i];
-            mu[i] = mu_r;
-            if mu_r != 0.0 {
-                axpy12(&mut g12, mu_r, &v.b);
-            }
-            if let Some((c, d)) = v.dnu {
-                force[nq + c] += d * mu_r;
-            }
-            if let Some(bs) = bs.as_deref_mut() {
-                // Column-major: entry (i, c) at c·m + i.
-                self.to_local(&v.b, &rots, |c, x| bs[c * m + i] = x);
-                if let Some((c, d)) = v.dnu {
-                    bs[(nq + c) * m + i] = d;
-                }
-            }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU supports AVX (checked at run time).
+            return unsafe { self.evaluate_rows_avx(ctx, nodes, coords, lambda, penalty, out) };
         }
-        self.to_local(&g12, &rots, |c, x| force[c] = x);
-        if let Some(k) = tangent {
-            k.as_mut_slice().fill(0.0);
-            self.add_reaction_tangent(&f, &rots, coords, mu, &g12, k);
-        }
+        self.evaluate_rows_impl(ctx, nodes, coords, lambda, penalty, out)
     }
 
     fn acceleration_term(

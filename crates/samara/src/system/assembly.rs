@@ -45,6 +45,37 @@ use nalgebra::{DMatrix, Matrix3};
 use std::ops::Range;
 use std::sync::Arc;
 
+/// The multiply–add `a·b + c` of the assembly's kernels: rounded twice (`Separate`) in the
+/// baseline and AVX copies, once (`Fused`, `vfmadd`) in the copy compiled with FMA, chosen
+/// at run time when the CPU has it. A type parameter, so each copy has its kernels inlined
+/// with no test per operation (`f64::mul_add` outside a function with the `fma` feature is
+/// a call to the C library's `fma`).
+pub(crate) trait MulAdd: Copy {
+    fn mul_add(a: f64, b: f64, c: f64) -> f64;
+}
+
+/// `a·b + c` rounded twice.
+#[derive(Clone, Copy)]
+pub(crate) struct Separate;
+
+impl MulAdd for Separate {
+    #[inline(always)]
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        a * b + c
+    }
+}
+
+/// `a·b + c` rounded once (only inside a function compiled with the `fma` feature).
+#[derive(Clone, Copy)]
+pub(crate) struct Fused;
+
+impl MulAdd for Fused {
+    #[inline(always)]
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        a.mul_add(b, c)
+    }
+}
+
 /// How constraints enter the dynamic equations.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Formulation {
@@ -803,9 +834,11 @@ impl Assembler {
     /// `tangent_ops[i]` is the tangent operator of node i's rotation update; an empty slice
     /// means identity.
     ///
-    /// On x86-64 CPUs with AVX the scatter runs in a copy compiled for AVX: the same
-    /// operations in the same order (no fused multiply–add), so the same results to the
-    /// bit; the elements and constraints it calls are not affected.
+    /// On x86-64 CPUs with AVX and FMA the scatter runs in a copy compiled for both, its
+    /// multiply–adds fused ([`Fused`]: one rounding, so results differ from the other
+    /// copies in round-off); with AVX alone in a copy compiled for AVX (the same operations
+    /// in the same order as the baseline, the same bits). The elements and constraints it
+    /// calls through `dyn` are not affected.
     #[allow(clippy::too_many_arguments)]
     pub fn assemble(
         &mut self,
@@ -819,12 +852,34 @@ impl Assembler {
     ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
+            if std::arch::is_x86_feature_detected!("fma") {
+                // SAFETY: the CPU supports AVX and FMA (checked at run time).
+                return unsafe {
+                    self.assemble_fma(sys, state, ctx, coef, tangent_ops, residual, matrix)
+                };
+            }
             // SAFETY: the CPU supports AVX (checked at run time).
             return unsafe {
                 self.assemble_avx(sys, state, ctx, coef, tangent_ops, residual, matrix)
             };
         }
-        self.assemble_impl(sys, state, ctx, coef, tangent_ops, residual, matrix)
+        self.assemble_impl::<Separate>(sys, state, ctx, coef, tangent_ops, residual, matrix)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,fma")]
+    #[allow(clippy::too_many_arguments)]
+    fn assemble_fma(
+        &mut self,
+        sys: &System,
+        state: &State,
+        ctx: &EvalContext,
+        coef: &Coefficients,
+        tangent_ops: &[Matrix3<f64>],
+        residual: &mut [f64],
+        matrix: Option<&mut BlockMatrix>,
+    ) {
+        self.assemble_impl::<Fused>(sys, state, ctx, coef, tangent_ops, residual, matrix)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -840,12 +895,12 @@ impl Assembler {
         residual: &mut [f64],
         matrix: Option<&mut BlockMatrix>,
     ) {
-        self.assemble_impl(sys, state, ctx, coef, tangent_ops, residual, matrix)
+        self.assemble_impl::<Separate>(sys, state, ctx, coef, tangent_ops, residual, matrix)
     }
 
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn assemble_impl(
+    fn assemble_impl<M: MulAdd>(
         &mut self,
         sys: &System,
         state: &State,
@@ -890,7 +945,7 @@ impl Assembler {
             while k < sys.elements.len() {
                 let end = self.batch_end[k];
                 let t = &mut self.terms[self.term_of[k]];
-                element_terms(
+                element_terms::<M>(
                     sys,
                     k..end,
                     state,
@@ -901,7 +956,7 @@ impl Assembler {
                     &mut self.inputs,
                 );
                 let t = &self.terms[self.term_of[k]];
-                self.scatter_element(sys, k..end, t, coef, residual, matrix.as_deref_mut());
+                self.scatter_element::<M>(sys, k..end, t, coef, residual, matrix.as_deref_mut());
                 k = end;
             }
         } else {
@@ -911,7 +966,10 @@ impl Assembler {
             // stays a window's (in the caches) however many elements there are. The loop
             // runs on one of rayon's threads (`scope`): the windows are then shared out
             // without handing each over from outside the pool (a thread wake-up per window,
-            // as much as a residual-only window costs).
+            // as much as a residual-only window costs). The closures run compiled for the
+            // baseline (they do not inherit this copy's target features), so their kernels
+            // take `Separate` multiply–adds: the windowed models' results are the same in
+            // every copy.
             use rayon::prelude::*;
             let tangents = tangents.as_ref();
             let mut matrix = matrix.as_deref_mut();
@@ -932,7 +990,7 @@ impl Assembler {
                         .with_min_len(PARALLEL_CHUNK)
                         .for_each(|(i, (slot, &size))| {
                             let k = start + i;
-                            element_terms(
+                            element_terms::<Separate>(
                                 sys,
                                 k..k + 1,
                                 state,
@@ -946,7 +1004,7 @@ impl Assembler {
                     for (i, slot) in window[..len].iter().enumerate() {
                         let k = start + i;
                         let t = &slot.terms[this.alone_term_of[k]];
-                        this.scatter_element(
+                        this.scatter_element::<Separate>(
                             sys,
                             k..k + 1,
                             t,
@@ -988,7 +1046,7 @@ impl Assembler {
             let (Some(tg), Some(mat)) = (tangents.as_ref(), matrix.as_deref_mut()) else {
                 continue;
             };
-            combine_node_terms(t, en, tg);
+            combine_node_terms::<M>(t, en, tg);
             for a in 0..2 {
                 for b in 0..2 {
                     add_block6(mat.view(slots[2 * a + b]), t.k.as_slice(), 12, a, b);
@@ -1098,7 +1156,7 @@ impl Assembler {
                 continue;
             }
             if coef.penalty != 0.0 {
-                add_gram(
+                add_gram::<M>(
                     w.k.as_mut_slice(),
                     w.b.as_slice(),
                     &mut w.b_rows,
@@ -1117,7 +1175,7 @@ impl Assembler {
             // (config, config): s_r c_K (K_c + ρ BᵀB) T, plus the coordinate elements.
             for a in 0..n {
                 for b in 0..n {
-                    add_node_columns(
+                    add_node_columns::<M>(
                         &mut mat.view(w.node_slots[a * n + b]),
                         (0, 0),
                         w.k.as_slice(),
@@ -1131,7 +1189,7 @@ impl Assembler {
             }
             if nc > 0 {
                 for a in 0..n {
-                    add_sub(
+                    add_sub::<M>(
                         &mut mat.view(w.lam_col[a]),
                         (0, m),
                         w.k.as_slice(),
@@ -1140,7 +1198,7 @@ impl Assembler {
                         (6, nc),
                         skk,
                     );
-                    add_node_columns(
+                    add_node_columns::<M>(
                         &mut mat.view(w.lam_row[a]),
                         (m, 0),
                         w.k.as_slice(),
@@ -1152,7 +1210,7 @@ impl Assembler {
                     );
                 }
                 let d = &mut mat.view(w.diag);
-                add_sub(d, (m, m), w.k.as_slice(), nl, (nq, nq), (nc, nc), skk);
+                add_sub::<M>(d, (m, m), w.k.as_slice(), nl, (nq, nq), (nc, nc), skk);
                 for j in 0..nc {
                     let i = d.at(m + j, m + j);
                     d.values[i] += sr * (coef.stiffness * w.cf_k[j] + coef.damping * w.cf_c[j]);
@@ -1196,7 +1254,7 @@ impl Assembler {
             // (config, λ): (s_r/s_λ) Bᵀ.
             let cs = sr / coef.multiplier_scale;
             for a in 0..n {
-                add_sub_t(
+                add_sub_t::<M>(
                     &mut mat.view(w.lam_col[a]),
                     (0, 0),
                     w.b.as_slice(),
@@ -1208,7 +1266,7 @@ impl Assembler {
             }
             if nc > 0 {
                 let d = &mut mat.view(w.diag);
-                add_sub_t(d, (m, 0), w.b.as_slice(), m, (0, nq), (nc, m), cs);
+                add_sub_t::<M>(d, (m, 0), w.b.as_slice(), m, (0, nq), (nc, m), cs);
             }
             if stabilized {
                 // ∂(B v)/∂q, row r = vᵀ ∂(B_rᵀ)/∂q = vᵀ K(e_r), then times T.
@@ -1229,34 +1287,50 @@ impl Assembler {
             }
             // (λ, config): B T (index 3) or s_v (γ' B + ∂(Bv)/∂q T) (stabilized); `with_t`:
             // apply T to the node columns of `src` on the way.
-            let mut lam_rows = |src: &DMatrix<f64>, scale: f64, with_t: bool| {
-                for a in 0..n {
-                    add_node_columns(
-                        &mut mat.view(w.lam_row[a]),
+            // A function, not a closure: a closure called three times was not inlined and
+            // ran compiled for the baseline, outside this AVX copy.
+            #[inline(always)]
+            #[allow(clippy::too_many_arguments)]
+            fn lam_rows<M: MulAdd>(
+                mat: &mut BlockMatrix,
+                (lam_row, diag): (&[usize], usize),
+                (m, nc): (usize, usize),
+                (cn, ops): (&[usize], &[Matrix3<f64>]),
+                src: &DMatrix<f64>,
+                scale: f64,
+                with_t: bool,
+            ) {
+                let nq = 6 * lam_row.len();
+                for (a, &slot) in lam_row.iter().enumerate() {
+                    add_node_columns::<M>(
+                        &mut mat.view(slot),
                         (0, 0),
                         src.as_slice(),
                         m,
                         (0, 6 * a),
                         m,
-                        if with_t { t_of(a) } else { None },
+                        if with_t { ops.get(cn[a]) } else { None },
                         scale,
                     );
                 }
                 if nc > 0 {
-                    let d = &mut mat.view(w.diag);
-                    add_sub(d, (0, m), src.as_slice(), m, (0, nq), (m, nc), scale);
+                    let d = &mut mat.view(diag);
+                    add_sub::<M>(d, (0, m), src.as_slice(), m, (0, nq), (m, nc), scale);
                 }
-            };
+            }
+            let rows = (&w.lam_row[..], w.diag);
+            let ts = (cn, tangent_ops);
             if stabilized {
-                lam_rows(&w.b, coef.velocity_scale * coef.damping, false);
-                lam_rows(&w.dbv, coef.velocity_scale, false);
+                let sc = coef.velocity_scale * coef.damping;
+                lam_rows::<M>(mat, rows, (m, nc), ts, &w.b, sc, false);
+                lam_rows::<M>(mat, rows, (m, nc), ts, &w.dbv, coef.velocity_scale, false);
             } else {
-                lam_rows(&w.b, 1.0, true);
+                lam_rows::<M>(mat, rows, (m, nc), ts, &w.b, 1.0, true);
             }
             if stabilized && p.projection.is_some() {
                 // (η, config): B T; (η, η): B T Bᵀ.
                 for a in 0..n {
-                    add_sub(
+                    add_sub::<M>(
                         &mut mat.view(w.proj_row[a]),
                         (0, 0),
                         w.bt.as_slice(),
@@ -1267,7 +1341,7 @@ impl Assembler {
                     );
                 }
                 if nc > 0 {
-                    add_sub(
+                    add_sub::<M>(
                         &mut mat.view(w.proj_blk),
                         (0, m),
                         w.bt.as_slice(),
@@ -1299,7 +1373,8 @@ impl Assembler {
     /// Adds the terms of the elements `ks` (one element, or a batch from [`batches`];
     /// from [`element_terms`]) into the residual and, if given, the iteration matrix,
     /// with the chain rule through the input signals.
-    fn scatter_element(
+    #[inline(always)]
+    fn scatter_element<M: MulAdd>(
         &self,
         sys: &System,
         ks: Range<usize>,
@@ -1353,7 +1428,7 @@ impl Assembler {
         } else {
             for (a, ra) in blocks.iter().enumerate() {
                 for (b, cb) in blocks.iter().enumerate() {
-                    add_sub(
+                    add_sub::<M>(
                         &mut mat.view(slots[a * nb + b]),
                         (0, 0),
                         t.k.as_slice(),
@@ -1432,7 +1507,7 @@ impl Assembler {
                     if ra.local < n6 && cb.local < n6 {
                         continue;
                     }
-                    add_sub(
+                    add_sub::<Separate>(
                         &mut mat.view(slots[a * nb + b]),
                         (0, 0),
                         src,
@@ -1646,8 +1721,9 @@ fn batches(sys: &System) -> Vec<usize> {
 /// `s_r (c_M M + c_C C + c_K K T)` on node rows (`T` the tangent operators, plus
 /// `C A_v + M A₀` with rate maps), `s_z (c_K ∂r/∂z + (∂ż/∂Δz) ∂r/∂ż)` on state rows and
 /// columns. Pure: touches nothing but `t` and the input scratch.
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn element_terms(
+fn element_terms<M: MulAdd>(
     sys: &System,
     ks: Range<usize>,
     state: &State,
@@ -1679,7 +1755,7 @@ fn element_terms(
     let n6 = 6 * en.len();
     let nl = t.r.len();
     if nl == n6 {
-        combine_node_terms(t, en, tg);
+        combine_node_terms::<M>(t, en, tg);
     } else {
         apply_tangent_ops(&mut t.k, en, tg.tangent_ops);
         if !tg.rate_maps.is_empty() {
@@ -1715,7 +1791,8 @@ fn element_terms(
 
 /// `t.k ← s_r (c_M M + c_C C + c_K K T)` (plus the rate-map terms) for an element with
 /// node unknowns only, in place.
-fn combine_node_terms(t: &mut LocalTerms, en: &[usize], tg: &TangentInputs) {
+#[inline(always)]
+fn combine_node_terms<M: MulAdd>(t: &mut LocalTerms, en: &[usize], tg: &TangentInputs) {
     let coef = tg.coef;
     apply_tangent_ops(&mut t.k, en, tg.tangent_ops);
     if !tg.rate_maps.is_empty() {
@@ -1729,7 +1806,7 @@ fn combine_node_terms(t: &mut LocalTerms, en: &[usize], tg: &TangentInputs) {
             .zip(t.m.as_slice())
             .zip(t.c.as_slice())
     {
-        *k = ck * *k + cm * m + cc * c;
+        *k = M::mul_add(cc, *c, M::mul_add(cm, *m, ck * *k));
     }
 }
 
@@ -1768,9 +1845,15 @@ fn add_block6(dst: BlockView, src: &[f64], nr: usize, a: usize, b: usize) {
 /// row), with no test for zero `b_r[j]` — written into `K` row by row with that test, the
 /// kernel had compiled to scalar multiply–adds behind a mispredicting branch.
 #[inline(always)]
-fn add_gram(k: &mut [f64], b: &[f64], rows: &mut [f64], m: usize, nl: usize, rho: f64) {
+fn add_gram<M: MulAdd>(k: &mut [f64], b: &[f64], rows: &mut [f64], m: usize, nl: usize, rho: f64) {
     #[inline(always)]
-    fn fixed<const NL: usize>(k: &mut [f64], b: &[f64], rows: &mut [f64], m: usize, rho: f64) {
+    fn fixed<M: MulAdd, const NL: usize>(
+        k: &mut [f64],
+        b: &[f64],
+        rows: &mut [f64],
+        m: usize,
+        rho: f64,
+    ) {
         let rows = &mut rows[..m * NL];
         for (j, col) in b[..m * NL].chunks_exact(m).enumerate() {
             for (r, &x) in col.iter().enumerate() {
@@ -1784,15 +1867,15 @@ fn add_gram(k: &mut [f64], b: &[f64], rows: &mut [f64], m: usize, nl: usize, rho
             for row in rows {
                 let s = rho * row[j];
                 for (a, &bi) in acc.iter_mut().zip(row) {
-                    *a += s * bi;
+                    *a = M::mul_add(s, bi, *a);
                 }
             }
             *kc = acc;
         }
     }
     match nl {
-        12 => return fixed::<12>(k, b, rows, m, rho),
-        6 => return fixed::<6>(k, b, rows, m, rho),
+        12 => return fixed::<M, 12>(k, b, rows, m, rho),
+        6 => return fixed::<M, 6>(k, b, rows, m, rho),
         _ => {}
     }
     let rows = &mut rows[..m * nl];
@@ -1808,7 +1891,7 @@ fn add_gram(k: &mut [f64], b: &[f64], rows: &mut [f64], m: usize, nl: usize, rho
                 continue;
             }
             for (kv, &bi) in kc.iter_mut().zip(row) {
-                *kv += s * bi;
+                *kv = M::mul_add(s, bi, *kv);
             }
         }
     }
@@ -1897,7 +1980,7 @@ fn local_velocities(
 /// `src` column-major with `nr` rows.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn add_sub(
+fn add_sub<M: MulAdd>(
     dst: &mut BlockView,
     (r0, c0): (usize, usize),
     src: &[f64],
@@ -1909,14 +1992,14 @@ fn add_sub(
     for c in 0..cols {
         let col = &src[(sc0 + c) * nr + sr0..(sc0 + c) * nr + sr0 + rows];
         if dst.row_major() {
-            for (r, v) in col.iter().enumerate() {
+            for (r, &v) in col.iter().enumerate() {
                 let i = dst.at(r0 + r, c0 + c);
-                dst.values[i] += scale * v;
+                dst.values[i] = M::mul_add(scale, v, dst.values[i]);
             }
         } else {
             let o = dst.at(r0, c0 + c);
-            for (d, v) in dst.values[o..o + rows].iter_mut().zip(col) {
-                *d += scale * v;
+            for (d, &v) in dst.values[o..o + rows].iter_mut().zip(col) {
+                *d = M::mul_add(scale, v, *d);
             }
         }
     }
@@ -1927,7 +2010,7 @@ fn add_sub(
 /// identity) — the same sums as [`apply_tangent_ops`] then [`add_sub`].
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn add_node_columns(
+fn add_node_columns<M: MulAdd>(
     dst: &mut BlockView,
     at0: (usize, usize),
     src: &[f64],
@@ -1940,15 +2023,15 @@ fn add_node_columns(
     // A node's rows (6) and a five-row joint's λ rows with the count a constant: the
     // column updates are then whole vector operations, not loops of run-time length.
     match rows {
-        6 => add_node_columns_of(dst, at0, src, nr, src0, 6, t, scale),
-        5 => add_node_columns_of(dst, at0, src, nr, src0, 5, t, scale),
-        _ => add_node_columns_of(dst, at0, src, nr, src0, rows, t, scale),
+        6 => add_node_columns_of::<M>(dst, at0, src, nr, src0, 6, t, scale),
+        5 => add_node_columns_of::<M>(dst, at0, src, nr, src0, 5, t, scale),
+        _ => add_node_columns_of::<M>(dst, at0, src, nr, src0, rows, t, scale),
     }
 }
 
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn add_node_columns_of(
+fn add_node_columns_of<M: MulAdd>(
     dst: &mut BlockView,
     (r0, c0): (usize, usize),
     src: &[f64],
@@ -1966,15 +2049,15 @@ fn add_node_columns_of(
         let dst = &mut *dst.values;
         let at = |c: usize| (c0 + c) * ld + r0..(c0 + c) * ld + r0 + rows;
         for c in 0..3 {
-            for (d, v) in dst[at(c)].iter_mut().zip(col(c)) {
-                *d += scale * v;
+            for (d, &v) in dst[at(c)].iter_mut().zip(col(c)) {
+                *d = M::mul_add(scale, v, *d);
             }
         }
         match t {
             None => {
                 for (c, v3) in [x, y, z].into_iter().enumerate() {
-                    for (d, v) in dst[at(3 + c)].iter_mut().zip(v3) {
-                        *d += scale * v;
+                    for (d, &v) in dst[at(3 + c)].iter_mut().zip(v3) {
+                        *d = M::mul_add(scale, v, *d);
                     }
                 }
             }
@@ -1982,9 +2065,9 @@ fn add_node_columns_of(
                 for j in 0..3 {
                     let (t0, t1, t2) = (t[(0, j)], t[(1, j)], t[(2, j)]);
                     let xyz = x.iter().zip(y).zip(z);
-                    for (d, ((a, b), c)) in dst[at(3 + j)].iter_mut().zip(xyz) {
-                        let v = a * t0 + b * t1 + c * t2;
-                        *d += scale * v;
+                    for (d, ((&a, &b), &c)) in dst[at(3 + j)].iter_mut().zip(xyz) {
+                        let v = M::mul_add(c, t2, M::mul_add(b, t1, a * t0));
+                        *d = M::mul_add(scale, v, *d);
                     }
                 }
             }
@@ -1994,15 +2077,17 @@ fn add_node_columns_of(
     let stride = dst.row_stride;
     let dst = &mut *dst.values;
     for c in 0..3 {
-        for (r, v) in col(c).iter().enumerate() {
-            dst[(r0 + r) * stride + c0 + c] += scale * v;
+        for (r, &v) in col(c).iter().enumerate() {
+            let d = &mut dst[(r0 + r) * stride + c0 + c];
+            *d = M::mul_add(scale, v, *d);
         }
     }
     match t {
         None => {
             for (c, v3) in [x, y, z].into_iter().enumerate() {
-                for (r, v) in v3.iter().enumerate() {
-                    dst[(r0 + r) * stride + c0 + 3 + c] += scale * v;
+                for (r, &v) in v3.iter().enumerate() {
+                    let d = &mut dst[(r0 + r) * stride + c0 + 3 + c];
+                    *d = M::mul_add(scale, v, *d);
                 }
             }
         }
@@ -2010,8 +2095,13 @@ fn add_node_columns_of(
             for r in 0..rows {
                 let row = [x[r], y[r], z[r]];
                 for j in 0..3 {
-                    let v = row[0] * t[(0, j)] + row[1] * t[(1, j)] + row[2] * t[(2, j)];
-                    dst[(r0 + r) * stride + c0 + 3 + j] += scale * v;
+                    let v = M::mul_add(
+                        row[2],
+                        t[(2, j)],
+                        M::mul_add(row[1], t[(1, j)], row[0] * t[(0, j)]),
+                    );
+                    let d = &mut dst[(r0 + r) * stride + c0 + 3 + j];
+                    *d = M::mul_add(scale, v, *d);
                 }
             }
         }
@@ -2021,7 +2111,7 @@ fn add_node_columns_of(
 /// Like [`add_sub`] with the source transposed: `dst[r, c] += scale · src[sr0 + c, sc0 + r]`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn add_sub_t(
+fn add_sub_t<M: MulAdd>(
     dst: &mut BlockView,
     (r0, c0): (usize, usize),
     src: &[f64],
@@ -2034,8 +2124,8 @@ fn add_sub_t(
         for r in 0..rows {
             let col = &src[(sc0 + r) * nr + sr0..(sc0 + r) * nr + sr0 + cols];
             let o = dst.at(r0 + r, c0);
-            for (x, v) in dst.values[o..o + cols].iter_mut().zip(col) {
-                *x += scale * v;
+            for (x, &v) in dst.values[o..o + cols].iter_mut().zip(col) {
+                *x = M::mul_add(scale, v, *x);
             }
         }
     } else {
@@ -2048,7 +2138,7 @@ fn add_sub_t(
                 let base = sc0 * nr + sr0 + c;
                 let col = &src[base..=base + 5 * nr];
                 for (r, d) in d.iter_mut().enumerate() {
-                    *d += scale * col[r * nr];
+                    *d = M::mul_add(scale, col[r * nr], *d);
                 }
             }
             return;
@@ -2056,8 +2146,8 @@ fn add_sub_t(
         for c in 0..cols {
             let o = dst.at(r0, c0 + c);
             let row = src[sc0 * nr + sr0 + c..].iter().step_by(nr);
-            for (d, v) in dst.values[o..o + rows].iter_mut().zip(row) {
-                *d += scale * v;
+            for (d, &v) in dst.values[o..o + rows].iter_mut().zip(row) {
+                *d = M::mul_add(scale, v, *d);
             }
         }
     }
