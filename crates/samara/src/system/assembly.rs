@@ -715,7 +715,7 @@ impl Assembler {
     /// Range of element k's states in the Newton vector (empty without states).
     pub fn state_range(&self, sys: &System, k: usize) -> Range<usize> {
         match self.state_place[k] {
-            Some(o) => o..o + sys.elements[k].n_states(),
+            Some(o) => o..o + sys.n_states_of(k),
             None => 0..0,
         }
     }
@@ -1396,7 +1396,7 @@ impl Assembler {
         // Each element's states after the previous ones' (a batch's block).
         let mut shift = 0;
         for j in ks.clone() {
-            let nz = sys.elements[j].n_states();
+            let nz = sys.n_states_of(j);
             if let Some(o) = self.state_place[j] {
                 for i in 0..nz {
                     residual[o + i] += coef.state_row_scale * t.r[n6 + shift + i];
@@ -1518,7 +1518,7 @@ impl Assembler {
                     );
                 }
             }
-            shift += sys.elements[j].n_states();
+            shift += sys.n_states_of(j);
         }
     }
 

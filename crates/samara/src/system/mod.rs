@@ -156,17 +156,21 @@ impl System {
         signals: &'a [f64],
         scratch: &'a mut Vec<f64>,
     ) -> ElementInput<'a> {
-        let off = self.state_offsets[k];
-        let n = self.elements[k].n_states();
         let ids = &self.signals.element_inputs[k];
         scratch.clear();
         scratch.extend(ids.iter().map(|&j| signals[j]));
         ElementInput {
             nodes: &state.nodes,
-            states: &state.states[off..off + n],
+            states: &state.states[span(&self.state_offsets, k, self.n_states)],
             signals: scratch,
             held: self.held_of(k, state),
         }
+    }
+
+    /// Number of element `k`'s states (from the offsets: no virtual call).
+    #[inline]
+    pub fn n_states_of(&self, k: usize) -> usize {
+        span(&self.state_offsets, k, self.n_states).len()
     }
 
     /// The sample-and-hold values of element `k` in `state` (empty when `state` holds
@@ -176,8 +180,7 @@ impl System {
         if state.held.len() != self.n_held {
             return &[];
         }
-        let o = self.held_offsets[k];
-        &state.held[o..o + self.elements[k].n_held()]
+        &state.held[span(&self.held_offsets, k, self.n_held)]
     }
 
     /// Whether `t` is a sample instant `k T` of the period `T`, to within 1e-9 T.
@@ -544,8 +547,7 @@ impl System {
     /// The joint coordinates of constraint `k` in `s`.
     #[inline]
     pub fn coords_of<'a>(&self, k: usize, s: &'a State) -> &'a [Coordinate] {
-        let o = self.coordinate_offsets[k];
-        &s.coords[o..o + self.constraints[k].n_coordinates()]
+        &s.coords[span(&self.coordinate_offsets, k, self.n_coordinates)]
     }
 
     /// Sets every joint coordinate (active and passive) to the principal value implied by
@@ -1027,4 +1029,13 @@ fn characteristic_mass(model: &Model, beams: &[crate::elements::beam::Beam]) -> 
     } else {
         massive.iter().sum::<f64>() / massive.len() as f64
     }
+}
+
+/// Item `k`'s range in a vector laid out by running `offsets` (one per item, in order)
+/// that ends at `total`: `offsets[k]..offsets[k + 1]`. The sizes are fixed per system, so
+/// the hot accessors read them here rather than through a virtual `n_states()` /
+/// `n_held()` / `n_coordinates()` call per element and Newton iteration.
+#[inline(always)]
+fn span(offsets: &[usize], k: usize, total: usize) -> std::ops::Range<usize> {
+    offsets[k]..offsets.get(k + 1).copied().unwrap_or(total)
 }
