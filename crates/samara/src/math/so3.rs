@@ -112,7 +112,7 @@ const EXP_SERIES_LIMIT: f64 = 0.04;
 /// Exponential map `exp(ψ̃)` as a unit quaternion: `(cos(ψ/2), sin(ψ/2) ψ/ψ)`. Small
 /// rotations (below [`EXP_SERIES_LIMIT`]) need neither the square root nor the
 /// trigonometric functions.
-#[inline]
+#[inline(always)]
 pub fn exp_map(psi: &Vector3<f64>) -> UnitQuaternion<f64> {
     let p2 = psi.norm_squared();
     let (c, s) = if p2 < EXP_SERIES_LIMIT {
@@ -246,7 +246,7 @@ impl Rotation {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn from_quaternion(q: UnitQuaternion<f64>) -> Self {
         // Renormalize to keep |q| = 1 to machine precision over millions of updates.
         let q = UnitQuaternion::new_normalize(q.into_inner());
@@ -275,8 +275,9 @@ impl Rotation {
         &self.m
     }
 
-    /// Material (right) update `R exp(ψ̃)`.
-    #[inline]
+    /// Material (right) update `R exp(ψ̃)` (always inlined: the configuration update's
+    /// AVX copy takes it in).
+    #[inline(always)]
     pub fn compose_exp(&self, psi: &Vector3<f64>) -> Self {
         Self::from_quaternion(self.q * exp_map(psi))
     }
