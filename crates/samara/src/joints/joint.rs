@@ -396,6 +396,80 @@ impl Joint {
         }
     }
 
+    /// Passive coordinates from the frames (see [`Constraint::update_passive_coordinates`]).
+    #[inline(always)]
+    fn update_passive_impl(&self, nodes: &[NodeState], passive: &mut [Coordinate], rates: bool) {
+        // The rates need the frames' velocities and accelerations; the values only the
+        // frames.
+        let f = if rates {
+            self.frames_with_rates(nodes)
+        } else {
+            self.frames(nodes)
+        };
+        let mut vel = Row12::zeros();
+        // Spatial accelerations: ẍ, and ω̇ = R Ω̇ (ω × ω = 0).
+        let mut acc = Row12::zeros();
+        if rates {
+            vel = f.spatial_velocities();
+            for (k, s) in self.sides.iter().enumerate() {
+                if let Some(i) = s.node {
+                    let (a, wd) = (nodes[i].a, nodes[i].r() * nodes[i].wd);
+                    for m in 0..3 {
+                        acc[6 * k + m] = a[m];
+                        acc[6 * k + 3 + m] = wd[m];
+                    }
+                }
+            }
+        }
+        // Principal values from the direction cosines, continued from the current value
+        // (angles keep counting turns).
+        let rel = f.axes[0].transpose() * f.axes[1];
+        let r: [[f64; 3]; 3] = std::array::from_fn(|p| std::array::from_fn(|q| rel[(p, q)]));
+        let dv = f.axes[0].transpose() * f.d();
+        let d3 = [dv.x, dv.y, dv.z];
+        for row in &self.passive_rows {
+            let c = match row {
+                Row::Displacement {
+                    coord: Some((c, _)),
+                    ..
+                }
+                | Row::Angle { coord: Some(c), .. } => *c,
+                _ => continue,
+            };
+            let comp = self.components[self.n_active + c];
+            let principal = measure(self.kind, comp, &r, &d3);
+            passive[c].q = if comp < 3 {
+                principal
+            } else {
+                let turn = 2.0 * std::f64::consts::PI;
+                let delta = principal - passive[c].q;
+                passive[c].q + delta - turn * (delta / turn).round()
+            };
+            if !rates {
+                continue;
+            }
+            let v = self.row_value(&f, passive, 0.0, row);
+            let Some((_, d)) = v.dnu else { continue };
+            if d.abs() < 1e-12 {
+                continue;
+            }
+            // Φ̇ = b·v + Φ_ν ν̇ = 0, then Φ̈ = conv + b·a + Φ_ν ν̈ = 0.
+            passive[c].v = -v.b.dot(&vel) / d;
+            let conv = match row {
+                Row::Displacement { axis, .. } => displacement::convective(&f, *axis),
+                Row::Angle { row, .. } => row.convective(&f, passive[c].q, passive[c].v),
+                Row::Drive { .. } | Row::Servo { .. } => 0.0,
+            };
+            passive[c].a = -(conv + v.b.dot(&acc)) / d;
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn update_passive_avx(&self, nodes: &[NodeState], passive: &mut [Coordinate], rates: bool) {
+        self.update_passive_impl(nodes, passive, rates)
+    }
+
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     fn evaluate_rows_avx(
@@ -892,75 +966,21 @@ impl Constraint for Joint {
         }
     }
 
+    /// On x86-64 CPUs with AVX this runs in a copy compiled for AVX (behind `dyn
+    /// Constraint` it would be compiled for the baseline only; ~1.5 % of the chain's
+    /// samples, once per joint and step): no fused multiply–add, the same bits.
     fn update_passive_coordinates(
         &self,
         nodes: &[NodeState],
         passive: &mut [Coordinate],
         rates: bool,
     ) {
-        // The rates need the frames' velocities and accelerations; the values only the
-        // frames.
-        let f = if rates {
-            self.frames_with_rates(nodes)
-        } else {
-            self.frames(nodes)
-        };
-        let mut vel = Row12::zeros();
-        // Spatial accelerations: ẍ, and ω̇ = R Ω̇ (ω × ω = 0).
-        let mut acc = Row12::zeros();
-        if rates {
-            vel = f.spatial_velocities();
-            for (k, s) in self.sides.iter().enumerate() {
-                if let Some(i) = s.node {
-                    let (a, wd) = (nodes[i].a, nodes[i].r() * nodes[i].wd);
-                    for m in 0..3 {
-                        acc[6 * k + m] = a[m];
-                        acc[6 * k + 3 + m] = wd[m];
-                    }
-                }
-            }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU supports AVX (checked at run time).
+            return unsafe { self.update_passive_avx(nodes, passive, rates) };
         }
-        // Principal values from the direction cosines, continued from the current value
-        // (angles keep counting turns).
-        let rel = f.axes[0].transpose() * f.axes[1];
-        let r: [[f64; 3]; 3] = std::array::from_fn(|p| std::array::from_fn(|q| rel[(p, q)]));
-        let dv = f.axes[0].transpose() * f.d();
-        let d3 = [dv.x, dv.y, dv.z];
-        for row in &self.passive_rows {
-            let c = match row {
-                Row::Displacement {
-                    coord: Some((c, _)),
-                    ..
-                }
-                | Row::Angle { coord: Some(c), .. } => *c,
-                _ => continue,
-            };
-            let comp = self.components[self.n_active + c];
-            let principal = measure(self.kind, comp, &r, &d3);
-            passive[c].q = if comp < 3 {
-                principal
-            } else {
-                let turn = 2.0 * std::f64::consts::PI;
-                let delta = principal - passive[c].q;
-                passive[c].q + delta - turn * (delta / turn).round()
-            };
-            if !rates {
-                continue;
-            }
-            let v = self.row_value(&f, passive, 0.0, row);
-            let Some((_, d)) = v.dnu else { continue };
-            if d.abs() < 1e-12 {
-                continue;
-            }
-            // Φ̇ = b·v + Φ_ν ν̇ = 0, then Φ̈ = conv + b·a + Φ_ν ν̈ = 0.
-            passive[c].v = -v.b.dot(&vel) / d;
-            let conv = match row {
-                Row::Displacement { axis, .. } => displacement::convective(&f, *axis),
-                Row::Angle { row, .. } => row.convective(&f, passive[c].q, passive[c].v),
-                Row::Drive { .. } | Row::Servo { .. } => 0.0,
-            };
-            passive[c].a = -(conv + v.b.dot(&acc)) / d;
-        }
+        self.update_passive_impl(nodes, passive, rates)
     }
 
     fn is_driven(&self, c: usize) -> bool {
