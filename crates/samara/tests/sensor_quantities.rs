@@ -477,6 +477,22 @@ fn a_load_cell_on_a_drive_holds_the_actuator_force() {
     assert!(o_delayed.iter().all(|&p| p > 1.7), "{o_delayed:?}");
 }
 
+/// Each element sees only its own sample-and-hold values: the held joint reactions are
+/// stored after the elements' held values and belong to no element (whichever element
+/// comes last must not see them).
+#[test]
+fn each_element_sees_only_its_own_held_values() {
+    let m = lift(1e-3);
+    let sys = System::new(&m);
+    let mut st = sys.initial_state();
+    sys.sample(&mut st, true);
+    assert_eq!(st.held.len(), sys.n_held);
+    assert!(!sys.signals.reactions.is_empty(), "held joint reactions");
+    for (k, e) in sys.elements.iter().enumerate() {
+        assert_eq!(sys.held_of(k, &st).len(), e.n_held(), "{}", e.name());
+    }
+}
+
 /// Bad input: located errors with a hint, never a panic.
 #[test]
 fn bad_output_and_reaction_sensors_are_located_errors() {

@@ -180,7 +180,9 @@ impl System {
         if state.held.len() != self.n_held {
             return &[];
         }
-        &state.held[span(&self.held_offsets, k, self.n_held)]
+        // The elements' held values end where the held joint reactions begin.
+        let end = self.n_held - self.signals.reactions.len();
+        &state.held[span(&self.held_offsets, k, end)]
     }
 
     /// Whether `t` is a sample instant `k T` of the period `T`, to within 1e-9 T.
