@@ -9,6 +9,7 @@ use super::{
     singular_hint,
 };
 use crate::core::EvalContext;
+use crate::math::isa;
 use crate::math::tangent_operator;
 use crate::model::{DynamicSettings, FormulationType, IntegratorType, JacobianUpdate};
 use crate::solve::condition::condition_number;
@@ -147,13 +148,14 @@ impl NewtonSystem for StepProblem<'_> {
         );
     }
 
-    fn apply(&mut self, delta: &[f64]) -> f64 {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU supports AVX (checked above).
-            return unsafe { self.apply_avx(delta) };
+    isa::copies! {
+        /// On CPUs with AVX in a copy compiled for AVX (VEX three-operand forms, 4-lane
+        /// vectors), with the configuration update and its per-node `R exp(ψ̃)`
+        /// (quaternion product, series, renormalization, matrix) inlined: the baseline copy
+        /// spent ~4 % of the chain's full-Newton samples there. No FMA: the same bits.
+        fn apply(&mut self: StepProblem<'_>, delta: &[f64]) -> f64 {
+            Base | Avx => apply_impl,
         }
-        self.apply_impl(delta)
     }
 
     fn constraint_violation(&mut self) -> f64 {
@@ -163,16 +165,6 @@ impl NewtonSystem for StepProblem<'_> {
 }
 
 impl StepProblem<'_> {
-    /// [`NewtonSystem::apply`] compiled for AVX (VEX three-operand forms, 4-lane
-    /// vectors), with the configuration update and its per-node `R exp(ψ̃)` (quaternion
-    /// product, series, renormalization, matrix) inlined: the baseline copy spent ~4 % of
-    /// the chain's full-Newton samples there. No FMA: same bits as the baseline copy.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn apply_avx(&mut self, delta: &[f64]) -> f64 {
-        self.apply_impl(delta)
-    }
-
     /// The Newton correction: velocities, accelerations, multipliers and `hΔq` updated
     /// from `delta`; returns the scaled norm of the configuration change.
     #[inline(always)]

@@ -14,6 +14,7 @@
 
 use super::{Element, EvalContext, LocalTerms, Need, add_block};
 use crate::core::{DiscreteStep, ElementInput, NodeState};
+use crate::math::isa;
 use crate::math::skew;
 use nalgebra::{Matrix3, Vector3};
 
@@ -73,12 +74,6 @@ impl RigidBody {
 }
 
 impl RigidBody {
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn evaluate_avx(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
-        self.evaluate_impl(ctx, x, need, out)
-    }
-
     #[inline(always)]
     fn evaluate_impl(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
         let nodes = x.nodes;
@@ -124,16 +119,19 @@ impl Element for RigidBody {
         &self.node
     }
 
-    /// On x86-64 CPUs with AVX this runs in a copy compiled for AVX (called through
-    /// `dyn Element`, it would otherwise be compiled for the baseline only): the same
-    /// operations in the same order, no fused multiply–add, so the same results to the bit.
-    fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU supports AVX (checked at run time).
-            return unsafe { self.evaluate_avx(ctx, x, need, out) };
+    isa::copies! {
+        /// On x86-64 CPUs with AVX this runs in a copy compiled for AVX (called through
+        /// `dyn Element`, it would otherwise be compiled for the baseline only): the same
+        /// operations in the same order, no fused multiply–add, so the same bits.
+        fn evaluate(
+            &self: RigidBody,
+            ctx: &EvalContext,
+            x: &ElementInput,
+            need: Need,
+            out: &mut LocalTerms,
+        ) {
+            Base | Avx => evaluate_impl,
         }
-        self.evaluate_impl(ctx, x, need, out)
     }
 
     fn kinetic_energy(&self, x: &ElementInput) -> f64 {

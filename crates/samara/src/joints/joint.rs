@@ -22,6 +22,7 @@ use crate::core::RowTerms;
 use crate::core::ServoRow;
 use crate::core::{Coordinate, NodeState};
 use crate::math::TimeFunction;
+use crate::math::isa;
 use crate::math::skew;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
@@ -464,26 +465,6 @@ impl Joint {
         }
     }
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn update_passive_avx(&self, nodes: &[NodeState], passive: &mut [Coordinate], rates: bool) {
-        self.update_passive_impl(nodes, passive, rates)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn evaluate_rows_avx(
-        &self,
-        ctx: &EvalContext,
-        nodes: &[NodeState],
-        coords: &[Coordinate],
-        lambda: &[f64],
-        penalty: f64,
-        out: RowTerms,
-    ) {
-        self.evaluate_rows_impl(ctx, nodes, coords, lambda, penalty, out)
-    }
-
     #[inline(always)]
     fn evaluate_rows_impl(
         &self,
@@ -757,24 +738,21 @@ impl Constraint for Joint {
         self.add_reaction_tangent(&f, &rots, coords, mu, &g12, k);
     }
 
-    /// On x86-64 CPUs with AVX the rows run in a copy compiled for AVX (called through
-    /// `dyn Constraint`, they would otherwise be compiled for the baseline only): the same
-    /// operations in the same order, no fused multiply–add, so the same results to the bit.
-    fn evaluate_rows(
-        &self,
-        ctx: &EvalContext,
-        nodes: &[NodeState],
-        coords: &[Coordinate],
-        lambda: &[f64],
-        penalty: f64,
-        out: RowTerms,
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU supports AVX (checked at run time).
-            return unsafe { self.evaluate_rows_avx(ctx, nodes, coords, lambda, penalty, out) };
+    isa::copies! {
+        /// On x86-64 CPUs with AVX the rows run in a copy compiled for AVX (called through
+        /// `dyn Constraint`, they would otherwise be compiled for the baseline only): the
+        /// same operations in the same order, no fused multiply–add, so the same bits.
+        fn evaluate_rows(
+            &self: Joint,
+            ctx: &EvalContext,
+            nodes: &[NodeState],
+            coords: &[Coordinate],
+            lambda: &[f64],
+            penalty: f64,
+            out: RowTerms,
+        ) {
+            Base | Avx => evaluate_rows_impl,
         }
-        self.evaluate_rows_impl(ctx, nodes, coords, lambda, penalty, out)
     }
 
     fn acceleration_term(
@@ -966,21 +944,18 @@ impl Constraint for Joint {
         }
     }
 
-    /// On x86-64 CPUs with AVX this runs in a copy compiled for AVX (behind `dyn
-    /// Constraint` it would be compiled for the baseline only; ~1.5 % of the chain's
-    /// samples, once per joint and step): no fused multiply–add, the same bits.
-    fn update_passive_coordinates(
-        &self,
-        nodes: &[NodeState],
-        passive: &mut [Coordinate],
-        rates: bool,
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU supports AVX (checked at run time).
-            return unsafe { self.update_passive_avx(nodes, passive, rates) };
+    isa::copies! {
+        /// On x86-64 CPUs with AVX this runs in a copy compiled for AVX (behind `dyn
+        /// Constraint` it would be compiled for the baseline only; ~1.5 % of the chain's
+        /// samples, once per joint and step): no fused multiply–add, the same bits.
+        fn update_passive_coordinates(
+            &self: Joint,
+            nodes: &[NodeState],
+            passive: &mut [Coordinate],
+            rates: bool,
+        ) {
+            Base | Avx => update_passive_impl,
         }
-        self.update_passive_impl(nodes, passive, rates)
     }
 
     fn is_driven(&self, c: usize) -> bool {

@@ -1,10 +1,12 @@
-//! Rotation and small linear-algebra kernels, scalar time functions and tabulated terrain.
+//! Rotation and small linear-algebra kernels, scalar time functions, tabulated terrain,
+//! and the kernels' copies compiled for wider instruction sets ([`isa`]).
 //!
 //! Pure functions only; everything here is independent of the model and of the analyses.
 
 pub mod cayley;
 pub mod dual;
 pub mod height_field;
+pub mod isa;
 pub mod so3;
 pub mod time_function;
 

@@ -69,6 +69,8 @@
 
 use std::sync::Arc;
 
+use crate::math::isa::{self, Isa};
+
 use super::{BlockKind, BlockMatrix, BlockSlot, BlockStructure, StructureError};
 
 /// Relative pivot tolerance (see module docs).
@@ -738,7 +740,11 @@ pub struct BlockLu {
     /// Scratch of the second part's thread (`piv`, `work`).
     piv2: Vec<u32>,
     work2: Vec<f64>,
-    /// The compiled copy the factorization and the solves run in ([`Isa::detect`]).
+    /// The compiled copy the elimination and the solves run in ([`Isa::detected`]):
+    /// `Base` and `Avx` give the same bits (`tests::avx_and_baseline_agree_to_the_bit`),
+    /// `Fma` differs from them by round-off only, `Avx512` gives the bits of `Fma`
+    /// (`tests::fma_and_avx512_agree_to_the_bit`; valgrind, which has no AVX-512, runs the
+    /// `Fma` copy). The same copy for any thread count.
     isa: Isa,
     factored: bool,
 }
@@ -760,7 +766,7 @@ impl BlockLu {
             colmax,
             work2: work.clone(),
             work,
-            isa: Isa::detect(),
+            isa: Isa::detected(),
             factored: false,
         }
     }
@@ -770,24 +776,15 @@ impl BlockLu {
         &self.sym
     }
 
-    /// Numeric factorization of `a` (same structure as the symbolic one).
-    /// Performs no heap allocation.
-    pub fn factor(&mut self, a: &BlockMatrix) -> Result<(), SingularBlock> {
-        #[cfg(target_arch = "x86_64")]
-        if self.isa != Isa::Base {
-            // SAFETY: the CPU supports AVX (checked at run time).
-            return unsafe { self.factor_avx(a) };
+    isa::copies! {
+        /// Numeric factorization of `a` (same structure as the symbolic one).
+        /// Performs no heap allocation. The scatter (moves only) runs in the AVX copy on
+        /// every CPU with AVX; the elimination in the copy of `self.isa`.
+        pub fn factor(&mut self: BlockLu, a: &BlockMatrix) -> Result<(), SingularBlock>
+        where isa = self.isa
+        {
+            Base | Avx => factor_impl,
         }
-        self.factor_impl(a)
-    }
-
-    /// [`Self::factor`]'s copy of the scatter compiled for AVX (moves only); the
-    /// elimination runs in the copy of `self.isa` (`Avx`: the same bits as the baseline, no
-    /// fused multiply–add; `Fma`, `Avx512`: fused).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn factor_avx(&mut self, a: &BlockMatrix) -> Result<(), SingularBlock> {
-        self.factor_impl(a)
     }
 
     #[inline(always)]
@@ -839,20 +836,17 @@ impl BlockLu {
             "BlockLu::factor_in_place: storage does not match the symbolic factorization"
         );
         std::mem::swap(&mut self.values, values);
-        #[cfg(target_arch = "x86_64")]
-        if self.isa != Isa::Base {
-            // SAFETY: the CPU supports AVX (checked at run time).
-            return unsafe { self.factor_in_place_avx() };
-        }
-        self.factor_in_place_impl()
+        self.factor_swapped_in()
     }
 
-    /// [`Self::factor_in_place`]'s column maxima compiled for AVX; the elimination as in
-    /// [`Self::factor_avx`].
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn factor_in_place_avx(&mut self) -> Result<(), SingularBlock> {
-        self.factor_in_place_impl()
+    isa::copies! {
+        /// [`Self::factor_in_place`] after the swap: the column maxima in the AVX copy on
+        /// every CPU with AVX, the elimination as in [`Self::factor`].
+        fn factor_swapped_in(&mut self: BlockLu) -> Result<(), SingularBlock>
+        where isa = self.isa
+        {
+            Base | Avx => factor_in_place_impl,
+        }
     }
 
     #[inline(always)]
@@ -906,7 +900,7 @@ impl BlockLu {
                 rb?;
                 for k in 0..b {
                     // SAFETY: the parts are done; one thread.
-                    unsafe { schur_updates(isa, sym, k, sym.upd_mid[k], vp) };
+                    unsafe { schur_updates(isa, sym, k, sym.upd_mid[k]..sym.upd_ptr[k + 1], vp) };
                 }
                 // SAFETY: one thread.
                 unsafe { eliminate_steps(isa, sym, b..sym.n, false, vp, pp, colmax, piv, work)? };
@@ -918,41 +912,13 @@ impl BlockLu {
         Ok(())
     }
 
-    /// Solve `A x = b` in place (`rhs` = `b` on entry, `x` on exit).
-    pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
-        match self.isa {
-            // SAFETY: the CPU supports AVX (checked at run time).
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx => unsafe { self.solve_avx(rhs) },
-            // SAFETY: the CPU supports AVX2 and FMA (checked at run time).
-            #[cfg(target_arch = "x86_64")]
-            Isa::Fma => unsafe { self.solve_fma(rhs) },
-            // SAFETY: the CPU supports AVX-512 F and VL and FMA (checked at run time).
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe { self.solve_avx512(rhs) },
-            _ => self.solve_impl::<Plain>(rhs),
+    isa::copies! {
+        /// Solve `A x = b` in place (`rhs` = `b` on entry, `x` on exit); in the `Fma` and
+        /// `Avx512` copies the kernels' multiply–adds fused.
+        pub fn solve_in_place(&mut self: BlockLu, rhs: &mut [f64]) where isa = self.isa {
+            Base | Avx => solve_impl::<Plain>,
+            Fma | Avx512 => solve_impl::<Fused>,
         }
-    }
-
-    /// [`Self::solve_in_place`] compiled for AVX (bit-identical results).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn solve_avx(&mut self, rhs: &mut [f64]) {
-        self.solve_impl::<Plain>(rhs)
-    }
-
-    /// [`Self::solve_in_place`] compiled for AVX2 and FMA, the kernels' multiply–adds fused.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx,avx2,fma")]
-    fn solve_fma(&mut self, rhs: &mut [f64]) {
-        self.solve_impl::<Fused>(rhs)
-    }
-
-    /// [`Self::solve_fma`] compiled for AVX-512 as well (the same bits as the FMA copy).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx,avx2,fma,avx512f,avx512vl")]
-    fn solve_avx512(&mut self, rhs: &mut [f64]) {
-        self.solve_impl::<Fused>(rhs)
     }
 
     #[inline(always)]
@@ -1000,41 +966,14 @@ impl BlockLu {
         }
     }
 
-    /// Solve `Aᵀ x = b` in place.
-    pub fn solve_transpose_in_place(&mut self, rhs: &mut [f64]) {
-        match self.isa {
-            // SAFETY: the CPU supports AVX (checked at run time).
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx => unsafe { self.solve_transpose_avx(rhs) },
-            // SAFETY: the CPU supports AVX2 and FMA (checked at run time).
-            #[cfg(target_arch = "x86_64")]
-            Isa::Fma => unsafe { self.solve_transpose_fma(rhs) },
-            // SAFETY: the CPU supports AVX-512 F and VL and FMA (checked at run time).
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe { self.solve_transpose_avx512(rhs) },
-            _ => self.solve_transpose_impl::<Plain>(rhs),
+    isa::copies! {
+        /// Solve `Aᵀ x = b` in place (the copies as in [`Self::solve_in_place`]).
+        pub fn solve_transpose_in_place(&mut self: BlockLu, rhs: &mut [f64])
+        where isa = self.isa
+        {
+            Base | Avx => solve_transpose_impl::<Plain>,
+            Fma | Avx512 => solve_transpose_impl::<Fused>,
         }
-    }
-
-    /// [`Self::solve_transpose_in_place`] compiled for AVX (bit-identical results).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn solve_transpose_avx(&mut self, rhs: &mut [f64]) {
-        self.solve_transpose_impl::<Plain>(rhs)
-    }
-
-    /// [`Self::solve_transpose_in_place`] compiled for AVX2 and FMA (fused kernels).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx,avx2,fma")]
-    fn solve_transpose_fma(&mut self, rhs: &mut [f64]) {
-        self.solve_transpose_impl::<Fused>(rhs)
-    }
-
-    /// [`Self::solve_transpose_fma`] compiled for AVX-512 as well (the same bits).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx,avx2,fma,avx512f,avx512vl")]
-    fn solve_transpose_avx512(&mut self, rhs: &mut [f64]) {
-        self.solve_transpose_impl::<Fused>(rhs)
     }
 
     #[inline(always)]
@@ -1136,103 +1075,29 @@ fn parallel() -> bool {
     rayon::current_num_threads() > 1 && rayon::current_thread_index().is_some()
 }
 
-/// Elimination steps `ks`: LU of the pivot block `D_k`, `L_ik = A_ik D_k⁻¹`, and the Schur
-/// updates `A_ij −= L_ik U_kj`; with `part_only`, not those into the separator's blocks.
-///
-/// # Safety
-/// `vals` and `perm` are the factor storage and the pivot permutations of `sym`; no other
-/// thread touches the blocks of the steps `ks` or their updates' destinations.
-#[allow(clippy::too_many_arguments)]
-unsafe fn eliminate_steps(
-    isa: Isa,
-    sym: &BlockLuSymbolic,
-    ks: std::ops::Range<usize>,
-    part_only: bool,
-    vals: Shared<f64>,
-    perm: Shared<u32>,
-    colmax: &[f64],
-    piv: &mut [u32],
-    work: &mut [f64],
-) -> Result<(), SingularBlock> {
-    // SAFETY: `isa` is supported by the CPU (checked at run time); the rest is the caller's.
-    unsafe {
-        match isa {
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx => eliminate_steps_avx(sym, ks, part_only, vals, perm, colmax, piv, work),
-            #[cfg(target_arch = "x86_64")]
-            Isa::Fma => eliminate_steps_fma(sym, ks, part_only, vals, perm, colmax, piv, work),
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => {
-                eliminate_steps_avx512(sym, ks, part_only, vals, perm, colmax, piv, work)
-            }
-            _ => eliminate_steps_impl::<Plain>(sym, ks, part_only, vals, perm, colmax, piv, work),
-        }
+isa::copies! {
+    /// Elimination steps `ks`: LU of the pivot block `D_k`, `L_ik = A_ik D_k⁻¹`, and the
+    /// Schur updates `A_ij −= L_ik U_kj`; with `part_only`, not those into the separator's
+    /// blocks. In the copy of `isa` (the `Fma` and `Avx512` ones fused).
+    ///
+    /// # Safety
+    /// `vals` and `perm` are the factor storage and the pivot permutations of `sym`; no
+    /// other thread touches the blocks of the steps `ks` or their updates' destinations.
+    #[allow(clippy::too_many_arguments)]
+    unsafe fn eliminate_steps(
+        isa: Isa,
+        sym: &BlockLuSymbolic,
+        ks: std::ops::Range<usize>,
+        part_only: bool,
+        vals: Shared<f64>,
+        perm: Shared<u32>,
+        colmax: &[f64],
+        piv: &mut [u32],
+        work: &mut [f64],
+    ) -> Result<(), SingularBlock> {
+        Base | Avx => eliminate_steps_impl::<Plain>,
+        Fma | Avx512 => eliminate_steps_impl::<Fused>,
     }
-}
-
-/// [`eliminate_steps`] compiled for AVX (bit-identical results).
-///
-/// # Safety
-/// As [`eliminate_steps`]; the CPU supports AVX.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn eliminate_steps_avx(
-    sym: &BlockLuSymbolic,
-    ks: std::ops::Range<usize>,
-    part_only: bool,
-    vals: Shared<f64>,
-    perm: Shared<u32>,
-    colmax: &[f64],
-    piv: &mut [u32],
-    work: &mut [f64],
-) -> Result<(), SingularBlock> {
-    // SAFETY: the caller's.
-    unsafe { eliminate_steps_impl::<Plain>(sym, ks, part_only, vals, perm, colmax, piv, work) }
-}
-
-/// [`eliminate_steps`] compiled for AVX2 and FMA, the kernels' multiply–adds fused.
-///
-/// # Safety
-/// As [`eliminate_steps`]; the CPU supports AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx,avx2,fma")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn eliminate_steps_fma(
-    sym: &BlockLuSymbolic,
-    ks: std::ops::Range<usize>,
-    part_only: bool,
-    vals: Shared<f64>,
-    perm: Shared<u32>,
-    colmax: &[f64],
-    piv: &mut [u32],
-    work: &mut [f64],
-) -> Result<(), SingularBlock> {
-    // SAFETY: the caller's.
-    unsafe { eliminate_steps_impl::<Fused>(sym, ks, part_only, vals, perm, colmax, piv, work) }
-}
-
-/// [`eliminate_steps_fma`] compiled for AVX-512 (F, VL) as well: the same operations,
-/// so the same bits; the compiler has 32 vector registers and masked moves for the 5- and
-/// 6-long columns.
-///
-/// # Safety
-/// As [`eliminate_steps`]; the CPU supports AVX-512 F and VL and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx,avx2,fma,avx512f,avx512vl")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn eliminate_steps_avx512(
-    sym: &BlockLuSymbolic,
-    ks: std::ops::Range<usize>,
-    part_only: bool,
-    vals: Shared<f64>,
-    perm: Shared<u32>,
-    colmax: &[f64],
-    piv: &mut [u32],
-    work: &mut [f64],
-) -> Result<(), SingularBlock> {
-    // SAFETY: the caller's.
-    unsafe { eliminate_steps_impl::<Fused>(sym, ks, part_only, vals, perm, colmax, piv, work) }
 }
 
 #[inline(always)]
@@ -1283,42 +1148,21 @@ unsafe fn eliminate_steps_impl<F: Arith>(
     Ok(())
 }
 
-/// The Schur updates of step `k` from `from` on (those into the separator's blocks, for a
-/// part's step).
-///
-/// # Safety
-/// As [`eliminate_steps`], for step `k`'s updates.
-unsafe fn schur_updates(isa: Isa, sym: &BlockLuSymbolic, k: usize, from: usize, vals: Shared<f64>) {
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    unsafe fn wide(sym: &BlockLuSymbolic, k: usize, r: std::ops::Range<usize>, v: Shared<f64>) {
-        // SAFETY: the caller's.
-        unsafe { schur_range::<Plain>(sym, k, r, v) }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx,avx2,fma")]
-    unsafe fn fused(sym: &BlockLuSymbolic, k: usize, r: std::ops::Range<usize>, v: Shared<f64>) {
-        // SAFETY: the caller's.
-        unsafe { schur_range::<Fused>(sym, k, r, v) }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx,avx2,fma,avx512f,avx512vl")]
-    unsafe fn fused512(sym: &BlockLuSymbolic, k: usize, r: std::ops::Range<usize>, v: Shared<f64>) {
-        // SAFETY: the caller's.
-        unsafe { schur_range::<Fused>(sym, k, r, v) }
-    }
-    let r = from..sym.upd_ptr[k + 1];
-    // SAFETY: `isa` is supported by the CPU (checked at run time); the rest is the caller's.
-    unsafe {
-        match isa {
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx => wide(sym, k, r, vals),
-            #[cfg(target_arch = "x86_64")]
-            Isa::Fma => fused(sym, k, r, vals),
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => fused512(sym, k, r, vals),
-            _ => schur_range::<Plain>(sym, k, r, vals),
-        }
+isa::copies! {
+    /// [`schur_range`] in the copy of `isa`: for a part's step `k`, its updates `r` into
+    /// the separator's blocks.
+    ///
+    /// # Safety
+    /// As [`eliminate_steps`], for step `k`'s updates `r`.
+    unsafe fn schur_updates(
+        isa: Isa,
+        sym: &BlockLuSymbolic,
+        k: usize,
+        r: std::ops::Range<usize>,
+        vals: Shared<f64>,
+    ) {
+        Base | Avx => schur_range::<Plain>,
+        Fma | Avx512 => schur_range::<Fused>,
     }
 }
 
@@ -1531,49 +1375,6 @@ unsafe fn backward_row<F: Arith, const S: usize>(
 // ----------------------------------------------------------------------------
 // small dense kernels
 // ----------------------------------------------------------------------------
-
-/// The compiled copy of the factorization and the solves (the kernels below are inlined
-/// into each). `Base` and `Avx` differ only in the vector width — no fused multiply–add,
-/// no reordered sums — so they give the same bits (`tests::avx_and_baseline_agree_to_the_bit`).
-/// `Fma` (AVX2 and FMA) rounds every kernel's multiply–add `c ∓ a b` once instead of twice:
-/// other round-off, the same operations in the same order otherwise, so on one machine the
-/// results are the same for any thread count. `Avx512` is the `Fma` copy compiled with
-/// AVX-512 F and VL too (32 vector registers, masked moves): the same operations, so the
-/// same bits as `Fma` (`tests::fma_and_avx512_agree_to_the_bit`; valgrind, which has no
-/// AVX-512, runs the `Fma` copy). One choice per [`BlockLu`], made from the CPU.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Isa {
-    Base,
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-    Avx,
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-    Fma,
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-    Avx512,
-}
-
-impl Isa {
-    /// The widest copy the CPU runs.
-    fn detect() -> Self {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                if std::arch::is_x86_feature_detected!("avx512f")
-                    && std::arch::is_x86_feature_detected!("avx512vl")
-                {
-                    return Isa::Avx512;
-                }
-                return Isa::Fma;
-            }
-            if std::arch::is_x86_feature_detected!("avx") {
-                return Isa::Avx;
-            }
-        }
-        Isa::Base
-    }
-}
 
 /// The kernels' multiply–add: `Plain` rounds the product and the sum, `Fused` once
 /// (`f64::mul_add`, one `vfmadd`/`vfnmadd` in the copies compiled with FMA — only those
@@ -2357,7 +2158,7 @@ mod tests {
     #[test]
     fn avx_and_baseline_agree_to_the_bit() {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
+        if Isa::detected() >= Isa::Avx {
             let (s, _) = kkt_tree(&chain_parent(12), &[5, 3, 1, 2, 4, 6, 7], true);
             let s = Arc::new(s);
             let sym = Arc::new(BlockLuSymbolic::new(&s).unwrap());
@@ -2392,7 +2193,7 @@ mod tests {
     #[test]
     fn fma_and_baseline_agree_to_round_off() {
         #[cfg(target_arch = "x86_64")]
-        if matches!(Isa::detect(), Isa::Fma | Isa::Avx512) {
+        if matches!(Isa::detected(), Isa::Fma | Isa::Avx512) {
             let (s, _) = kkt_tree(&chain_parent(12), &[5, 3, 1, 2, 4, 6, 7], true);
             let s = Arc::new(s);
             let sym = Arc::new(BlockLuSymbolic::new(&s).unwrap());
@@ -2448,7 +2249,7 @@ mod tests {
     #[test]
     fn fma_and_avx512_agree_to_the_bit() {
         #[cfg(target_arch = "x86_64")]
-        if Isa::detect() == Isa::Avx512 {
+        if Isa::detected() == Isa::Avx512 {
             let (s, _) = kkt_tree(&chain_parent(12), &[5, 3, 1, 2, 4, 6, 7], true);
             let s = Arc::new(s);
             let sym = Arc::new(BlockLuSymbolic::new(&s).unwrap());

@@ -40,6 +40,7 @@ use super::{SignalValues, State, System};
 use crate::core::{ElementInput, RowTerms};
 use crate::elements::{Element, EvalContext, LocalTerms, Need, SpherePair};
 use crate::joints::CoordinateTangents;
+use crate::math::isa;
 use crate::solve::{BlockKind, BlockMatrix, BlockStructure, BlockView};
 use nalgebra::{DMatrix, Matrix3};
 use std::ops::Range;
@@ -829,73 +830,32 @@ impl Assembler {
         self.rate_maps.extend_from_slice(maps);
     }
 
-    /// Assembles the residual (always) and the iteration matrix (if given).
-    ///
-    /// `tangent_ops[i]` is the tangent operator of node i's rotation update; an empty slice
-    /// means identity.
-    ///
-    /// On x86-64 CPUs with AVX and FMA the scatter runs in a copy compiled for both, its
-    /// multiply–adds fused ([`Fused`]: one rounding, so results differ from the other
-    /// copies in round-off); with AVX alone in a copy compiled for AVX (the same operations
-    /// in the same order as the baseline, the same bits). The elements and constraints it
-    /// calls through `dyn` are not affected.
-    #[allow(clippy::too_many_arguments)]
-    pub fn assemble(
-        &mut self,
-        sys: &System,
-        state: &State,
-        ctx: &EvalContext,
-        coef: &Coefficients,
-        tangent_ops: &[Matrix3<f64>],
-        residual: &mut [f64],
-        matrix: Option<&mut BlockMatrix>,
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            if std::arch::is_x86_feature_detected!("fma") {
-                // SAFETY: the CPU supports AVX and FMA (checked at run time).
-                return unsafe {
-                    self.assemble_fma(sys, state, ctx, coef, tangent_ops, residual, matrix)
-                };
-            }
-            // SAFETY: the CPU supports AVX (checked at run time).
-            return unsafe {
-                self.assemble_avx(sys, state, ctx, coef, tangent_ops, residual, matrix)
-            };
+    isa::copies! {
+        /// Assembles the residual (always) and the iteration matrix (if given).
+        ///
+        /// `tangent_ops[i]` is the tangent operator of node i's rotation update; an empty
+        /// slice means identity.
+        ///
+        /// On x86-64 CPUs with AVX2 and FMA the scatter runs in a copy compiled for them,
+        /// its multiply–adds fused ([`Fused`]: one rounding, so results differ from the
+        /// other copies in round-off; the same copy on CPUs with AVX-512); with AVX alone
+        /// in a copy compiled for AVX (the same operations in the same order as the
+        /// baseline, the same bits). The elements and constraints it calls through `dyn`
+        /// are not affected.
+        #[allow(clippy::too_many_arguments)]
+        pub fn assemble(
+            &mut self: Assembler,
+            sys: &System,
+            state: &State,
+            ctx: &EvalContext,
+            coef: &Coefficients,
+            tangent_ops: &[Matrix3<f64>],
+            residual: &mut [f64],
+            matrix: Option<&mut BlockMatrix>,
+        ) {
+            Base | Avx => assemble_impl::<Separate>,
+            Fma => assemble_impl::<Fused>,
         }
-        self.assemble_impl::<Separate>(sys, state, ctx, coef, tangent_ops, residual, matrix)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx,fma")]
-    #[allow(clippy::too_many_arguments)]
-    fn assemble_fma(
-        &mut self,
-        sys: &System,
-        state: &State,
-        ctx: &EvalContext,
-        coef: &Coefficients,
-        tangent_ops: &[Matrix3<f64>],
-        residual: &mut [f64],
-        matrix: Option<&mut BlockMatrix>,
-    ) {
-        self.assemble_impl::<Fused>(sys, state, ctx, coef, tangent_ops, residual, matrix)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    #[allow(clippy::too_many_arguments)]
-    fn assemble_avx(
-        &mut self,
-        sys: &System,
-        state: &State,
-        ctx: &EvalContext,
-        coef: &Coefficients,
-        tangent_ops: &[Matrix3<f64>],
-        residual: &mut [f64],
-        matrix: Option<&mut BlockMatrix>,
-    ) {
-        self.assemble_impl::<Separate>(sys, state, ctx, coef, tangent_ops, residual, matrix)
     }
 
     #[inline(always)]

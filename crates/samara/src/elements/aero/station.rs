@@ -30,7 +30,7 @@
 //! add the node's own rotation in Rᵢᵀ: ∂(Rᵢᵀ y)/∂δθᵢ = (Rᵢᵀ y)~. Each column g of
 //! ∂(F, M) is spread over the node rows as `c −= L g`, L the shares' map
 //! `[wᵢ I 0; wᵢ d̃ᵢ Rᵢᵀ wᵢ Rᵢᵀ]` stacked over the nodes; on CPUs with AVX the tangents run in
-//! a copy compiled for it ([`AeroStation::tangents_avx`], the same bits).
+//! a copy compiled for it ([`AeroStation::evaluate_body`], the same bits).
 //!
 //! **Unsteady airfoil** ([`super::unsteady`]): with Wagner's attached-flow states or Øye's
 //! dynamic stall the station takes the air velocity at the three-quarter-chord point,
@@ -50,6 +50,7 @@ use super::wind::Wind;
 use crate::core::{Element, ElementInput, EvalContext, LocalTerms, Need, NodeState, SignalTerms};
 use crate::elements::slot::Slot;
 use crate::math::dual::{Dual, Scalar, V3, add, cross, cst3, dot, scale, sub};
+use crate::math::isa;
 use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
 
@@ -459,7 +460,7 @@ impl AeroStation {
     }
 
     /// The body of [`Self::loads`], inlined into the copy of the tangents compiled for
-    /// AVX ([`Self::tangents_avx`]).
+    /// AVX ([`Self::evaluate_body`]).
     #[inline(always)]
     fn loads_body<S: Scalar>(
         &self,
@@ -1229,7 +1230,7 @@ impl AeroStation {
     }
 
     /// Residual only (f64); with `INLINE` the load kernel inlined (the AVX copy,
-    /// [`Self::residual_avx`]).
+    /// [`Self::evaluate_body`]).
     #[inline(always)]
     fn residual<const INLINE: bool>(
         &self,
@@ -1283,26 +1284,22 @@ impl AeroStation {
         }
     }
 
-    /// The tangents in a copy compiled for AVX, the load kernel inlined into it: the
-    /// dual numbers' arithmetic and the spreading over the node rows run four lanes
-    /// wide instead of two. The same operations in the same order (no fused
-    /// multiply–add), so the same results to the bit (as the assembler's and the block
-    /// LU's AVX copies); the wind, BEM root, airfoil tables and stall curves it calls
-    /// are not affected.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn tangents_avx(&self, ctx: &EvalContext, x: &ElementInput, out: &mut LocalTerms) {
-        self.tangents_of_size::<true>(ctx, x, out)
-    }
-
-    /// The residual in a copy compiled for AVX, the load kernel inlined into it (the
-    /// kinematics and node rows over the element's nodes run four lanes wide); the same
-    /// operations in the same order, so the same results to the bit, as
-    /// [`Self::tangents_avx`].
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn residual_avx(&self, ctx: &EvalContext, x: &ElementInput, out: &mut LocalTerms) {
-        self.residual::<true>(ctx, x, out)
+    /// The residual alone or with the tangents; with `INLINE` the load kernel inlined (the
+    /// AVX copy of [`Element::evaluate`]). Loads are applied loads: scaled by the load
+    /// factor in statics.
+    #[inline(always)]
+    fn evaluate_body<const INLINE: bool>(
+        &self,
+        ctx: &EvalContext,
+        x: &ElementInput,
+        need: Need,
+        out: &mut LocalTerms,
+    ) {
+        if need == Need::Residual {
+            self.residual::<INLINE>(ctx, x, out)
+        } else {
+            self.tangents_of_size::<INLINE>(ctx, x, out)
+        }
     }
 }
 
@@ -1343,24 +1340,23 @@ impl Element for AeroStation {
         out[..ns].copy_from_slice(&self.initial[..ns]);
     }
 
-    fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
-        // Loads are applied loads: scaled by the load factor in statics.
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU supports AVX (checked at run time).
-            return unsafe {
-                if need == Need::Residual {
-                    self.residual_avx(ctx, x, out)
-                } else {
-                    self.tangents_avx(ctx, x, out)
-                }
-            };
+    isa::copies! {
+        /// On CPUs with AVX in a copy compiled for AVX, the load kernel inlined into it:
+        /// the dual numbers' arithmetic, the kinematics and the spreading over the node
+        /// rows run four lanes wide instead of two. The same operations in the same order
+        /// (no fused multiply–add), so the same results to the bit (as the assembler's and
+        /// the block LU's AVX copies); the wind, BEM root, airfoil tables and stall curves
+        /// it calls are not affected.
+        fn evaluate(
+            &self: AeroStation,
+            ctx: &EvalContext,
+            x: &ElementInput,
+            need: Need,
+            out: &mut LocalTerms,
+        ) {
+            Base => evaluate_body::<false>,
+            Avx => evaluate_body::<true>,
         }
-        if need == Need::Residual {
-            self.residual::<false>(ctx, x, out);
-            return;
-        }
-        self.tangents_of_size::<false>(ctx, x, out)
     }
 
     fn accumulates(&self) -> bool {
@@ -1567,7 +1563,7 @@ mod tests {
         (e, nodes)
     }
 
-    /// The AVX copy of the tangents ([`AeroStation::tangents_avx`], taken by `evaluate`
+    /// The AVX copy of the tangents ([`AeroStation::evaluate_body`], taken by `evaluate`
     /// on CPUs with AVX) and the baseline copy give the same residual and tangents to the
     /// bit: a BEM station with Øye's dynamic stall on the 7 nodes of an order-6 beam
     /// element, at generic node states (reference: the baseline copy itself; tolerance
@@ -1575,7 +1571,7 @@ mod tests {
     #[test]
     fn avx_and_baseline_copies_agree_to_the_bit() {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
+        if isa::Isa::detected() >= isa::Isa::Avx {
             let (e, nodes) = spinning_station();
             let states = [ElementState { z: 0.6, zd: 0.05 }];
             let x = ElementInput {

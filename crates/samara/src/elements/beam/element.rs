@@ -24,6 +24,7 @@ use crate::elements::slot::Slot;
 use crate::elements::{Element, EvalContext, LocalTerms, Need};
 use crate::math::Rotation;
 use crate::math::TimeFunction;
+use crate::math::isa;
 use nalgebra::{DMatrix, Matrix3, Matrix4x3, Matrix6, Vector3, Vector6};
 use std::cell::RefCell;
 use std::sync::Arc;
@@ -523,20 +524,21 @@ impl BeamElement {
         }
     }
 
-    /// [`Self::evaluate_gathered`] in a copy compiled for AVX: its loops over the nodes
-    /// and quadrature points run four lanes wide (the section kernels it calls are not
-    /// affected). The same operations in the same order (no fused multiply–add), so the
-    /// same results to the bit, as the stations' and the block LU's AVX copies.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn evaluate_gathered_avx(
-        &self,
-        ctx: &EvalContext,
-        need: Need,
-        g: &mut Work,
-        out: &mut LocalTerms,
-    ) {
-        self.evaluate_gathered(ctx, need, g, out)
+    isa::copies! {
+        /// [`Self::evaluate_gathered`], on CPUs with AVX in a copy compiled for AVX: its
+        /// loops over the nodes and quadrature points run four lanes wide (the section
+        /// kernels it calls are not affected). The same operations in the same order (no
+        /// fused multiply–add), so the same results to the bit, as the stations' and the
+        /// block LU's AVX copies.
+        fn evaluate_gathered_in_copy(
+            &self: BeamElement,
+            ctx: &EvalContext,
+            need: Need,
+            g: &mut Work,
+            out: &mut LocalTerms,
+        ) {
+            Base | Avx => evaluate_gathered,
+        }
     }
 
     /// The body of [`Element::evaluate`] with the nodal data gathered into `g`.
@@ -935,12 +937,7 @@ impl Element for BeamElement {
         let nodes = x.nodes;
         with_work(self.nodes.len(), |g| {
             self.gather(nodes, g);
-            #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx") {
-                // SAFETY: the CPU supports AVX (checked at run time).
-                return unsafe { self.evaluate_gathered_avx(ctx, need, g, out) };
-            }
-            self.evaluate_gathered(ctx, need, g, out);
+            self.evaluate_gathered_in_copy(ctx, need, g, out);
         })
     }
 
@@ -1117,7 +1114,7 @@ mod tests {
     use super::*;
     use crate::elements::beam::section::{Section, mass_matrix};
 
-    /// The AVX copy of the element's evaluation ([`BeamElement::evaluate_gathered_avx`])
+    /// The AVX copy of the element's evaluation ([`BeamElement::evaluate_gathered_in_copy`])
     /// and the baseline body give the same bits: an order-4 element on a curved line,
     /// fully populated stiffness, mass offsets, damping, a follower load and gravity, in
     /// a displaced, rotated and moving state. The dissipated power each copy keeps
@@ -1125,7 +1122,7 @@ mod tests {
     #[test]
     fn avx_and_baseline_evaluations_agree_to_the_bit() {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
+        if isa::Isa::detected() >= isa::Isa::Avx {
             let p = 4;
             let stiffness = |seed: f64| {
                 let a = Matrix6::from_fn(|i, j| ((i * 5 + j * 11) as f64 * 0.29 + seed).sin());
