@@ -7,8 +7,9 @@
 //!
 //! Layers, each importing only from the ones before it (no circular imports):
 //!
-//! 1. [`math`] (rotations, time functions), [`diagnostics`] (located errors of input
-//!    files), [`input_files`], [`solve`] (sparse and block linear solvers);
+//! 1. [`math`] (rotations, time functions, the kernels' compiled copies),
+//!    [`diagnostics`] (located errors of input files), [`input_files`]; then [`solve`]
+//!    (sparse and block linear solvers), which imports [`math`] only;
 //! 2. [`core`]: node state, element states, the [`core::Element`] and
 //!    [`core::Constraint`] traits every kernel implements;
 //! 3. the kernels: [`elements`] (bodies, beams, springs, sensors, …) and [`joints`];

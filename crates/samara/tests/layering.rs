@@ -10,7 +10,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("math", &[]),
     ("diagnostics", &[]),
     ("input_files", &[]),
-    ("solve", &[]),
+    ("solve", &["math"]),
     ("core", &["math"]),
     ("elements", &["core", "math"]),
     ("joints", &["core", "math", "elements"]),
