@@ -1,7 +1,7 @@
 //! `type = "campbell"` from the command line: the sweep of the rotating uniform cantilever
 //! written to the results file, and `samara plot RESULTS campbell` (issue #14).
 
-mod common;
+use crate::common;
 use common::*;
 
 #[test]

@@ -4,7 +4,7 @@
 use netcdf3::FileReader;
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 use common::*;
 
 /// `text` with the first occurrence of `from` replaced by `to` fails `samara check` with

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::*;
 
 fn run_text(text: &str) -> (std::process::Output, tempfile::TempDir) {

@@ -1,7 +1,7 @@
 //! Issue #10: inputs found by mutating model files and by using samara as a new user
 //! would. Each test names the item of the issue it guards; each failed before its fix.
 
-mod common;
+use crate::common;
 use common::*;
 use std::path::Path;
 use std::process::Output;

@@ -1,7 +1,7 @@
 //! Span-wise plots of lifting-line station outputs (`samara plot RESULTS span LINE Q… --time
 //! T`, `ResultsReader::span_profile`) on the NREL 5-MW rigid rotor (issue #15, "Outputs").
 
-mod common;
+use crate::common;
 use common::*;
 use samara::output::{ReadError, ResultsReader};
 

@@ -7,7 +7,7 @@ use samara::output::ResultsReader;
 use std::path::{Path, PathBuf};
 use vtkio::model::{Attribute, CellType, DataSet, IOBuffer, Piece, UnstructuredGridPiece};
 
-mod common;
+use crate::common;
 use common::*;
 
 /// The blade spin-up example (examples/blade_spinup.toml) cut to 0.04 s: a hub body on a

@@ -12,7 +12,7 @@
 //! samara integrates the pressure with the first-order generalized-α: O(h²), checked by the
 //! observed order as the step is halved.
 
-mod common;
+use crate::common;
 use common::{first_error, line_of};
 use common::{model, run, with_step};
 

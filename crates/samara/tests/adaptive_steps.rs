@@ -7,7 +7,7 @@
 //! Theory: with the local error (O(h³) for the second-order generalized-α) held at the
 //! tolerance ε per step, h ∝ ε^(1/3) and the global error ∝ h² ∝ ε^(2/3).
 
-mod common;
+use crate::common;
 use common::{kick_constants, kick_response, model, model_file, run};
 use samara::model::Model;
 use std::f64::consts::PI;

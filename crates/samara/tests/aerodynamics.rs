@@ -12,8 +12,7 @@ use samara::model::components::{Build, build_all, initial_nodes};
 use std::path::Path;
 use std::sync::Arc;
 
-#[path = "common/nrel5mw.rs"]
-mod nrel5mw;
+use crate::common::nrel5mw;
 use nrel5mw::*;
 
 #[test]

@@ -9,8 +9,7 @@ use samara::elements::aero::Airfoil;
 use samara::model::Model;
 use std::path::{Path, PathBuf};
 
-#[path = "common/airfoil_run.rs"]
-mod airfoil_run;
+use crate::common::airfoil_run;
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")

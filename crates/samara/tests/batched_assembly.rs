@@ -3,7 +3,7 @@
 //! once. Reference: the same model with every element assembled alone (each wrapped so
 //! that it does not declare itself accumulating) — the element-by-element assembly.
 
-mod common;
+use crate::common;
 
 use common::model_file;
 use nalgebra::{Matrix3, Vector3};

@@ -4,7 +4,7 @@
 //! large-rotation right-angle cantilever of Simo & Vu-Quoc (1988) against the published
 //! curves.
 
-mod common;
+use crate::common;
 
 use common::{model, run};
 use nalgebra::Vector3;

@@ -2,7 +2,7 @@
 //! `beam_moment`, `beam_strain`, `beam_curvature` and the sections' positions, stations and
 //! frames, and the values obey the statics of a cantilever under a tip load.
 
-mod common;
+use crate::common;
 
 use common::model;
 use nalgebra::{UnitQuaternion, Vector3, Vector4};

@@ -3,7 +3,7 @@
 //! coupling (compliance closed form), the BeamDyn regression cases and the Kynema composite
 //! beam (reference/), the Bathe–Bolourchi 45° bend.
 
-mod common;
+use crate::common;
 
 use common::{model, model_file, run};
 use nalgebra::{UnitQuaternion, Vector3};

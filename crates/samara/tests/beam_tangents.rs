@@ -7,7 +7,7 @@
 //! Tolerance 1e-6 relative per entry, as for every element (see `samara::tangent_check`),
 //! so a larger mismatch is a wrong tangent.
 
-mod common;
+use crate::common;
 use common::Lcg;
 use nalgebra::{Matrix3, Matrix6, Vector3};
 use samara::elements::beam::element::{BeamElement, DistributedLoad, ElementSpec, Quadrature};

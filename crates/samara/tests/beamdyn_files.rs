@@ -5,7 +5,7 @@
 //! BeamDyn-ordered matrices (`ordering = "beamdyn"`) against closed forms, and located
 //! errors for malformed files.
 
-mod common;
+use crate::common;
 
 use common::run;
 use nalgebra::{Matrix2, Vector2, Vector3};

@@ -7,7 +7,7 @@
 //! the transient is below e^{−60}: tolerance 1e-8 relative. A tilted capsule touches with
 //! its lower end only.
 
-mod common;
+use crate::common;
 use common::{model, model_file, run};
 use samara::elements::EvalContext;
 use samara::model::Model;

@@ -2,7 +2,7 @@
 //! the iteration matrix, constraint violation per step, and the heavy top against the
 //! Kynema reference.
 
-mod common;
+use crate::common;
 use common::*;
 use samara::model::AnalysisKind;
 

@@ -16,7 +16,7 @@
 //! step; LuGre friction differs from Coulomb's law by the bristle compliance (μ/σ₀ ≈ 1e-6 m)
 //! and the Stribeck region (v_s = 1e-3 m/s), both far below the tolerances stated per test.
 
-mod common;
+use crate::common;
 use common::{first_error, line_of};
 use common::{model, model_file, run};
 use samara::analysis::History;

@@ -14,7 +14,7 @@
 //! saturation or the rate limit mid-step) the error is O(h) locally, hence the looser
 //! bounds there, each stated at its assertion.
 
-mod common;
+use crate::common;
 use common::{first_error, line_of};
 use common::{model, model_file, run, with_step};
 use samara::model::Model;

@@ -18,8 +18,7 @@ use std::path::{Path, PathBuf};
 
 type C64 = Complex<f64>;
 
-#[path = "common/airfoil_run.rs"]
-mod airfoil_run;
+use crate::common::airfoil_run;
 use airfoil_run::{fit, run};
 
 fn repo() -> PathBuf {

@@ -275,8 +275,7 @@ step = 0.01
     )
 }
 
-#[path = "common/airfoil_run.rs"]
-mod airfoil_run;
+use crate::common::airfoil_run;
 
 #[test]
 fn a_line_runs_dynamic_stall_on_interpolated_tables() {

@@ -2,7 +2,7 @@
 //! element pass the generic tangent check — K, C, M of node and state columns, ∂r/∂s, and
 //! the derivatives of the signals they produce — at random states.
 
-mod common;
+use crate::common;
 use common::Lcg;
 use nalgebra::Vector3;
 use samara::core::{ElementState, EvalContext, NodeState};

@@ -10,7 +10,7 @@
 //! classical fourth-order Runge–Kutta at 1/20 of the finest step (its error, O(h⁴), is
 //! below 1e-10 and negligible against the O(h²) errors measured).
 
-mod common;
+use crate::common;
 use common::{model, run};
 use samara::analysis::History;
 use samara::system::System;

@@ -3,7 +3,7 @@
 //! elements the model has, and a large model keeps the preserving scheme's statement —
 //! energy constant to the Newton tolerance — through the sparse path.
 
-mod common;
+use crate::common;
 use common::{example_model_text, model};
 use samara::model::{AnalysisKind, Model};
 use samara::system::System;

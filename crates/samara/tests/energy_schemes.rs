@@ -8,7 +8,7 @@
 //! high-frequency limit ρ∞, and an independent high-accuracy run (h/8 or finer) where
 //! no closed form exists.
 
-mod common;
+use crate::common;
 use common::*;
 use samara::model::{AnalysisKind, IntegratorType, Model};
 use samara::system::System;

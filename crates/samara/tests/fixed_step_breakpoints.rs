@@ -10,7 +10,7 @@
 //! scheme's second order. Tolerance: observed orders ≥ 1.8 per halving (second order; the
 //! step response at ωh = 0.13 … 0.03 is in the asymptotic range), and every step ends on t₀.
 
-mod common;
+use crate::common;
 use common::{model_file, orders, run};
 use samara::model::{AnalysisKind, TimeFunction};
 

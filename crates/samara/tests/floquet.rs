@@ -13,7 +13,7 @@
 //! between δ = 1 − ε²/12 and δ = 1 + 5ε²/12. The points below lie well inside or well
 //! outside them, and the RK4 reference confirms each.
 
-mod common;
+use crate::common;
 
 use common::model;
 use nalgebra::{Complex, Matrix2};

@@ -8,7 +8,7 @@
 //! failure is reproducible from the printed seed; the run stops after a fixed budget of
 //! mutants or of time (whichever comes first), so it stays a bounded part of the suite.
 
-mod common;
+use crate::common;
 use common::Lcg;
 use samara::analysis::{History, run_analysis};
 use samara::model::{AnalysisKind, Model};

@@ -21,7 +21,7 @@
 //! (samara imposes equilibrium at t_{n+1} and averages accelerations, Arnold & Brüls 2007;
 //! on a linear problem that is the same recurrence.)
 
-mod common;
+use crate::common;
 
 use common::{model, run};
 use nalgebra::{Complex, Matrix3};

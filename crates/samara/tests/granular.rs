@@ -18,7 +18,7 @@
 //!   follows the pair through rebuilds of the candidate list (closed forms below).
 //! - the run is deterministic (the same bits twice).
 
-mod common;
+use crate::common;
 use common::{model, model_file, run};
 use samara::elements::GranularSet;
 use samara::model::Model;

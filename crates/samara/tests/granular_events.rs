@@ -12,7 +12,7 @@
 //! local error (ε = 1e-7 m: ≤ 1e-3 m/s, 2e-5 s). Without event location the steps across
 //! the edges land anywhere (checked: at least one ends ≥ 10× farther from the edge).
 
-mod common;
+use crate::common;
 use common::{model, run};
 
 const PAIR: &str = r#"

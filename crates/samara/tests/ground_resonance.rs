@@ -22,7 +22,7 @@
 //! the same in every frame, so they compare directly with samara's rotating-frame modes
 //! and with the Floquet exponents of the driven hub in the inertial frame.
 
-mod common;
+use crate::common;
 
 use nalgebra::{Complex, DMatrix};
 use samara::analysis::{History, run_all, run_analysis};

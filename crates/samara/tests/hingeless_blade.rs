@@ -18,7 +18,6 @@
 //! of lag with axial motion (2Ω against an axial frequency near 100 rad/s), and the
 //! centrifugal terms of the rotary inertia.
 
-mod common;
 use samara::analysis::History;
 use samara::model::Model;
 use samara::system::System;

@@ -15,7 +15,7 @@
 //! the tests check the error's order (2 ± 0.3) as the step is halved and its size at the
 //! finest step.
 
-mod common;
+use crate::common;
 use common::{first_error, line_of};
 use common::{model, model_file, run};
 use samara::analysis::History;

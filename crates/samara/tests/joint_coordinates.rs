@@ -1,7 +1,7 @@
 //! Issue #3: the elements on joint coordinates (backlash, table spring, input port) and
 //! the consistent initial conditions (assembly of a sloppy model, velocity projection).
 
-mod common;
+use crate::common;
 use common::*;
 use std::f64::consts::PI;
 

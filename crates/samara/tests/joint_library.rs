@@ -5,7 +5,7 @@
 //! The test mechanism is one body on a joint to the ground, the joint frame tilted so that
 //! no axis is global. Its free components carry linear springs (1000 N/m, 50 N m/rad).
 
-mod common;
+use crate::common;
 use common::*;
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use samara::joints::rows::has_coordinate;

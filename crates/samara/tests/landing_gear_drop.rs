@@ -14,7 +14,7 @@
 //! - retraction: the actuator's stroke follows the ramp command under the PID and ends
 //!   at −0.4 m; the gear swings forward and up.
 
-mod common;
+use crate::common;
 use common::{model_file, run};
 use nalgebra::Vector3;
 use samara::elements::EvalContext;

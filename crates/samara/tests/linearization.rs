@@ -15,7 +15,7 @@
 //! residual at most quadratically, so ε = 1e-2 is exact up to round-off. A missing
 //! Coriolis, centrifugal or w̃ term is of the order of the entries themselves.
 
-mod common;
+use crate::common;
 use common::{Lcg, model_file};
 use faer::sparse::SparseColMat;
 use nalgebra::{DMatrix, Vector3};

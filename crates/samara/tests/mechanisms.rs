@@ -2,7 +2,7 @@
 //! against their closed forms, an over-constrained four-bar, the Bricard linkage, a
 //! screw, and the initial assembly.
 
-mod common;
+use crate::common;
 use common::*;
 use samara::model::{AnalysisKind, Model};
 use samara::system::System;

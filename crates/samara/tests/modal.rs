@@ -3,7 +3,7 @@
 //! against its minimal-coordinate model; free-free bodies with exactly six zero modes; the
 //! dense (null-space + QZ) and sparse (shift-invert Krylov–Schur) paths against each other.
 
-mod common;
+use crate::common;
 use common::model;
 use nalgebra::{Matrix2, Matrix4};
 use samara::analysis::History;

@@ -8,7 +8,7 @@
 //! is stated below; the energy balance (kinetic + ½ L i² + Joule losses − V i input)
 //! closes to the integrator's O(h²).
 
-mod common;
+use crate::common;
 use common::{model_file, run};
 use samara::model::{AnalysisKind, Model};
 use samara::system::System;

@@ -3,7 +3,7 @@
 //! otherwise be parsed and ignored are rejected where they are written, and the beams'
 //! distributed loads (`[[beams.loads]]`) against the closed form of a loaded cantilever.
 
-mod common;
+use crate::common;
 use common::{first_error, line_of};
 
 use common::model;

@@ -3,7 +3,7 @@
 //! landing on those instants, so that no output time is stepped over and nothing is
 //! interpolated.
 
-mod common;
+use crate::common;
 use common::{example_model_text, kick_response, model, model_file, run};
 use samara::analysis::History;
 use samara::model::{AnalysisKind, Model};

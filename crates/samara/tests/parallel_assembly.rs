@@ -4,7 +4,7 @@
 //! with any number of threads; and the parallel path computes the right answer (a
 //! 300-element cantilever against the Timoshenko closed form).
 
-mod common;
+use crate::common;
 
 use common::model;
 use samara::analysis::{History, run_analysis};

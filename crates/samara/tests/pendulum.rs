@@ -4,7 +4,7 @@
 //! converge at second order in h; the constraint violation must stay within the Newton
 //! tolerance at every step.
 
-mod common;
+use crate::common;
 use common::*;
 
 const L: f64 = 1.0;

@@ -2,7 +2,7 @@
 //! the closed form, and the torque-free asymmetric body spinning near its intermediate
 //! axis (energy and angular momentum bounded, no drift, O(h²)).
 
-mod common;
+use crate::common;
 use common::*;
 use nalgebra::Vector3;
 use samara::math::Rotation;

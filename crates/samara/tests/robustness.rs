@@ -1,7 +1,7 @@
 //! Issue #10 through the library: the prescribed joint, degenerate over-constrained
 //! loops, and result names from models built in code.
 
-mod common;
+use crate::common;
 use common::line_of;
 use common::*;
 use samara::analysis::{History, run_analysis};

@@ -28,7 +28,7 @@
 //! oscillation (damped within 0.1 s) are over before the measuring window. 1e-3 relative
 //! therefore leaves a margin of ≥ 10 over what is expected.
 
-mod common;
+use crate::common;
 use common::{first_error, line_of};
 use common::{model, run};
 use samara::analysis::History;

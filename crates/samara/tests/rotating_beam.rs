@@ -12,7 +12,7 @@
 //! rise). The test also integrates the equation itself (RK4 shooting, 4000 steps) to
 //! confirm the table values it quotes.
 
-mod common;
+use crate::common;
 use common::{model, model_file};
 use samara::analysis::History;
 use samara::model::Model;

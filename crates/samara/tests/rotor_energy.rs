@@ -1,7 +1,7 @@
 //! Energy balance of the flexible NREL 5-MW rotor (issue #15, verification 6: "aerodynamic
 //! power = shaft power + structural energy rate over a run").
 
-mod common;
+use crate::common;
 
 use common::{model_file, run, with_step};
 use samara::analysis::Frame;

@@ -6,7 +6,7 @@
 //! (Franklin, Powell & Workman, *Digital Control of Dynamic Systems*, 3rd ed., §4.3.3):
 //! `x_(k+1) = a x_k + b u_k`, `a = e^(−T/τ)`, `b = (1 − a) K` for `τ ẋ + x = K u`.
 
-mod common;
+use crate::common;
 use common::{model, model_file, orders, run, with_step};
 use samara::model::{AnalysisKind, Model};
 use samara::system::System;

@@ -12,7 +12,7 @@
 //!   controller on a spring's tension);
 //! - the actuator force of a driven body under gravity, F = m (g + f'').
 
-mod common;
+use crate::common;
 use common::{model, orders, run};
 use samara::model::Model;
 use samara::system::System;

@@ -14,7 +14,7 @@
 //! - the system's Jacobian B (with −∂s/∂x on the servo row) against central differences
 //!   of the constraint values Φ = ν − s: tests/system_matrices.rs (`servo_follower`).
 
-mod common;
+use crate::common;
 use common::*;
 use nalgebra::{Matrix4, Vector4};
 use samara::model::Model;

@@ -4,7 +4,7 @@
 //! `m ẍ + k x = 0`: x(t) = x₀ cos(ω t), ω = √(k/m) (closed form). Unknown signals are
 //! located errors.
 
-mod common;
+use crate::common;
 use common::{model, orders, run};
 use samara::model::Model;
 

@@ -26,7 +26,7 @@
 //!    by its convergence. The kinetic energy lost equals the dissipated work (normal
 //!    damping and friction, integrated by the trapezoidal rule) to O(h²).
 
-mod common;
+use crate::common;
 use common::{model, run};
 
 /// B on A under gravity with a horizontal pull `force` [N]; m = 2 kg, ρ = 0.1 m.

@@ -11,7 +11,7 @@
 //! within 2.2e-5 at this step); momentum to 1e-12 relative (the forces are equal and
 //! opposite in every Newton iteration).
 
-mod common;
+use crate::common;
 use common::{model, model_file, run};
 use samara::model::Model;
 

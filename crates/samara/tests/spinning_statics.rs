@@ -2,7 +2,7 @@
 //! closed form of a rotating rod, against a driven hub run to steady state by the
 //! dynamic analysis, and as the starting state of a rotating-frame modal analysis.
 
-mod common;
+use crate::common;
 use common::model;
 use nalgebra::{Rotation3, Vector3};
 use samara::analysis::{AnalysisSummary, History};

@@ -2,7 +2,7 @@
 //! state set from outside continues consistently, and an analysis that writes arrays
 //! (not time records) gets them into its results file.
 
-mod common;
+use crate::common;
 use common::model;
 use samara::analysis::{
     Analysis, AnalysisSummary, ArraySpec, History, Progress, Recorder, Simulation, run_analysis,

@@ -11,7 +11,7 @@
 //! the hydraulic examples) and by what it costs (modified Newton's stopping error, which
 //! falls with the tolerance).
 
-mod common;
+use crate::common;
 use common::{model, run};
 
 fn example(rel: &str) -> String {

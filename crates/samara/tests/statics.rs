@@ -1,6 +1,6 @@
 //! Static analysis with load increments against closed-form equilibria.
 
-mod common;
+use crate::common;
 use common::*;
 use nalgebra::Vector3;
 

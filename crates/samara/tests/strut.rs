@@ -23,7 +23,7 @@
 //! RK4 — so the pointwise force error there is 1.2e-3 of the peak (not a convergence
 //! measure).
 
-mod common;
+use crate::common;
 use common::{model_file, run, with_step};
 use samara::system::System;
 

@@ -11,7 +11,7 @@
 //! to 1e6 in a stiff beam) far below the entries of C and M. A wrong or missing term
 //! shows at ≥ 1e-3.
 
-mod common;
+use crate::common;
 use common::{Lcg, model_file};
 use faer::sparse::SparseColMat;
 use nalgebra::{DMatrix, Vector3};

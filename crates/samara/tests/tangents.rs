@@ -8,7 +8,7 @@
 //! against its own size and the diagonal scaling, with what central differences at ε = 1e-6
 //! can resolve as the floor), so anything above 1e-6 is a wrong tangent.
 
-mod common;
+use crate::common;
 use common::Lcg;
 use nalgebra::{Matrix3, Vector3};
 use samara::elements::{AppliedLoad, Element, EvalContext, RigidBody, SpringDamper};

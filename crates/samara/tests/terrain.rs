@@ -12,7 +12,7 @@
 //!   Gauss–Legendre quadrature after x = A sin θ), → 2π√(R/g) as A → 0;
 //! - a tire rolling over a bump: the normal load returns to the static weight once past it.
 
-mod common;
+use crate::common;
 use common::{model, model_file, run};
 use samara::analysis::{AnalysisSummary, History, run_analysis};
 use samara::elements::EvalContext;

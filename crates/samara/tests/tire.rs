@@ -15,7 +15,7 @@
 //! The wheel runs on a flat-track rig (hub fixed by a revolute to the ground, the ground
 //! moving under it), so the slip angle, speed and load are exactly known.
 
-mod common;
+use crate::common;
 use common::{model, model_file, orders, run};
 use samara::analysis::History;
 use samara::elements::EvalContext;

@@ -11,8 +11,7 @@ use samara::model::components::{Build, build_all, initial_nodes};
 use samara::system::System;
 use std::path::Path;
 
-#[path = "common/bts.rs"]
-mod bts;
+use crate::common::bts;
 use bts::Box3;
 
 fn repo() -> std::path::PathBuf {

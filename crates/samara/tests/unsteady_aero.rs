@@ -14,8 +14,7 @@ use std::path::{Path, PathBuf};
 
 type C64 = Complex<f64>;
 
-#[path = "common/airfoil_run.rs"]
-mod airfoil_run;
+use crate::common::airfoil_run;
 use airfoil_run::{fit, run};
 
 fn repo() -> PathBuf {
@@ -679,8 +678,7 @@ fn kussner_model(dir: &Path, v: f64, wind_keys: &str, t_end: f64, h: f64) -> Str
         )
 }
 
-#[path = "common/bts.rs"]
-mod bts;
+use crate::common::bts;
 
 #[test]
 fn kussner_states_give_the_sears_lift_for_a_convected_sinusoidal_gust() {

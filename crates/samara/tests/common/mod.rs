@@ -1,6 +1,10 @@
 //! Helpers shared by the verification tests.
 #![allow(dead_code)]
 
+pub mod airfoil_run;
+pub mod bts;
+pub mod nrel5mw;
+
 use samara::analysis::{AnalysisSummary, History, run_analysis};
 use samara::model::{AnalysisKind, Model};
 use samara::system::System;

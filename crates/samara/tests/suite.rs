@@ -1,0 +1,83 @@
+//! The verification suite of the `samara` library, one module per file of this folder,
+//! compiled and linked as one test binary (one link instead of one per file; a test is
+//! named `file::test`, e.g. `cargo test --release -p samara --test suite pendulum::`).
+//! `step_allocations.rs` stays its own binary: its counting global allocator must see
+//! only its own tests.
+
+mod common;
+
+mod accumulator;
+mod adaptive_steps;
+mod aerodynamics;
+mod airfoil_reynolds;
+mod airfoil_user_property;
+mod batched_assembly;
+mod beam_dynamics;
+mod beam_input;
+mod beam_output;
+mod beam_statics;
+mod beam_tangents;
+mod beamdyn_files;
+mod capsule;
+mod constrained;
+mod contact;
+mod control;
+mod dynamic_inflow;
+mod dynamic_stall_hgm;
+mod dynamic_stall_reynolds;
+mod dynamic_wake;
+mod element_states;
+mod element_states_closed_form;
+mod energy_newton_matrix;
+mod energy_schemes;
+mod examples;
+mod fixed_step_breakpoints;
+mod floquet;
+mod fuzz_models;
+mod generalized_alpha;
+mod granular;
+mod granular_events;
+mod ground_resonance;
+mod hingeless_blade;
+mod hydraulics;
+mod joint_coordinates;
+mod joint_library;
+mod landing_gear_drop;
+mod layering;
+mod linearization;
+mod mechanisms;
+mod modal;
+mod motor;
+mod options;
+mod output_interval;
+mod parallel_assembly;
+mod pendulum;
+mod registry;
+mod rigid_rotation;
+mod robustness;
+mod rolling_resistance;
+mod rotating_beam;
+mod rotor_energy;
+mod sample_hold;
+mod section_composite;
+mod section_files;
+mod section_isotropic;
+mod section_options;
+mod sensor_quantities;
+mod servo;
+mod signal_force;
+mod skewed_wake;
+mod sphere_friction;
+mod sphere_pairs;
+mod spinning_statics;
+mod stages;
+mod state_convergence;
+mod statics;
+mod strut;
+mod system_matrices;
+mod tangents;
+mod terrain;
+mod tire;
+mod turbsim_files;
+mod turbulent_wind;
+mod unsteady_aero;
