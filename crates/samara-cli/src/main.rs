@@ -12,6 +12,7 @@ mod sweep;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use samara::analysis::{Chain, run_analysis};
+use samara::math::isa::{ISA_VARIABLE, Isa};
 use samara::model::{LoadOptions, LoadedModel, Model, ModelInput};
 use samara::output::ResultsFile;
 use samara::system::System;
@@ -134,9 +135,35 @@ enum Command {
     },
 }
 
+/// Refuses a `SAMARA_ISA` that names no compiled copy, and says when it asks for a wider
+/// one than the CPU runs (the kernels then run the CPU's widest; [`Isa::detected`]).
+fn check_isa_variable() -> Option<ExitCode> {
+    match Isa::requested() {
+        Err(message) => {
+            eprintln!(
+                "error: {message}\n  hint: unset it to run the widest copy this CPU has ({})",
+                Isa::cpu().name()
+            );
+            Some(ExitCode::from(EXIT_MODEL))
+        }
+        Ok(Some(asked)) if asked > Isa::cpu() => {
+            eprintln!(
+                "warning: {ISA_VARIABLE} = {} is wider than this CPU runs; running {}",
+                asked.name(),
+                Isa::cpu().name()
+            );
+            None
+        }
+        Ok(_) => None,
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     report::install_hook();
+    if let Some(code) = check_isa_variable() {
+        return code;
+    }
     match cli.command {
         Command::Run { model, out, quiet } => run(&model, out, quiet),
         Command::Check { model } => check(&model),

@@ -7,6 +7,7 @@ mod common;
 mod campbell_cli;
 mod cli;
 mod examples;
+mod isa_cli;
 mod modal_cli;
 mod python_example;
 mod robustness;

@@ -35,11 +35,64 @@ pub enum Isa {
     Avx512,
 }
 
+/// The environment variable that narrows the copies run (`base`, `avx`, `fma` or
+/// `avx512`; [`Isa::detected`]): to profile under tools that do not decode the wider
+/// instructions (valgrind 3.19 stops at a VEX `vmovq`), or to compare the copies' results
+/// on one machine.
+pub const ISA_VARIABLE: &str = "SAMARA_ISA";
+
 impl Isa {
-    /// The widest copy this CPU runs, detected once.
+    /// The copy the kernels run, chosen once per process: the widest this CPU runs
+    /// ([`Isa::cpu`]), narrowed to [`ISA_VARIABLE`] when that is set to a narrower one
+    /// (a value that is not a copy's name is ignored here; the `samara` command refuses
+    /// it, [`Isa::requested`]).
     pub fn detected() -> Self {
         static DETECTED: OnceLock<Isa> = OnceLock::new();
-        *DETECTED.get_or_init(Self::detect)
+        *DETECTED.get_or_init(|| match Self::requested() {
+            Ok(Some(r)) => r.min(Self::cpu()),
+            _ => Self::cpu(),
+        })
+    }
+
+    /// The widest copy this CPU runs.
+    pub fn cpu() -> Self {
+        static CPU: OnceLock<Isa> = OnceLock::new();
+        *CPU.get_or_init(Self::detect)
+    }
+
+    /// The copy [`ISA_VARIABLE`] asks for: `None` when it is unset or empty, an error
+    /// naming the accepted values when it is not one of them.
+    pub fn requested() -> Result<Option<Self>, String> {
+        match std::env::var(ISA_VARIABLE) {
+            Err(std::env::VarError::NotPresent) => Ok(None),
+            Err(std::env::VarError::NotUnicode(v)) => Err(format!(
+                "{ISA_VARIABLE} = {v:?} is not text; expected one of base, avx, fma, avx512"
+            )),
+            Ok(v) if v.trim().is_empty() => Ok(None),
+            Ok(v) => Self::parse(v.trim()).map(Some).ok_or_else(|| {
+                format!(
+                    "{ISA_VARIABLE} = \"{v}\" is not an instruction set samara has copies for; \
+                     expected one of base, avx, fma, avx512"
+                )
+            }),
+        }
+    }
+
+    /// The copy of a name (`base`, `avx`, `fma`, `avx512`, any case).
+    pub fn parse(name: &str) -> Option<Self> {
+        [Isa::Base, Isa::Avx, Isa::Fma, Isa::Avx512]
+            .into_iter()
+            .find(|i| i.name().eq_ignore_ascii_case(name))
+    }
+
+    /// The copy's name, as [`ISA_VARIABLE`] takes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Isa::Base => "base",
+            Isa::Avx => "avx",
+            Isa::Fma => "fma",
+            Isa::Avx512 => "avx512",
+        }
     }
 
     fn detect() -> Self {
@@ -205,7 +258,7 @@ macro_rules! copies {
                 $($recv)* $($call)*($($callarg)*)
             }
             if $isa == $crate::math::isa::Isa::$copy {
-                // SAFETY: `isa` is at most `Isa::detected()`: the CPU has the copy's
+                // SAFETY: `isa` ≤ `Isa::detected()` ≤ `Isa::cpu()`: the CPU has the copy's
                 // features.
                 return unsafe { $copy($($arg)*) };
             }
@@ -225,7 +278,7 @@ macro_rules! copies {
                 unsafe { $($call)*($($callarg)*) }
             }
             if $isa == $crate::math::isa::Isa::$copy {
-                // SAFETY: `isa` is at most `Isa::detected()`: the CPU has the copy's
+                // SAFETY: `isa` ≤ `Isa::detected()` ≤ `Isa::cpu()`: the CPU has the copy's
                 // features; the rest is the caller's.
                 return unsafe { $copy($($arg)*) };
             }
@@ -234,3 +287,20 @@ macro_rules! copies {
 }
 
 pub(crate) use copies;
+
+#[cfg(test)]
+mod tests {
+    use super::Isa;
+
+    #[test]
+    fn names_parse_back_and_the_order_is_by_width() {
+        for isa in [Isa::Base, Isa::Avx, Isa::Fma, Isa::Avx512] {
+            assert_eq!(Isa::parse(isa.name()), Some(isa));
+            assert_eq!(Isa::parse(&isa.name().to_uppercase()), Some(isa));
+        }
+        assert_eq!(Isa::parse("sse2"), None);
+        assert_eq!(Isa::parse(""), None);
+        assert!(Isa::Base < Isa::Avx && Isa::Avx < Isa::Fma && Isa::Fma < Isa::Avx512);
+        assert!(Isa::detected() <= Isa::cpu());
+    }
+}
