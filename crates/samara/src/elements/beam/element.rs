@@ -577,9 +577,14 @@ impl BeamElement {
                 }
                 f
             };
-            let (c, d) = self.section_matrices(ep);
+            // The table's C by reference (no 288-byte copy per point on a uniform beam).
+            let c = self.table.stiffness_in(ep.eta, &mut g.c_buf);
+            let d = self
+                .root_damping
+                .as_ref()
+                .map(|r| damping_matrix_from_roots(c, r));
             let sec = ElasticSection {
-                c: &c,
+                c,
                 d: d.as_ref(),
                 eps0: ep.eps0,
                 k0: ep.k0,
@@ -664,7 +669,7 @@ impl BeamElement {
         let io = &mut g.io;
         for ip in &self.inertial {
             let hs = self.inertial_shape(ip);
-            let mass = InertialSection::new(&self.mass_of(ip));
+            let mass = InertialSection::new(self.table.mass_in(ip.eta, &mut g.m_buf));
             let f = {
                 let mut f = InertialFields::default();
                 for k in 0..nn {
@@ -828,6 +833,9 @@ struct Work {
     strain1: Vec<Vector6<f64>>,
     rows_a: Vec<f64>,
     rows_b: Vec<f64>,
+    /// The section stiffness and mass interpolated at a point (tables with stations).
+    c_buf: Matrix6<f64>,
+    m_buf: Matrix6<f64>,
 }
 
 impl Work {

@@ -216,20 +216,45 @@ impl SectionTable {
         self.interpolate(eta, |s| &s.mass)
     }
 
-    /// `(1 − t) X_{k−1} + t X_k` between the stations around η; the end sections outside.
+    /// [`Self::stiffness_at`] without the copy: the table's own matrix for a uniform beam
+    /// and outside the stations, else interpolated into `buf`.
+    #[inline]
+    pub fn stiffness_in<'a>(&'a self, eta: f64, buf: &'a mut Matrix6<f64>) -> &'a Matrix6<f64> {
+        self.interpolate_in(eta, |s| &s.stiffness, buf)
+    }
+
+    /// [`Self::mass_at`] without the copy (as [`Self::stiffness_in`]).
+    #[inline]
+    pub fn mass_in<'a>(&'a self, eta: f64, buf: &'a mut Matrix6<f64>) -> &'a Matrix6<f64> {
+        self.interpolate_in(eta, |s| &s.mass, buf)
+    }
+
     #[inline]
     fn interpolate(&self, eta: f64, of: impl Fn(&Section) -> &Matrix6<f64>) -> Matrix6<f64> {
+        *self.interpolate_in(eta, of, &mut Matrix6::zeros())
+    }
+
+    /// `(1 − t) X_{k−1} + t X_k` between the stations around η (written into `buf`); the
+    /// end sections outside, by reference.
+    #[inline]
+    fn interpolate_in<'a>(
+        &'a self,
+        eta: f64,
+        of: impl Fn(&Section) -> &Matrix6<f64>,
+        buf: &'a mut Matrix6<f64>,
+    ) -> &'a Matrix6<f64> {
         let n = self.stations.len();
         if n == 1 || eta <= self.stations[0] {
-            return *of(&self.sections[0]);
+            return of(&self.sections[0]);
         }
         if eta >= self.stations[n - 1] {
-            return *of(&self.sections[n - 1]);
+            return of(&self.sections[n - 1]);
         }
         let k = self.stations.partition_point(|&s| s <= eta).clamp(1, n - 1);
         let (a, b) = (self.stations[k - 1], self.stations[k]);
         let t = (eta - a) / (b - a);
-        of(&self.sections[k - 1]) * (1.0 - t) + of(&self.sections[k]) * t
+        *buf = of(&self.sections[k - 1]) * (1.0 - t) + of(&self.sections[k]) * t;
+        buf
     }
 }
 
