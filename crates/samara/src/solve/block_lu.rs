@@ -334,7 +334,7 @@ impl BlockLuSymbolic {
         }
 
         // ---- scatter map ----
-        let mut scatter = Vec::with_capacity(s.nnz_values());
+        let mut scatter = Vec::with_capacity(s.n_entries());
         let mut placement = Vec::with_capacity(s.n_entries());
         for bi in 0..n {
             for (&bj, &src) in s.row_cols(bi).iter().zip(s.row_offsets(bi)) {
