@@ -166,16 +166,27 @@ impl NewtonSystem for StepProblem<'_> {
 
 impl StepProblem<'_> {
     /// The Newton correction: velocities, accelerations, multipliers and `hΔq` updated
-    /// from `delta`; returns the scaled norm of the configuration change.
+    /// from `delta`, and the configuration at the new `hΔq`; returns the scaled norm of
+    /// the configuration change. One pass per node (rates, `hΔq`, `x`, `R exp(hΔψ̃)`):
+    /// the node data are read once per iteration, not once per quantity.
     #[inline(always)]
     fn apply_impl(&mut self, delta: &[f64]) -> f64 {
         let (bp, gp) = (self.beta_p, self.gamma_p);
+        let (atol, rtol) = (self.atol, self.rtol);
         self.asm.configuration_of(self.sys, delta, self.dcfg);
-        self.change.copy_from_slice(self.dcfg);
-        if self.asm.formulation() == Formulation::StabilizedIndex2 {
+        let projected = self.asm.formulation() == Formulation::StabilizedIndex2;
+        if projected {
+            self.change.copy_from_slice(self.dcfg);
             self.asm.add_projection(self.sys, delta, self.change);
         }
-        for (i, n) in self.cur.nodes.iter_mut().enumerate() {
+        let change: &[f64] = if projected { self.change } else { self.dcfg };
+        // A configuration unknown's correction is weighed against its step increment
+        // (positions have no natural origin); an element state's against the larger of its
+        // increment and its value (a state has a natural zero — inflow, a stall fraction, a
+        // pressure — so its own size sets the relative tolerance, as in ODE codes).
+        let mut worst: f64 = 0.0;
+        let nodes = self.cur.nodes.iter_mut().zip(&self.prev.nodes);
+        for (i, (n, p)) in nodes.enumerate() {
             let d = &self.dcfg[6 * i..6 * i + 6];
             let dx = Vector3::new(d[0], d[1], d[2]);
             let dth = Vector3::new(d[3], d[4], d[5]);
@@ -183,32 +194,35 @@ impl StepProblem<'_> {
             n.w += dth * gp;
             n.a += dx * bp;
             n.wd += dth * bp;
+            let q = &mut self.hdq[6 * i..6 * i + 6];
+            for (q, c) in q.iter_mut().zip(&change[6 * i..6 * i + 6]) {
+                *q += c;
+                worst = worst.max(c.abs() / (atol + rtol * q.abs()));
+            }
+            n.x = p.x + Vector3::new(q[0], q[1], q[2]);
+            n.rot = p.rot.compose_exp(&Vector3::new(q[3], q[4], q[5]));
         }
         let n6 = 6 * self.cur.nodes.len();
         let nc = self.sys.n_coordinates;
-        for (c, d) in self.cur.coords.iter_mut().zip(&self.dcfg[n6..n6 + nc]) {
+        let coords = self.cur.coords.iter_mut().zip(&self.prev.coords).take(nc);
+        for (j, (c, p)) in coords.enumerate() {
+            let (d, k) = (self.dcfg[n6 + j], n6 + j);
             c.v += d * gp;
             c.a += d * bp;
+            self.hdq[k] += change[k];
+            worst = worst.max(change[k].abs() / (atol + rtol * self.hdq[k].abs()));
+            c.q = p.q + self.hdq[k];
         }
-        for (z, d) in self.cur.states.iter_mut().zip(&self.dcfg[n6 + nc..]) {
-            z.zd += d * self.coef.state_rate;
-        }
-        let mut worst: f64 = 0.0;
-        // A configuration unknown's correction is weighed against its step increment
-        // (positions have no natural origin); an element state's against the larger of its
-        // increment and its value (a state has a natural zero — inflow, a stall fraction, a
-        // pressure — so its own size sets the relative tolerance, as in ODE codes).
         let z0 = n6 + nc;
-        for (k, (q, c)) in self.hdq.iter_mut().zip(self.change.iter()).enumerate() {
-            *q += c;
-            let scale = if k >= z0 {
-                q.abs().max(self.cur.states[k - z0].z.abs())
-            } else {
-                q.abs()
-            };
-            worst = worst.max(c.abs() / (self.atol + self.rtol * scale));
+        let states = self.cur.states.iter_mut().zip(&self.prev.states);
+        for (j, (z, p)) in states.enumerate() {
+            let k = z0 + j;
+            z.zd += self.dcfg[k] * self.coef.state_rate;
+            self.hdq[k] += change[k];
+            let scale = self.hdq[k].abs().max(z.z.abs());
+            worst = worst.max(change[k].abs() / (atol + rtol * scale));
+            z.z = p.z + self.hdq[k];
         }
-        self.update_configuration();
         let s = 1.0 / self.coef.multiplier_scale;
         self.asm.multipliers_of(self.sys, delta, self.dlam);
         for (l, d) in self.cur.lambda.iter_mut().zip(self.dlam.iter()) {
