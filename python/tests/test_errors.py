@@ -134,3 +134,39 @@ def test_too_many_modes_is_located_before_anything_runs(tmp_path):
     [d] = errors(e.value)
     assert "n_modes" in d["message"] or "modes" in d["message"]
     assert d["line"] == (PENDULUM + '\n[[analyses]]\nname = "modes"\ntype = "modal"\n').count("\n") + 1
+
+
+def _import_with_isa(value, code="import samara"):
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, SAMARA_ISA=value)
+    return subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True
+    )
+
+
+def test_an_unknown_instruction_set_is_refused_at_import():
+    r = _import_with_isa("sse9")
+    assert r.returncode != 0
+    assert "ValueError" in r.stderr and 'SAMARA_ISA = "sse9"' in r.stderr
+    assert "base, avx, fma, avx512" in r.stderr
+
+
+def test_a_narrowed_instruction_set_runs_a_model():
+    # The baseline copies run everywhere; the pendulum swings as with the widest ones
+    # (round-off apart: the FMA copies round c ± ab once).
+    code = (
+        "import samara, sys\n"
+        f"r = samara.run({PENDULUM!r})\n"
+        "x = r['swing'].position.values[-1, 0]\n"
+        "print(repr(float(x[0])), repr(float(x[2])))\n"
+    )
+    base = _import_with_isa("base", code)
+    assert base.returncode == 0, base.stderr
+    wide = _import_with_isa("", code)
+    assert wide.returncode == 0, wide.stderr
+    xb = [float(v) for v in base.stdout.split()]
+    xw = [float(v) for v in wide.stdout.split()]
+    assert len(xb) == 2 and all(abs(a - b) < 1e-9 for a, b in zip(xb, xw)), (xb, xw)
