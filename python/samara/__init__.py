@@ -23,18 +23,14 @@ import os
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Union
 
-# The compiled copies the engine's kernels run can be narrowed by SAMARA_ISA (base, avx,
-# fma, avx512; README, "Benchmarks"). The engine ignores a value that names no copy; as the
-# `samara` command does, refuse it here rather than run silently with the widest copy.
-_ISA = os.environ.get("SAMARA_ISA", "").strip()
-if _ISA and _ISA.lower() not in ("base", "avx", "fma", "avx512"):
-    raise ValueError(
-        f'SAMARA_ISA = "{_ISA}" is not an instruction set samara has copies for; expected '
-        "one of base, avx, fma, avx512 (unset it to run the widest copy this CPU has)"
-    )
-
-from ._samara import Model, ModelError, SamaraError  # noqa: E402
+from ._samara import Model, ModelError, SamaraError
+from ._samara import check_isa_variable as _check_isa_variable
 from ._samara import version as _engine_version
+
+# SAMARA_ISA narrows the compiled copies the engine's kernels run (base, avx, fma, avx512;
+# README, "Benchmarks"). The engine ignores a value that names no copy; as the `samara`
+# command does, refuse it here rather than run silently with the widest copy.
+_check_isa_variable()
 
 __all__ = [
     "Model",

@@ -71,6 +71,9 @@ class Model:
         Ctrl-C stops the run at its next output time and raises KeyboardInterrupt.
         """
 
+def check_isa_variable() -> None:
+    """Raises ValueError if SAMARA_ISA names no compiled copy (base, avx, fma, avx512)."""
+
 def version() -> str:
     """The version of the samara engine."""
 

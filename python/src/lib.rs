@@ -638,6 +638,19 @@ fn is_plain_file_name(path: &str) -> bool {
     samara::model::is_plain_file_name(path)
 }
 
+/// Refuses a `SAMARA_ISA` that names no compiled copy (`ValueError`), as the `samara`
+/// command does; the engine alone would ignore it ([`samara::math::isa::Isa::requested`]).
+#[pyfunction]
+fn check_isa_variable() -> PyResult<()> {
+    samara::math::isa::Isa::requested()
+        .map(|_| ())
+        .map_err(|m| {
+            PyValueError::new_err(format!(
+                "{m} (unset it to run the widest copy this CPU has)"
+            ))
+        })
+}
+
 /// The version of the samara engine.
 #[pyfunction]
 fn version() -> &'static str {
@@ -651,5 +664,6 @@ fn _samara(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ModelError", m.py().get_type::<ModelError>())?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(is_plain_file_name, m)?)?;
+    m.add_function(wrap_pyfunction!(check_isa_variable, m)?)?;
     Ok(())
 }

@@ -8,7 +8,6 @@ use crate::common::stderr;
 use netcdf3::{DataVector, FileReader};
 use samara::math::isa::Isa;
 use std::collections::BTreeMap;
-use std::path::Path;
 use std::process::{Command, Output};
 
 /// A beam hung from a revolute joint and a body on a spherical joint at its tip, swinging
@@ -63,30 +62,29 @@ step = 1e-3
 rho_inf = 0.9
 "#;
 
-fn run_with(isa: Option<&str>, model: &Path, out: &Path) -> Output {
+/// Writes [`MODEL`] into a fresh folder and runs it with `SAMARA_ISA` set to `isa` (unset
+/// for `None`); the folder (results in `out/`) is returned with the output.
+fn run_with(isa: Option<&str>) -> (Output, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("isa.toml");
+    std::fs::write(&model, MODEL).unwrap();
     let mut c = Command::new(env!("CARGO_BIN_EXE_samara"));
-    c.args([
-        "run",
-        model.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    c.arg("run")
+        .arg(&model)
+        .arg("--out")
+        .arg(dir.path().join("out"));
     match isa {
         Some(v) => c.env("SAMARA_ISA", v),
         None => c.env_remove("SAMARA_ISA"),
     };
-    c.output().expect("the samara binary runs")
+    (c.output().expect("the samara binary runs"), dir)
 }
 
 /// Every floating-point variable of the results file but the wall time.
 fn results(isa: Option<&str>) -> BTreeMap<String, Vec<f64>> {
-    let dir = tempfile::tempdir().unwrap();
-    let model = dir.path().join("isa.toml");
-    std::fs::write(&model, MODEL).unwrap();
-    let out = dir.path().join("out");
-    let o = run_with(isa, &model, &out);
+    let (o, dir) = run_with(isa);
     assert!(o.status.success(), "SAMARA_ISA={isa:?}: {}", stderr(&o));
-    let mut rd = FileReader::open(out.join("swing.nc")).unwrap();
+    let mut rd = FileReader::open(dir.path().join("out/swing.nc")).unwrap();
     let names = rd.data_set().get_var_names();
     let mut vars = BTreeMap::new();
     for name in names.into_iter().filter(|n| !n.contains("wall")) {
@@ -144,10 +142,7 @@ fn each_copy_keeps_its_statement_from_the_command_line() {
 
 #[test]
 fn an_unknown_instruction_set_is_refused_with_the_accepted_names() {
-    let dir = tempfile::tempdir().unwrap();
-    let model = dir.path().join("isa.toml");
-    std::fs::write(&model, MODEL).unwrap();
-    let o = run_with(Some("sse9"), &model, &dir.path().join("out"));
+    let (o, dir) = run_with(Some("sse9"));
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let e = stderr(&o);
     assert!(
@@ -170,10 +165,7 @@ fn a_wider_copy_than_the_cpu_runs_is_a_warning() {
     if Isa::cpu() == Isa::Avx512 {
         return; // every copy runs here: nothing to warn about
     }
-    let dir = tempfile::tempdir().unwrap();
-    let model = dir.path().join("isa.toml");
-    std::fs::write(&model, MODEL).unwrap();
-    let o = run_with(Some("avx512"), &model, &dir.path().join("out"));
+    let (o, _dir) = run_with(Some("avx512"));
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("wider than this CPU runs"),
