@@ -152,17 +152,97 @@ tolerance = 1e-12
 relative_tolerance = 1e-12
 "#;
 
-/// Dynamics: with p = 0 every factorization of the 500 steps falls back to the sparse LU
-/// (1000 of 1000 Newton iterations); with the default p = 1 or p = 100 none does; the bob's
-/// final position is the same within 1e-11 m in all three and with `linear_solver =
+/// Dynamics: the block LU needs no fallback with p = 0 either. The joints' multipliers
+/// are relative (`Constraint::is_relative`), so the order takes the bob, then the weld's
+/// multipliers, then the link, whose empty block the weld's Schur complement has filled
+/// (before that order, the link came first and every factorization of the 500 steps fell
+/// back to the sparse LU: 1000 of 1000 Newton iterations). The bob's final position is the
+/// same within 1e-11 m with the default p = 1, p = 0, p = 100 and `linear_solver =
 /// "sparse_lu"` (Newton tolerance 1e-12; measured ≤ 1e-15).
 #[test]
-fn dynamic_penalty_fills_the_pivot_of_a_massless_node() {
+fn dynamic_massless_node_pivots_after_its_weld() {
     let with = |extra: &str| attempt(&format!("{MASSLESS_LINK}{extra}\n"));
     let (s0, h0) = with("");
     assert!(s0.failure.is_none());
     assert_eq!(s0.fallbacks, 0);
     let x0 = last_node(&h0);
+    for extra in [
+        "penalty = 0.0",
+        "penalty = 0.0\nlinear_solver = \"block\"",
+        "penalty = 100.0",
+        "penalty = 0.0\nlinear_solver = \"sparse_lu\"",
+    ] {
+        let (s, h) = with(extra);
+        let d = (last_node(&h) - x0).norm();
+        println!(
+            "{extra}: {} Newton iterations, {} fallbacks, |Δx| = {d:.1e}",
+            s.newton_iterations, s.fallbacks
+        );
+        assert!(s.failure.is_none(), "{extra}");
+        assert_eq!(s.fallbacks, 0, "{extra}");
+        assert!(d < 1e-11, "{extra}: {d:e}");
+    }
+}
+
+/// A massless link between two hinges with crossed axes (ground, hinge about y, link,
+/// hinge about x, bob). The order takes the bob, the outer hinge's multipliers, then the
+/// link: its block holds what the outer hinge passes on, nothing about that hinge's axis
+/// (rank 5), unless the penalty adds the inner hinge's BᵀB, whose free axis is another.
+const MASSLESS_CROSSED: &str = r#"
+[model]
+name = "massless_crossed"
+gravity = [0.0, 0.0, -9.81]
+[[nodes]]
+name = "link"
+position = [0.5, 0.0, 0.0]
+[[nodes]]
+name = "bob"
+position = [1.0, 0.0, -0.3]
+[[bodies]]
+name = "bob"
+node = "bob"
+mass = 1.0
+inertia = [[1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]
+[[joints]]
+name = "inner"
+type = "revolute"
+node_a = "ground"
+node_b = "link"
+position = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+[[joints]]
+name = "outer"
+type = "revolute"
+node_a = "link"
+node_b = "bob"
+position = [0.5, 0.0, 0.0]
+axis = [1.0, 0.0, 0.0]
+[[analyses]]
+name = "swing"
+type = "dynamic"
+t_end = 0.2
+step = 1e-3
+rho_inf = 0.9
+tolerance = 1e-12
+relative_tolerance = 1e-12
+"#;
+
+/// Dynamics on [`MASSLESS_CROSSED`]: with p = 0 every factorization meets the link's
+/// singular pivot and falls back to the sparse LU, the matrix assembled again row-major
+/// (the fallback path of the assembly into the factor storage); `linear_solver = "block"`
+/// then stops with "singular"; with the default p = 1 or p = 100 no factorization falls
+/// back. The bob's final position is the same within 1e-11 m in all of them and with
+/// `"sparse_lu"` (Newton tolerance 1e-12).
+#[test]
+fn dynamic_penalty_fills_the_pivot_of_a_massless_link() {
+    let with = |extra: &str| attempt(&format!("{MASSLESS_CROSSED}{extra}\n"));
+    let (s0, h0) = with("");
+    assert!(s0.failure.is_none());
+    assert_eq!(s0.fallbacks, 0);
+    let x0 = last_node(&h0);
+    let (s, _) = with("penalty = 0.0\nlinear_solver = \"block\"");
+    let failure = s.failure.expect("the block LU alone cannot pivot");
+    assert!(failure.reason.contains("singular"), "{}", failure.reason);
     for (extra, fallback) in [
         ("penalty = 0.0", true),
         ("penalty = 100.0", false),

@@ -76,6 +76,14 @@ pub trait Constraint: Send + Sync {
     }
     /// Number of scalar equations enforced (multipliers).
     fn n_equations(&self) -> usize;
+    /// Whether every row is invariant under a rigid motion of the whole constraint (a
+    /// relative constraint between two frames). Then `B_A G_A + B_B G_B = 0` for the
+    /// rigid motions, with `G_A`, `G_B` invertible, so the rows restricted to either
+    /// node's columns have the rank of all of them, and the block LU may eliminate the
+    /// multipliers once either node is eliminated ([`crate::solve::BlockKind`]).
+    fn is_relative(&self) -> bool {
+        false
+    }
     /// `Φ` and, if given, `B` (`n_equations × (6·nodes + n_coordinates)`, overwritten).
     fn evaluate(
         &self,

@@ -498,8 +498,28 @@ impl Joint {
         force[nq..].fill(0.0);
         // Σ μ_r b_r in spatial components: converted to the local columns once.
         let mut g12 = Row12::zeros();
+        // Without B (a residual only), the displacement rows' share of Σ μ_r b_r in one
+        // term: their rows b_r = [−e_r, e_r × w, e_r, r_B × e_r] (w = uᴮ − xᴬ) are linear in
+        // the axis e_r, so the share is [−m, m × w, m, r_B × m] with m = Σ μ_r e_r, as in
+        // their tangent ([`displacement::force_tangent_along`]): two cross products per
+        // joint, not two per row (the same value up to round-off).
+        let lump = bs.is_none();
+        let d = f.d();
+        let mut m_disp = Vector3::zeros();
         for (i, &r) in self.active.iter().enumerate() {
             let row = &self.rows[r];
+            if lump && let Row::Displacement { axis, coord } = row {
+                let e = f.axes[0].column(*axis);
+                let value = e.dot(&d) - coord.map_or(0.0, |(c, s)| s * coords[c].q);
+                phi[i] = value;
+                let mu_r = lambda[i] + penalty * value;
+                mu[i] = mu_r;
+                m_disp += e * mu_r;
+                if let Some((c, s)) = *coord {
+                    force[nq + c] += -s * mu_r;
+                }
+                continue;
+            }
             let v = self.row_value(&f, coords, ctx.time, row);
             phi[i] = match row {
                 Row::Servo { .. } if !targets.is_empty() => v.phi - targets[i],
@@ -519,6 +539,16 @@ impl Joint {
                 if let Some((c, d)) = v.dnu {
                     bs[(nq + c) * m + i] = d;
                 }
+            }
+        }
+        if lump && m_disp != Vector3::zeros() {
+            let w = f.origin(1) - f.x[0];
+            let (mw, rm) = (m_disp.cross(&w), f.arm[1].cross(&m_disp));
+            for j in 0..3 {
+                g12[j] -= m_disp[j];
+                g12[3 + j] += mw[j];
+                g12[6 + j] += m_disp[j];
+                g12[9 + j] += rm[j];
             }
         }
         self.to_local(&g12, &rots, |c, x| force[c] = x);
@@ -653,6 +683,13 @@ impl Constraint for Joint {
 
     fn n_equations(&self) -> usize {
         self.active.len()
+    }
+
+    /// Displacement rows `e_iᴬ·(uᴮ − uᴬ)`, direction cosines `e_pᴬ·e_qᴮ` and their
+    /// combinations are invariant under a rigid motion of both frames; drive and servo
+    /// rows have no node columns.
+    fn is_relative(&self) -> bool {
+        true
     }
 
     fn evaluate(

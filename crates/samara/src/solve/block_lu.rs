@@ -401,7 +401,10 @@ impl BlockLuSymbolic {
 
     /// The elimination order and its filled pattern: of AMD on the block graph (with every
     /// multiplier deferred until all its coupled primaries have been eliminated) and of the
-    /// minimum-fill order (multipliers held back likewise), the one whose Schur updates
+    /// minimum-fill order (multipliers held back likewise; a relative constraint's,
+    /// [`BlockKind::RelativeMultiplier`], until one of them — not in the separator order
+    /// below: on the 1,000-link chain that combination met singular pivots in the initial
+    /// conditions' system), the one whose Schur updates
     /// cost fewer flops (Σ_k s_k (Σ_{i ∈ S_k} s_i)²); AMD on a tie. On graphs of
     /// [`SPLIT_MIN_BLOCKS`] blocks or more, a third candidate: minimum fill with a
     /// separator kept last ([`dissect`]), its two parts eliminated one after the other, is
@@ -431,7 +434,7 @@ impl BlockLuSymbolic {
         let amd_updates: usize = amd_rows.iter().map(|r| r.len() * r.len()).sum();
         let nnz: usize = adj.iter().map(Vec::len).sum();
         let budget = 256 * amd_updates + 64 * (adj.len() + nnz);
-        let is_mult = |b: usize| s.kind(b) == BlockKind::Multiplier;
+        let is_mult = |b: usize| s.kind(b).is_multiplier();
         let gates: Vec<Vec<usize>> = (0..adj.len())
             .map(|b| {
                 if is_mult(b) {
@@ -443,7 +446,10 @@ impl BlockLuSymbolic {
             .collect();
         let (mut best, mut best_rows) = (amd, amd_rows);
         let mut best_cost = amd_cost;
-        if let Some(mf) = super::min_fill::min_fill_order(adj, &gates, &[], budget) {
+        let any_gate: Vec<bool> = (0..adj.len())
+            .map(|b| s.kind(b) == BlockKind::RelativeMultiplier)
+            .collect();
+        if let Some(mf) = super::min_fill::min_fill_order(adj, &gates, &any_gate, &[], budget) {
             let mf_rows = fill_rows(adj, &mf);
             let mf_cost = cost(&mf, &mf_rows);
             if mf_cost < best_cost {
@@ -461,7 +467,7 @@ impl BlockLuSymbolic {
             }
         {
             let held: Vec<bool> = part.iter().map(|&p| p == 2).collect();
-            if let Some(mf) = super::min_fill::min_fill_order(adj, &gates, &held, budget) {
+            if let Some(mf) = super::min_fill::min_fill_order(adj, &gates, &[], &held, budget) {
                 // The parts are not coupled and the separator goes last: eliminating one
                 // part after the other makes the same fill as the interleaved order.
                 let mut nd = Vec::with_capacity(mf.len());
@@ -521,7 +527,7 @@ impl BlockLuSymbolic {
         for (k, &b) in perm.iter().enumerate() {
             perm_inv[b] = k;
         }
-        let is_mult = |b: usize| s.kind(b) == BlockKind::Multiplier;
+        let is_mult = |b: usize| s.kind(b).is_multiplier();
         let mut remaining: Vec<usize> = (0..n)
             .map(|b| {
                 if is_mult(b) {
@@ -2046,7 +2052,7 @@ mod tests {
                 let b = a.block_mut(i, j).unwrap();
                 let ki = s.kind(i);
                 let kj = s.kind(j);
-                if i == j && ki == BlockKind::Multiplier {
+                if i == j && ki.is_multiplier() {
                     for (t, v) in b.iter_mut().enumerate() {
                         *v = if mult_diag && t % (si + 1) == 0 {
                             0.1 * rng.uniform()
@@ -2141,6 +2147,64 @@ mod tests {
                     assert!(sym.pos[j] < sym.pos[m], "multiplier {m} before primary {j}");
                 }
             }
+        }
+    }
+
+    /// `s` with its multipliers of the relative kind.
+    fn relative(s: &BlockStructure) -> BlockStructure {
+        let n = s.n_blocks();
+        let sizes = (0..n).map(|b| s.block_size(b)).collect();
+        let kinds = (0..n)
+            .map(|b| match s.kind(b) {
+                BlockKind::Multiplier => BlockKind::RelativeMultiplier,
+                k => k,
+            })
+            .collect();
+        let coup: Vec<(usize, usize)> = (0..n)
+            .flat_map(|i| {
+                s.row_cols(i)
+                    .iter()
+                    .filter(move |&&j| j > i)
+                    .map(move |&j| (i, j))
+            })
+            .collect();
+        BlockStructure::new(sizes, kinds, &coup).unwrap()
+    }
+
+    /// A relative constraint's multipliers wait for one of the primaries they couple, not
+    /// all: a chain of 6-blocks and 5- or 3-multipliers is then eliminated from its tip,
+    /// primary then multiplier, with no fill between multipliers (fewer factor values than
+    /// with both primaries first), and solves as a dense LU does (pivots `−C D⁻¹ Cᵀ` of one
+    /// random full-rank coupling `C` are regular).
+    #[test]
+    fn relative_multipliers_wait_for_one_primary() {
+        for &inter in &[true, false] {
+            let (plain, mult_nodes) = kkt_tree(&chain_parent(20), &[5, 3], inter);
+            let rel = relative(&plain);
+            let sym_plain = BlockLuSymbolic::new(&plain).unwrap();
+            let sym = BlockLuSymbolic::new(&rel).unwrap();
+            assert!(
+                sym.n_factor_values() < sym_plain.n_factor_values(),
+                "{} ≥ {}",
+                sym.n_factor_values(),
+                sym_plain.n_factor_values()
+            );
+            let mut some_early = false;
+            for (m, nodes) in mult_nodes.iter().enumerate() {
+                if nodes.is_empty() {
+                    continue;
+                }
+                let first = nodes.iter().map(|&j| sym.pos[j]).min().unwrap();
+                let last = nodes.iter().map(|&j| sym.pos[j]).max().unwrap();
+                assert!(
+                    first < sym.pos[m],
+                    "multiplier {m} before all its primaries"
+                );
+                some_early |= sym.pos[m] < last;
+            }
+            assert!(some_early, "no multiplier went before its last primary");
+            assert_mult_after_primaries(&plain, &sym_plain);
+            check_against_dense(rel, 42, false);
         }
     }
 

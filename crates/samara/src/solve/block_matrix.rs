@@ -13,8 +13,22 @@ use std::sync::Arc;
 pub enum BlockKind {
     /// Primary unknowns (e.g. a node with 6 dofs).
     Primary,
-    /// Lagrange multipliers of constraint equations.
+    /// Lagrange multipliers of constraint equations: eliminated after every primary they
+    /// couple (their pivot `−B M⁻¹ Bᵀ` then has all of `B`'s columns).
     Multiplier,
+    /// Multipliers of a relative constraint ([`crate::core::Constraint::is_relative`]):
+    /// its rows restricted to either node's columns have the rank of all of them, so the
+    /// block may be eliminated after any one of the primaries it couples. A chain is then
+    /// factored from its tip, body and joint in turn, with no fill between joints.
+    RelativeMultiplier,
+}
+
+impl BlockKind {
+    /// Lagrange multipliers of either kind.
+    #[inline]
+    pub fn is_multiplier(self) -> bool {
+        matches!(self, Self::Multiplier | Self::RelativeMultiplier)
+    }
 }
 
 /// Error raised when a block structure is inconsistent.

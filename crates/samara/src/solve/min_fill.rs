@@ -19,14 +19,16 @@ use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 /// Minimum-fill order of the graph `adj` (symmetric, no self loops): `order[k]` is the
-/// vertex eliminated at step `k`. A vertex `v` with `eligible_after[v] > 0` may only be
-/// eliminated after that many of its neighbours listed in `gates[v]` have been (used to
-/// keep a multiplier after the primaries it couples). A vertex with `held[v]` (if `held`
-/// is not empty) waits until every vertex not held is eliminated (a separator kept last).
-/// `None` if more than `budget` adjacency operations would be needed.
+/// vertex eliminated at step `k`. A vertex `v` with gates (`gates[v]` not empty) may only
+/// be eliminated after all of them have been, or with `any_gate[v]` (if `any_gate` is not
+/// empty) after one of them (used to keep a multiplier after the primaries it couples, or
+/// after one of them). A vertex with `held[v]` (if `held` is not empty) waits until every
+/// vertex not held is eliminated (a separator kept last). `None` if more than `budget`
+/// adjacency operations would be needed.
 pub(crate) fn min_fill_order(
     adj: &[Vec<usize>],
     gates: &[Vec<usize>],
+    any_gate: &[bool],
     held: &[bool],
     budget: usize,
 ) -> Option<Vec<usize>> {
@@ -42,11 +44,17 @@ pub(crate) fn min_fill_order(
         .collect();
     // Vertices waiting for their gates, and the vertices each vertex gates.
     let is_held = |v: usize| held.get(v).copied().unwrap_or(false);
+    let is_any = |v: usize| any_gate.get(v).copied().unwrap_or(false);
     let mut waiting: Vec<usize> = gates
         .iter()
         .enumerate()
-        .map(|(v, g)| g.len() + usize::from(is_held(v)))
+        .map(|(v, g)| {
+            let gated = if is_any(v) { g.len().min(1) } else { g.len() };
+            gated + usize::from(is_held(v))
+        })
         .collect();
+    // An any-gate vertex released by its first gate (its later gates count no more).
+    let mut released = vec![false; n];
     let mut free = (0..n).filter(|&v| !is_held(v)).count();
     let mut gated_by: Vec<Vec<usize>> = vec![Vec::new(); n];
     for (v, gs) in gates.iter().enumerate() {
@@ -154,6 +162,12 @@ pub(crate) fn min_fill_order(
             std::mem::swap(&mut g[a], &mut merged);
         }
         for &w in &gated_by[v] {
+            if is_any(w) {
+                if released[w] {
+                    continue;
+                }
+                released[w] = true;
+            }
             waiting[w] -= 1;
         }
         if !is_held(v) {
@@ -209,7 +223,7 @@ mod tests {
     #[test]
     fn star_eliminates_leaves_first() {
         let adj = graph(5, &[(0, 1), (0, 2), (0, 3), (0, 4)]);
-        let o = min_fill_order(&adj, &vec![Vec::new(); 5], &[], usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &vec![Vec::new(); 5], &[], &[], usize::MAX).unwrap();
         assert_eq!(o, [1, 2, 3, 0, 4]);
     }
 
@@ -218,17 +232,27 @@ mod tests {
     fn path_and_gates() {
         let adj = graph(4, &[(0, 1), (1, 2), (2, 3)]);
         let none = vec![Vec::new(); 4];
-        let o = min_fill_order(&adj, &none, &[], usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &none, &[], &[], usize::MAX).unwrap();
         assert!(o[0] == 0 || o[0] == 3, "{o:?}");
         let mut gates = none.clone();
         gates[0] = vec![1];
-        let o = min_fill_order(&adj, &gates, &[], usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &gates, &[], &[], usize::MAX).unwrap();
         let p = |v: usize| o.iter().position(|&x| x == v).unwrap();
         assert!(p(0) > p(1), "{o:?}");
-        assert!(min_fill_order(&adj, &none, &[], 3).is_none());
+        assert!(min_fill_order(&adj, &none, &[], &[], 3).is_none());
+        // Vertex 1 gated by both neighbours: after both, or with `any_gate` after the
+        // first (0, an end), and then at once (deficiency 0, the smaller index of a tie).
+        let mut gates = none.clone();
+        gates[1] = vec![0, 2];
+        let o = min_fill_order(&adj, &gates, &[], &[], usize::MAX).unwrap();
+        let p = |v: usize| o.iter().position(|&x| x == v).unwrap();
+        assert!(p(1) > p(0) && p(1) > p(2), "{o:?}");
+        let any = [false, true, false, false];
+        let o = min_fill_order(&adj, &gates, &any, &[], usize::MAX).unwrap();
+        assert_eq!(o[..2], [0, 1], "{o:?}");
         // Vertex 1 held back: the others go first.
         let held = [false, true, false, false];
-        let o = min_fill_order(&adj, &none, &held, usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &none, &[], &held, usize::MAX).unwrap();
         assert_eq!(o[3], 1, "{o:?}");
     }
 }
