@@ -16,9 +16,10 @@ pub enum BlockKind {
     /// Lagrange multipliers of constraint equations: eliminated after every primary they
     /// couple (their pivot `−B M⁻¹ Bᵀ` then has all of `B`'s columns).
     Multiplier,
-    /// Multipliers of a relative constraint ([`crate::core::Constraint::is_relative`]):
-    /// its rows restricted to either node's columns have the rank of all of them, so the
-    /// block may be eliminated after any one of the primaries it couples. A chain is then
+    /// Multipliers of a relative constraint ([`crate::core::Constraint::is_relative`])
+    /// coupled to its nodes only: its rows restricted to either node's columns have the
+    /// rank of all of them, so the block may be eliminated right after a node whose only
+    /// multiplier it is ([`super::BlockLuSymbolic`]'s minimum-fill order). A chain is then
     /// factored from its tip, body and joint in turn, with no fill between joints.
     RelativeMultiplier,
 }

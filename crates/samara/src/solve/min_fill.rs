@@ -19,10 +19,14 @@ use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 /// Minimum-fill order of the graph `adj` (symmetric, no self loops): `order[k]` is the
-/// vertex eliminated at step `k`. A vertex `v` with gates (`gates[v]` not empty) may only
-/// be eliminated after all of them have been, or with `any_gate[v]` (if `any_gate` is not
-/// empty) after one of them (used to keep a multiplier after the primaries it couples, or
-/// after one of them). A vertex with `held[v]` (if `held` is not empty) waits until every
+/// vertex eliminated at step `k`. A vertex `v` with gates (`gates[v]` not empty: a
+/// multiplier) may only be eliminated after all of them have been (used to keep a
+/// multiplier after the primaries it couples). With `any_gate[v]` (if `any_gate` is not
+/// empty) it may also go after one gate `p` that had no other multiplier left among its
+/// neighbours when it was eliminated: `p`'s block then holds only what its eliminated
+/// neighbours added to it, and `v` is the one multiplier to take it (a chain from its free
+/// end; a gate shared with another multiplier, which may take up `p`'s freedom first, does
+/// not release `v`). A vertex with `held[v]` (if `held` is not empty) waits until every
 /// vertex not held is eliminated (a separator kept last). `None` if more than `budget`
 /// adjacency operations would be needed.
 pub(crate) fn min_fill_order(
@@ -45,16 +49,14 @@ pub(crate) fn min_fill_order(
     // Vertices waiting for their gates, and the vertices each vertex gates.
     let is_held = |v: usize| held.get(v).copied().unwrap_or(false);
     let is_any = |v: usize| any_gate.get(v).copied().unwrap_or(false);
+    let is_mult = |v: usize| !gates[v].is_empty();
+    // Released by a sole gate: its other gates count no more.
+    let mut released = vec![false; n];
     let mut waiting: Vec<usize> = gates
         .iter()
         .enumerate()
-        .map(|(v, g)| {
-            let gated = if is_any(v) { g.len().min(1) } else { g.len() };
-            gated + usize::from(is_held(v))
-        })
+        .map(|(v, g)| g.len() + usize::from(is_held(v)))
         .collect();
-    // An any-gate vertex released by its first gate (its later gates count no more).
-    let mut released = vec![false; n];
     let mut free = (0..n).filter(|&v| !is_held(v)).count();
     let mut gated_by: Vec<Vec<usize>> = vec![Vec::new(); n];
     for (v, gs) in gates.iter().enumerate() {
@@ -106,6 +108,13 @@ pub(crate) fn min_fill_order(
         alive[v] = false;
         order.push(v);
         let nb = std::mem::take(&mut g[v]);
+        // The only multiplier left next to v, if any: released by v if it may go after any
+        // gate (its gates still count down, so none is counted twice).
+        let mut sole = nb.iter().copied().filter(|&u| is_mult(u));
+        let sole = match (sole.next(), sole.next()) {
+            (Some(u), None) if is_any(u) && gates[u].contains(&v) => Some(u),
+            _ => None,
+        };
         // A vertex u outside N(v) keeps its neighbours; its deficiency falls by the pairs
         // of its neighbours in N(v) that the clique N(v) joins (found before the merge).
         stamp += 1;
@@ -162,13 +171,15 @@ pub(crate) fn min_fill_order(
             std::mem::swap(&mut g[a], &mut merged);
         }
         for &w in &gated_by[v] {
-            if is_any(w) {
-                if released[w] {
-                    continue;
-                }
-                released[w] = true;
+            if released[w] {
+                continue;
             }
             waiting[w] -= 1;
+            if Some(w) == sole {
+                // The gates left no longer hold it back (the held count stays).
+                waiting[w] -= gates[w].iter().filter(|&&p| alive[p]).count();
+                released[w] = true;
+            }
         }
         if !is_held(v) {
             free -= 1;

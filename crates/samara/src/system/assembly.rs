@@ -460,6 +460,28 @@ impl Assembler {
             couplings.push((a, b));
         }
         couplings.retain(|(a, b)| a != b);
+        // A relative constraint's multipliers go after either node only if its block
+        // couples to no other primary (a signal's support, an element reading a joint
+        // coordinate): the rank argument holds for its nodes' columns alone.
+        for (k, c) in sys.constraints.iter().enumerate() {
+            let Some(blk) = places[k].block else { continue };
+            if kinds[blk] != BlockKind::RelativeMultiplier {
+                continue;
+            }
+            let other = couplings.iter().any(|&(a, b)| {
+                let x = if a == blk {
+                    b
+                } else if b == blk {
+                    a
+                } else {
+                    return false;
+                };
+                kinds[x] == BlockKind::Primary && !c.nodes().contains(&x)
+            });
+            if other {
+                kinds[blk] = BlockKind::Multiplier;
+            }
+        }
         let structure = Arc::new(
             BlockStructure::new(sizes, kinds, &couplings)
                 .expect("block structure of a validated model is consistent"),
