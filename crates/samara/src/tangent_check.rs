@@ -362,8 +362,8 @@ pub struct ConstraintReport {
     /// in the target), B = e_ν (the system adds −∂s/∂x), zero rate terms.
     pub servo: f64,
     /// Largest difference, relative to each term's largest entry, between the one
-    /// evaluation of [`Constraint::evaluate_rows`] and the separate `evaluate`,
-    /// `reaction_tangent` and `Bᵀμ` (round-off).
+    /// evaluation of [`Constraint::evaluate_rows`] (with the tangent, and residual only)
+    /// and the separate `evaluate`, `reaction_tangent` and `Bᵀμ` (round-off).
     pub combined: f64,
 }
 
@@ -484,11 +484,34 @@ pub fn check_constraint(
             .zip(s)
             .fold(0.0f64, |x, (p, q)| x.max((p - q).abs() / scale))
     };
+    // The residual-only evaluation (no B, no tangent: the displacement rows' forces
+    // summed as one term) against the same.
+    let (mut phi_r, mut mu_r, mut force_r) = (vec![0.0; m], vec![0.0; m], vec![0.0; n]);
+    let mut b_r = DMatrix::zeros(m, n);
+    c.evaluate_rows(
+        ctx,
+        nodes,
+        coords,
+        mu,
+        0.0,
+        RowTerms {
+            phi: &mut phi_r,
+            mu: &mut mu_r,
+            force: &mut force_r,
+            b: &mut b_r,
+            want_b: false,
+            tangent: None,
+            targets: &targets,
+        },
+    );
     let combined = rel(&phi, &phi_targeted)
         .max(rel(&mu_out, mu))
         .max(rel(&force, force_s.as_slice()))
         .max(rel(b.as_slice(), b_s.as_slice()))
-        .max(rel(k.as_slice(), k_s.as_slice()));
+        .max(rel(k.as_slice(), k_s.as_slice()))
+        .max(rel(&phi_r, &phi_targeted))
+        .max(rel(&mu_r, mu))
+        .max(rel(&force_r, force_s.as_slice()));
 
     let mut work = nodes.to_vec();
     let mut wc = coords.to_vec();

@@ -161,17 +161,27 @@ relative_tolerance = 1e-12
 /// "sparse_lu"` (Newton tolerance 1e-12; measured ≤ 1e-15).
 #[test]
 fn dynamic_massless_node_pivots_after_its_weld() {
-    let with = |extra: &str| attempt(&format!("{MASSLESS_LINK}{extra}\n"));
+    same_answer_with_options(
+        MASSLESS_LINK,
+        &[
+            ("penalty = 0.0", false),
+            ("penalty = 0.0\nlinear_solver = \"block\"", false),
+            ("penalty = 100.0", false),
+            ("penalty = 0.0\nlinear_solver = \"sparse_lu\"", false),
+        ],
+    );
+}
+
+/// Runs `base` with the default options and with each of `cases` (extra analysis keys,
+/// whether every Newton iteration falls back to the sparse LU, else none does): no
+/// failure, and the last node within 1e-11 m of the default run's (Newton tolerance 1e-12).
+fn same_answer_with_options(base: &str, cases: &[(&str, bool)]) {
+    let with = |extra: &str| attempt(&format!("{base}{extra}\n"));
     let (s0, h0) = with("");
     assert!(s0.failure.is_none());
     assert_eq!(s0.fallbacks, 0);
     let x0 = last_node(&h0);
-    for extra in [
-        "penalty = 0.0",
-        "penalty = 0.0\nlinear_solver = \"block\"",
-        "penalty = 100.0",
-        "penalty = 0.0\nlinear_solver = \"sparse_lu\"",
-    ] {
+    for &(extra, fallback) in cases {
         let (s, h) = with(extra);
         let d = (last_node(&h) - x0).norm();
         println!(
@@ -179,7 +189,11 @@ fn dynamic_massless_node_pivots_after_its_weld() {
             s.newton_iterations, s.fallbacks
         );
         assert!(s.failure.is_none(), "{extra}");
-        assert_eq!(s.fallbacks, 0, "{extra}");
+        if fallback {
+            assert!(s.fallbacks >= s.newton_iterations, "{extra}");
+        } else {
+            assert_eq!(s.fallbacks, 0, "{extra}");
+        }
         assert!(d < 1e-11, "{extra}: {d:e}");
     }
 }
@@ -235,33 +249,19 @@ relative_tolerance = 1e-12
 /// `"sparse_lu"` (Newton tolerance 1e-12).
 #[test]
 fn dynamic_penalty_fills_the_pivot_of_a_massless_link() {
-    let with = |extra: &str| attempt(&format!("{MASSLESS_CROSSED}{extra}\n"));
-    let (s0, h0) = with("");
-    assert!(s0.failure.is_none());
-    assert_eq!(s0.fallbacks, 0);
-    let x0 = last_node(&h0);
-    let (s, _) = with("penalty = 0.0\nlinear_solver = \"block\"");
+    let (s, _) = attempt(&format!(
+        "{MASSLESS_CROSSED}penalty = 0.0\nlinear_solver = \"block\"\n"
+    ));
     let failure = s.failure.expect("the block LU alone cannot pivot");
     assert!(failure.reason.contains("singular"), "{}", failure.reason);
-    for (extra, fallback) in [
-        ("penalty = 0.0", true),
-        ("penalty = 100.0", false),
-        ("penalty = 0.0\nlinear_solver = \"sparse_lu\"", false),
-    ] {
-        let (s, h) = with(extra);
-        let d = (last_node(&h) - x0).norm();
-        println!(
-            "{extra}: {} Newton iterations, {} fallbacks, |Δx| = {d:.1e}",
-            s.newton_iterations, s.fallbacks
-        );
-        assert!(s.failure.is_none(), "{extra}");
-        if fallback {
-            assert!(s.fallbacks >= s.newton_iterations, "{extra}");
-        } else {
-            assert_eq!(s.fallbacks, 0, "{extra}");
-        }
-        assert!(d < 1e-11, "{extra}: {d:e}");
-    }
+    same_answer_with_options(
+        MASSLESS_CROSSED,
+        &[
+            ("penalty = 0.0", true),
+            ("penalty = 100.0", false),
+            ("penalty = 0.0\nlinear_solver = \"sparse_lu\"", false),
+        ],
+    );
 }
 
 /// `linear_solver = "block"` and `"sparse_lu"` on the double pendulum (index 3, ρ∞ = 0.9,

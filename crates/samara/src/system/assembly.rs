@@ -463,24 +463,21 @@ impl Assembler {
         // A relative constraint's multipliers go after either node only if its block
         // couples to no other primary (a signal's support, an element reading a joint
         // coordinate): the rank argument holds for its nodes' columns alone.
-        for (k, c) in sys.constraints.iter().enumerate() {
-            let Some(blk) = places[k].block else { continue };
-            if kinds[blk] != BlockKind::RelativeMultiplier {
-                continue;
+        // One pass over the couplings.
+        let mut foreign = vec![false; kinds.len()];
+        for &(a, b) in &couplings {
+            for (m, x) in [(a, b), (b, a)] {
+                if kinds[m] == BlockKind::RelativeMultiplier
+                    && kinds[x] == BlockKind::Primary
+                    && let BlockOwner::Joint(k) = owners[m]
+                    && !sys.constraints[k].nodes().contains(&x)
+                {
+                    foreign[m] = true;
+                }
             }
-            let other = couplings.iter().any(|&(a, b)| {
-                let x = if a == blk {
-                    b
-                } else if b == blk {
-                    a
-                } else {
-                    return false;
-                };
-                kinds[x] == BlockKind::Primary && !c.nodes().contains(&x)
-            });
-            if other {
-                kinds[blk] = BlockKind::Multiplier;
-            }
+        }
+        for (kind, _) in kinds.iter_mut().zip(&foreign).filter(|(_, f)| **f) {
+            *kind = BlockKind::Multiplier;
         }
         let structure = Arc::new(
             BlockStructure::new(sizes, kinds, &couplings)
