@@ -80,7 +80,8 @@ pub trait Constraint: Send + Sync {
     /// relative constraint between two frames). Then `B_A G_A + B_B G_B = 0` for the
     /// rigid motions, with `G_A`, `G_B` invertible, so the rows restricted to either
     /// node's columns have the rank of all of them, and the block LU may eliminate the
-    /// multipliers once either node is eliminated ([`crate::solve::BlockKind`]).
+    /// multipliers right after either node, if they are that node's only multipliers left
+    /// and couple to nothing but their nodes ([`crate::solve::BlockKind`]).
     fn is_relative(&self) -> bool {
         false
     }

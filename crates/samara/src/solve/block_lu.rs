@@ -402,7 +402,8 @@ impl BlockLuSymbolic {
     /// The elimination order and its filled pattern: of AMD on the block graph (with every
     /// multiplier deferred until all its coupled primaries have been eliminated) and of the
     /// minimum-fill order (multipliers held back likewise; a relative constraint's,
-    /// [`BlockKind::RelativeMultiplier`], until one of them — not in the separator order
+    /// [`BlockKind::RelativeMultiplier`], until one of them whose only multiplier left it
+    /// is — not in the separator order
     /// below: on the 1,000-link chain that combination met singular pivots in the initial
     /// conditions' system), the one whose Schur updates
     /// cost fewer flops (Σ_k s_k (Σ_{i ∈ S_k} s_i)²); AMD on a tie. On graphs of
