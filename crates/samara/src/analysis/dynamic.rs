@@ -13,7 +13,7 @@ use crate::math::isa;
 use crate::math::tangent_operator;
 use crate::model::{DynamicSettings, FormulationType, IntegratorType, JacobianUpdate};
 use crate::solve::condition::condition_number;
-use crate::solve::newton::{NewtonWork, newton};
+use crate::solve::newton::{Correction, NewtonWork, newton};
 use crate::solve::{
     BlockMatrix, LinearError, LinearSolver, NewtonFailure, NewtonReport, NewtonSettings,
     NewtonSystem,
@@ -153,7 +153,7 @@ impl NewtonSystem for StepProblem<'_> {
         /// vectors), with the configuration update and its per-node `R exp(ψ̃)`
         /// (quaternion product, series, renormalization, matrix) inlined: the baseline copy
         /// spent ~4 % of the chain's full-Newton samples there. No FMA: the same bits.
-        fn apply(&mut self: StepProblem<'_>, delta: &[f64]) -> f64 {
+        fn apply(&mut self: StepProblem<'_>, delta: &[f64]) -> Correction {
             Base | Avx => apply_impl,
         }
     }
@@ -170,7 +170,7 @@ impl StepProblem<'_> {
     /// the configuration change. One pass per node (rates, `hΔq`, `x`, `R exp(hΔψ̃)`):
     /// the node data are read once per iteration, not once per quantity.
     #[inline(always)]
-    fn apply_impl(&mut self, delta: &[f64]) -> f64 {
+    fn apply_impl(&mut self, delta: &[f64]) -> Correction {
         let (bp, gp) = (self.beta_p, self.gamma_p);
         let (atol, rtol) = (self.atol, self.rtol);
         self.asm.configuration_of(self.sys, delta, self.dcfg);
@@ -225,10 +225,11 @@ impl StepProblem<'_> {
         }
         let s = 1.0 / self.coef.multiplier_scale;
         self.asm.multipliers_of(self.sys, delta, self.dlam);
-        for (l, d) in self.cur.lambda.iter_mut().zip(self.dlam.iter()) {
-            *l += d * s;
+        for (l, d) in self.cur.lambda.iter_mut().zip(self.dlam.iter_mut()) {
+            *d *= s;
+            *l += *d;
         }
-        worst
+        Correction::new(worst, self.dlam, &self.cur.lambda, rtol)
     }
 }
 

@@ -19,7 +19,7 @@ use crate::core::EvalContext;
 use crate::linear::Spin;
 use crate::model::StaticSettings;
 use crate::solve::condition::condition_number;
-use crate::solve::newton::{NewtonWork, newton};
+use crate::solve::newton::{Correction, NewtonWork, newton};
 use crate::solve::{BlockMatrix, LinearSolver, NewtonFailure, NewtonSettings, NewtonSystem};
 use crate::system::{Assembler, Coefficients, Formulation, RateMaps, State, System};
 use nalgebra::Vector3;
@@ -65,7 +65,7 @@ impl NewtonSystem for StaticProblem<'_> {
         );
     }
 
-    fn apply(&mut self, delta: &[f64]) -> f64 {
+    fn apply(&mut self, delta: &[f64]) -> Correction {
         self.asm.configuration_of(self.sys, delta, self.dcfg);
         for (i, n) in self.state.nodes.iter_mut().enumerate() {
             let d = &self.dcfg[6 * i..6 * i + 6];
@@ -89,7 +89,7 @@ impl NewtonSystem for StaticProblem<'_> {
         for (l, d) in self.state.lambda.iter_mut().zip(self.dlam.iter()) {
             *l += d;
         }
-        worst
+        Correction::new(worst, self.dlam, &self.state.lambda, self.rtol)
     }
 
     fn constraint_violation(&mut self) -> f64 {

@@ -21,4 +21,4 @@ pub use block_matrix::{
     BlockKind, BlockMatrix, BlockSlot, BlockStructure, BlockView, StructureError,
 };
 pub use linear::{LinearError, LinearSolver, LinearSolverType, LinearStats};
-pub use newton::{NewtonFailure, NewtonReport, NewtonSettings, NewtonSystem, newton};
+pub use newton::{Correction, NewtonFailure, NewtonReport, NewtonSettings, NewtonSystem, newton};
