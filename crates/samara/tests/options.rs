@@ -454,7 +454,7 @@ fn modified_newton_dissipates_what_full_newton_does() {
 /// The same stop on the 1,000-link spherical chain of examples/bench (0.5 s, modified
 /// Newton, default tolerances). Generalized-α at ρ∞ = 0.9 dissipates, and full Newton's
 /// energy never rises above E₀ over the whole second (it ends 1.8e-8 below). The stop on
-/// the configuration's rate alone let it rise by 4.7e-7 of E₀ by 0.37 s, then grow until
+/// the configuration's rate alone let it rise by 4.5e-7 of E₀ at 0.37 s, then grow until
 /// Newton failed at t = 0.897 s with the step cut to 2e-6 s (the links near the root
 /// spinning at 1,000 rad/s). Asserted: no step cut, and E(t) ≤ E₀ (1 + 1e-10) at every
 /// step (the energy's round-off, 2,000 terms of a 1.3e5 J sum, is ~1e-13 of E₀).
