@@ -450,7 +450,12 @@ impl BlockLuSymbolic {
         let any_gate: Vec<bool> = (0..adj.len())
             .map(|b| s.kind(b) == BlockKind::RelativeMultiplier)
             .collect();
-        if let Some(mf) = super::min_fill::min_fill_order(adj, &gates, &any_gate, &[], budget) {
+        let silent: Vec<bool> = (0..adj.len())
+            .map(|b| s.kind(b) == BlockKind::Projection)
+            .collect();
+        if let Some(mf) =
+            super::min_fill::min_fill_order(adj, &gates, &any_gate, &silent, &[], budget)
+        {
             let mf_rows = fill_rows(adj, &mf);
             let mf_cost = cost(&mf, &mf_rows);
             if mf_cost < best_cost {
@@ -468,7 +473,8 @@ impl BlockLuSymbolic {
             }
         {
             let held: Vec<bool> = part.iter().map(|&p| p == 2).collect();
-            if let Some(mf) = super::min_fill::min_fill_order(adj, &gates, &[], &held, budget) {
+            if let Some(mf) = super::min_fill::min_fill_order(adj, &gates, &[], &[], &held, budget)
+            {
                 // The parts are not coupled and the separator goes last: eliminating one
                 // part after the other makes the same fill as the interleaved order.
                 let mut nd = Vec::with_capacity(mf.len());
@@ -2207,6 +2213,101 @@ mod tests {
             assert_mult_after_primaries(&plain, &sym_plain);
             check_against_dense(rel, 42, false);
         }
+    }
+
+    /// `s` with a projection block η of `kind` per multiplier of `mult_nodes` (the
+    /// stabilized index-2 layout: η couples to its multiplier, to that multiplier's nodes
+    /// and to every η whose multiplier shares a node); the η blocks' ids.
+    fn with_projections(
+        s: &BlockStructure,
+        mult_nodes: &[Vec<usize>],
+        kind: BlockKind,
+    ) -> (BlockStructure, Vec<usize>) {
+        let n = s.n_blocks();
+        let mut sizes: Vec<usize> = (0..n).map(|b| s.block_size(b)).collect();
+        let mut kinds: Vec<BlockKind> = (0..n).map(|b| s.kind(b)).collect();
+        let mut coup: Vec<(usize, usize)> = (0..n)
+            .flat_map(|i| s.row_cols(i).iter().map(move |&j| (i, j)))
+            .filter(|(i, j)| i < j)
+            .collect();
+        let mut etas: Vec<(usize, usize)> = Vec::new();
+        for (m, nodes) in mult_nodes.iter().enumerate().filter(|(_, v)| !v.is_empty()) {
+            let e = sizes.len();
+            sizes.push(s.block_size(m));
+            kinds.push(kind);
+            coup.push((e, m));
+            coup.extend(nodes.iter().map(|&v| (e, v)));
+            for &(f, l) in &etas {
+                if mult_nodes[l].iter().any(|v| nodes.contains(v)) {
+                    coup.push((e, f));
+                }
+            }
+            etas.push((e, m));
+        }
+        let ids = etas.iter().map(|&(e, _)| e).collect();
+        (BlockStructure::new(sizes, kinds, &coup).unwrap(), ids)
+    }
+
+    /// The stabilized formulation's projection multipliers η have zero columns outside the
+    /// η rows, so they must not keep a relative constraint's λ from going right after a
+    /// node: with η of the `Projection` kind the λ go early again and the factors are
+    /// smaller than with η as plain multipliers; the solution is a dense LU's (η's
+    /// columns zeroed outside η rows, η's diagonal dominant like B T Bᵀ).
+    #[test]
+    fn projections_do_not_hold_back_relative_multipliers() {
+        let (plain, mult_nodes) = kkt_tree(&chain_parent(20), &[5, 3], true);
+        let rel = relative(&plain);
+        let (held, _) = with_projections(&rel, &mult_nodes, BlockKind::Multiplier);
+        let (s, etas) = with_projections(&rel, &mult_nodes, BlockKind::Projection);
+        let (sym_held, sym) = (
+            BlockLuSymbolic::new(&held).unwrap(),
+            BlockLuSymbolic::new(&s).unwrap(),
+        );
+        assert!(
+            sym.n_factor_values() < sym_held.n_factor_values(),
+            "{} ≥ {}",
+            sym.n_factor_values(),
+            sym_held.n_factor_values()
+        );
+        let early = mult_nodes
+            .iter()
+            .enumerate()
+            .filter(|(_, nodes)| nodes.len() == 2)
+            .filter(|(m, nodes)| nodes.iter().any(|&j| sym.pos[j] > sym.pos[*m]))
+            .count();
+        assert!(early > 0, "no λ went before its last node");
+        let s = Arc::new(s);
+        let mut lu = BlockLu::new(Arc::new(sym));
+        let mut rng = Rng(7);
+        let mut a = BlockMatrix::zeros(s.clone());
+        fill_random(&mut a, &mut rng, false);
+        for i in 0..s.n_blocks() {
+            for &j in s.row_cols(i) {
+                if s.kind(j) != BlockKind::Projection {
+                    continue;
+                }
+                let si = s.block_size(i);
+                let b = a.block_mut(i, j).unwrap();
+                if s.kind(i) != BlockKind::Projection {
+                    b.fill(0.0);
+                } else if i == j {
+                    for (t, v) in b.iter_mut().enumerate() {
+                        *v = rng.uniform() + if t % (si + 1) == 0 { 20.0 } else { 0.0 };
+                    }
+                }
+            }
+        }
+        assert!(etas.iter().all(|&e| s.kind(e) == BlockKind::Projection));
+        lu.factor(&a).unwrap();
+        let n = s.dim();
+        let b: Vec<f64> = (0..n).map(|_| rng.uniform()).collect();
+        let mut x = b.clone();
+        lu.solve_in_place(&mut x);
+        let xr = dense_of(&a)
+            .partial_piv_lu()
+            .solve(&Mat::from_fn(n, 1, |r, _| b[r]));
+        let e = rel_err(&x, &xr);
+        assert!(e < 1e-10, "solve rel err {e}");
     }
 
     #[test]

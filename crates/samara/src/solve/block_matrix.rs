@@ -22,13 +22,23 @@ pub enum BlockKind {
     /// multiplier it is ([`super::BlockLuSymbolic`]'s minimum-fill order). A chain is then
     /// factored from its tip, body and joint in turn, with no fill between joints.
     RelativeMultiplier,
+    /// Projection multipliers η of the stabilized index-2 formulation: eliminated after
+    /// every primary they couple, like [`Self::Multiplier`], but their columns are zero in
+    /// every row that is not a projection's (the couplings of `Bᵀη` into the other rows are
+    /// left out of the matrix), so the Schur updates through them never reach a primary's
+    /// or another multiplier's pivot: they do not keep a relative constraint's multipliers
+    /// from going right after a node.
+    Projection,
 }
 
 impl BlockKind {
-    /// Lagrange multipliers of either kind.
+    /// Lagrange multipliers of any kind.
     #[inline]
     pub fn is_multiplier(self) -> bool {
-        matches!(self, Self::Multiplier | Self::RelativeMultiplier)
+        matches!(
+            self,
+            Self::Multiplier | Self::RelativeMultiplier | Self::Projection
+        )
     }
 }
 

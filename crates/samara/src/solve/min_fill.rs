@@ -26,13 +26,15 @@ use std::collections::BinaryHeap;
 /// neighbours when it was eliminated: `p`'s block then holds only what its eliminated
 /// neighbours added to it, and `v` is the one multiplier to take it (a chain from its free
 /// end; a gate shared with another multiplier, which may take up `p`'s freedom first, does
-/// not release `v`). A vertex with `held[v]` (if `held` is not empty) waits until every
-/// vertex not held is eliminated (a separator kept last). `None` if more than `budget`
-/// adjacency operations would be needed.
+/// not release `v`; a multiplier with `silent[u]`, if `silent` is not empty, does not count
+/// as another: its column is zero in `p`'s rows). A vertex with `held[v]` (if `held` is not
+/// empty) waits until every vertex not held is eliminated (a separator kept last). `None`
+/// if more than `budget` adjacency operations would be needed.
 pub(crate) fn min_fill_order(
     adj: &[Vec<usize>],
     gates: &[Vec<usize>],
     any_gate: &[bool],
+    silent: &[bool],
     held: &[bool],
     budget: usize,
 ) -> Option<Vec<usize>> {
@@ -50,6 +52,7 @@ pub(crate) fn min_fill_order(
     let is_held = |v: usize| held.get(v).copied().unwrap_or(false);
     let is_any = |v: usize| any_gate.get(v).copied().unwrap_or(false);
     let is_mult = |v: usize| !gates[v].is_empty();
+    let is_silent = |v: usize| silent.get(v).copied().unwrap_or(false);
     // Released by a sole gate: its other gates count no more.
     let mut released = vec![false; n];
     let mut waiting: Vec<usize> = gates
@@ -110,7 +113,7 @@ pub(crate) fn min_fill_order(
         let nb = std::mem::take(&mut g[v]);
         // The only multiplier left next to v, if any: released by v if it may go after any
         // gate (its gates still count down, so none is counted twice).
-        let mut sole = nb.iter().copied().filter(|&u| is_mult(u));
+        let mut sole = nb.iter().copied().filter(|&u| is_mult(u) && !is_silent(u));
         let sole = match (sole.next(), sole.next()) {
             (Some(u), None) if is_any(u) && gates[u].contains(&v) => Some(u),
             _ => None,
@@ -234,7 +237,7 @@ mod tests {
     #[test]
     fn star_eliminates_leaves_first() {
         let adj = graph(5, &[(0, 1), (0, 2), (0, 3), (0, 4)]);
-        let o = min_fill_order(&adj, &vec![Vec::new(); 5], &[], &[], usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &vec![Vec::new(); 5], &[], &[], &[], usize::MAX).unwrap();
         assert_eq!(o, [1, 2, 3, 0, 4]);
     }
 
@@ -243,27 +246,27 @@ mod tests {
     fn path_and_gates() {
         let adj = graph(4, &[(0, 1), (1, 2), (2, 3)]);
         let none = vec![Vec::new(); 4];
-        let o = min_fill_order(&adj, &none, &[], &[], usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &none, &[], &[], &[], usize::MAX).unwrap();
         assert!(o[0] == 0 || o[0] == 3, "{o:?}");
         let mut gates = none.clone();
         gates[0] = vec![1];
-        let o = min_fill_order(&adj, &gates, &[], &[], usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &gates, &[], &[], &[], usize::MAX).unwrap();
         let p = |v: usize| o.iter().position(|&x| x == v).unwrap();
         assert!(p(0) > p(1), "{o:?}");
-        assert!(min_fill_order(&adj, &none, &[], &[], 3).is_none());
+        assert!(min_fill_order(&adj, &none, &[], &[], &[], 3).is_none());
         // Vertex 1 gated by both neighbours: after both, or with `any_gate` after the
         // first (0, an end), and then at once (deficiency 0, the smaller index of a tie).
         let mut gates = none.clone();
         gates[1] = vec![0, 2];
-        let o = min_fill_order(&adj, &gates, &[], &[], usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &gates, &[], &[], &[], usize::MAX).unwrap();
         let p = |v: usize| o.iter().position(|&x| x == v).unwrap();
         assert!(p(1) > p(0) && p(1) > p(2), "{o:?}");
         let any = [false, true, false, false];
-        let o = min_fill_order(&adj, &gates, &any, &[], usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &gates, &any, &[], &[], usize::MAX).unwrap();
         assert_eq!(o[..2], [0, 1], "{o:?}");
         // Vertex 1 held back: the others go first.
         let held = [false, true, false, false];
-        let o = min_fill_order(&adj, &none, &[], &held, usize::MAX).unwrap();
+        let o = min_fill_order(&adj, &none, &[], &[], &held, usize::MAX).unwrap();
         assert_eq!(o[3], 1, "{o:?}");
     }
 }

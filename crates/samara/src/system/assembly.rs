@@ -336,7 +336,7 @@ impl Assembler {
                 if c.n_equations() > 0 {
                     places[k].projection = Some(sizes.len());
                     sizes.push(c.n_equations());
-                    kinds.push(BlockKind::Multiplier);
+                    kinds.push(BlockKind::Projection);
                     owners.push(BlockOwner::Projection(k));
                 }
             }
@@ -1253,17 +1253,17 @@ impl Assembler {
             }
             if stabilized {
                 // ∂(B v)/∂q, row r = vᵀ ∂(B_rᵀ)/∂q = vᵀ K(e_r), then times T.
+                // Slices, not `DMatrix` indexing: the bounds checks and nalgebra's
+                // element-wise `fill` held half of this assembly's samples at ρ∞ = 1.
+                let vel = &w.vel[..nl];
                 for r in 0..m {
                     w.unit.fill(0.0);
                     w.unit[r] = 1.0;
-                    w.kr.fill(0.0);
+                    w.kr.as_mut_slice().fill(0.0);
                     c.reaction_tangent(ctx, &state.nodes, coords, &w.unit, &mut w.kr);
-                    for j in 0..nl {
-                        let mut acc = 0.0;
-                        for i in 0..nl {
-                            acc += w.vel[i] * w.kr[(i, j)];
-                        }
-                        w.dbv[(r, j)] = acc;
+                    let dbv = w.dbv.as_mut_slice();
+                    for (j, col) in w.kr.as_slice().chunks_exact(nl).enumerate() {
+                        dbv[j * m + r] = vel.iter().zip(col).fold(0.0, |acc, (v, k)| acc + v * k);
                     }
                 }
                 apply_tangent_ops(&mut w.dbv, cn, tangent_ops);
@@ -1335,12 +1335,11 @@ impl Assembler {
                     );
                 }
                 let dst = mat.view(w.proj_diag);
+                let (bt, b) = (w.bt.as_slice(), w.b.as_slice());
                 for r in 0..m {
                     for s in 0..m {
-                        let mut acc = 0.0;
-                        for j in 0..nl {
-                            acc += w.bt[(r, j)] * w.b[(s, j)];
-                        }
+                        let rows = bt[r..].iter().step_by(m).zip(b[s..].iter().step_by(m));
+                        let acc = rows.take(nl).fold(0.0, |acc, (x, y)| acc + x * y);
                         dst.values[dst.at(r, s)] += acc;
                     }
                 }
@@ -1533,12 +1532,15 @@ impl Assembler {
             let (wk, wl) = (&self.constraints[k], &self.constraints[l]);
             let (mk, ml) = (wk.m, wl.m);
             let dst = matrix.view(o);
+            // Node a's columns of B_k T and node b's of B_l (column-major, rows strided).
+            let (bt, bl) = (
+                &wk.bt.as_slice()[6 * a * mk..],
+                &wl.b.as_slice()[6 * b * ml..],
+            );
             for r in 0..mk {
                 for s in 0..ml {
-                    let mut acc = 0.0;
-                    for j in 0..6 {
-                        acc += wk.bt[(r, 6 * a + j)] * wl.b[(s, 6 * b + j)];
-                    }
+                    let cols = bt[r..].iter().step_by(mk).zip(bl[s..].iter().step_by(ml));
+                    let acc = cols.take(6).fold(0.0, |acc, (x, y)| acc + x * y);
                     dst.values[dst.at(r, s)] += acc;
                 }
             }
