@@ -312,9 +312,8 @@ pub fn newton(
 mod tests {
     use super::{Correction, all_finite, norm2};
 
-    /// The lane sums against the one running sum: both add n ≤ 40 positive squares, so
-    /// they agree within n·ε of the result (summation-order round-off); the finite check
-    /// finds a NaN or an infinity in every position, in the lanes and in the tail.
+    /// `Correction::new`: the multipliers are settled when their largest change is within
+    /// `rtol` of the largest multiplier (4e-3 here), and trivially without multipliers.
     #[test]
     fn multipliers_settle_below_the_relative_tolerance_of_the_largest() {
         let lambda = [4000.0, -3.0, 0.0];
@@ -327,6 +326,9 @@ mod tests {
         assert!(none.multipliers == 0.0 && none.multipliers_settled);
     }
 
+    /// The lane sums against the one running sum: both add n ≤ 40 positive squares, so
+    /// they agree within n·ε of the result (summation-order round-off); the finite check
+    /// finds a NaN or an infinity in every position, in the lanes and in the tail.
     #[test]
     fn lane_sums_and_finite_check_match_the_plain_loops() {
         for n in 0..40 {
