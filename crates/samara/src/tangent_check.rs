@@ -348,6 +348,8 @@ pub fn check_element_held(
 pub struct ConstraintReport {
     pub b: Mismatch,
     pub k: Mismatch,
+    /// ∂(B v)/∂(q, ν) at fixed local rates v ([`Constraint::velocity_tangent`]).
+    pub velocity_tangent: Mismatch,
     /// Relative error of Φ̈ − B(v̇, ν̈) against the second difference along the motion.
     pub convective: f64,
     /// Relative error of Φ_t against the first difference along the motion minus B·v.
@@ -363,7 +365,8 @@ pub struct ConstraintReport {
     pub servo: f64,
     /// Largest difference, relative to each term's largest entry, between the one
     /// evaluation of [`Constraint::evaluate_rows`] (with the tangent, and residual only)
-    /// and the separate `evaluate`, `reaction_tangent` and `Bᵀμ` (round-off).
+    /// and the separate `evaluate`, `reaction_tangent` and `Bᵀμ`, and between
+    /// `velocity_tangent` and `vᵀ` times `reaction_tangent` at each μ = e_r (round-off).
     pub combined: f64,
 }
 
@@ -372,6 +375,7 @@ impl ConstraintReport {
         largest(&[
             self.b.relative,
             self.k.relative,
+            self.velocity_tangent.relative,
             self.convective,
             self.velocity,
             self.coordinate_stiffness.relative,
@@ -474,6 +478,30 @@ pub fn check_constraint(
             servo = servo.max(((phi_p[i] - phi[i]) / EPS + 1.0).abs());
         }
     }
+    // The local rates: node velocities, material angular velocities, coordinate rates.
+    let mut vel = vec![0.0; n];
+    for (a, &node) in cn.iter().enumerate() {
+        for j in 0..3 {
+            vel[6 * a + j] = nodes[node].v[j];
+            vel[6 * a + 3 + j] = nodes[node].w[j];
+        }
+    }
+    for (j, q) in coords.iter().enumerate() {
+        vel[nq + j] = q.v;
+    }
+    let mut dbv = DMatrix::zeros(m, n);
+    c.velocity_tangent(ctx, nodes, coords, &vel, &mut dbv);
+    // The same rows from the reaction tangent at each unit multiplier.
+    let mut dbv_k = DMatrix::zeros(m, n);
+    for r in 0..m {
+        let mut unit = vec![0.0; m];
+        unit[r] = 1.0;
+        let mut kr = DMatrix::zeros(n, n);
+        c.reaction_tangent(ctx, nodes, coords, &unit, &mut kr);
+        for j in 0..n {
+            dbv_k[(r, j)] = (0..n).map(|i| vel[i] * kr[(i, j)]).sum();
+        }
+    }
     let phi_targeted: Vec<f64> = phi_s.iter().zip(&targets).map(|(p, t)| p - t).collect();
     let mut k_s = DMatrix::zeros(n, n);
     c.reaction_tangent(ctx, nodes, coords, mu, &mut k_s);
@@ -511,13 +539,16 @@ pub fn check_constraint(
         .max(rel(k.as_slice(), k_s.as_slice()))
         .max(rel(&phi_r, &phi_targeted))
         .max(rel(&mu_r, mu))
-        .max(rel(&force_r, force_s.as_slice()));
+        .max(rel(&force_r, force_s.as_slice()))
+        .max(rel(dbv.as_slice(), dbv_k.as_slice()));
 
     let mut work = nodes.to_vec();
     let mut wc = coords.to_vec();
     // Central differences at steps ε ([0]) and 2ε ([1]).
     let mut b_fd = [DMatrix::zeros(m, n), DMatrix::zeros(m, n)];
     let mut k_fd = [DMatrix::zeros(n, n), DMatrix::zeros(n, n)];
+    let mut dbv_fd = [DMatrix::zeros(m, n), DMatrix::zeros(m, n)];
+    let vel_v = nalgebra::DVector::from_column_slice(&vel);
     let mut bp = DMatrix::zeros(m, n);
     let mut pp = vec![0.0; m];
     let mu_v = nalgebra::DVector::from_column_slice(mu);
@@ -525,6 +556,7 @@ pub fn check_constraint(
         for (level, step) in [EPS, 2.0 * EPS].into_iter().enumerate() {
             let mut vals = Vec::new();
             let mut forces = Vec::new();
+            let mut rates = Vec::new();
             for s in [1.0, -1.0] {
                 work.clone_from_slice(nodes);
                 wc.clone_from_slice(coords);
@@ -542,9 +574,11 @@ pub fn check_constraint(
                 c.evaluate(ctx, &work, &wc, &mut pp, Some(&mut bp));
                 vals.push(nalgebra::DVector::from_column_slice(&pp));
                 forces.push(bp.transpose() * &mu_v);
+                rates.push(&bp * &vel_v);
             }
             b_fd[level].set_column(col, &((&vals[0] - &vals[1]) / (2.0 * step)));
             k_fd[level].set_column(col, &((&forces[0] - &forces[1]) / (2.0 * step)));
+            dbv_fd[level].set_column(col, &((&rates[0] - &rates[1]) / (2.0 * step)));
         }
     }
 
@@ -575,16 +609,6 @@ pub fn check_constraint(
         p
     };
     let (pp1, pm1) = (along(eps2), along(-eps2));
-    let mut vel = vec![0.0; n];
-    for (a, &node) in cn.iter().enumerate() {
-        for j in 0..3 {
-            vel[6 * a + j] = nodes[node].v[j];
-            vel[6 * a + 3 + j] = nodes[node].w[j];
-        }
-    }
-    for (j, q) in coords.iter().enumerate() {
-        vel[nq + j] = q.v;
-    }
     let scale = conv.iter().fold(1.0f64, |a, x: &f64| a.max(x.abs()));
     let mut conv_err: f64 = 0.0;
     let mut vel_err: f64 = 0.0;
@@ -665,9 +689,14 @@ pub fn check_constraint(
     let unknowns = groups(cn.len(), nc);
     let scalars = groups(0, size);
     let reaction = (b.transpose() * &mu_v).as_slice().to_vec();
+    // B v's round-off scale per row: Σ |b_rj v_j| (B v itself may cancel).
+    let bv_all: Vec<f64> = (0..m)
+        .map(|r| (0..n).map(|j| (b_s[(r, j)] * vel[j]).abs()).sum())
+        .collect();
     ConstraintReport {
         b: compare(&b, &b_fd, &phi_s, &equations, &unknowns),
         k: compare(&k, &k_fd, &reaction, &unknowns, &unknowns),
+        velocity_tangent: compare(&dbv, &dbv_fd, &bv_all, &equations, &unknowns),
         convective: conv_err,
         velocity: vel_err,
         coordinate_stiffness: compare(&ka, &kfd, &r0, &scalars, &scalars),
@@ -789,6 +818,7 @@ impl TangentCase {
                     tangents: largest(&[
                         r.b.relative,
                         r.k.relative,
+                        r.velocity_tangent.relative,
                         r.coordinate_stiffness.relative,
                         r.coordinate_damping.relative,
                         r.coordinate_signals.relative,

@@ -225,12 +225,14 @@ fn every_constraint_tangent_matches_finite_differences() {
             largest = largest
                 .max(rep.b.relative)
                 .max(rep.k.relative)
+                .max(rep.velocity_tangent.relative)
                 .max(rep.coordinate_stiffness.relative)
                 .max(rep.coordinate_damping.relative);
             rates = rates.max(rep.convective).max(rep.velocity);
             assert!(
                 rep.b.relative < TOL
                     && rep.k.relative < TOL
+                    && rep.velocity_tangent.relative < TOL
                     && rep.coordinate_stiffness.relative < TOL
                     && rep.coordinate_damping.relative < TOL,
                 "trial {trial}, {}: {rep:?}",

@@ -119,6 +119,18 @@ pub trait Constraint: Send + Sync {
         mu: &[f64],
         k: &mut DMatrix<f64>,
     );
+    /// `∂(B v)/∂(q, ν)` at fixed `v` (`n_equations × (6·nodes + n_coordinates)`,
+    /// overwritten), `v` the local rates (node velocities, material angular velocities,
+    /// coordinate rates): row r is `vᵀ ∂(b_rᵀ)/∂(q, ν)`, the reaction tangent at μ = e_r
+    /// applied to `v` — the velocity rows' tangent of the stabilized index-2 step.
+    fn velocity_tangent(
+        &self,
+        ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        v: &[f64],
+        out: &mut DMatrix<f64>,
+    );
     /// One evaluation of the rows for the Newton iteration: `Φ`, `μ = λ + ρΦ` (`lambda`
     /// in physical units, `penalty` = ρ), `Bᵀμ` and, if asked, `B` and `∂(Bᵀμ)/∂(q, ν)`
     /// at that μ — what [`Constraint::evaluate`] and [`Constraint::reaction_tangent`] give

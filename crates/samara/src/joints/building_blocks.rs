@@ -123,6 +123,24 @@ impl Blocks12 {
             .then(|| unsafe { self.blocks[r][c].assume_init_ref() })
     }
 
+    /// `sᵀ K`, the row vector `s` (12 entries) times the tangent, over the blocks written.
+    #[inline(always)]
+    pub fn left_product(&self, s: &Row12) -> Row12 {
+        let mut out = Row12::zeros();
+        for r in 0..4 {
+            let sr = Vector3::new(s[3 * r], s[3 * r + 1], s[3 * r + 2]);
+            for c in 0..4 {
+                if let Some(b) = self.get(r, c) {
+                    let p = b.tr_mul(&sr);
+                    for j in 0..3 {
+                        out[3 * c + j] += p[j];
+                    }
+                }
+            }
+        }
+        out
+    }
+
     /// `K[3r.., 3c..] += b` (the first term assigned).
     #[inline(always)]
     fn add(&mut self, r: usize, c: usize, b: &Matrix3<f64>) {

@@ -775,6 +775,75 @@ impl Constraint for Joint {
         self.add_reaction_tangent(&f, &rots, coords, mu, &g12, k);
     }
 
+    /// Per row, `u = sᵀ K₁₂(e_r)` with `s = (vᴬ, Rᴬwᴬ, vᴮ, Rᴮwᴮ)` the spatial velocities,
+    /// to the material columns (`u_θ Rᵀ`), plus the rotation of those columns,
+    /// `w × (Rᵀ m_r)` (`m_r` the row's moment part), and the coordinate terms of a
+    /// defining row: `ν̇ ∂b_r/∂ν` in the node columns, `s·∂b_r/∂ν + ν̇ ∂²Φ/∂ν²` in its own.
+    /// The same terms as [`Self::reaction_tangent`] at μ = e_r times `v`, without forming
+    /// the 12 × 12 matrices.
+    fn velocity_tangent(
+        &self,
+        _ctx: &EvalContext,
+        nodes: &[NodeState],
+        coords: &[Coordinate],
+        v: &[f64],
+        out: &mut DMatrix<f64>,
+    ) {
+        let f = self.frames(nodes);
+        let rots = [self.rotation_of(0, nodes), self.rotation_of(1, nodes)];
+        let nq = 6 * self.nodes.len();
+        let m = out.nrows();
+        let os = out.as_mut_slice();
+        os.fill(0.0);
+        let mut s12 = Row12::zeros();
+        for (x, side) in self.sides.iter().enumerate() {
+            if side.node.is_none() {
+                continue;
+            }
+            let c = 6 * side.local;
+            let w = rots[x] * Vector3::new(v[c + 3], v[c + 4], v[c + 5]);
+            for j in 0..3 {
+                s12[6 * x + j] = v[c + j];
+                s12[6 * x + 3 + j] = w[j];
+            }
+        }
+        for (i, &r) in self.active.iter().enumerate() {
+            let mut k12 = Blocks12::new();
+            let (b12, coordinate) = match &self.rows[r] {
+                Row::Displacement { axis, .. } => {
+                    displacement::force_tangent(&f, *axis, 1.0, &mut k12);
+                    (displacement::jacobian(&f, *axis), None)
+                }
+                Row::Angle { row, coord } => {
+                    let nu = coord.map_or(0.0, |c| coords[c].q);
+                    row.force_tangent(&f, nu, 1.0, &mut k12);
+                    let d = coord.map(|c| (c, row.jacobian(&f, nu, 1), row.value(&f, nu)[2]));
+                    (row.jacobian(&f, nu, 0), d)
+                }
+                Row::Drive { .. } | Row::Servo { .. } => continue,
+            };
+            let u = k12.left_product(&s12);
+            self.to_local(&u, &rots, |c, x| os[c * m + i] = x);
+            for (x, side) in self.sides.iter().enumerate() {
+                if side.node.is_none() {
+                    continue;
+                }
+                let c = 6 * side.local;
+                let mom = Vector3::new(b12[6 * x + 3], b12[6 * x + 4], b12[6 * x + 5]);
+                let w = Vector3::new(v[c + 3], v[c + 4], v[c + 5]);
+                let t = w.cross(&(rots[x].transpose() * mom));
+                for j in 0..3 {
+                    os[(c + 3 + j) * m + i] += t[j];
+                }
+            }
+            if let Some((c, db, d2)) = coordinate {
+                let nu_dot = v[nq + c];
+                self.to_local(&db, &rots, |col, x| os[col * m + i] += nu_dot * x);
+                os[(nq + c) * m + i] += db.dot(&s12) + nu_dot * d2;
+            }
+        }
+    }
+
     isa::copies! {
         /// On x86-64 CPUs with AVX the rows run in a copy compiled for AVX (called through
         /// `dyn Constraint`, they would otherwise be compiled for the baseline only): the

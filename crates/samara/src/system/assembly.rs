@@ -169,9 +169,7 @@ struct ConstraintWork {
     /// Scratch: the rows of B, row-major (for ρ BᵀB).
     b_rows: Vec<f64>,
     k: DMatrix<f64>,
-    /// Scratch: ∂(B_r · v)/∂q of one row r (stabilized only), and the unit multiplier e_r.
-    kr: DMatrix<f64>,
-    unit: Vec<f64>,
+    /// ∂(B v)/∂q (stabilized only).
     dbv: DMatrix<f64>,
     /// Coordinate forces and their tangents.
     cf: Vec<f64>,
@@ -600,8 +598,6 @@ impl Assembler {
                     bt: DMatrix::zeros(m, nl),
                     b_rows: vec![0.0; m * nl],
                     k: DMatrix::zeros(nl, nl),
-                    kr: DMatrix::zeros(nl, nl),
-                    unit: vec![0.0; m],
                     dbv: DMatrix::zeros(m, nl),
                     cf: vec![0.0; nc],
                     cf_k: vec![0.0; nc],
@@ -1253,19 +1249,7 @@ impl Assembler {
             }
             if stabilized {
                 // ∂(B v)/∂q, row r = vᵀ ∂(B_rᵀ)/∂q = vᵀ K(e_r), then times T.
-                // Slices, not `DMatrix` indexing: the bounds checks and nalgebra's
-                // element-wise `fill` held half of this assembly's samples at ρ∞ = 1.
-                let vel = &w.vel[..nl];
-                for r in 0..m {
-                    w.unit.fill(0.0);
-                    w.unit[r] = 1.0;
-                    w.kr.as_mut_slice().fill(0.0);
-                    c.reaction_tangent(ctx, &state.nodes, coords, &w.unit, &mut w.kr);
-                    let dbv = w.dbv.as_mut_slice();
-                    for (j, col) in w.kr.as_slice().chunks_exact(nl).enumerate() {
-                        dbv[j * m + r] = vel.iter().zip(col).fold(0.0, |acc, (v, k)| acc + v * k);
-                    }
-                }
+                c.velocity_tangent(ctx, &state.nodes, coords, &w.vel[..nl], &mut w.dbv);
                 apply_tangent_ops(&mut w.dbv, cn, tangent_ops);
             }
             // (λ, config): B T (index 3) or s_v (γ' B + ∂(Bv)/∂q T) (stabilized); `with_t`:
