@@ -15,7 +15,17 @@ def long_pendulum(root):
     return m
 
 
-def test_ctrl_c_stops_a_run(root, tmp_path):
+@pytest.fixture
+def python_sigint_handler():
+    """Python's own SIGINT handler for the test's duration. A shell starts a background
+    job (`cmd &` without job control, as CI runners may) with SIGINT ignored, and Python
+    then installs no handler of its own, so Ctrl-C could not reach the engine's poll."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_ctrl_c_stops_a_run(root, tmp_path, python_sigint_handler):
     m = long_pendulum(root)
     timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
     start = time.perf_counter()
