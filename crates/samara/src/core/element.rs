@@ -212,6 +212,12 @@ pub trait Element: Send + Sync {
     fn signal_time_derivatives(&self, _ctx: &EvalContext, _out: &mut [[f64; 2]]) {}
     /// Residual and (if asked) tangents; `out` is cleared by the caller.
     fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms);
+    /// Asks for the element's data to be brought into the caches (a hint, called a few
+    /// elements ahead of [`Self::evaluate`] by the assembly). By default the element's own
+    /// bytes; an element whose data sit behind a pointer asks for those.
+    fn prefetch(&self) {
+        crate::math::prefetch::prefetch(self);
+    }
     /// Whether [`Element::evaluate`] only adds into `out` (never overwrites or reads it)
     /// and writes its state rows and columns at [`LocalTerms::state_shift`] past its node
     /// unknowns: then consecutive such elements on the same nodes without input signals

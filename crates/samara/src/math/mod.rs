@@ -7,6 +7,7 @@ pub mod cayley;
 pub mod dual;
 pub mod height_field;
 pub mod isa;
+pub mod prefetch;
 pub mod so3;
 pub mod time_function;
 

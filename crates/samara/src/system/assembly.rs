@@ -1636,6 +1636,10 @@ impl Assembler {
 /// element size keeps the working set small.
 pub const PARALLEL_MIN_ELEMENTS: usize = 256;
 
+/// How many elements ahead of the one evaluated the assembly asks for an element's data
+/// ([`Element::prefetch`]).
+const PREFETCH_AHEAD: usize = 2;
+
 /// Elements per parallel task (amortizes rayon's scheduling against a few µs per element).
 const PARALLEL_CHUNK: usize = 16;
 
@@ -1708,6 +1712,9 @@ fn element_terms<M: MulAdd>(
         Need::Residual
     };
     t.clear(need);
+    if let Some(ahead) = sys.elements.get(ks.start + PREFETCH_AHEAD) {
+        ahead.prefetch();
+    }
     let e = &sys.elements[ks.start];
     // A batch's elements write their states one after another ([`batches`]).
     for k in ks {

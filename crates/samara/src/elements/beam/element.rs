@@ -26,6 +26,7 @@ use crate::math::Rotation;
 use crate::math::TimeFunction;
 use crate::math::isa;
 use nalgebra::{DMatrix, Matrix3, Matrix4x3, Matrix6, Vector3, Vector6};
+use smallvec::SmallVec;
 use std::cell::RefCell;
 use std::sync::Arc;
 
@@ -148,22 +149,31 @@ struct LumpedNode {
     offset: bool,
 }
 
+/// A node's constant node-to-section offset `o_k` and its rotation matrix (`None`: the
+/// identity, for the nodes the beam created).
+type Offset = Option<Box<(Quat, Matrix3<f64>)>>;
+
 /// A beam finite element.
 ///
 /// Its point data are compact: per point the weight, η, the reference strains and the
 /// shape functions (all points' in one array), 184 B for a two-node element against
 /// ~1.7 kB with the section matrices stored per point; the sections come from the beam's
 /// shared table.
+///
+/// What an evaluation reads is stored inline up to order 2 (`SmallVec`), in the element's
+/// one allocation: as separate vectors the nodes, offsets, points and shape functions were
+/// five more blocks on the heap, each a dependent cache miss per element and iteration once
+/// the model outgrows the caches (docs/integrators.md, twenty-first round).
 #[derive(Clone, Debug)]
 pub struct BeamElement {
     name: String,
-    nodes: Vec<usize>,
-    offsets: Vec<Option<(Quat, Matrix3<f64>)>>,
+    nodes: SmallVec<[usize; 3]>,
+    offsets: SmallVec<[Offset; 3]>,
     middle: usize,
-    elastic: Vec<ElasticPoint>,
-    inertial: Vec<InertialPoint>,
+    elastic: SmallVec<[ElasticPoint; 2]>,
+    inertial: SmallVec<[InertialPoint; 3]>,
     /// Shape functions of the points: per elastic point h then dh/ds, per inertial point h.
-    shape: Vec<f64>,
+    shape: SmallVec<[f64; 21]>,
     table: Arc<SectionTable>,
     /// `√μᵢ` of the stiffness-proportional damping (None: undamped).
     root_damping: Option<[f64; 6]>,
@@ -190,7 +200,7 @@ impl BeamElement {
         let p = nn - 1;
         let (xi_nodes, _) = super::gll::gauss_lobatto_legendre(p);
         let middle = p / 2;
-        let offsets: Vec<Option<(Quat, Matrix3<f64>)>> = (0..nn)
+        let offsets: SmallVec<[Offset; 3]> = (0..nn)
             .map(|k| {
                 let o = mul(
                     &conj(&from_rotation(&spec.node_frames[k])),
@@ -200,7 +210,7 @@ impl BeamElement {
                 if (o - Quat::new(1.0, 0.0, 0.0, 0.0)).norm() < 1e-14 {
                     None
                 } else {
-                    Some((o, rotation(&o)))
+                    Some(Box::new((o, rotation(&o))))
                 }
             })
             .collect();
@@ -231,7 +241,7 @@ impl BeamElement {
             Quadrature::Full => p + 1,
         };
         let damped = spec.damping.iter().any(|&m| m > 0.0);
-        let mut shape = Vec::new();
+        let mut shape: SmallVec<[f64; 21]> = SmallVec::new();
         let (gx, gw) = super::gll::gauss_legendre(n_el);
         let elastic = gx
             .iter()
@@ -276,7 +286,7 @@ impl BeamElement {
                 let m6 = spec.table.at(eta).mass;
                 let w = gll_w[k] * jac;
                 let j_sec: Matrix3<f64> = m6.fixed_view::<3, 3>(3, 3).into_owned();
-                let j_node = match &offsets[k] {
+                let j_node = match offsets[k].as_deref() {
                     None => j_sec,
                     Some((_, om)) => om * j_sec * om.transpose(),
                 };
@@ -290,7 +300,7 @@ impl BeamElement {
             .collect();
         Self {
             name: spec.name,
-            nodes: spec.nodes,
+            nodes: SmallVec::from_vec(spec.nodes),
             offsets,
             middle,
             elastic,
@@ -344,7 +354,7 @@ impl BeamElement {
     /// (w, x, y, z): the section frame at the node is `q_k ⊗ o_k` (identity for nodes the
     /// beam created).
     pub fn section_offset(&self, k: usize) -> [f64; 4] {
-        match &self.offsets[k] {
+        match self.offsets[k].as_deref() {
             None => [1.0, 0.0, 0.0, 0.0],
             Some((o, _)) => [o[0], o[1], o[2], o[3]],
         }
@@ -382,7 +392,7 @@ impl BeamElement {
         let nn = self.nodes.len();
         for k in 0..nn {
             let nd = &nodes[self.nodes[k]];
-            let (w, wd) = match &self.offsets[k] {
+            let (w, wd) = match self.offsets[k].as_deref() {
                 None => (nd.w, nd.wd),
                 Some((_, om)) => (om.transpose() * nd.w, om.transpose() * nd.wd),
             };
@@ -402,7 +412,7 @@ impl BeamElement {
         for k in 0..nn {
             let nd = &nodes[self.nodes[k]];
             let q = from_rotation(&nd.rot);
-            g.s[k] = match &self.offsets[k] {
+            g.s[k] = match self.offsets[k].as_deref() {
                 None => q,
                 Some((o, _)) => mul(&q, o),
             };
@@ -752,7 +762,9 @@ impl BeamElement {
         }
         // Section-frame increments → node-frame increments for offset nodes.
         for (j, off) in self.offsets.iter().enumerate() {
-            let Some((_, om)) = off else { continue };
+            let Some((_, om)) = off.as_deref() else {
+                continue;
+            };
             let rr: Vector3<f64> =
                 om * Vector3::new(out.r[6 * j + 3], out.r[6 * j + 4], out.r[6 * j + 5]);
             for i in 0..3 {
@@ -1072,6 +1084,9 @@ impl Element for Arc<BeamElement> {
     }
     fn evaluate(&self, ctx: &EvalContext, x: &ElementInput, need: Need, out: &mut LocalTerms) {
         self.as_ref().evaluate(ctx, x, need, out)
+    }
+    fn prefetch(&self) {
+        crate::math::prefetch::prefetch(self.as_ref());
     }
     fn kinetic_energy(&self, x: &ElementInput) -> f64 {
         self.as_ref().kinetic_energy(x)

@@ -155,7 +155,7 @@ impl BeamElement {
         }
         for j in 0..nn {
             let mut m = g_mat(&g.s[j]).transpose() * g.fq[j];
-            if let Some((_, om)) = &self.offsets[j] {
+            if let Some((_, om)) = self.offsets[j].as_deref() {
                 m = om * m;
             }
             for i in 0..3 {
