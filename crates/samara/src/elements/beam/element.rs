@@ -160,7 +160,8 @@ type Offset = Option<Box<(Quat, Matrix3<f64>)>>;
 /// ~1.7 kB with the section matrices stored per point; the sections come from the beam's
 /// shared table.
 ///
-/// What an evaluation reads is stored inline up to order 2 (`SmallVec`), in the element's
+/// What an evaluation reads is stored inline up to order 2 with the default (reduced)
+/// quadrature (`SmallVec`; larger elements spill to the heap as before), in the element's
 /// one allocation: as separate vectors the nodes, offsets, points and shape functions were
 /// five more blocks on the heap, each a dependent cache miss per element and iteration once
 /// the model outgrows the caches (docs/integrators.md, twenty-first round).
