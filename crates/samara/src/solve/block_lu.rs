@@ -63,6 +63,17 @@
 //! relative to the original data (e.g. a multiplier block whose constraint
 //! Jacobian is rank deficient); the second keeps the test scale invariant for
 //! blocks whose Schur complement legitimately has a different magnitude.
+//! The first term is taken during the elimination, each input block's maximum just before
+//! the step that first touches it (its first Schur update, else the step it is a pivot, L
+//! or U block of): read while the step brings it into the cache, not in a sweep of its own
+//! over a matrix that may not fit there.
+//!
+//! # Factor and solve in one sweep
+//!
+//! [`BlockLu::factor_in_place_and_solve`] runs the forward substitution `y_i −= L_ik y_k`
+//! in the elimination's step `k`, right after `L_ik` is formed: the same operations in the
+//! same order as [`BlockLu::solve_in_place`]'s forward sweep (a separator order's held
+//! back like its Schur updates), so the same bits, and one pass less over the factor.
 
 // Dense block kernels index several arrays with one loop variable; ranges read clearer.
 #![allow(clippy::needless_range_loop)]
@@ -126,6 +137,15 @@ struct Scatter {
     col: usize,
 }
 
+/// An input block the pivot test's column maxima read (storage offset, length, block
+/// column's position) at the elimination step that first touches it.
+#[derive(Clone, Copy, Debug)]
+struct Touch {
+    dst: usize,
+    len: u32,
+    col: u32,
+}
+
 /// Symbolic block LU: ordering, filled pattern, storage layout and the flat
 /// list of Schur updates. Reusable for any matrix with the same structure.
 #[derive(Clone, Debug)]
@@ -156,6 +176,14 @@ pub struct BlockLuSymbolic {
     s_mid: Vec<usize>,
     upd_mid: Vec<usize>,
     scatter: Vec<Scatter>,
+    /// The input blocks by the elimination step that first touches them (writes them, or
+    /// reads them as a `U` block): those of step `k` in `touch[touch_ptr[k + 1]..touch_ptr
+    /// [k + 2]]`, read for the column maxima just before the step, still unchanged and
+    /// into the cache the step needs them in; `touch[..touch_ptr[1]]` before the first
+    /// step: with a separator order, the separator columns' blocks a part touches first
+    /// (two threads would otherwise both write their columns' maxima).
+    touch: Vec<Touch>,
+    touch_ptr: Vec<usize>,
     /// Where each input block lives in the factor storage (`BlockStructure::entry_index`
     /// order): a pivot block row-major, an off-diagonal one column-major. An assembly
     /// into these places is the scatter done by the assembler ([`BlockLu::factor_in_place`]).
@@ -358,6 +386,63 @@ impl BlockLuSymbolic {
                 debug_assert!(dst < n_input, "an input block among the fill");
             }
         }
+        // ---- the step that first touches each input block: its earliest Schur update,
+        // else the step it is a pivot, L or U block of ----
+        let mut by_dst: Vec<(usize, usize)> = scatter
+            .iter()
+            .enumerate()
+            .map(|(q, sc)| (sc.dst, q))
+            .collect();
+        by_dst.sort_unstable();
+        let mut first: Vec<usize> = scatter
+            .iter()
+            .map(|sc| pos[sc.row as usize].min(sc.col))
+            .collect();
+        for k in 0..n {
+            for up in &upd[upd_ptr[k]..upd_ptr[k + 1]] {
+                if up.dst < n_input {
+                    let q = by_dst[by_dst.partition_point(|&(d, _)| d < up.dst)].1;
+                    first[q] = first[q].min(k);
+                }
+            }
+        }
+        drop(by_dst);
+        // Group 0 before the first step, group k + 1 at step k.
+        let group = |q: usize| -> usize {
+            if scatter[q].col >= sep_start && first[q] < sep_start {
+                0
+            } else {
+                first[q] + 1
+            }
+        };
+        let mut touch_ptr = vec![0usize; n + 3];
+        for q in 0..scatter.len() {
+            touch_ptr[group(q) + 2] += 1;
+        }
+        for g in 2..touch_ptr.len() {
+            touch_ptr[g] += touch_ptr[g - 1];
+        }
+        let mut touch = vec![
+            Touch {
+                dst: 0,
+                len: 0,
+                col: 0
+            };
+            scatter.len()
+        ];
+        for (q, sc) in scatter.iter().enumerate() {
+            let at = &mut touch_ptr[group(q) + 1];
+            touch[*at] = Touch {
+                dst: sc.dst,
+                len: sc.rows * sc.cols,
+                col: sc.col as u32,
+            };
+            *at += 1;
+        }
+        touch_ptr.pop();
+        debug_assert_eq!(touch_ptr[n + 1], scatter.len());
+        drop(first);
+
         // Every fill block is written by an update before anything reads it.
         debug_assert!(s_ent.iter().all(|e| {
             [e.l, e.u]
@@ -392,6 +477,8 @@ impl BlockLuSymbolic {
             s_mid,
             upd_mid,
             scatter,
+            touch,
+            touch_ptr,
             placement: placement.into(),
             n_input,
             n_values,
@@ -812,26 +899,21 @@ impl BlockLu {
         assert_eq!(a.structure.dim(), sym.dim);
         self.factored = false;
         let vals = &mut self.values[..];
-        let colmax = &mut self.colmax[..];
 
         // ---- scatter ----
-        colmax.fill(0.0);
         let av = &a.values[..];
         for sc in &sym.scatter {
             let (rows, cols) = (sc.rows as usize, sc.cols as usize);
             let len = rows * cols;
             let src = &av[sc.src..sc.src + len];
             let dst = &mut vals[sc.dst..sc.dst + len];
-            let m = abs_max(src);
             if sc.transpose {
                 transpose_into(src, dst, rows, cols);
             } else {
                 dst.copy_from_slice(src);
             }
-            let c = &mut colmax[sc.col];
-            *c = c.max(m);
         }
-        self.eliminate()
+        self.eliminate(None)
     }
 
     /// Numeric factorization of the matrix assembled straight into the factor storage:
@@ -853,8 +935,7 @@ impl BlockLu {
     }
 
     isa::copies! {
-        /// [`Self::factor_in_place`] after the swap: the column maxima in the AVX copy on
-        /// every CPU with AVX, the elimination as in [`Self::factor`].
+        /// [`Self::factor_in_place`] after the swap, the elimination as in [`Self::factor`].
         fn factor_swapped_in(&mut self: BlockLu) -> Result<(), SingularBlock>
         where isa = self.isa
         {
@@ -864,36 +945,40 @@ impl BlockLu {
 
     #[inline(always)]
     fn factor_in_place_impl(&mut self) -> Result<(), SingularBlock> {
-        let sym = &*self.sym;
-        self.factored = false;
-        let vals = &self.values[..];
-        let colmax = &mut self.colmax[..];
-        // The pivot test's column maxima over the input blocks, in the scatter's order
-        // (the blocks the elimination needs first are read last).
-        colmax.fill(0.0);
-        for sc in &sym.scatter {
-            let len = sc.rows as usize * sc.cols as usize;
-            let m = abs_max(&vals[sc.dst..sc.dst + len]);
-            let c = &mut colmax[sc.col];
-            *c = c.max(m);
-        }
-        self.eliminate()
+        self.eliminate(None)
     }
 
-    /// The elimination on the scattered factor storage and its column maxima.
+    /// The elimination on the scattered factor storage, the pivot test's column maxima
+    /// taken on the way ([`BlockLuSymbolic::touch`]); with `rhs`, the forward substitution
+    /// `L y = b` of the solve in the same sweep (the `L` blocks of a step are used while
+    /// they are in the cache), the same operations in the same order as
+    /// [`Self::solve_in_place`]'s, so the same bits.
     #[inline(always)]
-    fn eliminate(&mut self) -> Result<(), SingularBlock> {
+    fn eliminate(&mut self, rhs: Option<&mut [f64]>) -> Result<(), SingularBlock> {
         let sym = &*self.sym;
         let vals = &mut self.values[..];
-        let colmax = &self.colmax[..];
+        let colmax = &mut self.colmax[..];
         let work = &mut self.work[..];
         let piv = &mut self.piv[..];
         let perm = &mut self.perm[..];
         let isa = self.isa;
+        if let Some(r) = &rhs {
+            assert_eq!(r.len(), sym.dim);
+        }
+        let x = rhs.map(|r| Shared(r.as_mut_ptr()));
+
+        // ---- the maxima of the blocks no step's group takes ----
+        colmax.fill(0.0);
+        for t in &sym.touch[sym.touch_ptr[0]..sym.touch_ptr[1]] {
+            let m = abs_max(&vals[t.dst..t.dst + t.len as usize]);
+            let c = &mut colmax[t.col as usize];
+            *c = c.max(m);
+        }
 
         // ---- elimination ----
         let vp = Shared(vals.as_mut_ptr());
         let pp = Shared(perm.as_mut_ptr());
+        let cp = Shared(colmax.as_mut_ptr());
         match sym.split {
             Some([a, b]) if parallel() => {
                 // The two parts on two threads, their updates into the separator's blocks
@@ -902,24 +987,23 @@ impl BlockLu {
                 let (piv2, work2) = (&mut self.piv2[..], &mut self.work2[..]);
                 let (ra, rb) = rayon::join(
                     // SAFETY: a part's steps read and write only its own blocks (pivots,
-                    // multipliers, Schur updates within the part) and its blocks'
-                    // permutation entries; the parts share no block.
-                    || unsafe { eliminate_steps(isa, sym, 0..a, true, vp, pp, colmax, piv, work) },
-                    || unsafe {
-                        eliminate_steps(isa, sym, a..b, true, vp, pp, colmax, piv2, work2)
-                    },
+                    // multipliers, Schur updates within the part), its blocks'
+                    // permutation entries, its columns' maxima and its rows of `rhs`;
+                    // the parts share no block.
+                    || unsafe { eliminate_steps(isa, sym, 0..a, true, vp, pp, cp, x, piv, work) },
+                    || unsafe { eliminate_steps(isa, sym, a..b, true, vp, pp, cp, x, piv2, work2) },
                 );
                 ra?;
                 rb?;
                 for k in 0..b {
                     // SAFETY: the parts are done; one thread.
-                    unsafe { schur_updates(isa, sym, k, sym.upd_mid[k]..sym.upd_ptr[k + 1], vp) };
+                    unsafe { held_back(isa, sym, k, vp, x) };
                 }
                 // SAFETY: one thread.
-                unsafe { eliminate_steps(isa, sym, b..sym.n, false, vp, pp, colmax, piv, work)? };
+                unsafe { eliminate_steps(isa, sym, b..sym.n, false, vp, pp, cp, x, piv, work)? };
             }
             // SAFETY: one thread.
-            _ => unsafe { eliminate_steps(isa, sym, 0..sym.n, false, vp, pp, colmax, piv, work)? },
+            _ => unsafe { eliminate_steps(isa, sym, 0..sym.n, false, vp, pp, cp, x, piv, work)? },
         }
         self.factored = true;
         Ok(())
@@ -936,21 +1020,25 @@ impl BlockLu {
 
     #[inline(always)]
     fn solve_impl<F: Arith>(&mut self, rhs: &mut [f64]) {
-        let sym = &*self.sym;
         assert!(self.factored, "BlockLu::solve_in_place: not factored");
-        assert_eq!(rhs.len(), sym.dim);
+        assert_eq!(rhs.len(), self.sym.dim);
+        self.forward_impl::<F>(rhs);
+        self.backward_impl::<F>(rhs);
+    }
+
+    /// Forward substitution `L y = b` in place.
+    #[inline(always)]
+    fn forward_impl<F: Arith>(&self, rhs: &mut [f64]) {
+        let sym = &*self.sym;
         let vals = &self.values[..];
-        let perm = &self.perm[..];
         let x = Shared(rhs.as_mut_ptr());
         let n = sym.n;
         match sym.split {
             Some([a, b]) if parallel() && SPLIT_SOLVE => {
-                // The parts' substitutions on two threads, the forward one's updates of the
-                // separator's blocks held back and applied after them in step order (the
+                // The parts' substitutions on two threads, their updates of the
+                // separator's rows held back and applied after them in step order (the
                 // same operations in the same order as one thread's).
-                let (work, work2) = (&mut self.work[..], &mut self.work2[..]);
-                // SAFETY: a part's steps write only its own blocks of `rhs` and read its own
-                // and (backward) the separator's, which no thread writes meanwhile.
+                // SAFETY: a part's steps write only its own blocks of `rhs`.
                 rayon::join(
                     || unsafe { forward_steps::<F>(sym, vals, 0..a, true, x) },
                     || unsafe { forward_steps::<F>(sym, vals, a..b, true, x) },
@@ -958,10 +1046,30 @@ impl BlockLu {
                 for k in 0..b {
                     let ents = &sym.s_ent[sym.s_mid[k]..sym.s_ptr[k + 1]];
                     // SAFETY: one thread.
-                    unsafe { forward_dyn::<F>(ents, vals, sym.roff[k], sym.size[k], x) };
+                    unsafe { forward_dyn::<F>(ents, vals.as_ptr(), sym.roff[k], sym.size[k], x) };
                 }
-                // SAFETY: one thread, then as above.
+                // SAFETY: one thread.
                 unsafe { forward_steps::<F>(sym, vals, b..n, false, x) };
+            }
+            // SAFETY: one thread.
+            _ => unsafe { forward_steps::<F>(sym, vals, 0..n, false, x) },
+        }
+    }
+
+    /// Backward substitution `U x = y` in place.
+    #[inline(always)]
+    fn backward_impl<F: Arith>(&mut self, rhs: &mut [f64]) {
+        let sym = &*self.sym;
+        let vals = &self.values[..];
+        let perm = &self.perm[..];
+        let x = Shared(rhs.as_mut_ptr());
+        let n = sym.n;
+        match sym.split {
+            Some([a, b]) if parallel() && SPLIT_SOLVE => {
+                let (work, work2) = (&mut self.work[..], &mut self.work2[..]);
+                // SAFETY: one thread, then a part's steps write only its own blocks of
+                // `rhs` and read its own and the separator's, which no thread writes
+                // meanwhile.
                 unsafe { backward_steps::<F>(sym, vals, perm, b..n, x, work) };
                 rayon::join(
                     || unsafe { backward_steps::<F>(sym, vals, perm, 0..a, x, work) },
@@ -971,12 +1079,48 @@ impl BlockLu {
             _ => {
                 let work = &mut self.work[..];
                 // SAFETY: one thread.
-                unsafe {
-                    forward_steps::<F>(sym, vals, 0..n, false, x);
-                    backward_steps::<F>(sym, vals, perm, 0..n, x, work);
-                }
+                unsafe { backward_steps::<F>(sym, vals, perm, 0..n, x, work) };
             }
         }
+    }
+
+    /// [`Self::factor_in_place`] and [`Self::solve_in_place`] of `rhs` in one: the forward
+    /// substitution runs in the elimination's sweep (each step's `L` blocks used while they
+    /// are in the cache; [`Self::eliminate`]), the same operations in the same order, so the
+    /// same bits as the two calls. On an error `rhs` is garbage.
+    pub fn factor_in_place_and_solve(
+        &mut self,
+        values: &mut Vec<f64>,
+        rhs: &mut [f64],
+    ) -> Result<(), SingularBlock> {
+        assert_eq!(
+            values.len(),
+            self.sym.n_values,
+            "BlockLu::factor_in_place_and_solve: storage does not match the symbolic \
+             factorization"
+        );
+        std::mem::swap(&mut self.values, values);
+        self.factor_solve_swapped_in(rhs)
+    }
+
+    isa::copies! {
+        /// [`Self::factor_in_place_and_solve`] after the swap, in the copies of
+        /// [`Self::solve_in_place`].
+        fn factor_solve_swapped_in(&mut self: BlockLu, rhs: &mut [f64])
+            -> Result<(), SingularBlock>
+        where isa = self.isa
+        {
+            Base | Avx => factor_solve_impl::<Plain>,
+            Fma | Avx512 => factor_solve_impl::<Fused>,
+        }
+    }
+
+    #[inline(always)]
+    fn factor_solve_impl<F: Arith>(&mut self, rhs: &mut [f64]) -> Result<(), SingularBlock> {
+        self.factored = false;
+        self.eliminate(Some(rhs))?;
+        self.backward_impl::<F>(rhs);
+        Ok(())
     }
 
     isa::copies! {
@@ -1089,13 +1233,17 @@ fn parallel() -> bool {
 }
 
 isa::copies! {
-    /// Elimination steps `ks`: LU of the pivot block `D_k`, `L_ik = A_ik D_k⁻¹`, and the
-    /// Schur updates `A_ij −= L_ik U_kj`; with `part_only`, not those into the separator's
-    /// blocks. In the copy of `isa` (the `Fma` and `Avx512` ones fused).
+    /// Elimination steps `ks`: the column maxima of the input blocks the step touches
+    /// first, LU of the pivot block `D_k`, `L_ik = A_ik D_k⁻¹`, with `rhs` the forward
+    /// substitution `y_i −= L_ik y_k`, and the Schur updates `A_ij −= L_ik U_kj`; with
+    /// `part_only`, not those into the separator's blocks and rows. In the copy of `isa`
+    /// (the `Fma` and `Avx512` ones fused).
     ///
     /// # Safety
-    /// `vals` and `perm` are the factor storage and the pivot permutations of `sym`; no
-    /// other thread touches the blocks of the steps `ks` or their updates' destinations.
+    /// `vals`, `perm` and `colmax` are the factor storage, the pivot permutations and the
+    /// column maxima of `sym`, `rhs` a vector of its dimension; no other thread touches
+    /// the blocks of the steps `ks`, their updates' destinations, their columns' maxima or
+    /// their rows of `rhs`.
     #[allow(clippy::too_many_arguments)]
     unsafe fn eliminate_steps(
         isa: Isa,
@@ -1104,7 +1252,8 @@ isa::copies! {
         part_only: bool,
         vals: Shared<f64>,
         perm: Shared<u32>,
-        colmax: &[f64],
+        colmax: Shared<f64>,
+        rhs: Option<Shared<f64>>,
         piv: &mut [u32],
         work: &mut [f64],
     ) -> Result<(), SingularBlock> {
@@ -1121,11 +1270,26 @@ unsafe fn eliminate_steps_impl<F: Arith>(
     part_only: bool,
     vals: Shared<f64>,
     perm: Shared<u32>,
-    colmax: &[f64],
+    colmax: Shared<f64>,
+    rhs: Option<Shared<f64>>,
     piv: &mut [u32],
     work: &mut [f64],
 ) -> Result<(), SingularBlock> {
     for k in ks {
+        // The maxima of the input blocks this step touches first (unchanged until now);
+        // their columns are this step's or later ones of its part or the separator's.
+        for t in &sym.touch[sym.touch_ptr[k + 1]..sym.touch_ptr[k + 2]] {
+            // SAFETY: an input block of this step (caller), in the storage; its column's
+            // maximum is this thread's (the symbolic phase's groups).
+            unsafe {
+                let m = abs_max(std::slice::from_raw_parts(
+                    vals.0.add(t.dst),
+                    t.len as usize,
+                ));
+                let c = &mut *colmax.0.add(t.col as usize);
+                *c = c.max(m);
+            }
+        }
         let sk = sym.size[k];
         let d = sym.d_off[k];
         let rk = sym.roff[k];
@@ -1137,7 +1301,8 @@ unsafe fn eliminate_steps_impl<F: Arith>(
             )
         };
         let bmax = db.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let thr = PIVOT_RTOL * colmax[k].max(bmax);
+        // SAFETY: column k's maximum is complete (its blocks' groups are steps ≤ k).
+        let thr = PIVOT_RTOL * unsafe { *colmax.0.add(k) }.max(bmax);
         if !lu_block::<F>(db, &mut piv[..sk], pk, sk, thr) {
             return Err(SingularBlock {
                 block: sym.order[k],
@@ -1149,6 +1314,16 @@ unsafe fn eliminate_steps_impl<F: Arith>(
             // SAFETY: L_ik is block column k's, disjoint from D_k.
             let lb = unsafe { std::slice::from_raw_parts_mut(vals.0.add(e.l), e.size * sk) };
             rsolve_block::<F>(lb, db, pk, e.size, sk, work);
+        }
+        if let Some(x) = rhs {
+            let end = if part_only {
+                sym.s_mid[k]
+            } else {
+                sym.s_ptr[k + 1]
+            };
+            // SAFETY: y_k is final (every earlier step's update of it is done) and the
+            // rows written are this thread's (caller).
+            unsafe { forward_dyn::<F>(&sym.s_ent[sym.s_ptr[k]..end], vals.0, rk, sk, x) };
         }
         let end = if part_only {
             sym.upd_mid[k]
@@ -1162,20 +1337,38 @@ unsafe fn eliminate_steps_impl<F: Arith>(
 }
 
 isa::copies! {
-    /// [`schur_range`] in the copy of `isa`: for a part's step `k`, its updates `r` into
-    /// the separator's blocks.
+    /// What a part's step `k` held back, in the copy of `isa`: its Schur updates into the
+    /// separator's blocks and, with `rhs`, its forward substitution into the separator's
+    /// rows.
     ///
     /// # Safety
-    /// As [`eliminate_steps`], for step `k`'s updates `r`.
-    unsafe fn schur_updates(
+    /// As [`eliminate_steps`], for step `k`'s updates and rows.
+    unsafe fn held_back(
         isa: Isa,
         sym: &BlockLuSymbolic,
         k: usize,
-        r: std::ops::Range<usize>,
         vals: Shared<f64>,
+        rhs: Option<Shared<f64>>,
     ) {
-        Base | Avx => schur_range::<Plain>,
-        Fma | Avx512 => schur_range::<Fused>,
+        Base | Avx => held_back_impl::<Plain>,
+        Fma | Avx512 => held_back_impl::<Fused>,
+    }
+}
+
+#[inline(always)]
+unsafe fn held_back_impl<F: Arith>(
+    sym: &BlockLuSymbolic,
+    k: usize,
+    vals: Shared<f64>,
+    rhs: Option<Shared<f64>>,
+) {
+    // SAFETY: the caller's.
+    unsafe {
+        schur_range::<F>(sym, k, sym.upd_mid[k]..sym.upd_ptr[k + 1], vals);
+        if let Some(x) = rhs {
+            let ents = &sym.s_ent[sym.s_mid[k]..sym.s_ptr[k + 1]];
+            forward_dyn::<F>(ents, vals.0, sym.roff[k], sym.size[k], x);
+        }
     }
 }
 
@@ -1234,7 +1427,7 @@ unsafe fn forward_steps<F: Arith>(
         };
         let ents = &sym.s_ent[sym.s_ptr[k]..end];
         // SAFETY: the caller's.
-        unsafe { forward_dyn::<F>(ents, vals, sym.roff[k], sym.size[k], x) };
+        unsafe { forward_dyn::<F>(ents, vals.as_ptr(), sym.roff[k], sym.size[k], x) };
     }
 }
 
@@ -1245,7 +1438,7 @@ unsafe fn forward_steps<F: Arith>(
 #[inline(always)]
 unsafe fn forward_dyn<F: Arith>(
     ents: &[OffDiag],
-    vals: &[f64],
+    vals: *const f64,
     rk: usize,
     sk: usize,
     x: Shared<f64>,
@@ -1274,7 +1467,7 @@ unsafe fn forward_dyn<F: Arith>(
 #[inline(always)]
 unsafe fn forward_column<F: Arith, const S: usize>(
     ents: &[OffDiag],
-    vals: &[f64],
+    vals: *const f64,
     rk: usize,
     x: Shared<f64>,
 ) {
@@ -1290,7 +1483,7 @@ unsafe fn forward_column<F: Arith, const S: usize>(
 #[inline(always)]
 unsafe fn forward_entries<F: Arith>(
     ents: &[OffDiag],
-    vals: &[f64],
+    vals: *const f64,
     rk: usize,
     sk: usize,
     x: Shared<f64>,
@@ -1299,7 +1492,7 @@ unsafe fn forward_entries<F: Arith>(
     unsafe {
         let yk = std::slice::from_raw_parts(x.0.add(rk), sk);
         for e in ents {
-            let lb = &vals[e.l..e.l + e.size * sk];
+            let lb = std::slice::from_raw_parts(vals.add(e.l), e.size * sk);
             let yi = std::slice::from_raw_parts_mut(x.0.add(e.roff), e.size);
             matvec_acc::<F>(lb, yk, yi, e.size, sk, -1.0);
         }
@@ -2498,10 +2691,144 @@ mod tests {
             placed.fill_zero();
             assert_eq!(
                 in_place
-                    .factor_in_place(&mut placed.values)
+                    .factor_in_place(placed.settled_values())
                     .unwrap_err()
                     .block,
                 copied
+                    .factor(&BlockMatrix::zeros(s.clone()))
+                    .unwrap_err()
+                    .block
+            );
+        }
+    }
+
+    /// The pivot test's column maxima, taken block by block at the step that first touches
+    /// each input block ([`BlockLuSymbolic::touch`]), are those of the input matrix's block
+    /// columns: on one order and on a separator order (whose separator columns' blocks a
+    /// part touches first are taken before the steps), one thread and two.
+    #[test]
+    fn column_maxima_are_the_input_columns_maxima() {
+        for split in [usize::MAX, TEST_SPLIT_MIN_BLOCKS] {
+            let (s, _) = kkt_tree(&chain_parent(70), &[5, 3, 1, 2, 4, 6, 7], true);
+            let s = Arc::new(s);
+            let sym = Arc::new(BlockLuSymbolic::with_split_from(&s, split).unwrap());
+            assert_eq!(sym.split().is_some(), split != usize::MAX);
+            if let Some([_, b]) = sym.split() {
+                assert!(
+                    sym.touch_ptr[1] > 0,
+                    "separator blocks a part touches first"
+                );
+                assert!(
+                    sym.touch[..sym.touch_ptr[1]]
+                        .iter()
+                        .all(|t| t.col as usize >= b)
+                );
+            }
+            assert!(
+                sym.upd.iter().any(|u| u.dst < sym.n_input),
+                "updates of input blocks"
+            );
+            let mut m = BlockMatrix::zeros(s.clone());
+            fill_random(&mut m, &mut Rng(3), true);
+            let mut expected = vec![0.0f64; sym.n];
+            for sc in &sym.scatter {
+                let len = (sc.rows * sc.cols) as usize;
+                let c = &mut expected[sc.col];
+                *c = c.max(
+                    m.values[sc.src..sc.src + len]
+                        .iter()
+                        .fold(0.0, |a, x| a.max(x.abs())),
+                );
+            }
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let colmax = pool.install(|| {
+                    let mut lu = BlockLu::new(sym.clone());
+                    lu.factor(&m).unwrap();
+                    lu.colmax.clone()
+                });
+                assert_eq!(colmax, expected, "threads {threads}, split {split}");
+            }
+        }
+    }
+
+    /// Factoring in place and solving in one sweep (the forward substitution in the
+    /// elimination's) gives the bits of `factor_in_place` then `solve_in_place`: on one
+    /// order and on a separator order, one thread and two; a singular pivot is reported at
+    /// the same block.
+    #[test]
+    fn factor_and_solve_in_one_sweep_matches_the_two_calls_to_the_bit() {
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for split in [usize::MAX, TEST_SPLIT_MIN_BLOCKS] {
+            let (s, _) = kkt_tree(&chain_parent(90), &[5, 3, 7], true);
+            let s = Arc::new(s);
+            let sym = Arc::new(BlockLuSymbolic::with_split_from(&s, split).unwrap());
+            let mut rng = Rng(11);
+            let mut a = BlockMatrix::zeros(s.clone());
+            fill_random(&mut a, &mut rng, true);
+            let placed = |a: &BlockMatrix| {
+                let mut p = BlockMatrix::with_placement(
+                    s.clone(),
+                    sym.placement().clone(),
+                    sym.n_factor_values(),
+                    sym.n_input_values(),
+                );
+                for (e, rm) in s.slots().iter().enumerate() {
+                    let src = &a.values[rm.offset..rm.offset + rm.len];
+                    let cols = rm.row_stride;
+                    let v = p.view(e);
+                    for r in 0..rm.len / cols {
+                        for c in 0..cols {
+                            let i = v.at(r, c);
+                            v.values[i] = src[r * cols + c];
+                        }
+                    }
+                }
+                p
+            };
+            let b: Vec<f64> = (0..s.dim()).map(|_| rng.uniform()).collect();
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| {
+                    let (mut two, mut one) = (BlockLu::new(sym.clone()), BlockLu::new(sym.clone()));
+                    let mut x0 = b.clone();
+                    two.factor_in_place(&mut placed(&a).values).unwrap();
+                    two.solve_in_place(&mut x0);
+                    let mut x1 = b.clone();
+                    one.factor_in_place_and_solve(&mut placed(&a).values, &mut x1)
+                        .unwrap();
+                    assert_eq!(bits(&two.values), bits(&one.values));
+                    assert_eq!(bits(&x0), bits(&x1), "threads {threads}, split {split}");
+                    // The factorization is kept for further solves.
+                    let (mut y0, mut y1) = (b.clone(), b.clone());
+                    two.solve_in_place(&mut y0);
+                    one.solve_in_place(&mut y1);
+                    assert_eq!(bits(&y0), bits(&y1));
+                });
+            }
+            let n = s.dim();
+            let mut x = b.clone();
+            BlockLu::new(sym.clone())
+                .factor_in_place_and_solve(&mut placed(&a).values, &mut x)
+                .unwrap();
+            let xr = dense_of(&a)
+                .partial_piv_lu()
+                .solve(Mat::from_fn(n, 1, |r, _| b[r]));
+            assert!(rel_err(&x, &xr) < 1e-10, "against a dense LU");
+            let mut zero = placed(&BlockMatrix::zeros(s.clone()));
+            let mut x = b.clone();
+            assert_eq!(
+                BlockLu::new(sym.clone())
+                    .factor_in_place_and_solve(&mut zero.values, &mut x)
+                    .unwrap_err()
+                    .block,
+                BlockLu::new(sym.clone())
                     .factor(&BlockMatrix::zeros(s.clone()))
                     .unwrap_err()
                     .block

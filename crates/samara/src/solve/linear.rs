@@ -132,7 +132,7 @@ impl LinearSolver {
         self.fallback_from = None;
         self.reassemble = false;
         if !a.is_row_major() {
-            return match self.block.factor_in_place(&mut a.values) {
+            return match self.block.factor_in_place(a.settled_values()) {
                 Ok(()) => {
                     self.stats.factorizations += 1;
                     self.active = Active::Block;
@@ -178,6 +178,46 @@ impl LinearSolver {
             Err(LinearError::Singular {
                 block: block_err.unwrap_or(0),
             })
+        }
+    }
+
+    /// [`Self::factor`] and [`Self::solve_in_place`] of `rhs` in one. For a matrix
+    /// assembled into the block LU's factor storage, the forward substitution runs in the
+    /// elimination's sweep ([`BlockLu::factor_in_place_and_solve`]; the same bits as the two
+    /// calls). On an error `rhs` is garbage.
+    pub fn factor_and_solve(
+        &mut self,
+        a: &mut BlockMatrix,
+        rhs: &mut [f64],
+    ) -> Result<(), LinearError> {
+        if a.is_row_major() {
+            self.factor(a)?;
+            self.solve_in_place(rhs);
+            return Ok(());
+        }
+        self.active = Active::None;
+        self.fallback_from = None;
+        self.reassemble = false;
+        match self
+            .block
+            .factor_in_place_and_solve(a.settled_values(), rhs)
+        {
+            Ok(()) => {
+                self.stats.factorizations += 1;
+                self.stats.solves += 1;
+                self.active = Active::Block;
+                Ok(())
+            }
+            Err(e) if self.kind == LinearSolverType::Block => {
+                self.stats.factorizations += 1;
+                Err(LinearError::Singular { block: e.block })
+            }
+            Err(e) => {
+                // As in `factor`: the fallback needs the matrix assembled again.
+                *a = BlockMatrix::zeros(a.structure.clone());
+                self.reassemble = true;
+                Err(LinearError::Singular { block: e.block })
+            }
         }
     }
 

@@ -214,23 +214,28 @@ pub fn newton(
             report.first_residual = rn;
         }
         report.last_residual = rn;
+        for (d, r) in work.delta.iter_mut().zip(&work.residual) {
+            *d = -r;
+        }
         if refactor {
-            let mut factored = lin.factor(matrix);
+            // Factored and solved in one sweep where the linear solver can.
+            let mut factored = lin.factor_and_solve(matrix, &mut work.delta);
             if lin.needs_assembly() {
                 // The block LU rejected a matrix assembled into its storage: the fallback
                 // gets it assembled again, row-major (the same iterate, the same values).
                 problem.evaluate(&mut work.residual, Some(matrix));
-                factored = lin.factor(matrix);
+                for (d, r) in work.delta.iter_mut().zip(&work.residual) {
+                    *d = -r;
+                }
+                factored = lin.factor_and_solve(matrix, &mut work.delta);
             }
             factored.map_err(|e| match e {
                 LinearError::Singular { block } => NewtonFailure::Singular { block },
             })?;
             report.factorizations += 1;
+        } else {
+            lin.solve_in_place(&mut work.delta);
         }
-        for (d, r) in work.delta.iter_mut().zip(&work.residual) {
-            *d = -r;
-        }
-        lin.solve_in_place(&mut work.delta);
         if !all_finite(&work.delta) {
             // A pivot the block LU rejected that the sparse LU let through is the cause.
             return Err(match lin.fallback_block() {
