@@ -407,15 +407,6 @@ impl BlockMatrix {
         }
     }
 
-    /// Asks for the lines of stored block `e` ahead of a [`Self::view`] of it (a hint).
-    #[inline(always)]
-    pub fn prefetch_block(&self, e: usize) {
-        let s = self.slot(e);
-        if let Some(v) = self.values.get(s.offset..s.offset + s.len) {
-            crate::math::prefetch::prefetch(v);
-        }
-    }
-
     fn assert_row_major(&self) {
         assert!(
             self.placement.is_none(),

@@ -982,13 +982,6 @@ impl Assembler {
                         });
                     for (i, slot) in window[..len].iter().enumerate() {
                         let k = start + i;
-                        if let (Some(m), Some(ahead)) =
-                            (matrix.as_deref(), this.element_slots.get(k + SCATTER_AHEAD))
-                        {
-                            for &e in ahead {
-                                m.prefetch_block(e);
-                            }
-                        }
                         let t = &slot.terms[this.alone_term_of[k]];
                         this.scatter_element::<Separate>(
                             sys,
@@ -1646,10 +1639,6 @@ pub const PARALLEL_MIN_ELEMENTS: usize = 256;
 /// How many elements ahead of the one evaluated the assembly asks for an element's data
 /// ([`Element::prefetch`]).
 const PREFETCH_AHEAD: usize = 2;
-
-/// How many elements ahead of the one scattered a windowed assembly asks for the
-/// iteration matrix's blocks an element adds into (past the caches at 10,000 beam elements).
-const SCATTER_AHEAD: usize = 4;
 
 /// Elements per parallel task (amortizes rayon's scheduling against a few µs per element).
 const PARALLEL_CHUNK: usize = 16;
