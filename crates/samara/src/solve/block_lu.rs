@@ -955,6 +955,7 @@ impl BlockLu {
     /// [`Self::solve_in_place`]'s, so the same bits.
     #[inline(always)]
     fn eliminate(&mut self, rhs: Option<&mut [f64]>) -> Result<(), SingularBlock> {
+        self.factored = false;
         let sym = &*self.sym;
         let vals = &mut self.values[..];
         let colmax = &mut self.colmax[..];
@@ -2687,7 +2688,9 @@ mod tests {
             copied.solve_in_place(&mut x0);
             in_place.solve_in_place(&mut x1);
             assert_eq!(bits(&x0), bits(&x1));
-            // A zero matrix is found singular in place at the same block.
+            // A zero matrix is found singular in place at the same block, and the failed
+            // factorization is not taken for the earlier one.
+            assert!(in_place.factored);
             placed.fill_zero();
             assert_eq!(
                 in_place
@@ -2699,6 +2702,7 @@ mod tests {
                     .unwrap_err()
                     .block
             );
+            assert!(!in_place.factored && !copied.factored);
         }
     }
 

@@ -430,8 +430,8 @@ impl BlockMatrix {
         self.lazy = true;
     }
 
-    /// The values, with the blocks [`Self::fill_zero`] cleared and no view has touched
-    /// since zeroed now: what a factorization of the storage reads.
+    /// The values, after zeroing the blocks no view has touched since [`Self::fill_zero`]
+    /// and the values between blocks: what a factorization of the storage reads.
     pub fn settled_values(&mut self) -> &mut Vec<f64> {
         if std::mem::take(&mut self.lazy) {
             let epoch = self.epoch;
