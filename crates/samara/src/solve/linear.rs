@@ -9,7 +9,7 @@
 //! row-major: when the block LU rejects such a matrix, the matrix is switched to the
 //! row-major layout and [`LinearSolver::needs_assembly`] asks for it to be assembled again.
 
-use super::block_lu::{BlockLu, BlockLuSymbolic};
+use super::block_lu::{BlockLu, BlockLuSymbolic, SingularBlock};
 use super::sparse_lu::SparseLu;
 use super::{BlockMatrix, BlockStructure};
 use schemars::JsonSchema;
@@ -132,24 +132,8 @@ impl LinearSolver {
         self.fallback_from = None;
         self.reassemble = false;
         if !a.is_row_major() {
-            return match self.block.factor_in_place(a.settled_values()) {
-                Ok(()) => {
-                    self.stats.factorizations += 1;
-                    self.active = Active::Block;
-                    Ok(())
-                }
-                Err(e) if self.kind == LinearSolverType::Block => {
-                    self.stats.factorizations += 1;
-                    Err(LinearError::Singular { block: e.block })
-                }
-                Err(e) => {
-                    // The fallback needs the matrix, which the elimination overwrote:
-                    // row-major from now on, assembled again by the caller.
-                    *a = BlockMatrix::zeros(a.structure.clone());
-                    self.reassemble = true;
-                    Err(LinearError::Singular { block: e.block })
-                }
-            };
+            let r = self.block.factor_in_place(a.settled_values());
+            return self.factored_in_place(a, r);
         }
         self.stats.factorizations += 1;
         let block_err = match self.kind {
@@ -198,13 +182,24 @@ impl LinearSolver {
         self.active = Active::None;
         self.fallback_from = None;
         self.reassemble = false;
-        match self
+        let r = self
             .block
-            .factor_in_place_and_solve(a.settled_values(), rhs)
-        {
+            .factor_in_place_and_solve(a.settled_values(), rhs);
+        if r.is_ok() {
+            self.stats.solves += 1;
+        }
+        self.factored_in_place(a, r)
+    }
+
+    /// The outcome of a factorization of `a` in the block LU's factor storage.
+    fn factored_in_place(
+        &mut self,
+        a: &mut BlockMatrix,
+        r: Result<(), SingularBlock>,
+    ) -> Result<(), LinearError> {
+        match r {
             Ok(()) => {
                 self.stats.factorizations += 1;
-                self.stats.solves += 1;
                 self.active = Active::Block;
                 Ok(())
             }
@@ -213,7 +208,8 @@ impl LinearSolver {
                 Err(LinearError::Singular { block: e.block })
             }
             Err(e) => {
-                // As in `factor`: the fallback needs the matrix assembled again.
+                // The fallback needs the matrix, which the elimination overwrote:
+                // row-major from now on, assembled again by the caller.
                 *a = BlockMatrix::zeros(a.structure.clone());
                 self.reassemble = true;
                 Err(LinearError::Singular { block: e.block })
