@@ -1118,7 +1118,6 @@ impl BlockLu {
 
     #[inline(always)]
     fn factor_solve_impl<F: Arith>(&mut self, rhs: &mut [f64]) -> Result<(), SingularBlock> {
-        self.factored = false;
         self.eliminate(Some(rhs))?;
         self.backward_impl::<F>(rhs);
         Ok(())
