@@ -142,8 +142,8 @@ struct Scatter {
 #[derive(Clone, Copy, Debug)]
 struct Touch {
     dst: usize,
-    len: u32,
-    col: u32,
+    len: usize,
+    col: usize,
 }
 
 /// Symbolic block LU: ordering, filled pattern, storage layout and the flat
@@ -434,8 +434,8 @@ impl BlockLuSymbolic {
             let at = &mut touch_ptr[group(q) + 1];
             touch[*at] = Touch {
                 dst: sc.dst,
-                len: sc.rows * sc.cols,
-                col: sc.col as u32,
+                len: sc.rows as usize * sc.cols as usize,
+                col: sc.col,
             };
             *at += 1;
         }
@@ -971,8 +971,8 @@ impl BlockLu {
         // ---- the maxima of the blocks no step's group takes ----
         colmax.fill(0.0);
         for t in &sym.touch[sym.touch_ptr[0]..sym.touch_ptr[1]] {
-            let m = abs_max(&vals[t.dst..t.dst + t.len as usize]);
-            let c = &mut colmax[t.col as usize];
+            let m = abs_max(&vals[t.dst..t.dst + t.len]);
+            let c = &mut colmax[t.col];
             *c = c.max(m);
         }
 
@@ -1282,11 +1282,8 @@ unsafe fn eliminate_steps_impl<F: Arith>(
             // SAFETY: an input block of this step (caller), in the storage; its column's
             // maximum is this thread's (the symbolic phase's groups).
             unsafe {
-                let m = abs_max(std::slice::from_raw_parts(
-                    vals.0.add(t.dst),
-                    t.len as usize,
-                ));
-                let c = &mut *colmax.0.add(t.col as usize);
+                let m = abs_max(std::slice::from_raw_parts(vals.0.add(t.dst), t.len));
+                let c = &mut *colmax.0.add(t.col);
                 *c = c.max(m);
             }
         }
@@ -2634,6 +2631,31 @@ mod tests {
         }
     }
 
+    /// The row-major `a` written block by block at the factor's places of `sym`, the fill
+    /// blocks garbage (NaN).
+    fn placed_at_the_factors_places(a: &BlockMatrix, sym: &BlockLuSymbolic) -> BlockMatrix {
+        let s = &a.structure;
+        let mut p = BlockMatrix::with_placement(
+            s.clone(),
+            sym.placement().clone(),
+            sym.n_factor_values(),
+            sym.n_input_values(),
+        );
+        p.values[sym.n_input_values()..].fill(f64::NAN);
+        for (e, rm) in s.slots().iter().enumerate() {
+            let src = &a.values[rm.offset..rm.offset + rm.len];
+            let cols = rm.row_stride;
+            let v = p.view(e);
+            for r in 0..rm.len / cols {
+                for c in 0..cols {
+                    let i = v.at(r, c);
+                    v.values[i] = src[r * cols + c];
+                }
+            }
+        }
+        p
+    }
+
     /// A matrix placed block by block at the factor's places (`placement`: pivot blocks
     /// row-major, off-diagonal blocks column-major, fill blocks left as garbage — NaN —
     /// since their first updates assign them) and factored in place gives
@@ -2651,31 +2673,14 @@ mod tests {
             let mut rng = Rng(77);
             let mut a = BlockMatrix::zeros(s.clone());
             fill_random(&mut a, &mut rng, true);
-            let mut placed = BlockMatrix::with_placement(
-                s.clone(),
-                sym.placement().clone(),
-                sym.n_factor_values(),
-                sym.n_input_values(),
-            );
-            assert!(!placed.is_row_major());
             assert!(
                 sym.n_input_values() < sym.n_factor_values(),
                 "a pattern with fill"
             );
             // The fill blocks are not zeroed: their first updates assign them.
-            placed.values[sym.n_input_values()..].fill(f64::NAN);
             copied.values[sym.n_input_values()..].fill(f64::NAN);
-            for (e, rm) in s.slots().iter().enumerate() {
-                let src = &a.values[rm.offset..rm.offset + rm.len];
-                let (rows, cols) = (rm.len / rm.row_stride, rm.row_stride);
-                let v = placed.view(e);
-                for r in 0..rows {
-                    for c in 0..cols {
-                        let i = v.at(r, c);
-                        v.values[i] = src[r * cols + c];
-                    }
-                }
-            }
+            let mut placed = placed_at_the_factors_places(&a, &sym);
+            assert!(!placed.is_row_major());
             copied.factor(&a).unwrap();
             in_place.factor_in_place(&mut placed.values).unwrap();
             assert_eq!(placed.values.len(), sym.n_factor_values());
@@ -2721,11 +2726,7 @@ mod tests {
                     sym.touch_ptr[1] > 0,
                     "separator blocks a part touches first"
                 );
-                assert!(
-                    sym.touch[..sym.touch_ptr[1]]
-                        .iter()
-                        .all(|t| t.col as usize >= b)
-                );
+                assert!(sym.touch[..sym.touch_ptr[1]].iter().all(|t| t.col >= b));
             }
             assert!(
                 sym.upd.iter().any(|u| u.dst < sym.n_input),
@@ -2772,26 +2773,7 @@ mod tests {
             let mut rng = Rng(11);
             let mut a = BlockMatrix::zeros(s.clone());
             fill_random(&mut a, &mut rng, true);
-            let placed = |a: &BlockMatrix| {
-                let mut p = BlockMatrix::with_placement(
-                    s.clone(),
-                    sym.placement().clone(),
-                    sym.n_factor_values(),
-                    sym.n_input_values(),
-                );
-                for (e, rm) in s.slots().iter().enumerate() {
-                    let src = &a.values[rm.offset..rm.offset + rm.len];
-                    let cols = rm.row_stride;
-                    let v = p.view(e);
-                    for r in 0..rm.len / cols {
-                        for c in 0..cols {
-                            let i = v.at(r, c);
-                            v.values[i] = src[r * cols + c];
-                        }
-                    }
-                }
-                p
-            };
+            let placed = |a: &BlockMatrix| placed_at_the_factors_places(a, &sym);
             let b: Vec<f64> = (0..s.dim()).map(|_| rng.uniform()).collect();
             for threads in [1, 2] {
                 let pool = rayon::ThreadPoolBuilder::new()

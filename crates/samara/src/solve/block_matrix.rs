@@ -618,7 +618,9 @@ mod tests {
         let placement: Arc<[BlockSlot]> = placement.into_iter().map(|p| p.1).collect();
         let (zeroed, len) = (off, off + 5);
         let mut p = BlockMatrix::with_placement(s.clone(), placement.clone(), len, zeroed);
-        for round in 0..3 {
+        // The rounds cross the epoch's wrap-around (every stamp reset).
+        p.epoch = u32::MAX - 1;
+        for round in 0..4 {
             p.values.fill(f64::NAN);
             p.fill_zero();
             // Blocks 0 and 2 written (0 twice), the others not.
