@@ -2656,6 +2656,16 @@ mod tests {
         p
     }
 
+    /// The 70-link tree of mixed block sizes with multiplier diagonals, and its symbolic
+    /// factorization from `split` blocks on (`usize::MAX`: one order, else a separator order).
+    fn tree_of_70(split: usize) -> (Arc<BlockStructure>, Arc<BlockLuSymbolic>) {
+        let (s, _) = kkt_tree(&chain_parent(70), &[5, 3, 1, 2, 4, 6, 7], true);
+        let s = Arc::new(s);
+        let sym = Arc::new(BlockLuSymbolic::with_split_from(&s, split).unwrap());
+        assert_eq!(sym.split().is_some(), split != usize::MAX);
+        (s, sym)
+    }
+
     /// A matrix placed block by block at the factor's places (`placement`: pivot blocks
     /// row-major, off-diagonal blocks column-major, fill blocks left as garbage — NaN —
     /// since their first updates assign them) and factored in place gives
@@ -2665,10 +2675,7 @@ mod tests {
     #[test]
     fn in_place_factor_matches_the_copying_one_to_the_bit() {
         for split in [usize::MAX, TEST_SPLIT_MIN_BLOCKS] {
-            let (s, _) = kkt_tree(&chain_parent(70), &[5, 3, 1, 2, 4, 6, 7], true);
-            let s = Arc::new(s);
-            let sym = Arc::new(BlockLuSymbolic::with_split_from(&s, split).unwrap());
-            assert_eq!(sym.split().is_some(), split != usize::MAX);
+            let (s, sym) = tree_of_70(split);
             let (mut copied, mut in_place) = (BlockLu::new(sym.clone()), BlockLu::new(sym.clone()));
             let mut rng = Rng(77);
             let mut a = BlockMatrix::zeros(s.clone());
@@ -2717,10 +2724,7 @@ mod tests {
     #[test]
     fn column_maxima_are_the_input_columns_maxima() {
         for split in [usize::MAX, TEST_SPLIT_MIN_BLOCKS] {
-            let (s, _) = kkt_tree(&chain_parent(70), &[5, 3, 1, 2, 4, 6, 7], true);
-            let s = Arc::new(s);
-            let sym = Arc::new(BlockLuSymbolic::with_split_from(&s, split).unwrap());
-            assert_eq!(sym.split().is_some(), split != usize::MAX);
+            let (s, sym) = tree_of_70(split);
             if let Some([_, b]) = sym.split() {
                 assert!(
                     sym.touch_ptr[1] > 0,
