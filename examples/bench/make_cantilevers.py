@@ -7,7 +7,11 @@ nu = 0.3, rho = 7850, shear factor 5/6, J = 0.1406 b^4), tip load 50 N along -z.
 Analyses: static in 10 load steps; the same load applied suddenly (at t = 0) and held for 1 s
 of dynamics at h = 1e-3, rho_inf = 0.9.
 Run:  python3 examples/bench/make_cantilevers.py   (from the repository root)
+      python3 examples/bench/make_cantilevers.py 3000 30000 100000
+The second form writes only the sizes named (models for a growth scan such as
+docs/integrators.md's, not kept in the repository: every example runs in the test suite).
 """
+import sys
 from pathlib import Path
 
 B = 0.01
@@ -64,7 +68,23 @@ output_every = 100
 """
 
 
+def sizes(args: list[str]) -> list[int]:
+    """The element counts named on the command line (whole numbers from 1 to 10,000,000)."""
+    out = []
+    for a in args:
+        if not a.isdigit() or not 1 <= int(a) <= 10_000_000:
+            sys.exit(f"make_cantilevers.py: '{a}' is not an element count "
+                     "(expected a whole number from 1 to 10000000)")
+        out.append(int(a))
+    return out
+
+
 here = Path(__file__).parent
-for n in (10, 100, 1000, 10000):
-    (here / f"cantilever_{n}.toml").write_text(model(f"cantilever_{n}", 1, n))
-(here / "cantilever_p8x4.toml").write_text(model("cantilever_p8x4", 8, 4))
+if __name__ == "__main__":
+    if len(sys.argv) > 1:
+        for n in sizes(sys.argv[1:]):
+            (here / f"cantilever_{n}.toml").write_text(model(f"cantilever_{n}", 1, n))
+    else:
+        for n in (10, 100, 1000, 10000):
+            (here / f"cantilever_{n}.toml").write_text(model(f"cantilever_{n}", 1, n))
+        (here / "cantilever_p8x4.toml").write_text(model("cantilever_p8x4", 8, 4))

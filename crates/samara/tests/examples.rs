@@ -120,3 +120,76 @@ fn every_example_runs() {
         );
     }
 }
+
+/// examples/bench/make_cantilevers.py, run from a copy in a scratch folder: without
+/// arguments it writes the committed benchmark models byte for byte; with element counts it
+/// writes those models only, each a cantilever of that many elements; a count that is not a
+/// whole number from 1 to 10,000,000 is refused with its value named and nothing written.
+#[test]
+fn cantilever_generator_writes_the_committed_models_and_named_sizes() {
+    let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/bench");
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        bench.join("make_cantilevers.py"),
+        dir.path().join("make_cantilevers.py"),
+    )
+    .unwrap();
+    let run = |args: &[&str]| {
+        std::process::Command::new("python3")
+            .arg(dir.path().join("make_cantilevers.py"))
+            .args(args)
+            .output()
+            .expect("python3 runs")
+    };
+    let written = || {
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".toml"))
+            .collect();
+        names.sort();
+        names
+    };
+    assert!(run(&[]).status.success());
+    let defaults = written();
+    assert_eq!(
+        defaults,
+        [
+            "cantilever_10.toml",
+            "cantilever_100.toml",
+            "cantilever_1000.toml",
+            "cantilever_10000.toml",
+            "cantilever_p8x4.toml"
+        ]
+    );
+    for name in &defaults {
+        let ours = std::fs::read_to_string(dir.path().join(name)).unwrap();
+        let committed = std::fs::read_to_string(bench.join(name)).unwrap();
+        assert!(ours == committed, "{name} differs from the committed model");
+        std::fs::remove_file(dir.path().join(name)).unwrap();
+    }
+
+    assert!(run(&["7", "12"]).status.success());
+    assert_eq!(written(), ["cantilever_12.toml", "cantilever_7.toml"]);
+    for n in [7usize, 12] {
+        let m = Model::from_file(dir.path().join(format!("cantilever_{n}.toml")))
+            .unwrap()
+            .model;
+        assert_eq!(m.name, format!("cantilever_{n}"));
+        // One two-node beam element per span between consecutive beam nodes: root, n − 1
+        // inner nodes and the tip (the clamp's ground is not a model node).
+        assert_eq!(m.nodes.len(), n + 1, "cantilever_{n}");
+        std::fs::remove_file(dir.path().join(format!("cantilever_{n}.toml"))).unwrap();
+    }
+
+    for bad in ["3x", "0", "-5", "10000001"] {
+        let out = run(&["4", bad]);
+        assert_eq!(out.status.code(), Some(1), "{bad}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains(&format!("'{bad}' is not an element count")),
+            "{bad}: {err}"
+        );
+        assert!(written().is_empty(), "{bad}: a model was written");
+    }
+}
