@@ -72,7 +72,8 @@ def sizes(args: list[str]) -> list[int]:
     """The element counts named on the command line (whole numbers from 1 to 10,000,000)."""
     out = []
     for a in args:
-        if not a.isdigit() or not 1 <= int(a) <= 10_000_000:
+        # ASCII digits only, and few (int() refuses '²' and strings of 4,300+ digits).
+        if not (a.isascii() and a.isdigit() and len(a) <= 8) or not 1 <= int(a) <= 10_000_000:
             sys.exit(f"make_cantilevers.py: '{a}' is not an element count "
                      "(expected a whole number from 1 to 10000000)")
         out.append(int(a))

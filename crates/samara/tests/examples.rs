@@ -124,7 +124,8 @@ fn every_example_runs() {
 /// examples/bench/make_cantilevers.py, run from a copy in a scratch folder: without
 /// arguments it writes the committed benchmark models byte for byte; with element counts it
 /// writes those models only, each a cantilever of that many elements; a count that is not a
-/// whole number from 1 to 10,000,000 is refused with its value named and nothing written.
+/// whole number from 1 to 10,000,000 in ASCII digits is refused with its value named and
+/// nothing written.
 #[test]
 fn cantilever_generator_writes_the_committed_models_and_named_sizes() {
     let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/bench");
@@ -182,7 +183,8 @@ fn cantilever_generator_writes_the_committed_models_and_named_sizes() {
         std::fs::remove_file(dir.path().join(format!("cantilever_{n}.toml"))).unwrap();
     }
 
-    for bad in ["3x", "0", "-5", "10000001"] {
+    let long = "9".repeat(5000);
+    for bad in ["3x", "0", "-5", "10000001", "²", "", long.as_str()] {
         let out = run(&["4", bad]);
         assert_eq!(out.status.code(), Some(1), "{bad}");
         let err = String::from_utf8_lossy(&out.stderr);
