@@ -82,10 +82,8 @@ def sizes(args: list[str]) -> list[int]:
 
 here = Path(__file__).parent
 if __name__ == "__main__":
-    if len(sys.argv) > 1:
-        for n in sizes(sys.argv[1:]):
-            (here / f"cantilever_{n}.toml").write_text(model(f"cantilever_{n}", 1, n))
-    else:
-        for n in (10, 100, 1000, 10000):
-            (here / f"cantilever_{n}.toml").write_text(model(f"cantilever_{n}", 1, n))
+    named = sizes(sys.argv[1:])
+    for n in named or (10, 100, 1000, 10000):
+        (here / f"cantilever_{n}.toml").write_text(model(f"cantilever_{n}", 1, n))
+    if not named:
         (here / "cantilever_p8x4.toml").write_text(model("cantilever_p8x4", 8, 4))
