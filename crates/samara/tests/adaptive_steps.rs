@@ -228,6 +228,65 @@ fn bad_settings_are_located_errors() {
         "`step_max` must be at least `step`",
     );
     bad("step_control = \"adaptve\"", "unknown value `adaptve`");
+    // The smallest step is named as written (`min_step` or its alias `step_min`) and the
+    // error points at its value.
+    for key in ["min_step", "step_min"] {
+        let analysis = format!("step_control = \"adaptive\"\ntolerance_abs = 1e-6\n{key} = 1e-2");
+        let text = format!(
+            "{PENDULUM}\n[[analyses]]\nname = \"run\"\ntype = \"dynamic\"\nt_end = 1.0\nstep = 1e-3\n{analysis}"
+        );
+        let shown = Model::from_toml_str(&text, "bad.toml")
+            .expect_err(key)
+            .to_string();
+        let line = text[..text.find(&format!("{key} = 1e-2")).unwrap()]
+            .matches('\n')
+            .count()
+            + 1;
+        let col = key.len() + 4;
+        assert!(
+            shown.contains(&format!(
+                "bad.toml:{line}:{col}: error: analysis 'run': `{key}` must be in (0, step]"
+            )),
+            "{shown}"
+        );
+        let text = text.replace(&format!("{key} = 1e-2"), &format!("{key} = 1e-300"));
+        let shown = Model::from_toml_str(&text, "bad.toml")
+            .expect_err(key)
+            .to_string();
+        assert!(
+            shown.contains(&format!("bad.toml:{line}:{col}:")),
+            "{shown}"
+        );
+        assert!(shown.contains(&format!("use a larger `{key}`")), "{shown}");
+    }
+    // Both spellings at once: named as one key given twice, at the second.
+    let text = format!(
+        "{PENDULUM}\n[[analyses]]\nname = \"run\"\ntype = \"dynamic\"\nt_end = 1.0\nstep = 1e-3\nmin_step = 1e-5\nstep_min = 1e-5\n"
+    );
+    let shown = Model::from_toml_str(&text, "bad.toml")
+        .expect_err("both")
+        .to_string();
+    let line = text[..text.find("step_min").unwrap()].matches('\n').count() + 1;
+    assert!(
+        shown.contains(&format!(
+            "bad.toml:{line}:1: error: key `min_step` is given twice"
+        )),
+        "{shown}"
+    );
+    assert!(
+        shown.contains("`min_step` and `step_min` are two spellings of one key"),
+        "{shown}"
+    );
+    // A static analysis names the spelling it was given among the keys it does not use.
+    let text =
+        format!("{PENDULUM}\n[[analyses]]\nname = \"eq\"\ntype = \"static\"\nstep_min = 1e-5\n");
+    let shown = Model::from_toml_str(&text, "bad.toml")
+        .expect_err("static")
+        .to_string();
+    assert!(
+        shown.contains("`step_min` is not used by a static analysis"),
+        "{shown}"
+    );
 }
 
 /// Adaptive steps land on every breakpoint of ramps and table knots, not only of steps:

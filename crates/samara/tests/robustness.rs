@@ -283,3 +283,41 @@ steps_per_period = 50
     assert!(d.message.contains("non-zero"), "{}", d.message);
     assert!(d.hint.as_deref().unwrap_or("").contains("direction"));
 }
+
+/// A key or table given twice is named, located at the second, and hinted (the TOML
+/// parser's own message was only "duplicate key").
+#[test]
+fn keys_and_tables_given_twice_are_named_and_located() {
+    let check = |text: &str, second: &str, message: &str, hint: &str| {
+        let shown = Model::from_toml_str(text, "twice.toml")
+            .expect_err(second)
+            .to_string();
+        let at = text.rfind(second).unwrap();
+        let line = text[..at].matches('\n').count() + 1;
+        let col = at - text[..at].rfind('\n').map_or(0, |i| i + 1) + 1;
+        assert!(
+            shown.contains(&format!("twice.toml:{line}:{col}: error: {message}")),
+            "{shown}"
+        );
+        assert!(shown.contains(hint), "{shown}");
+    };
+    let base = BOB.replace("DRIVES\n", "");
+    check(
+        &base.replace("t_end = 0.5\n", "t_end = 0.5\nt_end = 0.7\n"),
+        "t_end",
+        "key `t_end` is given twice in this table",
+        "give each key once per table",
+    );
+    check(
+        &format!("{base}[model]\nname = \"again\"\n"),
+        "model]",
+        "table `model` is given twice",
+        "a list of entries is written [[name]]",
+    );
+    check(
+        &base.replace("gravity = ", "gravity = [0.0, 0.0, 0.0]\ngravity = "),
+        "gravity",
+        "key `gravity` is given twice in this table",
+        "remove one of the two",
+    );
+}

@@ -97,6 +97,49 @@ pub fn parse_error_diagnostic(e: &toml::de::Error, text: &str) -> Diagnostic {
                 None => d.with_hint(format!("expected one of: {}", candidates.join(", "))),
             };
         }
+    } else if msg == "duplicate key" {
+        let span = e.span().unwrap_or(0..0);
+        let key = text.get(span.clone()).map(str::trim);
+        // A table header (`[model]` again, or `[nodes]` after `[[nodes]]`) or a key.
+        let header = span.start > 0 && text.as_bytes().get(span.start - 1) == Some(&b'[');
+        let key = key.filter(|k| !k.is_empty() && k.len() <= 64);
+        if header {
+            if let Some(key) = key {
+                d.message = format!("table `{key}` is given twice");
+            }
+            d = d.with_hint(
+                "write each table once; a list of entries is written [[name]] for every entry",
+            );
+        } else {
+            if let Some(key) = key {
+                d.message = format!("key `{key}` is given twice in this table");
+            }
+            d = d.with_hint("give each key once per table; remove one of the two");
+        }
+    } else if let Some(rest) = msg.strip_prefix("duplicate field `") {
+        if let Some((field, _)) = rest.split_once('`') {
+            // The only key with a second spelling (serde alias in model/input.rs).
+            let spellings: &[&str] = match field {
+                "min_step" | "step_min" => &["min_step", "step_min"],
+                _ => &[],
+            };
+            d.message = format!("key `{field}` is given twice in this table");
+            if let Some(at) = e.span().and_then(|t| second_key(text, t, field, spellings)) {
+                d.span = Some(at);
+            }
+            d = d.with_hint(if spellings.is_empty() {
+                "give each key once per table; remove one of the two".to_string()
+            } else {
+                format!(
+                    "{} are two spellings of one key: give it once",
+                    spellings
+                        .iter()
+                        .map(|k| format!("`{k}`"))
+                        .collect::<Vec<_>>()
+                        .join(" and ")
+                )
+            });
+        }
     } else if let Some(rest) = msg.strip_prefix("missing field `") {
         if let Some((field, _)) = rest.split_once('`') {
             d.message = format!("missing required key `{field}`");
@@ -108,6 +151,45 @@ pub fn parse_error_diagnostic(e: &toml::de::Error, text: &str) -> Diagnostic {
         d = d.with_hint("check the value's type: numbers are written like 1.0 or 2e-3, vectors like [0.0, 1.0, 0.0], names in quotes");
     }
     d
+}
+
+/// The line of the second `key = …` (any of its `spellings`) in the table spanned by
+/// `table` (its header or inline table, up to the next header).
+fn second_key(
+    text: &str,
+    table: std::ops::Range<usize>,
+    key: &str,
+    spellings: &[&str],
+) -> Option<std::ops::Range<usize>> {
+    let from = table.start.min(text.len());
+    let rest = text.get(from..)?;
+    // Past the header line, to the next table header.
+    let body_start = rest.find('\n').map_or(rest.len(), |i| i + 1);
+    let body = &rest[body_start..];
+    let body = &body[..body.find("\n[").map_or(body.len(), |i| i + 1)];
+    let names: Vec<&str> = if spellings.is_empty() {
+        vec![key]
+    } else {
+        spellings.to_vec()
+    };
+    let mut start = from + body_start;
+    let mut seen = 0;
+    for line in body.split_inclusive('\n') {
+        let t = line.trim_start();
+        let is_key = names.iter().any(|n| {
+            t.strip_prefix(n)
+                .is_some_and(|r| r.trim_start_matches([' ', '\t']).starts_with('='))
+        });
+        if is_key {
+            seen += 1;
+            if seen == 2 {
+                let lead = line.len() - t.len();
+                return Some(start + lead..start + line.trim_end().len().max(lead + 1));
+            }
+        }
+        start += line.len();
+    }
+    None
 }
 
 fn backticked(s: &str) -> Vec<String> {

@@ -96,6 +96,23 @@ impl<'a> Checker<'a> {
     /// Span of `key = value` inside an entry, pointing at the value; the entry's span if
     /// the key cannot be found (e.g. the model was built in code).
     pub(crate) fn key(&self, entry: &Entry, key: &str) -> Option<Range<usize>> {
+        self.locate_key(entry, key).map(|(span, _)| span)
+    }
+
+    /// The spelling of a key with aliases that the entry uses (the first of `names` if it
+    /// uses none), so that messages name and point at what the user wrote.
+    pub(crate) fn spelling<'k>(&self, entry: &Entry, names: &[&'k str]) -> &'k str {
+        let found = |n: &&&str| matches!(self.locate_key(entry, n), Some((_, true)));
+        names
+            .iter()
+            .find(found)
+            .or(names.first())
+            .copied()
+            .unwrap_or("")
+    }
+
+    /// [`Self::key`], and whether the key was found (`false`: the entry's span).
+    fn locate_key(&self, entry: &Entry, key: &str) -> Option<(Range<usize>, bool)> {
         let mut span = entry.span.clone()?;
         // An array-of-tables entry may be spanned by its header only: extend the search to
         // the next table header. (Inline tables are spanned whole; extending them would
@@ -128,11 +145,11 @@ impl<'a> Checker<'a> {
                     .max(vs + 1)
                     .min(text.len());
                 let value = text[vs..ve].trim_end();
-                return Some(span.start + vs..span.start + vs + value.len().max(1));
+                return Some((span.start + vs..span.start + vs + value.len().max(1), true));
             }
             from = end;
         }
-        Some(span)
+        Some((span, false))
     }
 
     /// Span of `key = value` in the top-level table `[table]`, if the file has one.
@@ -782,6 +799,8 @@ impl<'a> Checker<'a> {
             return None;
         }
         // `scaling` multiplies rows and multipliers by βh²: there is no step in statics.
+        // Named as written (`min_step` or its alias `step_min`).
+        let min_key = self.spelling(&e, &["min_step", "step_min"]);
         let dynamic_keys: [(&str, bool); 15] = [
             ("output_interval", ai.output_interval.is_some()),
             ("step_control", ai.step_control.is_some()),
@@ -795,7 +814,7 @@ impl<'a> Checker<'a> {
             ("t_end", ai.t_end.is_some()),
             ("step", ai.step.is_some()),
             ("rho_inf", ai.rho_inf.is_some()),
-            ("min_step", ai.min_step.is_some()),
+            (min_key, ai.min_step.is_some()),
             ("output_every", ai.output_every.is_some()),
             ("jacobian", ai.jacobian.is_some()),
         ];
@@ -1090,16 +1109,16 @@ impl<'a> Checker<'a> {
                 };
                 if !(min_step.is_finite() && min_step > 0.0 && min_step <= step) {
                     self.error(
-                        format!("{what}: `min_step` must be in (0, step] (got {min_step})"),
-                        self.key(&e, "min_step"),
+                        format!("{what}: `{min_key}` must be in (0, step] (got {min_step})"),
+                        self.key(&e, min_key),
                         None,
                     );
                     ok = false;
                 } else if ai.min_step.is_some() && min_step <= resolution {
                     self.error(
-                        format!("{what}: `min_step` ({min_step:e}) is below the resolution of time near t = {t_end:e} ({resolution:.1e})"),
-                        self.key(&e, "min_step"),
-                        Some("a step that small would not move time; use a larger `min_step`".into()),
+                        format!("{what}: `{min_key}` ({min_step:e}) is below the resolution of time near t = {t_end:e} ({resolution:.1e})"),
+                        self.key(&e, min_key),
+                        Some(format!("a step that small would not move time; use a larger `{min_key}`")),
                     );
                     ok = false;
                 }
@@ -1206,7 +1225,7 @@ impl<'a> Checker<'a> {
                             self.error(
                                 format!("{what}: `step_max` must be at least `step` ({step}) (got {step_max})"),
                                 self.key(&e, "step_max"),
-                                Some("`step` is the first step; the error control chooses the others in [min_step, step_max]".into()),
+                                Some(format!("`step` is the first step; the error control chooses the others in [{min_key}, step_max]")),
                             );
                             ok = false;
                         }
