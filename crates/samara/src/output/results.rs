@@ -80,9 +80,22 @@ pub struct ResultsFile {
 }
 
 fn nc_err(path: &Path, e: NcError) -> crate::Error {
+    let mut message = e.to_string();
+    if let NcError::Io { source, .. } = &e
+        && matches!(
+            source.kind(),
+            std::io::ErrorKind::StorageFull | std::io::ErrorKind::QuotaExceeded
+        )
+    {
+        // Each record is written before the header counts it (output/netcdf.rs).
+        message.push_str(
+            "; the disk is full: free space or choose another --out folder (the records \
+             written before the error, if any, stay readable in the file, status `running`)",
+        );
+    }
     crate::Error::Output {
         path: path.to_path_buf(),
-        message: e.to_string(),
+        message,
     }
 }
 
@@ -886,5 +899,32 @@ impl Recorder for ResultsFile {
             .map_err(e)?;
         }
         w.commit_record().map_err(e)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{NcError, nc_err};
+    use std::io::{Error, ErrorKind};
+    use std::path::{Path, PathBuf};
+
+    /// A full disk is said so, with what to do; other write errors keep their own words.
+    #[test]
+    fn a_full_disk_is_named_with_a_remedy() {
+        let io = |kind| NcError::Io {
+            path: PathBuf::from("out/run.nc"),
+            source: Error::from(kind),
+        };
+        let shown = |kind| nc_err(Path::new("out/run.nc"), io(kind)).to_string();
+        for kind in [ErrorKind::StorageFull, ErrorKind::QuotaExceeded] {
+            let s = shown(kind);
+            assert!(s.starts_with("results file 'out/run.nc': I/O error"), "{s}");
+            assert!(
+                s.contains("the disk is full: free space or choose another --out"),
+                "{s}"
+            );
+        }
+        let s = shown(ErrorKind::PermissionDenied);
+        assert!(!s.contains("disk is full"), "{s}");
     }
 }
