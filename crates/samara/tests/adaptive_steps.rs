@@ -277,6 +277,20 @@ fn bad_settings_are_located_errors() {
         shown.contains("`min_step` and `step_min` are two spellings of one key"),
         "{shown}"
     );
+    // The same in an inline table: located at the second spelling inside its braces.
+    let text = format!(
+        "analyses = [{{ name = \"run\", type = \"dynamic\", t_end = 1.0, step = 1e-3, step_min = 1e-5, min_step = 1e-5 }}]\n{PENDULUM}"
+    );
+    let shown = Model::from_toml_str(&text, "bad.toml")
+        .expect_err("inline")
+        .to_string();
+    let col = text.find("min_step").unwrap() + 1;
+    assert!(
+        shown.contains(&format!(
+            "bad.toml:1:{col}: error: key `min_step` is given twice"
+        )),
+        "{shown}"
+    );
     // A static analysis names the spelling it was given among the keys it does not use.
     let text =
         format!("{PENDULUM}\n[[analyses]]\nname = \"eq\"\ntype = \"static\"\nstep_min = 1e-5\n");

@@ -153,8 +153,8 @@ pub fn parse_error_diagnostic(e: &toml::de::Error, text: &str) -> Diagnostic {
     d
 }
 
-/// The line of the second `key = …` (any of its `spellings`) in the table spanned by
-/// `table` (its header or inline table, up to the next header).
+/// Where the second `key = …` (any of its `spellings`) is written in the table spanned by
+/// `table`: an inline table's braces, or a header's lines up to the next header.
 fn second_key(
     text: &str,
     table: std::ops::Range<usize>,
@@ -163,33 +163,34 @@ fn second_key(
 ) -> Option<std::ops::Range<usize>> {
     let from = table.start.min(text.len());
     let rest = text.get(from..)?;
-    // Past the header line, to the next table header.
-    let body_start = rest.find('\n').map_or(rest.len(), |i| i + 1);
-    let body = &rest[body_start..];
-    let body = &body[..body.find("\n[").map_or(body.len(), |i| i + 1)];
+    let (start, region) = if rest.starts_with('{') {
+        (from, text.get(from..table.end.clamp(from, text.len()))?)
+    } else {
+        // Past the header line, to the next table header.
+        let body_start = rest.find('\n').map_or(rest.len(), |i| i + 1);
+        let body = &rest[body_start..];
+        (
+            from + body_start,
+            &body[..body.find("\n[").map_or(body.len(), |i| i + 1)],
+        )
+    };
     let names: Vec<&str> = if spellings.is_empty() {
         vec![key]
     } else {
         spellings.to_vec()
     };
-    let mut start = from + body_start;
-    let mut seen = 0;
-    for line in body.split_inclusive('\n') {
-        let t = line.trim_start();
-        let is_key = names.iter().any(|n| {
-            t.strip_prefix(n)
-                .is_some_and(|r| r.trim_start_matches([' ', '\t']).starts_with('='))
-        });
-        if is_key {
-            seen += 1;
-            if seen == 2 {
-                let lead = line.len() - t.len();
-                return Some(start + lead..start + line.trim_end().len().max(lead + 1));
-            }
-        }
-        start += line.len();
-    }
-    None
+    let bytes = region.as_bytes();
+    let mut hits = names
+        .iter()
+        .flat_map(|n| region.match_indices(n).map(move |(i, _)| (i, n.len())))
+        .filter(|&(i, len)| {
+            let before_ok = i == 0 || matches!(bytes[i - 1], b' ' | b'\t' | b'\n' | b'{' | b',');
+            let after = region[i + len..].trim_start_matches([' ', '\t']);
+            before_ok && after.starts_with('=')
+        })
+        .collect::<Vec<_>>();
+    hits.sort_unstable();
+    hits.get(1).map(|&(i, len)| start + i..start + i + len)
 }
 
 fn backticked(s: &str) -> Vec<String> {
