@@ -315,6 +315,12 @@ fn keys_and_tables_given_twice_are_named_and_located() {
         "a list of entries is written [[name]]",
     );
     check(
+        &format!("{base}[ model ]\nname = \"again\"\n"),
+        "model ]",
+        "table `model` is given twice",
+        "write each table once",
+    );
+    check(
         &base.replace("gravity = ", "gravity = [0.0, 0.0, 0.0]\ngravity = "),
         "gravity",
         "key `gravity` is given twice in this table",

@@ -100,8 +100,15 @@ pub fn parse_error_diagnostic(e: &toml::de::Error, text: &str) -> Diagnostic {
     } else if msg == "duplicate key" {
         let span = e.span().unwrap_or(0..0);
         let key = text.get(span.clone()).map(str::trim);
-        // A table header (`[model]` again, or `[nodes]` after `[[nodes]]`) or a key.
-        let header = span.start > 0 && text.as_bytes().get(span.start - 1) == Some(&b'[');
+        // A table header (`[model]` again, `[nodes]` after `[[nodes]]`, `[ a.b ]`): its
+        // line starts with `[`, which no key's line does.
+        let line_start = text
+            .get(..span.start)
+            .and_then(|t| t.rfind('\n'))
+            .map_or(0, |i| i + 1);
+        let header = text
+            .get(line_start..)
+            .is_some_and(|l| l.trim_start().starts_with('['));
         let key = key.filter(|k| !k.is_empty() && k.len() <= 64);
         if header {
             if let Some(key) = key {

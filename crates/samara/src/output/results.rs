@@ -89,8 +89,9 @@ fn nc_err(path: &Path, e: NcError) -> crate::Error {
     {
         // Each record is written before the header counts it (output/netcdf.rs).
         message.push_str(
-            "; the disk is full: free space or choose another --out folder (the records \
-             written before the error, if any, stay readable in the file, status `running`)",
+            "; the disk is full (or the quota used up): free space or write the results \
+             elsewhere (--out); the records written before the error, if any, stay readable \
+             in the file (status `running`)",
         );
     }
     crate::Error::Output {
@@ -920,7 +921,7 @@ mod tests {
             let s = shown(kind);
             assert!(s.starts_with("results file 'out/run.nc': I/O error"), "{s}");
             assert!(
-                s.contains("the disk is full: free space or choose another --out"),
+                s.contains("the disk is full (or the quota used up): free space"),
                 "{s}"
             );
         }
