@@ -65,8 +65,16 @@ fn deepest_line(text: &str) -> Option<std::ops::Range<usize>> {
     best.map(|(_, r)| r)
 }
 
+/// Hint for a key given twice.
+const GIVE_ONCE: &str = "give each key once per table; remove one of the two";
+
 /// Turns a TOML/serde error into a diagnostic with a hint where one can be guessed.
-pub fn parse_error_diagnostic(e: &toml::de::Error, text: &str) -> Diagnostic {
+/// `spellings` lists the file's keys that have a second spelling (canonical first).
+pub fn parse_error_diagnostic(
+    e: &toml::de::Error,
+    text: &str,
+    spellings: &[&[&str]],
+) -> Diagnostic {
     let msg = e.message().trim().to_string();
     if e.span().is_none() && msg.contains("recursion") {
         return Diagnostic::error(
@@ -121,21 +129,21 @@ pub fn parse_error_diagnostic(e: &toml::de::Error, text: &str) -> Diagnostic {
             if let Some(key) = key {
                 d.message = format!("key `{key}` is given twice in this table");
             }
-            d = d.with_hint("give each key once per table; remove one of the two");
+            d = d.with_hint(GIVE_ONCE);
         }
     } else if let Some(rest) = msg.strip_prefix("duplicate field `") {
         if let Some((field, _)) = rest.split_once('`') {
-            // The only key with a second spelling (serde alias in model/input.rs).
-            let spellings: &[&str] = match field {
-                "min_step" | "step_min" => &["min_step", "step_min"],
-                _ => &[],
-            };
+            let spellings: &[&str] = spellings
+                .iter()
+                .find(|s| s.contains(&field))
+                .copied()
+                .unwrap_or(&[]);
             d.message = format!("key `{field}` is given twice in this table");
             if let Some(at) = e.span().and_then(|t| second_key(text, t, field, spellings)) {
                 d.span = Some(at);
             }
             d = d.with_hint(if spellings.is_empty() {
-                "give each key once per table; remove one of the two".to_string()
+                GIVE_ONCE.to_string()
             } else {
                 format!(
                     "{} are two spellings of one key: give it once",

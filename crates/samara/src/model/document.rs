@@ -121,7 +121,11 @@ impl Document {
             }),
             Err(e) => Err(ModelError {
                 source: super::SourceFile::new(&path, text),
-                diagnostics: vec![crate::diagnostics::parse_error_diagnostic(&e, text)],
+                diagnostics: vec![crate::diagnostics::parse_error_diagnostic(
+                    &e,
+                    text,
+                    super::input::KEY_SPELLINGS,
+                )],
             }),
         }
     }

@@ -256,7 +256,7 @@ pub struct AnalysisInput {
     #[serde(default)]
     pub rho_inf: Option<f64>,
     /// dynamic: smallest step allowed when steps are cut after Newton failures or by the
-    /// error control (default step/1024); also spelled `step_min`.
+    /// error control (default step/1024); also spelled `step_min` ([`KEY_SPELLINGS`]).
     #[serde(default, alias = "step_min")]
     pub min_step: Option<f64>,
     /// dynamic: `generalized_alpha` (default), `energy_preserving` or `energy_decaying`.
@@ -414,3 +414,10 @@ pub struct RotationInput {
     #[serde(default)]
     pub parts: Option<Vec<Located<String>>>,
 }
+
+/// The keys of a model file with a second spelling (the serde aliases above), canonical
+/// name first: messages name and locate the spelling the user wrote.
+pub const KEY_SPELLINGS: &[&[&str]] = &[MIN_STEP_SPELLINGS];
+
+/// `min_step` and its alias.
+pub const MIN_STEP_SPELLINGS: &[&str] = &["min_step", "step_min"];

@@ -305,7 +305,11 @@ impl Model {
             Err(e) => {
                 return Err(ModelError {
                     source,
-                    diagnostics: vec![crate::diagnostics::parse_error_diagnostic(&e, text)],
+                    diagnostics: vec![crate::diagnostics::parse_error_diagnostic(
+                        &e,
+                        text,
+                        input::KEY_SPELLINGS,
+                    )],
                 });
             }
         };

@@ -799,7 +799,7 @@ impl<'a> Checker<'a> {
             return None;
         }
         // Named as written (`min_step` or its alias `step_min`).
-        let min_key = self.spelling(&e, &["min_step", "step_min"]);
+        let min_key = self.spelling(&e, super::input::MIN_STEP_SPELLINGS);
         // `scaling` multiplies rows and multipliers by βh²: there is no step in statics.
         let dynamic_keys: [(&str, bool); 15] = [
             ("output_interval", ai.output_interval.is_some()),

@@ -363,7 +363,7 @@ pub fn from_str(text: &str, path: &Path) -> Result<LoadedSection, SectionError> 
             return Err(SectionError {
                 errors: vec![ModelError {
                     source,
-                    diagnostics: vec![crate::diagnostics::parse_error_diagnostic(&e, text)],
+                    diagnostics: vec![crate::diagnostics::parse_error_diagnostic(&e, text, &[])],
                 }],
             });
         }
