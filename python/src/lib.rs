@@ -423,7 +423,8 @@ impl Model {
                 for &j in &chain {
                     let def = &model.analyses[j];
                     let stage = def.stage();
-                    let mut rec = ResultsFile::in_memory(model, file, &sys, stage.as_ref())?;
+                    let mut rec = ResultsFile::in_memory(model, file, &sys, stage.as_ref())?
+                        .ensure_space(def)?;
                     let state = starts.start(&sys, def)?;
                     let mut capture = starts.capture(j, &mut rec);
                     let summary = stage.run(&sys, state, &mut capture, &mut |_| {})?;
@@ -519,8 +520,10 @@ impl Model {
                 let initial = finals.start(&sys, def)?;
                 let stage = def.stage();
                 let inner = match &out {
-                    Some(dir) => ResultsFile::create_for(dir, model, file, &sys, stage.as_ref())?,
-                    None => ResultsFile::in_memory(model, file, &sys, stage.as_ref())?,
+                    Some(dir) => ResultsFile::create_for(dir, model, file, &sys, stage.as_ref())?
+                        .ensure_space(def)?,
+                    None => ResultsFile::in_memory(model, file, &sys, stage.as_ref())?
+                        .ensure_space(def)?,
                 };
                 let mut rec = Interruptible { inner, stop: &stop };
                 let mut last = Instant::now();

@@ -170,3 +170,17 @@ def test_a_narrowed_instruction_set_runs_a_model():
     xb = [float(v) for v in base.stdout.split()]
     xw = [float(v) for v in wide.stdout.split()]
     assert len(xb) == 2 and all(abs(a - b) < 1e-9 for a, b in zip(xb, xw)), (xb, xw)
+
+
+def test_results_that_cannot_fit_are_refused_at_the_start(tmp_path):
+    # 10^12 steps of 1e-9 s, each written: at least 320 TB, more than any disk the suite
+    # runs on (as `samara run`, crates/samara-cli/tests/robustness.rs).
+    m = samara.load(PENDULUM.replace("t_end = 0.1", "t_end = 1e3").replace("step = 1e-3", "step = 1e-9"))
+    with pytest.raises(samara.SamaraError, match="the results need at least .* output times of 320 B.* free on their disk") as e:
+        samara.run(m, out=tmp_path)
+    assert "output_interval" in str(e.value)
+    assert list(tmp_path.iterdir()) == []
+    # In memory (no `out`): refused against the available memory, not killed by it.
+    with pytest.raises(samara.SamaraError, match="of memory are available to hold them") as e:
+        samara.run(m)
+    assert "out=DIR" in str(e.value)

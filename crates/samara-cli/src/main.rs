@@ -424,6 +424,16 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
                 return ExitCode::from(EXIT_MODEL);
             }
         };
+        // Refused at its start, not hours later at a full disk (which also stalls
+        // everything else writing there); an earlier file goes back to its name.
+        if let Some(s) = file.space_shortfall(def) {
+            eprintln!("error: analysis '{}': {s}", def.name);
+            eprintln!("  help: {}", s.hint());
+            if let Err(e) = file.discard() {
+                report::error(&e, None);
+            }
+            return ExitCode::from(EXIT_MODEL);
+        }
         if let Some(b) = &file.backup {
             eprintln!(
                 "note: an earlier {} was kept as {}",

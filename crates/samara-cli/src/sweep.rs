@@ -254,7 +254,9 @@ fn run_case(base: &Document, case: &Case, model_file: &Path, dir: &Path) -> Outc
         };
         let stage = def.stage();
         let mut file =
-            match ResultsFile::create_for(dir, model, Some(model_file), &sys, stage.as_ref()) {
+            match ResultsFile::create_for(dir, model, Some(model_file), &sys, stage.as_ref())
+                .and_then(|f| f.ensure_space(def))
+            {
                 Ok(f) => f,
                 Err(e) => return Outcome::Error(e.to_string()),
             };

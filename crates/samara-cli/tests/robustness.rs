@@ -328,3 +328,74 @@ type = "static"
     assert_located(&o, &path, 7, "not a regular file");
     assert!(clock.elapsed() < Duration::from_secs(60));
 }
+
+/// A run whose results provably outgrow the free space of their disk is refused at its
+/// start (status 1, the sizes and a hint), not hours later at a full disk: 10¹² steps of
+/// 1e-9 s, each written (320 B per record, so at least 320 TB, more than any disk the
+/// suite runs on). No file is left, an earlier one keeps its name; a sweep reports the
+/// case as an error and runs the cases that fit.
+#[test]
+fn results_that_cannot_fit_are_refused_at_the_start() {
+    let text = PENDULUM
+        .replace("t_end = 0.5", "t_end = 1e3")
+        .replace("step = 1e-3", "step = 1e-9")
+        .replace("diagnostics = true\n", "");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("m.toml");
+    std::fs::write(&path, &text).unwrap();
+    let out = dir.path().join("out");
+    let clock = Instant::now();
+    let o = samara(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(clock.elapsed() < Duration::from_secs(60), "refused at once");
+    assert!(
+        err.contains("error: analysis 'swing': the results need at least ")
+            && err.contains("1000000000001 output times of 320 B")
+            && err.contains("are free on their disk"),
+        "{err}"
+    );
+    assert!(
+        err.contains("help: record fewer output times (`output_interval`"),
+        "{err}"
+    );
+    assert!(!out.join("swing.nc").exists(), "the unused file is removed");
+    // An earlier file of the name is left as it was (not moved aside).
+    std::fs::write(out.join("swing.nc"), b"earlier").unwrap();
+    let o = samara(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("was kept as"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(out.join("swing.nc")).unwrap(), b"earlier");
+    let names: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names, ["swing.nc"]);
+
+    let grid = dir.path().join("grid.toml");
+    std::fs::write(&grid, "[grid]\n\"analyses.swing.step\" = [1e-9, 0.01]\n").unwrap();
+    let sweep = dir.path().join("sweep");
+    let o = samara(&[
+        "sweep",
+        path.to_str().unwrap(),
+        "--grid",
+        grid.to_str().unwrap(),
+        "--out",
+        sweep.to_str().unwrap(),
+    ]);
+    let index = std::fs::read_to_string(sweep.join("index.csv")).unwrap();
+    let rows: Vec<&str> = index.lines().skip(1).collect();
+    assert_eq!(rows.len(), 2, "{index}");
+    assert!(rows[0].contains("the results need at least"), "{index}");
+    assert!(!rows[1].contains("error"), "{index}\n{}", stderr(&o));
+}

@@ -327,3 +327,85 @@ fn keys_and_tables_given_twice_are_named_and_located() {
         "remove one of the two",
     );
 }
+
+/// A results file's projected size ([`ResultsFile::projected_size`] of
+/// [`samara::model::AnalysisDef::min_records`]) is the size it reaches, to the byte, for
+/// fixed steps that divide the span: every step, every 10th (`output_every`), and at
+/// `output_interval`; for adaptive steps it is a lower bound. A run that fits raises no
+/// shortfall; one of 10¹² records (10¹² steps, the most validation accepts: 320 TB) does, on any
+/// disk the suite runs on, with the numbers in its message, and `ensure_space` then
+/// removes the file and puts an earlier one back.
+#[test]
+fn the_projected_results_size_is_the_written_size() {
+    let analysis = |t_end: f64, extra: &str| {
+        model(&format!(
+            "{PENDULUM}[[analyses]]\nname = \"swing\"\ntype = \"dynamic\"\nt_end = {t_end:e}\n{extra}"
+        ))
+    };
+    let cases = [
+        ("step = 1e-3\n", 101),
+        ("step = 1e-3\noutput_every = 10\n", 11),
+        ("step = 1e-3\noutput_interval = 0.02\n", 6),
+        (
+            "step = 2e-3\nstep_control = \"adaptive\"\nstep_max = 0.01\n",
+            11,
+        ),
+    ];
+    for (extra, expected) in cases {
+        let m = analysis(0.1, extra);
+        let def = &m.analyses[0];
+        let records = def.min_records().expect("a dynamic analysis");
+        assert_eq!(records, expected, "{extra}");
+        let sys = System::new(&m);
+        let dir = tempfile::tempdir().unwrap();
+        let mut file = ResultsFile::create(dir.path(), &m, None, &sys, def).unwrap();
+        assert_eq!(file.space_shortfall(def), None, "{extra}");
+        let projected = file.projected_size(records);
+        let summary = run_analysis(&sys, def, sys.initial_state(), &mut file, &mut |_| {}).unwrap();
+        assert!(summary.failure.is_none(), "{extra}: {:?}", summary.failure);
+        let written = file.records();
+        let path = file.finish(&summary).unwrap();
+        let size = std::fs::metadata(&path).unwrap().len();
+        if extra.contains("adaptive") {
+            assert!(written >= records, "{extra}: {written} records");
+            assert!(size >= projected, "{extra}: {size} < {projected}");
+        } else {
+            assert_eq!(written, records, "{extra}");
+            assert_eq!(size, projected, "{extra}");
+        }
+    }
+    let m = analysis(1e3, "step = 1e-9\n");
+    let def = &m.analyses[0];
+    assert_eq!(def.min_records(), Some(1_000_000_000_001));
+    let sys = System::new(&m);
+    let dir = tempfile::tempdir().unwrap();
+    let file = ResultsFile::create(dir.path(), &m, None, &sys, def).unwrap();
+    let s = file.space_shortfall(def).expect("1e12 records fit no disk");
+    assert_eq!(s.records, 1_000_000_000_001);
+    assert!(s.record_bytes >= 300, "{} bytes per record", s.record_bytes);
+    assert!(s.needed > s.available);
+    let text = s.to_string();
+    assert!(
+        text.starts_with("the results need at least ") && text.contains("TB"),
+        "{text}"
+    );
+    assert!(s.hint().contains("output_interval"));
+    // Refused: the file removed, the earlier one back at its name.
+    let Err(e) = file.ensure_space(def) else {
+        panic!("refused")
+    };
+    assert!(
+        e.to_string().contains("analysis 'swing': the results need"),
+        "{e}"
+    );
+    assert!(!dir.path().join("swing.nc").exists());
+    std::fs::write(dir.path().join("swing.nc"), b"earlier").unwrap();
+    let file = ResultsFile::create(dir.path(), &m, None, &sys, def).unwrap();
+    assert!(file.backup.is_some());
+    assert!(file.ensure_space(def).is_err());
+    assert_eq!(
+        std::fs::read(dir.path().join("swing.nc")).unwrap(),
+        b"earlier"
+    );
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}

@@ -262,6 +262,39 @@ impl AnalysisDef {
         }
     }
 
+    /// The fewest output times a dynamic analysis writes (`None` for the other kinds,
+    /// whose records are few): the initial state, then one per `output_interval`, or one
+    /// per `output_every` steps of at most `step` (fixed) or `step_max` (adaptive), and
+    /// the final state. Breakpoints, events and step cuts only add steps, so this is a
+    /// lower bound, and the count for fixed steps that meet no breakpoint.
+    pub fn min_records(&self) -> Option<u64> {
+        let AnalysisKind::Dynamic(d) = &self.kind else {
+            return None;
+        };
+        let span = d.t_end - d.t_start;
+        if !span.is_finite() || span <= 0.0 {
+            return Some(1);
+        }
+        // A last step shorter than 1e-9 of a step is merged into the one before
+        // (analysis/dynamic.rs), and the final state is always written.
+        let outputs = match d.output_interval {
+            Some(dt) => (span / dt - 1e-9).ceil(),
+            None => {
+                let h = d.adaptive.map_or(d.step, |a| a.step_max.max(d.step));
+                let steps = (span / h - 1e-9).ceil();
+                (steps / d.output_every.max(1) as f64).ceil()
+            }
+        };
+        // Validation bounds the steps and records by 10¹²; `as` saturates regardless.
+        Some(
+            1 + if outputs.is_finite() {
+                outputs as u64
+            } else {
+                0
+            },
+        )
+    }
+
     /// The time the analysis ends at (a static analysis: the time its loads are taken
     /// at); `None` when the state it starts from decides (a modal analysis).
     pub fn end_time(&self) -> Option<f64> {

@@ -932,6 +932,19 @@ impl Writer {
         self.numrecs
     }
 
+    /// Whether the bytes go to memory ([`Definition::create_in_memory`]), not to a file.
+    pub fn is_in_memory(&self) -> bool {
+        matches!(self.file, Target::Memory(_))
+    }
+
+    /// Bytes of the file once it holds `records` records: header, fixed variables, then
+    /// `records` × the record size (saturating).
+    pub fn size_with_records(&self, records: u64) -> u64 {
+        (self.recsize as u64)
+            .saturating_mul(records)
+            .saturating_add(self.rec_begin)
+    }
+
     /// Write a whole non-record variable from f64 values (converted to its type;
     /// integer types are range-checked and truncated).
     pub fn put_fixed_f64(&mut self, var: VarId, data: &[f64]) -> Result<(), NcError> {

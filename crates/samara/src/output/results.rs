@@ -706,6 +706,69 @@ impl ResultsFile {
         self.writer.num_records()
     }
 
+    /// Bytes of the file once it holds `records` output times.
+    pub fn projected_size(&self, records: u64) -> u64 {
+        self.writer.size_with_records(records)
+    }
+
+    /// Whether the analysis `def` writes more than the free space of the file's disk
+    /// (results in memory: the available memory) can hold, at
+    /// [`AnalysisDef::min_records`] output times, a lower bound; `None` when it fits,
+    /// for the other analysis kinds, or when the system does not report the space.
+    pub fn space_shortfall(&self, def: &AnalysisDef) -> Option<super::SpaceShortfall> {
+        use super::space::{Storage, available_memory, available_space};
+        let records = def.min_records()?;
+        let record_bytes = self.projected_size(1) - self.projected_size(0);
+        let (storage, needed, available) = if self.writer.is_in_memory() {
+            (
+                Storage::Memory,
+                self.projected_size(records),
+                available_memory()?,
+            )
+        } else {
+            // The file already holds its header and fixed variables.
+            let now = std::fs::metadata(&self.path).map_or(0, |m| m.len());
+            let needed = self.projected_size(records).saturating_sub(now);
+            (Storage::Disk, needed, available_space(&self.path)?)
+        };
+        super::SpaceShortfall::compare(storage, records, record_bytes, needed, available)
+    }
+
+    /// [`Self::space_shortfall`] as an error (message and hint), for a caller that
+    /// refuses to start such a run; a file is then [discarded](Self::discard).
+    pub fn ensure_space(self, def: &AnalysisDef) -> Result<Self, crate::Error> {
+        let Some(s) = self.space_shortfall(def) else {
+            return Ok(self);
+        };
+        let path = self.path.clone();
+        self.discard()?;
+        Err(crate::Error::Output {
+            path,
+            message: format!("analysis '{}': {s}; {}", def.name, s.hint()),
+        })
+    }
+
+    /// Removes the file of an analysis that is not run, and moves the earlier file it
+    /// had set aside ([`Self::backup`]) back to its name.
+    pub fn discard(self) -> Result<(), crate::Error> {
+        let in_memory = self.writer.is_in_memory();
+        drop(self.writer);
+        if in_memory {
+            return Ok(());
+        }
+        let io = |action, source| crate::Error::Io {
+            path: self.path.clone(),
+            action,
+            source,
+        };
+        std::fs::remove_file(&self.path).map_err(|e| io("remove the unused results file", e))?;
+        if let Some(b) = &self.backup {
+            std::fs::rename(b, &self.path)
+                .map_err(|e| io("move the earlier results file back", e))?;
+        }
+        Ok(())
+    }
+
     /// Writes the closing attributes (status, counts, failure) and closes the file.
     pub fn finish(mut self, summary: &AnalysisSummary) -> Result<PathBuf, crate::Error> {
         self.close(summary)?;
