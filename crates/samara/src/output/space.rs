@@ -89,11 +89,16 @@ pub fn available_space(path: &Path) -> Option<u64> {
     fs4::available_space(path).ok().filter(|&b| b > 0)
 }
 
-/// Memory the system can give without swapping (`None` where it does not say).
+/// Memory the system can give without swapping, within the control group's limit where
+/// one is set (a container's; Linux) (`None` where it does not say).
 pub fn available_memory() -> Option<u64> {
     let mut sys = sysinfo::System::new();
     sys.refresh_memory();
-    Some(sys.available_memory()).filter(|&b| b > 0)
+    let host = sys.available_memory();
+    let limited = sys
+        .cgroup_limits()
+        .map_or(host, |c| host.min(c.free_memory));
+    Some(limited).filter(|&b| b > 0)
 }
 
 /// A byte count in decimal units (B, kB, MB, GB, TB), three significant digits.
@@ -172,8 +177,11 @@ mod tests {
     #[test]
     fn this_machine_reports_its_memory_and_disk() {
         // Linux, the platform the suite runs on, reports both.
-        assert!(available_memory().is_some_and(|b| b > 1 << 20));
+        let memory = available_memory();
         let dir = std::env::temp_dir();
-        assert!(available_space(&dir).is_some_and(|b| b > 0));
+        let disk = available_space(&dir);
+        println!("available: memory {memory:?} B, disk {disk:?} B");
+        assert!(memory.is_some_and(|b| b > 1 << 20));
+        assert!(disk.is_some_and(|b| b > 0));
     }
 }
