@@ -356,7 +356,7 @@ fn results_that_cannot_fit_are_refused_at_the_start() {
     assert!(clock.elapsed() < Duration::from_secs(60), "refused at once");
     assert!(
         err.contains("error: analysis 'swing': the results need at least ")
-            && err.contains("1000000000001 output times of 320 B")
+            && err.contains("1,000,000,000,001 output times of 320 B")
             && err.contains("are free on their disk"),
         "{err}"
     );

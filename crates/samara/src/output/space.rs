@@ -71,7 +71,7 @@ impl fmt::Display for SpaceShortfall {
             f,
             "the results need at least {} ({} output times of {}), but only {} {}",
             Bytes(self.needed),
-            self.records,
+            Grouped(self.records),
             Bytes(self.record_bytes),
             Bytes(self.available),
             match self.storage {
@@ -99,6 +99,22 @@ pub fn available_memory() -> Option<u64> {
         .cgroup_limits()
         .map_or(host, |c| host.min(c.free_memory));
     Some(limited).filter(|&b| b > 0)
+}
+
+/// A count with its thousands grouped by commas (`7,500,000,001`).
+struct Grouped(u64);
+
+impl fmt::Display for Grouped {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let digits = self.0.to_string();
+        for (i, d) in digits.chars().enumerate() {
+            if i > 0 && (digits.len() - i).is_multiple_of(3) {
+                f.write_str(",")?;
+            }
+            write!(f, "{d}")?;
+        }
+        Ok(())
+    }
 }
 
 /// A byte count in decimal units (B, kB, MB, GB, TB), three significant digits.
@@ -133,6 +149,16 @@ mod tests {
     use super::*;
 
     #[test]
+    fn counts_are_grouped_by_thousands() {
+        let g = |n: u64| Grouped(n).to_string();
+        assert_eq!(g(0), "0");
+        assert_eq!(g(999), "999");
+        assert_eq!(g(1_000), "1,000");
+        assert_eq!(g(7_500_000_001), "7,500,000,001");
+        assert_eq!(g(u64::MAX), "18,446,744,073,709,551,615");
+    }
+
+    #[test]
     fn byte_counts_read_in_decimal_units() {
         let s = |b: u64| Bytes(b).to_string();
         assert_eq!(s(0), "0 B");
@@ -160,7 +186,7 @@ mod tests {
         .expect("98.3 GB does not fit in 75.1 GB");
         assert_eq!(
             s.to_string(),
-            "the results need at least 98.3 GB (1000001 output times of 98.3 kB), but only \
+            "the results need at least 98.3 GB (1,000,001 output times of 98.3 kB), but only \
              75.1 GB are free on their disk"
         );
         assert!(s.hint().contains("--out"));
