@@ -16,6 +16,22 @@ fn error_lines(o: &Output) -> Vec<String> {
         .collect()
 }
 
+/// Writes `text` as `m.toml` in a fresh directory and runs it with `--out <dir>/out`:
+/// the output, that results folder, and the directory (kept alive by the caller).
+fn run_in_temp_dir(text: &str) -> (Output, std::path::PathBuf, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("m.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = dir.path().join("out");
+    let o = samara(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    (o, out, dir)
+}
+
 /// Line number (1-based) of the first occurrence of `needle` in `text`.
 fn line_of(text: &str, needle: &str) -> usize {
     text[..text.find(needle).unwrap()].matches('\n').count() + 1
@@ -143,16 +159,7 @@ fn a_run_that_overflows_fails_with_status_2() {
         )
         .replace("type = \"revolute\"", "type = \"spherical\"")
         .replace("axis = [0.0, 1.0, 0.0]\n", "");
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("m.toml");
-    std::fs::write(&path, &text).unwrap();
-    let out = dir.path().join("out");
-    let o = samara(&[
-        "run",
-        path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (o, _, _dir) = run_in_temp_dir(&text);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("is not finite"), "{err}");
@@ -170,16 +177,7 @@ fn every_step_moves_time_to_the_end() {
     let text = PENDULUM
         .replace("t_end = 0.5", "t_end = 2e-11")
         .replace("step = 1e-3", "step = 1e-12");
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("m.toml");
-    std::fs::write(&path, &text).unwrap();
-    let out = dir.path().join("out");
-    let o = samara(&[
-        "run",
-        path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (o, out, _dir) = run_in_temp_dir(&text);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let mut r = samara::output::ResultsReader::open(out.join("swing.nc")).unwrap();
     let t = r.time().unwrap();
@@ -278,16 +276,7 @@ fn a_free_body_in_statics_is_named() {
     );
     let text = text[..text.find("[[ignored]]").unwrap()].to_string()
         + &text[text.find("[[analyses]]").unwrap()..];
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("m.toml");
-    std::fs::write(&path, &text).unwrap();
-    let out = dir.path().join("out");
-    let o = samara(&[
-        "run",
-        path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (o, _, _dir) = run_in_temp_dir(&text);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("singular at node 'bob'"), "{err}");
@@ -340,17 +329,9 @@ fn results_that_cannot_fit_are_refused_at_the_start() {
         .replace("t_end = 0.5", "t_end = 1e3")
         .replace("step = 1e-3", "step = 1e-9")
         .replace("diagnostics = true\n", "");
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("m.toml");
-    std::fs::write(&path, &text).unwrap();
-    let out = dir.path().join("out");
     let clock = Instant::now();
-    let o = samara(&[
-        "run",
-        path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (o, out, dir) = run_in_temp_dir(&text);
+    let path = dir.path().join("m.toml");
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(clock.elapsed() < Duration::from_secs(60), "refused at once");
