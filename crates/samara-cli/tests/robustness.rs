@@ -23,13 +23,17 @@ fn run_in_temp_dir(text: &str) -> (Output, std::path::PathBuf, tempfile::TempDir
     let path = dir.path().join("m.toml");
     std::fs::write(&path, text).unwrap();
     let out = dir.path().join("out");
-    let o = samara(&[
+    (run_with_out(&path, &out), out, dir)
+}
+
+/// `samara run <path> --out <out>`.
+fn run_with_out(path: &Path, out: &Path) -> Output {
+    samara(&[
         "run",
         path.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
-    ]);
-    (o, out, dir)
+    ])
 }
 
 /// Line number (1-based) of the first occurrence of `needle` in `text`.
@@ -68,12 +72,7 @@ fn analysis_names_must_be_plain_file_names() {
         let (o, path, dir) = check_text("m.toml", &text);
         assert_located(&o, &path, line_of(&text, bad), "must be plain");
         let out = dir.path().join("out");
-        let o = samara(&[
-            "run",
-            path.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = run_with_out(&path, &out);
         assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
         // Nothing was written anywhere in the folder (nor beside it).
         let entries: Vec<_> = std::fs::read_dir(dir.path())
@@ -348,12 +347,7 @@ fn results_that_cannot_fit_are_refused_at_the_start() {
     assert!(!out.join("swing.nc").exists(), "the unused file is removed");
     // An earlier file of the name is left as it was (not moved aside).
     std::fs::write(out.join("swing.nc"), b"earlier").unwrap();
-    let o = samara(&[
-        "run",
-        path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_with_out(&path, &out);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(!stderr(&o).contains("was kept as"), "{}", stderr(&o));
     assert_eq!(std::fs::read(out.join("swing.nc")).unwrap(), b"earlier");
