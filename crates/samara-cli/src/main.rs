@@ -425,10 +425,17 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
             }
         };
         // Refused at its start, not hours later at a full disk (which also stalls
-        // everything else writing there); an earlier file goes back to its name.
+        // everything else writing there), located at the analysis whose settings give
+        // the records; an earlier file goes back to its name.
         if let Some(s) = file.space_shortfall(def) {
-            eprintln!("error: analysis '{}': {s}", def.name);
-            eprintln!("  help: {}", s.hint());
+            let d = samara::model::Diagnostic {
+                hint: Some(s.hint().into()),
+                ..samara::model::Diagnostic::error(
+                    format!("analysis '{}': {s}", def.name),
+                    def.spans.name.clone(),
+                )
+            };
+            report::diagnostics(&loaded.source, &[d]);
             if let Err(e) = file.discard() {
                 report::error(&e, None);
             }

@@ -318,7 +318,7 @@ type = "static"
 }
 
 /// A run whose results provably outgrow the free space of their disk is refused at its
-/// start (status 1, the sizes and a hint), not hours later at a full disk: 10¹² steps of
+/// start (status 1, located at the analysis, the sizes and a hint), not hours later at a full disk: 10¹² steps of
 /// 1e-9 s, each written (320 B per record, so at least 320 TB, more than any disk the
 /// suite runs on). No file is left, an earlier one keeps its name; a sweep reports the
 /// case as an error and runs the cases that fit.
@@ -332,8 +332,14 @@ fn results_that_cannot_fit_are_refused_at_the_start() {
     let (o, out, dir) = run_in_temp_dir(&text);
     let path = dir.path().join("m.toml");
     let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(clock.elapsed() < Duration::from_secs(60), "refused at once");
+    // Located at the analysis whose settings give the records.
+    assert_located(
+        &o,
+        &path,
+        line_of(&text, "name = \"swing\""),
+        "analysis 'swing'",
+    );
     assert!(
         err.contains("error: analysis 'swing': the results need at least ")
             && err.contains("1,000,000,000,001 output times of 320 B")
