@@ -59,10 +59,15 @@ enum Command {
         #[arg(long, short)]
         out: Option<PathBuf>,
     },
-    /// Validate a model without running it.
+    /// Validate a model without running it; print the least size of each dynamic
+    /// analysis's results and refuse those the results folder's disk cannot hold.
     Check {
         /// Model file (TOML).
         model: PathBuf,
+        /// Results directory the sizes are checked against [default: out/<model file
+        /// stem>/ beside the model]; nothing is written there.
+        #[arg(long, short)]
+        out: Option<PathBuf>,
     },
     /// Print the JSON Schema of the model file.
     Schema,
@@ -166,7 +171,7 @@ fn main() -> ExitCode {
     }
     match cli.command {
         Command::Run { model, out, quiet } => run(&model, out, quiet),
-        Command::Check { model } => check(&model),
+        Command::Check { model, out } => check(&model, out),
         Command::Sweep { model, grid, out } => sweep::sweep(&model, &grid, out),
         Command::Section {
             section,
@@ -354,8 +359,9 @@ fn system_checks(loaded: &LoadedModel, sys: &System) -> bool {
     }
 }
 
-fn check(path: &Path) -> ExitCode {
-    let Some(loaded) = load(path, &load_options(&results_dir(path, None), false)) else {
+fn check(path: &Path, out: Option<PathBuf>) -> ExitCode {
+    let out_dir = results_dir(path, out);
+    let Some(loaded) = load(path, &load_options(&out_dir, false)) else {
         return ExitCode::from(EXIT_MODEL);
     };
     let m = &loaded.model;
@@ -366,6 +372,9 @@ fn check(path: &Path) -> ExitCode {
     if !system_checks(&loaded, &sys) {
         return ExitCode::from(EXIT_MODEL);
     }
+    let Some(sizes) = results_sizes(&loaded, path, &sys, &out_dir) else {
+        return ExitCode::from(EXIT_MODEL);
+    };
     let dropped: usize = sys.loops.iter().map(|l| l.dropped.len()).sum();
     println!(
         "{}: ok — model '{}': {} nodes, {} bodies, {} joints ({} constraint equations{}, {} joint coordinates), {} springs, {} loads, {} analyses",
@@ -385,7 +394,58 @@ fn check(path: &Path) -> ExitCode {
         m.forces.len(),
         m.analyses.len()
     );
+    for line in sizes {
+        println!("  {line}");
+    }
     ExitCode::SUCCESS
+}
+
+/// The least size of each dynamic analysis's results, a line each; `None` (with the
+/// errors printed, located at the analyses) when the disk of `out_dir` cannot hold them,
+/// which `samara run` would refuse at the analysis's start.
+fn results_sizes(
+    loaded: &LoadedModel,
+    path: &Path,
+    sys: &System,
+    out_dir: &Path,
+) -> Option<Vec<String>> {
+    let mut lines = Vec::new();
+    let mut errors = Vec::new();
+    for def in &loaded.model.analyses {
+        let projection = match ResultsFile::projection(&loaded.model, Some(path), sys, def) {
+            Ok(Some(p)) => p,
+            Ok(None) => continue,
+            Err(e) => {
+                report::error(&e, None);
+                return None;
+            }
+        };
+        if let Some(s) = projection.shortfall_in(out_dir) {
+            errors.push(samara::model::Diagnostic {
+                hint: Some(s.hint().into()),
+                ..samara::model::Diagnostic::error(
+                    format!("analysis '{}': {s}", def.name),
+                    def.spans.name.clone(),
+                )
+            });
+        }
+        lines.push(format!(
+            "analysis '{}': results of {projection} in {}",
+            def.name,
+            out_dir.display()
+        ));
+    }
+    if errors.is_empty() {
+        return Some(lines);
+    }
+    report::diagnostics(&loaded.source, &errors);
+    let n = errors.len();
+    eprintln!(
+        "{}: {n} error{} — nothing was run",
+        path.display(),
+        if n == 1 { "" } else { "s" }
+    );
+    None
 }
 
 fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {

@@ -317,6 +317,76 @@ type = "static"
     assert!(clock.elapsed() < Duration::from_secs(60));
 }
 
+/// `samara check` prints the least size of a dynamic analysis's results, which for fixed
+/// steps is the size of the file `samara run` then writes, to the byte; and refuses, as
+/// the run would, results the disk of the results folder cannot hold, writing nothing.
+#[test]
+fn check_prints_the_results_size_and_refuses_what_cannot_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("m.toml");
+    let text = PENDULUM.replace("diagnostics = true\n", "");
+    std::fs::write(&path, &text).unwrap();
+    let out = dir.path().join("out");
+    let check = |path: &Path| {
+        samara(&[
+            "check",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let o = check(&path);
+    let printed = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(o.status.success(), "{printed}{}", stderr(&o));
+    assert!(!out.exists(), "check writes nothing");
+    let line = printed
+        .lines()
+        .find(|l| l.contains("analysis 'swing': results of at least "))
+        .unwrap_or_else(|| panic!("no size in:\n{printed}"));
+    assert!(line.contains("501 output times of 320 B"), "{line}");
+    let o = run_with_out(&path, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let written = std::fs::metadata(out.join("swing.nc")).unwrap().len();
+    let grouped = written
+        .to_string()
+        .as_bytes()
+        .rchunks(3)
+        .rev()
+        .map(|c| std::str::from_utf8(c).unwrap())
+        .collect::<Vec<_>>()
+        .join(",");
+    assert!(
+        line.contains(&format!("({grouped} bytes: ")),
+        "{line} against {written} B"
+    );
+
+    let text = text
+        .replace("t_end = 0.5", "t_end = 1e3")
+        .replace("step = 1e-3", "step = 1e-9");
+    let big = dir.path().join("big.toml");
+    std::fs::write(&big, &text).unwrap();
+    let out = dir.path().join("big_out");
+    let o = samara(&[
+        "check",
+        big.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_located(
+        &o,
+        &big,
+        line_of(&text, "name = \"swing\""),
+        "analysis 'swing'",
+    );
+    let err = stderr(&o);
+    assert!(
+        err.contains("1,000,000,000,001 output times of 320 B")
+            && err.contains("help: record fewer"),
+        "{err}"
+    );
+    assert!(!out.exists(), "check writes nothing");
+}
+
 /// A run whose results provably outgrow the free space of their disk is refused at its
 /// start (status 1, located at the analysis, the sizes and a hint), not hours later at a full disk: 10¹² steps of
 /// 1e-9 s, each written (320 B per record, so at least 320 TB, more than any disk the

@@ -25,6 +25,6 @@ pub mod vtu;
 
 pub use reader::{Channel, ReadError, ResultsReader, VariableInfo};
 pub use results::{FORMAT_VERSION, ResultsFile};
-pub use space::{SpaceShortfall, Storage};
+pub use space::{ResultsProjection, SpaceShortfall, Storage};
 pub use span::SpanProfile;
 pub use vtk::{VtkOptions, VtkSeries, write_vtk, write_vtk_with};

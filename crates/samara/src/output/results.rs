@@ -711,6 +711,27 @@ impl ResultsFile {
         self.writer.size_with_records(records)
     }
 
+    /// The least size of `def`'s results ([`AnalysisDef::min_records`] output times of
+    /// the layout this model's file would have), found without writing anything: the
+    /// header is laid out in memory. `None` for the analysis kinds with few records.
+    pub fn projection(
+        model: &Model,
+        model_file: Option<&Path>,
+        sys: &System,
+        def: &AnalysisDef,
+    ) -> Result<Option<super::ResultsProjection>, crate::Error> {
+        let Some(records) = def.min_records() else {
+            return Ok(None);
+        };
+        let f = Self::in_memory(model, model_file, sys, def.stage().as_ref())?;
+        let record_bytes = f.projected_size(1) - f.projected_size(0);
+        Ok(Some(super::ResultsProjection {
+            records,
+            record_bytes,
+            bytes: f.projected_size(records),
+        }))
+    }
+
     /// Whether the analysis `def` writes more than the free space of the file's disk
     /// (results in memory: the available memory) can hold, at
     /// [`AnalysisDef::min_records`] output times, a lower bound; `None` when it fits,

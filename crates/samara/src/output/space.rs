@@ -82,6 +82,49 @@ impl fmt::Display for SpaceShortfall {
     }
 }
 
+/// The least size of an analysis's results, projected before it runs
+/// ([`super::ResultsFile::projection`]): `samara check` prints it and compares it with
+/// the free space of the results folder's disk.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ResultsProjection {
+    /// The fewest output times the analysis writes ([`crate::model::AnalysisDef::min_records`]).
+    pub records: u64,
+    /// Bytes of one output time.
+    pub record_bytes: u64,
+    /// Bytes of the file with `records` output times: its header and fixed variables
+    /// included, a lower bound.
+    pub bytes: u64,
+}
+
+impl ResultsProjection {
+    /// The shortfall of writing these results into the folder `dir` (which need not exist
+    /// yet: the free space is that of its nearest existing ancestor's disk); `None` when
+    /// they fit or the system does not say.
+    pub fn shortfall_in(&self, dir: &Path) -> Option<SpaceShortfall> {
+        let existing = dir.ancestors().find(|p| p.exists())?;
+        SpaceShortfall::compare(
+            Storage::Disk,
+            self.records,
+            self.record_bytes,
+            self.bytes,
+            available_space(existing)?,
+        )
+    }
+}
+
+impl fmt::Display for ResultsProjection {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "at least {} ({} bytes: {} output times of {})",
+            Bytes(self.bytes),
+            Grouped(self.bytes),
+            Grouped(self.records),
+            Bytes(self.record_bytes)
+        )
+    }
+}
+
 /// Bytes available to the user on the file system holding `path` (`None` when the
 /// file system does not say). Zero counts as not said: it is asked after the file's
 /// header was written, and some network and virtual file systems report no space at all.
@@ -198,6 +241,35 @@ mod tests {
              8.00 kB of memory are available to hold them"
         );
         assert!(m.hint().contains("out=DIR"));
+    }
+
+    #[test]
+    fn a_projection_reads_in_units_and_is_compared_with_the_nearest_existing_folder() {
+        let p = ResultsProjection {
+            records: 1_000_001,
+            record_bytes: 320,
+            bytes: 320_004_096,
+        };
+        assert_eq!(
+            p.to_string(),
+            "at least 320 MB (320,004,096 bytes: 1,000,001 output times of 320 B)"
+        );
+        // A folder not made yet is judged by the disk of the folder it will be made in.
+        let dir = std::env::temp_dir().join("samara-not-made-yet").join("out");
+        assert!(!dir.exists());
+        assert_eq!(
+            p.shortfall_in(&dir),
+            None,
+            "320 MB fit in the temporary folder"
+        );
+        let huge = ResultsProjection {
+            records: u64::MAX / 320,
+            record_bytes: 320,
+            bytes: u64::MAX,
+        };
+        let s = huge.shortfall_in(&dir).expect("18 EB do not fit");
+        assert_eq!((s.storage, s.needed), (Storage::Disk, u64::MAX));
+        assert!(s.available > 0 && s.available < u64::MAX);
     }
 
     #[test]
