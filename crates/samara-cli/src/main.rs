@@ -59,8 +59,8 @@ enum Command {
         #[arg(long, short)]
         out: Option<PathBuf>,
     },
-    /// Validate a model without running it; print the least size of each dynamic
-    /// analysis's results and refuse those the results folder's disk cannot hold.
+    /// Validate a model without running it; print the least size of each dynamic or
+    /// static analysis's results and refuse those the results folder's disk cannot hold.
     Check {
         /// Model file (TOML).
         model: PathBuf,
@@ -400,7 +400,7 @@ fn check(path: &Path, out: Option<PathBuf>) -> ExitCode {
     ExitCode::SUCCESS
 }
 
-/// The least size of each dynamic analysis's results, a line each; `None` (with the
+/// The least size of each dynamic or static analysis's results, a line each; `None` (with the
 /// errors printed, located at the analyses) when the disk of `out_dir` cannot hold them,
 /// which `samara run` would refuse at the analysis's start.
 fn results_sizes(

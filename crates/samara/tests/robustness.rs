@@ -331,7 +331,8 @@ fn keys_and_tables_given_twice_are_named_and_located() {
 /// A results file's projected size ([`ResultsFile::projected_size`] of
 /// [`samara::model::AnalysisDef::min_records`]) is the size it reaches, to the byte, for
 /// fixed steps that divide the span: every step, every 10th (`output_every`), and at
-/// `output_interval`; for adaptive steps it is a lower bound. A run that fits raises no
+/// `output_interval`; for adaptive steps it is a lower bound; for a static analysis, its
+/// load steps and the unloaded state (10¹² load steps are refused). A run that fits raises no
 /// shortfall; one of 10¹² records (10¹² steps, the most validation accepts: 320 TB) does, on any
 /// disk the suite runs on, with the numbers in its message, and `ensure_space` then
 /// removes the file and puts an earlier one back.
@@ -374,6 +375,38 @@ fn the_projected_results_size_is_the_written_size() {
             assert_eq!(size, projected, "{extra}");
         }
     }
+    // Statics: the unloaded state and one record per load step, to the byte (gravity
+    // along the rod: the pendulum hangs where it starts, no increment is cut).
+    let hanging = PENDULUM.replace("gravity = [0.0, 0.0, -9.81]", "gravity = [9.81, 0.0, 0.0]");
+    let statics = |load_steps: &str| {
+        model(&format!(
+            "{hanging}[[analyses]]\nname = \"hang\"\ntype = \"static\"\nload_steps = {load_steps}\n"
+        ))
+    };
+    let m = statics("4");
+    let def = &m.analyses[0];
+    assert_eq!(def.min_records(), Some(5));
+    let sys = System::new(&m);
+    let dir = tempfile::tempdir().unwrap();
+    let mut file = ResultsFile::create(dir.path(), &m, None, &sys, def).unwrap();
+    assert_eq!(file.space_shortfall(def), None);
+    let projected = file.projected_size(5);
+    let summary = run_analysis(&sys, def, sys.initial_state(), &mut file, &mut |_| {}).unwrap();
+    assert!(summary.failure.is_none(), "{:?}", summary.failure);
+    assert_eq!(file.records(), 5);
+    let path = file.finish(&summary).unwrap();
+    assert_eq!(std::fs::metadata(&path).unwrap().len(), projected);
+    let m = statics("1_000_000_000_000");
+    let def = &m.analyses[0];
+    let sys = System::new(&m);
+    let file = ResultsFile::create(dir.path(), &m, None, &sys, def).unwrap();
+    let s = file
+        .space_shortfall(def)
+        .expect("1e12 load steps' records fit no disk");
+    assert_eq!(s.records, 1_000_000_000_001);
+    assert!(s.hint().contains("`load_steps`"));
+    assert!(file.ensure_space(def).is_err());
+
     let m = analysis(1e3, "step = 1e-9\n");
     let def = &m.analyses[0];
     assert_eq!(def.min_records(), Some(1_000_000_000_001));

@@ -262,14 +262,18 @@ impl AnalysisDef {
         }
     }
 
-    /// The fewest output times a dynamic analysis writes (`None` for the other kinds,
-    /// whose records are few): the initial state, then one per `output_interval`, or one
-    /// per `output_every` steps of at most `step` (fixed) or `step_max` (adaptive), and
-    /// the final state. Breakpoints, events and step cuts only add steps, so this is a
-    /// lower bound, and the count for fixed steps that meet no breakpoint.
+    /// The fewest output times a dynamic or static analysis writes (`None` for the other
+    /// kinds, whose records are few). Dynamic: the initial state, then one per
+    /// `output_interval`, or one per `output_every` steps of at most `step` (fixed) or
+    /// `step_max` (adaptive), and the final state; breakpoints, events and step cuts only
+    /// add steps, so this is a lower bound, and the count for fixed steps that meet no
+    /// breakpoint. Static: the unloaded state and one per load step (cut increments
+    /// add records).
     pub fn min_records(&self) -> Option<u64> {
-        let AnalysisKind::Dynamic(d) = &self.kind else {
-            return None;
+        let d = match &self.kind {
+            AnalysisKind::Dynamic(d) => d,
+            AnalysisKind::Static(s) => return Some((s.load_steps as u64).saturating_add(1)),
+            _ => return None,
         };
         let span = d.t_end - d.t_start;
         if !span.is_finite() || span <= 0.0 {

@@ -53,13 +53,14 @@ impl SpaceShortfall {
     pub fn hint(&self) -> &'static str {
         match self.storage {
             Storage::Disk => {
-                "record fewer output times (`output_interval`, `output_every`), shorten \
-                 the analysis, or write the results to a larger disk with --out (Python: \
-                 out=DIR)"
+                "record fewer output times (`output_interval`, `output_every`; fewer \
+                 `load_steps` in statics), shorten the analysis, or write the results to a \
+                 larger disk with --out (Python: out=DIR)"
             }
             Storage::Memory => {
-                "record fewer output times (`output_interval`, `output_every`), shorten \
-                 the analysis, or write the results to a folder (Python: out=DIR)"
+                "record fewer output times (`output_interval`, `output_every`; fewer \
+                 `load_steps` in statics), shorten the analysis, or write the results to a \
+                 folder (Python: out=DIR)"
             }
         }
     }
