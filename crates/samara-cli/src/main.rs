@@ -326,12 +326,7 @@ fn load(path: &Path, options: &LoadOptions) -> Option<LoadedModel> {
         }
         Err(samara::Error::Model(e)) => {
             report::diagnostics(&e.source, &e.diagnostics);
-            let n = e.errors().count();
-            eprintln!(
-                "{}: {n} error{} — nothing was run",
-                e.source.path.display(),
-                if n == 1 { "" } else { "s" }
-            );
+            nothing_was_run(&e.source.path, e.errors().count());
             None
         }
         Err(e) => {
@@ -348,12 +343,7 @@ fn system_checks(loaded: &LoadedModel, sys: &System) -> bool {
         Ok(()) => true,
         Err(e) => {
             report::diagnostics(&e.source, &e.diagnostics);
-            let n = e.errors().count();
-            eprintln!(
-                "{}: {n} error{} — nothing was run",
-                e.source.path.display(),
-                if n == 1 { "" } else { "s" }
-            );
+            nothing_was_run(&e.source.path, e.errors().count());
             false
         }
     }
@@ -421,13 +411,7 @@ fn results_sizes(
             }
         };
         if let Some(s) = projection.shortfall_in(out_dir) {
-            errors.push(samara::model::Diagnostic {
-                hint: Some(s.hint().into()),
-                ..samara::model::Diagnostic::error(
-                    format!("analysis '{}': {s}", def.name),
-                    def.spans.name.clone(),
-                )
-            });
+            errors.push(shortfall_diagnostic(def, &s));
         }
         lines.push(format!(
             "analysis '{}': results of {projection} in {}",
@@ -439,13 +423,31 @@ fn results_sizes(
         return Some(lines);
     }
     report::diagnostics(&loaded.source, &errors);
-    let n = errors.len();
+    nothing_was_run(path, errors.len());
+    None
+}
+
+/// An analysis whose results cannot fit, located at its name, with what to change.
+fn shortfall_diagnostic(
+    def: &samara::model::AnalysisDef,
+    s: &samara::output::SpaceShortfall,
+) -> samara::model::Diagnostic {
+    samara::model::Diagnostic {
+        hint: Some(s.hint().into()),
+        ..samara::model::Diagnostic::error(
+            format!("analysis '{}': {s}", def.name),
+            def.spans.name.clone(),
+        )
+    }
+}
+
+/// The closing line of a model's errors.
+fn nothing_was_run(path: &Path, n: usize) {
     eprintln!(
         "{}: {n} error{} — nothing was run",
         path.display(),
         if n == 1 { "" } else { "s" }
     );
-    None
 }
 
 fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
@@ -488,14 +490,7 @@ fn run(path: &Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
         // everything else writing there), located at the analysis whose settings give
         // the records; an earlier file goes back to its name.
         if let Some(s) = file.space_shortfall(def) {
-            let d = samara::model::Diagnostic {
-                hint: Some(s.hint().into()),
-                ..samara::model::Diagnostic::error(
-                    format!("analysis '{}': {s}", def.name),
-                    def.spans.name.clone(),
-                )
-            };
-            report::diagnostics(&loaded.source, &[d]);
+            report::diagnostics(&loaded.source, &[shortfall_diagnostic(def, &s)]);
             if let Err(e) = file.discard() {
                 report::error(&e, None);
             }
