@@ -102,7 +102,17 @@ impl ResultsProjection {
     /// yet: the free space is that of its nearest existing ancestor's disk); `None` when
     /// they fit or the system does not say.
     pub fn shortfall_in(&self, dir: &Path) -> Option<SpaceShortfall> {
-        let existing = dir.ancestors().find(|p| p.exists())?;
+        // A relative path's last ancestor is the empty path: the working folder.
+        let existing = dir
+            .ancestors()
+            .map(|p| {
+                if p.as_os_str().is_empty() {
+                    Path::new(".")
+                } else {
+                    p
+                }
+            })
+            .find(|p| p.exists())?;
         SpaceShortfall::compare(
             Storage::Disk,
             self.records,
@@ -271,6 +281,11 @@ mod tests {
         let s = huge.shortfall_in(&dir).expect("18 EB do not fit");
         assert_eq!((s.storage, s.needed), (Storage::Disk, u64::MAX));
         assert!(s.available > 0 && s.available < u64::MAX);
+        // A relative folder none of whose parents exists is made in the working folder.
+        let relative = Path::new("samara-not-made-yet").join("out");
+        assert!(!relative.exists());
+        assert!(huge.shortfall_in(&relative).is_some());
+        assert_eq!(p.shortfall_in(&relative), None);
     }
 
     #[test]
