@@ -28,8 +28,18 @@ fn run_in_temp_dir(text: &str) -> (Output, std::path::PathBuf, tempfile::TempDir
 
 /// `samara run <path> --out <out>`.
 fn run_with_out(path: &Path, out: &Path) -> Output {
+    with_out("run", path, out)
+}
+
+/// `samara check <path> --out <out>`.
+fn check_with_out(path: &Path, out: &Path) -> Output {
+    with_out("check", path, out)
+}
+
+/// `samara <command> <path> --out <out>`.
+fn with_out(command: &str, path: &Path, out: &Path) -> Output {
     samara(&[
-        "run",
+        command,
         path.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
@@ -327,15 +337,7 @@ fn check_prints_the_results_size_and_refuses_what_cannot_fit() {
     let text = PENDULUM.replace("diagnostics = true\n", "");
     std::fs::write(&path, &text).unwrap();
     let out = dir.path().join("out");
-    let check = |path: &Path| {
-        samara(&[
-            "check",
-            path.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-    };
-    let o = check(&path);
+    let o = check_with_out(&path, &out);
     let printed = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(o.status.success(), "{printed}{}", stderr(&o));
     assert!(!out.exists(), "check writes nothing");
@@ -366,12 +368,7 @@ fn check_prints_the_results_size_and_refuses_what_cannot_fit() {
     let big = dir.path().join("big.toml");
     std::fs::write(&big, &text).unwrap();
     let out = dir.path().join("big_out");
-    let o = samara(&[
-        "check",
-        big.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = check_with_out(&big, &out);
     assert_located(
         &o,
         &big,
