@@ -1030,6 +1030,7 @@ impl BlockLu {
     /// Forward substitution `L y = b` in place.
     #[inline(always)]
     fn forward_impl<F: Arith>(&self, rhs: &mut [f64]) {
+        let isa = self.isa;
         let sym = &*self.sym;
         let vals = &self.values[..];
         let x = Shared(rhs.as_mut_ptr());
@@ -1041,8 +1042,8 @@ impl BlockLu {
                 // same operations in the same order as one thread's).
                 // SAFETY: a part's steps write only its own blocks of `rhs`.
                 rayon::join(
-                    || unsafe { forward_steps::<F>(sym, vals, 0..a, true, x) },
-                    || unsafe { forward_steps::<F>(sym, vals, a..b, true, x) },
+                    || unsafe { forward_part(isa, sym, vals, 0..a, true, x) },
+                    || unsafe { forward_part(isa, sym, vals, a..b, true, x) },
                 );
                 for k in 0..b {
                     let ents = &sym.s_ent[sym.s_mid[k]..sym.s_ptr[k + 1]];
@@ -1060,6 +1061,7 @@ impl BlockLu {
     /// Backward substitution `U x = y` in place.
     #[inline(always)]
     fn backward_impl<F: Arith>(&mut self, rhs: &mut [f64]) {
+        let isa = self.isa;
         let sym = &*self.sym;
         let vals = &self.values[..];
         let perm = &self.perm[..];
@@ -1073,8 +1075,8 @@ impl BlockLu {
                 // meanwhile.
                 unsafe { backward_steps::<F>(sym, vals, perm, b..n, x, work) };
                 rayon::join(
-                    || unsafe { backward_steps::<F>(sym, vals, perm, 0..a, x, work) },
-                    || unsafe { backward_steps::<F>(sym, vals, perm, a..b, x, work2) },
+                    || unsafe { backward_part(isa, sym, vals, perm, 0..a, x, work) },
+                    || unsafe { backward_part(isa, sym, vals, perm, a..b, x, work2) },
                 );
             }
             _ => {
@@ -1425,6 +1427,45 @@ unsafe fn forward_steps<F: Arith>(
         let ents = &sym.s_ent[sym.s_ptr[k]..end];
         // SAFETY: the caller's.
         unsafe { forward_dyn::<F>(ents, vals.as_ptr(), sym.roff[k], sym.size[k], x) };
+    }
+}
+
+isa::copies! {
+    /// [`forward_steps`] in the copy of `isa`: a part's substitution runs in a closure
+    /// handed to another thread, which does not inherit its caller's target features (in
+    /// the baseline a fused multiply–add is a call into the runtime library).
+    ///
+    /// # Safety
+    /// As [`forward_steps`].
+    unsafe fn forward_part(
+        isa: Isa,
+        sym: &BlockLuSymbolic,
+        vals: &[f64],
+        ks: std::ops::Range<usize>,
+        part_only: bool,
+        x: Shared<f64>,
+    ) {
+        Base | Avx => forward_steps::<Plain>,
+        Fma | Avx512 => forward_steps::<Fused>,
+    }
+}
+
+isa::copies! {
+    /// [`backward_steps`] in the copy of `isa` (as [`forward_part`]).
+    ///
+    /// # Safety
+    /// As [`backward_steps`].
+    unsafe fn backward_part(
+        isa: Isa,
+        sym: &BlockLuSymbolic,
+        vals: &[f64],
+        perm: &[u32],
+        ks: std::ops::Range<usize>,
+        x: Shared<f64>,
+        work: &mut [f64],
+    ) {
+        Base | Avx => backward_steps::<Plain>,
+        Fma | Avx512 => backward_steps::<Fused>,
     }
 }
 
