@@ -134,7 +134,28 @@ impl StepProblem<'_> {
 
 impl NewtonSystem for StepProblem<'_> {
     fn evaluate(&mut self, residual: &mut [f64], matrix: Option<&mut BlockMatrix>) {
-        if matrix.is_some() {
+        if matrix.is_some()
+            && let Some(plan) = self.asm.split_plan()
+        {
+            // Prototype: each part's nodes on its thread.
+            let tp = SendPtr(self.t_ops.as_mut_ptr());
+            let hdq = &*self.hdq;
+            let one = move |i: usize| {
+                // SAFETY: each node's operator is written by one thread.
+                unsafe {
+                    *tp.get().add(i) = tangent_operator(&Vector3::new(
+                        hdq[6 * i + 3],
+                        hdq[6 * i + 4],
+                        hdq[6 * i + 5],
+                    ))
+                };
+            };
+            let [l0, l1] = &plan.nodes;
+            crate::solve::partner::join2(
+                || l0.iter().for_each(|&i| one(i)),
+                || l1.iter().for_each(|&i| one(i)),
+            );
+        } else if matrix.is_some() {
             for (i, t) in self.t_ops.iter_mut().enumerate() {
                 *t = tangent_operator(&Vector3::new(
                     self.hdq[6 * i + 3],
@@ -185,8 +206,43 @@ impl StepProblem<'_> {
         // increment and its value (a state has a natural zero — inflow, a stall fraction, a
         // pressure — so its own size sets the relative tolerance, as in ODE codes).
         let mut worst: f64 = 0.0;
+        if let Some(plan) = self.asm.split_plan() {
+            // Prototype: part 1's nodes on the partner thread.
+            let np = SendPtr(self.cur.nodes.as_mut_ptr());
+            let qp = SendPtr(self.hdq.as_mut_ptr());
+            let prev = &self.prev.nodes;
+            let dcfg = &*self.dcfg;
+            let update = move |i: usize| -> f64 {
+                // SAFETY: each node is updated by one thread.
+                let n = unsafe { &mut *np.get().add(i) };
+                let q = unsafe { std::slice::from_raw_parts_mut(qp.get().add(6 * i), 6) };
+                let p = &prev[i];
+                let d = &dcfg[6 * i..6 * i + 6];
+                let dx = Vector3::new(d[0], d[1], d[2]);
+                let dth = Vector3::new(d[3], d[4], d[5]);
+                n.v += dx * gp;
+                n.w += dth * gp;
+                n.a += dx * bp;
+                n.wd += dth * bp;
+                let mut w: f64 = 0.0;
+                for (q, c) in q.iter_mut().zip(&change[6 * i..6 * i + 6]) {
+                    *q += c;
+                    w = w.max(c.abs() / (atol + rtol * q.abs()));
+                }
+                n.x = p.x + Vector3::new(q[0], q[1], q[2]);
+                n.rot = p.rot.compose_exp(&Vector3::new(q[3], q[4], q[5]));
+                w
+            };
+            let [l0, l1] = &plan.nodes;
+            let (w0, w1) = crate::solve::partner::join2(
+                || l0.iter().fold(0.0f64, |m, &i| m.max(update(i))),
+                || l1.iter().fold(0.0f64, |m, &i| m.max(update(i))),
+            );
+            worst = w0.max(w1);
+        }
         let nodes = self.cur.nodes.iter_mut().zip(&self.prev.nodes);
-        for (i, (n, p)) in nodes.enumerate() {
+        let all = self.asm.split_plan().is_none();
+        for (i, (n, p)) in nodes.enumerate().take_while(|_| all) {
             let d = &self.dcfg[6 * i..6 * i + 6];
             let dx = Vector3::new(d[0], d[1], d[2]);
             let dth = Vector3::new(d[3], d[4], d[5]);
@@ -230,6 +286,23 @@ impl StepProblem<'_> {
             *l += *d;
         }
         Correction::new(worst, self.dlam, &self.cur.lambda, rtol)
+    }
+}
+
+/// A pointer handed to the partner thread (prototype).
+struct SendPtr<T>(*mut T);
+impl<T> Clone for SendPtr<T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for SendPtr<T> {}
+// SAFETY: each thread touches its own nodes.
+unsafe impl<T> Send for SendPtr<T> {}
+unsafe impl<T> Sync for SendPtr<T> {}
+impl<T> SendPtr<T> {
+    fn get(self) -> *mut T {
+        self.0
     }
 }
 
@@ -914,9 +987,17 @@ fn start<'a>(
         FormulationType::Index3 => Formulation::Index3,
         FormulationType::StabilizedIndex2 => Formulation::StabilizedIndex2,
     };
-    let asm = Assembler::new(sys, formulation);
+    let mut asm = Assembler::new(sys, formulation);
     let n = asm.n_unknowns();
     let lin = LinearSolver::new(asm.structure(), settings.solver.linear_solver);
+    if std::env::var("SAMARA_TWOPART").as_deref() == Ok("1")
+        && let Some(parts) = lin.block_parts()
+    {
+        let planned = asm.plan_split(sys, &parts);
+        if std::env::var("SAMARA_SPLIT_DEBUG").is_ok() {
+            eprintln!("two-part assembly planned: {planned}");
+        }
+    }
     let matrix = iteration_matrix(&lin, asm.structure(), settings);
     let mut it = Integrator {
         sys,

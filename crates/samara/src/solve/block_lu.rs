@@ -198,7 +198,7 @@ pub struct BlockLuSymbolic {
 impl BlockLuSymbolic {
     /// Ordering + symbolic factorization of the block pattern of `s`.
     pub fn new(s: &BlockStructure) -> Result<Self, StructureError> {
-        Self::with_split_from(s, SPLIT_MIN_BLOCKS)
+        Self::with_split_from(s, env_usize("SAMARA_SPLIT_MIN").unwrap_or(SPLIT_MIN_BLOCKS))
     }
 
     /// [`Self::new`], a separator order tried from `split_min_blocks` blocks on.
@@ -516,6 +516,10 @@ impl BlockLuSymbolic {
                 .sum()
         };
         let amd_cost = cost(&amd, &amd_rows);
+        let slack = std::env::var("SAMARA_SPLIT_SLACK")
+            .ok()
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(SPLIT_COST_SLACK);
         // The minimum-fill elimination graph costs about 100 adjacency operations per block
         // update of the factorization on a granular column: give up on it past 256 (about
         // the flops of one numeric factorization, 216 per 6 × 6 update).
@@ -556,12 +560,22 @@ impl BlockLuSymbolic {
             // order is not worth the second minimum-fill pass.
             && {
                 let w: usize = (0..adj.len()).filter(|&b| part[b] == 2).map(|b| s.block_size(b)).sum();
-                (w * w * w) as f64 / 3.0 <= SPLIT_COST_SLACK * best_cost
+                (w * w * w) as f64 / 3.0 <= slack * best_cost
             }
         {
             let held: Vec<bool> = part.iter().map(|&p| p == 2).collect();
-            if let Some(mf) = super::min_fill::min_fill_order(adj, &gates, &[], &[], &held, budget)
-            {
+            if let Some(mf) = super::min_fill::min_fill_order(
+                adj,
+                &gates,
+                if std::env::var("SAMARA_SPLIT_ANYGATE").is_ok() {
+                    &any_gate
+                } else {
+                    &[]
+                },
+                &[],
+                &held,
+                budget,
+            ) {
                 // The parts are not coupled and the separator goes last: eliminating one
                 // part after the other makes the same fill as the interleaved order.
                 let mut nd = Vec::with_capacity(mf.len());
@@ -569,7 +583,15 @@ impl BlockLuSymbolic {
                     nd.extend(mf.iter().copied().filter(|&b| part[b] == p));
                 }
                 let nd_rows = fill_rows(adj, &nd);
-                if cost(&nd, &nd_rows) <= (1.0 + SPLIT_COST_SLACK) * best_cost {
+                if std::env::var("SAMARA_SPLIT_DEBUG").is_ok() {
+                    eprintln!(
+                        "split: nd cost {} best {} ({})",
+                        cost(&nd, &nd_rows),
+                        best_cost,
+                        nd.len()
+                    );
+                }
+                if cost(&nd, &nd_rows) <= (1.0 + slack) * best_cost {
                     let a_end = part.iter().filter(|&&p| p == 0).count();
                     let b_end = a_end + part.iter().filter(|&&p| p == 1).count();
                     return Ok((nd, nd_rows, Some([a_end, b_end])));
@@ -801,7 +823,11 @@ fn dissect(
         }
         below += w;
     }
-    let sep = sep?;
+    let shift: isize = std::env::var("SAMARA_SPLIT_SHIFT")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
+    let sep = (sep? as isize + shift).clamp(1, depth as isize - 2) as usize;
     let mut part: Vec<u8> = level
         .iter()
         .map(|&l| match l.cmp(&sep) {
@@ -981,12 +1007,12 @@ impl BlockLu {
         let pp = Shared(perm.as_mut_ptr());
         let cp = Shared(colmax.as_mut_ptr());
         match sym.split {
-            Some([a, b]) if parallel() => {
+            Some([a, b]) if parallel() || super::partner::partner().is_some() => {
                 // The two parts on two threads, their updates into the separator's blocks
                 // held back and applied after them in step order: the same operations on
                 // every block in the same order as one thread's, so the same bits.
                 let (piv2, work2) = (&mut self.piv2[..], &mut self.work2[..]);
-                let (ra, rb) = rayon::join(
+                let (ra, rb) = pjoin(
                     // SAFETY: a part's steps read and write only its own blocks (pivots,
                     // multipliers, Schur updates within the part), its blocks'
                     // permutation entries, its columns' maxima and its rows of `rhs`;
@@ -1030,19 +1056,20 @@ impl BlockLu {
     /// Forward substitution `L y = b` in place.
     #[inline(always)]
     fn forward_impl<F: Arith>(&self, rhs: &mut [f64]) {
+        let isa = self.isa;
         let sym = &*self.sym;
         let vals = &self.values[..];
         let x = Shared(rhs.as_mut_ptr());
         let n = sym.n;
         match sym.split {
-            Some([a, b]) if parallel() && SPLIT_SOLVE => {
+            Some([a, b]) if (parallel() || super::partner::partner().is_some()) && SPLIT_SOLVE => {
                 // The parts' substitutions on two threads, their updates of the
                 // separator's rows held back and applied after them in step order (the
                 // same operations in the same order as one thread's).
                 // SAFETY: a part's steps write only its own blocks of `rhs`.
-                rayon::join(
-                    || unsafe { forward_steps::<F>(sym, vals, 0..a, true, x) },
-                    || unsafe { forward_steps::<F>(sym, vals, a..b, true, x) },
+                pjoin(
+                    || unsafe { forward_part(isa, sym, vals, 0..a, true, x) },
+                    || unsafe { forward_part(isa, sym, vals, a..b, true, x) },
                 );
                 for k in 0..b {
                     let ents = &sym.s_ent[sym.s_mid[k]..sym.s_ptr[k + 1]];
@@ -1060,21 +1087,22 @@ impl BlockLu {
     /// Backward substitution `U x = y` in place.
     #[inline(always)]
     fn backward_impl<F: Arith>(&mut self, rhs: &mut [f64]) {
+        let isa = self.isa;
         let sym = &*self.sym;
         let vals = &self.values[..];
         let perm = &self.perm[..];
         let x = Shared(rhs.as_mut_ptr());
         let n = sym.n;
         match sym.split {
-            Some([a, b]) if parallel() && SPLIT_SOLVE => {
+            Some([a, b]) if (parallel() || super::partner::partner().is_some()) && SPLIT_SOLVE => {
                 let (work, work2) = (&mut self.work[..], &mut self.work2[..]);
                 // SAFETY: one thread, then a part's steps write only its own blocks of
                 // `rhs` and read its own and the separator's, which no thread writes
                 // meanwhile.
                 unsafe { backward_steps::<F>(sym, vals, perm, b..n, x, work) };
-                rayon::join(
-                    || unsafe { backward_steps::<F>(sym, vals, perm, 0..a, x, work) },
-                    || unsafe { backward_steps::<F>(sym, vals, perm, a..b, x, work2) },
+                pjoin(
+                    || unsafe { backward_part(isa, sym, vals, perm, 0..a, x, work) },
+                    || unsafe { backward_part(isa, sym, vals, perm, a..b, x, work2) },
                 );
             }
             _ => {
@@ -1228,6 +1256,20 @@ unsafe impl<T> Sync for Shared<T> {}
 /// rayon's threads, when it has more than one (`RAYON_NUM_THREADS=1` keeps one; the results
 /// are the same). From outside the pool a `join` is handed over to it and waited for, two
 /// thread wake-ups per call, more than the half of a factorization it would save.
+fn env_usize(name: &str) -> Option<usize> {
+    std::env::var(name).ok().and_then(|v| v.parse().ok())
+}
+
+fn pjoin<A: FnOnce() -> RA + Send, RA: Send, B: FnOnce() -> RB + Send, RB: Send>(
+    a: A,
+    b: B,
+) -> (RA, RB) {
+    match super::partner::partner() {
+        Some(p) => p.join(a, b),
+        None => rayon::join(a, b),
+    }
+}
+
 fn parallel() -> bool {
     rayon::current_num_threads() > 1 && rayon::current_thread_index().is_some()
 }
@@ -1425,6 +1467,44 @@ unsafe fn forward_steps<F: Arith>(
         let ents = &sym.s_ent[sym.s_ptr[k]..end];
         // SAFETY: the caller's.
         unsafe { forward_dyn::<F>(ents, vals.as_ptr(), sym.roff[k], sym.size[k], x) };
+    }
+}
+
+isa::copies! {
+    /// [`forward_steps`] in the copy of `isa`: called from a thread's closure, which does
+    /// not inherit its caller's target features.
+    ///
+    /// # Safety
+    /// As [`forward_steps`].
+    unsafe fn forward_part(
+        isa: Isa,
+        sym: &BlockLuSymbolic,
+        vals: &[f64],
+        ks: std::ops::Range<usize>,
+        part_only: bool,
+        x: Shared<f64>,
+    ) {
+        Base | Avx => forward_steps::<Plain>,
+        Fma | Avx512 => forward_steps::<Fused>,
+    }
+}
+
+isa::copies! {
+    /// [`backward_steps`] in the copy of `isa` (as [`forward_part`]).
+    ///
+    /// # Safety
+    /// As [`backward_steps`].
+    unsafe fn backward_part(
+        isa: Isa,
+        sym: &BlockLuSymbolic,
+        vals: &[f64],
+        perm: &[u32],
+        ks: std::ops::Range<usize>,
+        x: Shared<f64>,
+        work: &mut [f64],
+    ) {
+        Base | Avx => backward_steps::<Plain>,
+        Fma | Avx512 => backward_steps::<Fused>,
     }
 }
 

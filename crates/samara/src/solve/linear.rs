@@ -90,6 +90,28 @@ impl LinearSolver {
         self.block.symbolic().split().is_some() && rayon::current_num_threads() > 1
     }
 
+    /// Prototype: per block, 0 or 1 for the parts of a separator order, 2 for the
+    /// separator.
+    pub fn block_parts(&self) -> Option<Vec<u8>> {
+        let sym = self.block.symbolic();
+        let [a, b] = sym.split()?;
+        let n = sym.elimination_order().len();
+        Some(
+            (0..n)
+                .map(|blk| {
+                    let p = sym.position(blk);
+                    if p < a {
+                        0
+                    } else if p < b {
+                        1
+                    } else {
+                        2
+                    }
+                })
+                .collect(),
+        )
+    }
+
     pub fn is_factored(&self) -> bool {
         self.active != Active::None
     }

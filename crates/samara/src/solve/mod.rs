@@ -14,6 +14,7 @@ pub mod condition;
 mod linear;
 mod min_fill;
 pub mod newton;
+pub mod partner;
 mod sparse_lu;
 
 pub use block_lu::{BlockLu, BlockLuSymbolic, SPLIT_MIN_BLOCKS, SingularBlock};

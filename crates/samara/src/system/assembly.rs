@@ -277,6 +277,34 @@ pub struct Assembler {
     pairs: Vec<SpherePair>,
     pair_slots: Vec<[usize; 4]>,
     pair_terms: LocalTerms,
+    /// Prototype: the two-part assembly (items of part 0, part 1 and the interface).
+    split: Option<Box<SplitPlan>>,
+}
+
+/// Prototype: the batches (their first elements) and constraints of each part of a
+/// separator order (0, 1) and of the interface (2), and the second part's assembler.
+pub struct SplitPlan {
+    /// The nodes of part 1 and the others.
+    pub nodes: [Vec<usize>; 2],
+    starts: [Vec<usize>; 3],
+    cons: [Vec<usize>; 3],
+    partner: Assembler,
+}
+
+/// A pointer handed to the partner thread (disjoint blocks and rows per part).
+struct SharedPtr<T>(*mut T);
+impl<T> Clone for SharedPtr<T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for SharedPtr<T> {}
+unsafe impl<T> Send for SharedPtr<T> {}
+unsafe impl<T> Sync for SharedPtr<T> {}
+impl<T> SharedPtr<T> {
+    fn get(self) -> *mut T {
+        self.0
+    }
 }
 
 /// How a node's rates follow its configuration in a steadily spinning state:
@@ -706,7 +734,72 @@ impl Assembler {
             constraints,
             nu_pairs,
             rate_maps: Vec::new(),
+            split: None,
         }
+    }
+
+    /// Prototype: plans the two-part assembly from the part of each block (0, 1, else the
+    /// separator); `false` (no plan) where the model has what the plan does not cover.
+    pub fn plan_split(&mut self, sys: &System, part: &[u8]) -> bool {
+        self.split = None;
+        if !sys.signals.names.is_empty()
+            || !self.pairs.is_empty()
+            || !self.window.is_empty()
+            || self.formulation != Formulation::Index3
+        {
+            return false;
+        }
+        let of = |blocks: &mut dyn Iterator<Item = usize>| -> usize {
+            let mut p: Option<u8> = None;
+            for b in blocks {
+                let q = part[b];
+                if q > 1 || p.is_some_and(|p| p != q) {
+                    return 2;
+                }
+                p = Some(q);
+            }
+            p.map_or(2, |p| p as usize)
+        };
+        let mut starts: [Vec<usize>; 3] = Default::default();
+        let mut k = 0;
+        while k < sys.elements.len() {
+            let end = self.batch_end[k];
+            let p = of(&mut (k..end).flat_map(|j| self.element_blocks[j].iter().map(|b| b.block)));
+            starts[p].push(k);
+            k = end;
+        }
+        let mut cons: [Vec<usize>; 3] = Default::default();
+        for (k, c) in sys.constraints.iter().enumerate() {
+            let w = &self.constraints[k];
+            let nodes = c.nodes().iter().map(|&n| self.config_place[6 * n].0);
+            let p = of(&mut nodes.chain(w.place.block).chain(w.place.projection));
+            cons[p].push(k);
+        }
+        if std::env::var("SAMARA_SPLIT_DEBUG").is_ok() {
+            eprintln!(
+                "parts: batches {:?}, constraints {:?}",
+                starts.iter().map(Vec::len).collect::<Vec<_>>(),
+                cons.iter().map(Vec::len).collect::<Vec<_>>()
+            );
+        }
+        let partner = Assembler::new(sys, self.formulation);
+        let mut nodes: [Vec<usize>; 2] = Default::default();
+        for i in 0..sys.n_nodes() {
+            let p = (part[self.config_place[6 * i].0] == 1) as usize;
+            nodes[p].push(i);
+        }
+        self.split = Some(Box::new(SplitPlan {
+            nodes,
+            starts,
+            cons,
+            partner,
+        }));
+        true
+    }
+
+    /// Prototype: the two-part plan, if any.
+    pub fn split_plan(&self) -> Option<&SplitPlan> {
+        self.split.as_deref()
     }
 
     /// Block of the iteration matrix and column in it of configuration unknown `i`.
@@ -913,32 +1006,59 @@ impl Assembler {
                 self.combine_signal_gradients(sys, coef, tangent_ops);
             }
         }
-        let tangents = matrix.is_some().then_some(TangentInputs {
-            coef,
-            tangent_ops,
-            rate_maps: &self.rate_maps,
-        });
+        if let Some(mut plan) = self.split.take() {
+            // Prototype: part 0 here, part 1 on the partner thread, then the interface.
+            let len = residual.len();
+            let rp = SharedPtr(residual.as_mut_ptr());
+            let mp = matrix
+                .as_deref_mut()
+                .map(|m| SharedPtr(m as *mut BlockMatrix));
+            let want = mp.is_some();
+            let partner = &mut plan.partner;
+            let (s1, c1) = (&plan.starts[1], &plan.cons[1]);
+            let this = &mut *self;
+            let (s0, c0) = (&plan.starts[0], &plan.cons[0]);
+            crate::solve::partner::join2(
+                move || {
+                    // SAFETY: part 0's items write only part 0's rows and blocks.
+                    let r = unsafe { std::slice::from_raw_parts_mut(rp.get(), len) };
+                    let m = mp.map(|m| unsafe { &mut *m.get() });
+                    this.assemble_items(sys, state, ctx, coef, tangent_ops, r, m, s0, c0);
+                },
+                move || {
+                    // SAFETY: part 1's items write only part 1's rows and blocks.
+                    let r = unsafe { std::slice::from_raw_parts_mut(rp.get(), len) };
+                    let m = mp.map(|m| unsafe { &mut *m.get() });
+                    partner.assemble_items(sys, state, ctx, coef, tangent_ops, r, m, s1, c1);
+                },
+            );
+            let _ = want;
+            let m = matrix.as_deref_mut();
+            self.assemble_items(
+                sys,
+                state,
+                ctx,
+                coef,
+                tangent_ops,
+                residual,
+                m,
+                &plan.starts[2],
+                &plan.cons[2],
+            );
+            self.split = Some(plan);
+            return;
+        }
         if self.window.is_empty() {
-            // Evaluate and scatter batch by batch (mostly one element) through the shared
-            // scratch.
-            let mut k = 0;
-            while k < sys.elements.len() {
-                let end = self.batch_end[k];
-                let t = &mut self.terms[self.term_of[k]];
-                element_terms::<M>(
-                    sys,
-                    k..end,
-                    state,
-                    ctx,
-                    &self.signal_values.values,
-                    tangents.as_ref(),
-                    t,
-                    &mut self.inputs,
-                );
-                let t = &self.terms[self.term_of[k]];
-                self.scatter_element::<M>(sys, k..end, t, coef, residual, matrix.as_deref_mut());
-                k = end;
-            }
+            self.element_loop::<M>(
+                sys,
+                state,
+                ctx,
+                coef,
+                tangent_ops,
+                residual,
+                matrix.as_deref_mut(),
+                None,
+            );
         } else {
             // Large models, a window of elements at a time: each element of the window into
             // its own slot in parallel, then the same scatter in element order, so the sums
@@ -951,6 +1071,11 @@ impl Assembler {
             // take `Separate` multiply–adds: the windowed models' results are the same in
             // every copy.
             use rayon::prelude::*;
+            let tangents = matrix.is_some().then_some(TangentInputs {
+                coef,
+                tangent_ops,
+                rate_maps: &self.rate_maps,
+            });
             let tangents = tangents.as_ref();
             let mut matrix = matrix.as_deref_mut();
             // Taken out for the loop (a move, no allocation) and put back after it.
@@ -998,6 +1123,11 @@ impl Assembler {
             });
             self.window = window;
         }
+        let tangents = matrix.is_some().then_some(TangentInputs {
+            coef,
+            tangent_ops,
+            rate_maps: &self.rate_maps,
+        });
         // Granular candidate pairs: node blocks only; their bristles (history) from the
         // state, aligned with the pairs.
         debug_assert!(
@@ -1034,7 +1164,145 @@ impl Assembler {
             }
         }
 
-        for (k, c) in sys.constraints.iter().enumerate() {
+        self.constraint_loop::<M>(
+            sys,
+            state,
+            ctx,
+            coef,
+            tangent_ops,
+            residual,
+            matrix.as_deref_mut(),
+            None,
+        );
+        if let Some(mat) = matrix
+            && stabilized
+        {
+            self.add_projection_couplings(mat);
+        }
+    }
+
+    isa::copies! {
+        /// Prototype: the listed batches and constraints only (one part of a split).
+        #[allow(clippy::too_many_arguments)]
+        pub(crate) fn assemble_items(
+            &mut self: Assembler,
+            sys: &System,
+            state: &State,
+            ctx: &EvalContext,
+            coef: &Coefficients,
+            tangent_ops: &[Matrix3<f64>],
+            residual: &mut [f64],
+            matrix: Option<&mut BlockMatrix>,
+            starts: &[usize],
+            cons: &[usize],
+        ) {
+            Base | Avx => assemble_items_impl::<Separate>,
+            Fma => assemble_items_impl::<Fused>,
+        }
+    }
+
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn assemble_items_impl<M: MulAdd>(
+        &mut self,
+        sys: &System,
+        state: &State,
+        ctx: &EvalContext,
+        coef: &Coefficients,
+        tangent_ops: &[Matrix3<f64>],
+        residual: &mut [f64],
+        mut matrix: Option<&mut BlockMatrix>,
+        starts: &[usize],
+        cons: &[usize],
+    ) {
+        self.element_loop::<M>(
+            sys,
+            state,
+            ctx,
+            coef,
+            tangent_ops,
+            residual,
+            matrix.as_deref_mut(),
+            Some(starts),
+        );
+        self.constraint_loop::<M>(
+            sys,
+            state,
+            ctx,
+            coef,
+            tangent_ops,
+            residual,
+            matrix,
+            Some(cons),
+        );
+    }
+
+    /// The batches (all, or those starting at `starts`), evaluated and scattered through
+    /// the shared scratch.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn element_loop<M: MulAdd>(
+        &mut self,
+        sys: &System,
+        state: &State,
+        ctx: &EvalContext,
+        coef: &Coefficients,
+        tangent_ops: &[Matrix3<f64>],
+        residual: &mut [f64],
+        mut matrix: Option<&mut BlockMatrix>,
+        starts: Option<&[usize]>,
+    ) {
+        let tangents = matrix.is_some().then_some(TangentInputs {
+            coef,
+            tangent_ops,
+            rate_maps: &self.rate_maps,
+        });
+        let count = starts.map_or(sys.elements.len(), |l| l.len());
+        let mut i = 0;
+        let mut k = 0;
+        while i < count && k < sys.elements.len() {
+            if let Some(l) = starts {
+                k = l[i];
+            }
+            let end = self.batch_end[k];
+            let t = &mut self.terms[self.term_of[k]];
+            element_terms::<M>(
+                sys,
+                k..end,
+                state,
+                ctx,
+                &self.signal_values.values,
+                tangents.as_ref(),
+                t,
+                &mut self.inputs,
+            );
+            let t = &self.terms[self.term_of[k]];
+            self.scatter_element::<M>(sys, k..end, t, coef, residual, matrix.as_deref_mut());
+            k = end;
+            i += 1;
+        }
+    }
+
+    /// The constraints' rows (all, or those in `list`) into the residual and the matrix.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn constraint_loop<M: MulAdd>(
+        &mut self,
+        sys: &System,
+        state: &State,
+        ctx: &EvalContext,
+        coef: &Coefficients,
+        tangent_ops: &[Matrix3<f64>],
+        residual: &mut [f64],
+        mut matrix: Option<&mut BlockMatrix>,
+        list: Option<&[usize]>,
+    ) {
+        let stabilized = self.formulation == Formulation::StabilizedIndex2;
+        let sr = coef.row_scale;
+        let count = list.map_or(sys.constraints.len(), |l| l.len());
+        for i in 0..count {
+            let k = list.map_or(i, |l| l[i]);
+            let c = &sys.constraints[k];
             let w = &mut self.constraints[k];
             let (m, nc) = (w.m, w.nc);
             let off = sys.multiplier_offsets[k];
@@ -1329,11 +1597,6 @@ impl Assembler {
                     }
                 }
             }
-        }
-        if let Some(mat) = matrix
-            && stabilized
-        {
-            self.add_projection_couplings(mat);
         }
     }
 
