@@ -77,7 +77,7 @@ impl Partner {
         }
         let ra = a();
         while s.state.load(Ordering::Acquire) != DONE {
-            std::hint::spin_loop();
+            spin_pause();
         }
         s.state.store(IDLE, Ordering::Relaxed);
         if s.panicked.swap(false, Ordering::Relaxed) {
@@ -98,6 +98,16 @@ pub fn pin(cpu: usize) {
     }
 }
 
+/// The pause of a spin-wait: `SAMARA_SPIN_PAUSE=0` spins without the PAUSE instruction
+/// (a guest's PAUSE loops may exit to the hypervisor).
+#[inline(always)]
+fn spin_pause() {
+    static PAUSE: OnceLock<bool> = OnceLock::new();
+    if *PAUSE.get_or_init(|| std::env::var("SAMARA_SPIN_PAUSE").as_deref() != Ok("0")) {
+        std::hint::spin_loop();
+    }
+}
+
 fn run(s: &Slot) {
     if let Some(c) = std::env::var("SAMARA_PARTNER_CPU")
         .ok()
@@ -109,7 +119,7 @@ fn run(s: &Slot) {
         let mut since = Instant::now();
         let mut spins = 0u32;
         while s.state.load(Ordering::Acquire) != POSTED {
-            std::hint::spin_loop();
+            spin_pause();
             spins += 1;
             if spins & 1023 == 0 && since.elapsed() > SPIN {
                 s.parked.store(true, Ordering::Release);
