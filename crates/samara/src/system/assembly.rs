@@ -42,7 +42,7 @@ use crate::elements::{Element, EvalContext, LocalTerms, Need, SpherePair};
 use crate::joints::CoordinateTangents;
 use crate::math::isa;
 use crate::math::prefetch::prefetch;
-use crate::solve::{BlockKind, BlockMatrix, BlockStructure, BlockView};
+use crate::solve::{BlockKind, BlockMatrix, BlockStructure, BlockTarget, BlockView};
 use nalgebra::{DMatrix, Matrix3};
 use std::ops::Range;
 use std::sync::Arc;
@@ -286,25 +286,14 @@ pub struct Assembler {
 pub struct SplitPlan {
     /// The nodes of part 1 and the others.
     pub nodes: [Vec<usize>; 2],
+    /// Owner of each stored block (0, 1; 2 for the blocks on the separator).
+    entry_part: Vec<u8>,
+    /// Part 1's residual (its rows only are written) and the ranges of those rows.
+    residual1: Vec<f64>,
+    rows1: Vec<Range<usize>>,
     starts: [Vec<usize>; 3],
     cons: [Vec<usize>; 3],
     partner: Assembler,
-}
-
-/// A pointer handed to the partner thread (disjoint blocks and rows per part).
-struct SharedPtr<T>(*mut T);
-impl<T> Clone for SharedPtr<T> {
-    fn clone(&self) -> Self {
-        *self
-    }
-}
-impl<T> Copy for SharedPtr<T> {}
-unsafe impl<T> Send for SharedPtr<T> {}
-unsafe impl<T> Sync for SharedPtr<T> {}
-impl<T> SharedPtr<T> {
-    fn get(self) -> *mut T {
-        self.0
-    }
 }
 
 /// How a node's rates follow its configuration in a steadily spinning state:
@@ -788,7 +777,27 @@ impl Assembler {
             let p = (part[self.config_place[6 * i].0] == 1) as usize;
             nodes[p].push(i);
         }
+        let st = &*self.structure;
+        let mut entry_part = vec![2u8; st.n_entries()];
+        for i in 0..st.n_blocks() {
+            for j in 0..st.n_blocks() {
+                if let Some(e) = st.entry_index(i, j)
+                    && part[i] == part[j]
+                    && part[i] < 2
+                {
+                    entry_part[e] = part[i];
+                }
+            }
+        }
+        let rows1: Vec<Range<usize>> = (0..st.n_blocks())
+            .filter(|&b| part[b] == 1)
+            .map(|b| st.block_offset(b)..st.block_offset(b) + st.block_size(b))
+            .collect();
+        let residual1 = vec![0.0; st.dim()];
         self.split = Some(Box::new(SplitPlan {
+            entry_part,
+            residual1,
+            rows1,
             nodes,
             starts,
             cons,
@@ -1007,33 +1016,43 @@ impl Assembler {
             }
         }
         if let Some(mut plan) = self.split.take() {
-            // Prototype: part 0 here, part 1 on the partner thread, then the interface.
-            let len = residual.len();
-            let rp = SharedPtr(residual.as_mut_ptr());
-            let mp = matrix
-                .as_deref_mut()
-                .map(|m| SharedPtr(m as *mut BlockMatrix));
-            let want = mp.is_some();
-            let partner = &mut plan.partner;
-            let (s1, c1) = (&plan.starts[1], &plan.cons[1]);
-            let this = &mut *self;
-            let (s0, c0) = (&plan.starts[0], &plan.cons[0]);
-            crate::solve::partner::join2(
-                move || {
-                    // SAFETY: part 0's items write only part 0's rows and blocks.
-                    let r = unsafe { std::slice::from_raw_parts_mut(rp.get(), len) };
-                    let m = mp.map(|m| unsafe { &mut *m.get() });
-                    this.assemble_items(sys, state, ctx, coef, tangent_ops, r, m, s0, c0);
-                },
-                move || {
-                    // SAFETY: part 1's items write only part 1's rows and blocks.
-                    let r = unsafe { std::slice::from_raw_parts_mut(rp.get(), len) };
-                    let m = mp.map(|m| unsafe { &mut *m.get() });
-                    partner.assemble_items(sys, state, ctx, coef, tangent_ops, r, m, s1, c1);
-                },
-            );
-            let _ = want;
-            let m = matrix.as_deref_mut();
+            // Part 0 here, part 1 on the partner thread (into its own residual rows and
+            // the blocks it owns), then the items on the separator.
+            let SplitPlan {
+                partner,
+                residual1,
+                rows1,
+                entry_part,
+                starts,
+                cons,
+                ..
+            } = &mut *plan;
+            {
+                let [mut t0, mut t1] = match matrix.as_deref_mut() {
+                    Some(m) => m.part_targets(entry_part).map(Some),
+                    None => [None, None],
+                };
+                let this = &mut *self;
+                let r0 = &mut *residual;
+                let (s0, c0, s1, c1) = (&starts[0], &cons[0], &starts[1], &cons[1]);
+                crate::solve::partner::join2(
+                    move || {
+                        let m = t0.as_mut();
+                        this.assemble_items(sys, state, ctx, coef, tangent_ops, r0, m, s0, c0);
+                    },
+                    || {
+                        for r in rows1.iter() {
+                            residual1[r.clone()].fill(0.0);
+                        }
+                        let (r1, m) = (&mut residual1[..], t1.as_mut());
+                        partner.assemble_items(sys, state, ctx, coef, tangent_ops, r1, m, s1, c1);
+                    },
+                );
+            }
+            for r in rows1.iter() {
+                residual[r.clone()].copy_from_slice(&residual1[r.clone()]);
+            }
+            let mut whole = matrix.as_deref_mut().map(|m| m.target());
             self.assemble_items(
                 sys,
                 state,
@@ -1041,13 +1060,14 @@ impl Assembler {
                 coef,
                 tangent_ops,
                 residual,
-                m,
-                &plan.starts[2],
-                &plan.cons[2],
+                whole.as_mut(),
+                &starts[2],
+                &cons[2],
             );
             self.split = Some(plan);
             return;
         }
+        let mut tgt = matrix.as_deref_mut().map(|m| m.target());
         if self.window.is_empty() {
             self.element_loop::<M>(
                 sys,
@@ -1056,7 +1076,7 @@ impl Assembler {
                 coef,
                 tangent_ops,
                 residual,
-                matrix.as_deref_mut(),
+                tgt.as_mut(),
                 None,
             );
         } else {
@@ -1071,13 +1091,12 @@ impl Assembler {
             // take `Separate` multiply–adds: the windowed models' results are the same in
             // every copy.
             use rayon::prelude::*;
-            let tangents = matrix.is_some().then_some(TangentInputs {
+            let tangents = tgt.is_some().then_some(TangentInputs {
                 coef,
                 tangent_ops,
                 rate_maps: &self.rate_maps,
             });
             let tangents = tangents.as_ref();
-            let mut matrix = matrix.as_deref_mut();
             // Taken out for the loop (a move, no allocation) and put back after it.
             let mut window = std::mem::take(&mut self.window);
             let this = &*self;
@@ -1115,7 +1134,7 @@ impl Assembler {
                             t,
                             coef,
                             residual,
-                            matrix.as_deref_mut(),
+                            tgt.as_mut(),
                         );
                     }
                     start += len;
@@ -1123,7 +1142,7 @@ impl Assembler {
             });
             self.window = window;
         }
-        let tangents = matrix.is_some().then_some(TangentInputs {
+        let tangents = tgt.is_some().then_some(TangentInputs {
             coef,
             tangent_ops,
             rate_maps: &self.rate_maps,
@@ -1153,7 +1172,7 @@ impl Assembler {
                     residual[6 * na + i] += sr * t.r[6 * a + i];
                 }
             }
-            let (Some(tg), Some(mat)) = (tangents.as_ref(), matrix.as_deref_mut()) else {
+            let (Some(tg), Some(mat)) = (tangents.as_ref(), tgt.as_mut()) else {
                 continue;
             };
             combine_node_terms::<M>(t, en, tg);
@@ -1171,9 +1190,10 @@ impl Assembler {
             coef,
             tangent_ops,
             residual,
-            matrix.as_deref_mut(),
+            tgt.as_mut(),
             None,
         );
+        drop(tgt);
         if let Some(mat) = matrix
             && stabilized
         {
@@ -1192,7 +1212,7 @@ impl Assembler {
             coef: &Coefficients,
             tangent_ops: &[Matrix3<f64>],
             residual: &mut [f64],
-            matrix: Option<&mut BlockMatrix>,
+            matrix: Option<&mut BlockTarget<'_>>,
             starts: &[usize],
             cons: &[usize],
         ) {
@@ -1211,7 +1231,7 @@ impl Assembler {
         coef: &Coefficients,
         tangent_ops: &[Matrix3<f64>],
         residual: &mut [f64],
-        mut matrix: Option<&mut BlockMatrix>,
+        mut matrix: Option<&mut BlockTarget<'_>>,
         starts: &[usize],
         cons: &[usize],
     ) {
@@ -1249,7 +1269,7 @@ impl Assembler {
         coef: &Coefficients,
         tangent_ops: &[Matrix3<f64>],
         residual: &mut [f64],
-        mut matrix: Option<&mut BlockMatrix>,
+        mut matrix: Option<&mut BlockTarget<'_>>,
         starts: Option<&[usize]>,
     ) {
         let tangents = matrix.is_some().then_some(TangentInputs {
@@ -1294,7 +1314,7 @@ impl Assembler {
         coef: &Coefficients,
         tangent_ops: &[Matrix3<f64>],
         residual: &mut [f64],
-        mut matrix: Option<&mut BlockMatrix>,
+        mut matrix: Option<&mut BlockTarget<'_>>,
         list: Option<&[usize]>,
     ) {
         let stabilized = self.formulation == Formulation::StabilizedIndex2;
@@ -1528,7 +1548,7 @@ impl Assembler {
             #[inline(always)]
             #[allow(clippy::too_many_arguments)]
             fn lam_rows<M: MulAdd>(
-                mat: &mut BlockMatrix,
+                mat: &mut BlockTarget<'_>,
                 (lam_row, diag): (&[usize], usize),
                 (m, nc): (usize, usize),
                 (cn, ops): (&[usize], &[Matrix3<f64>]),
@@ -1611,7 +1631,7 @@ impl Assembler {
         t: &LocalTerms,
         coef: &Coefficients,
         residual: &mut [f64],
-        matrix: Option<&mut BlockMatrix>,
+        matrix: Option<&mut BlockTarget<'_>>,
     ) {
         let k = ks.start;
         let e = &sys.elements[k];
@@ -1703,7 +1723,7 @@ impl Assembler {
         sys: &System,
         ks: Range<usize>,
         t: &LocalTerms,
-        mat: &mut BlockMatrix,
+        mat: &mut BlockTarget<'_>,
     ) {
         let k = ks.start;
         let n = sys.elements[k].nodes().len();
