@@ -356,6 +356,8 @@ struct Integrator<'a> {
     contacts: ContactPairs,
     /// The size of the step solved into `trial`.
     trial_step: f64,
+    /// The partner thread of a two-part model (prototype).
+    partner: Option<crate::solve::partner::Partner>,
 }
 
 /// Candidate pairs of the granular sets (a Verlet list, [`crate::elements::GranularSet`]):
@@ -645,11 +647,14 @@ impl Integrator<'_> {
         };
         problem.update_configuration();
         let (lin, matrix, work) = (&mut self.lin, &mut self.matrix, &mut self.work);
+        let partner = self.partner.as_ref();
         let mut solve = || newton(&mut problem, lin, matrix, work, &settings);
         // A block LU with two parts factors them on two threads from within rayon's pool:
         // the iterations then run on one of its threads (`scope`), once per step rather
         // than a hand-over from outside the pool per factorization.
-        let result = if lin_splits && rayon::current_thread_index().is_none() {
+        let result = if partner.is_some() {
+            crate::solve::partner::within(partner, solve)
+        } else if lin_splits && rayon::current_thread_index().is_none() {
             rayon::scope(|_| solve())
         } else {
             solve()
@@ -988,12 +993,22 @@ fn start<'a>(
         FormulationType::StabilizedIndex2 => Formulation::StabilizedIndex2,
     };
     let mut asm = Assembler::new(sys, formulation);
+    let mut partner = None;
     let n = asm.n_unknowns();
     let lin = LinearSolver::new(asm.structure(), settings.solver.linear_solver);
     if std::env::var("SAMARA_TWOPART").as_deref() == Ok("1")
         && let Some(parts) = lin.block_parts()
     {
         let planned = asm.plan_split(sys, &parts);
+        if planned && std::env::var("SAMARA_PARTNER").as_deref() == Ok("1") {
+            partner = crate::solve::partner::Partner::spawn().ok();
+            if let Some(c) = std::env::var("SAMARA_MAIN_CPU")
+                .ok()
+                .and_then(|v| v.parse().ok())
+            {
+                crate::solve::partner::pin(c);
+            }
+        }
         if std::env::var("SAMARA_SPLIT_DEBUG").is_ok() {
             eprintln!("two-part assembly planned: {planned}");
         }
@@ -1032,6 +1047,7 @@ fn start<'a>(
         breakpoints: sys.breakpoints(),
         contacts: ContactPairs::default(),
         trial_step: 0.0,
+        partner,
     };
     // Granular sets: the candidate pairs at the start, in the pattern from the first
     // assembly on.

@@ -1007,7 +1007,7 @@ impl BlockLu {
         let pp = Shared(perm.as_mut_ptr());
         let cp = Shared(colmax.as_mut_ptr());
         match sym.split {
-            Some([a, b]) if parallel() || super::partner::partner().is_some() => {
+            Some([a, b]) if parallel() || super::partner::active() => {
                 // The two parts on two threads, their updates into the separator's blocks
                 // held back and applied after them in step order: the same operations on
                 // every block in the same order as one thread's, so the same bits.
@@ -1062,7 +1062,7 @@ impl BlockLu {
         let x = Shared(rhs.as_mut_ptr());
         let n = sym.n;
         match sym.split {
-            Some([a, b]) if (parallel() || super::partner::partner().is_some()) && SPLIT_SOLVE => {
+            Some([a, b]) if (parallel() || super::partner::active()) && SPLIT_SOLVE => {
                 // The parts' substitutions on two threads, their updates of the
                 // separator's rows held back and applied after them in step order (the
                 // same operations in the same order as one thread's).
@@ -1094,7 +1094,7 @@ impl BlockLu {
         let x = Shared(rhs.as_mut_ptr());
         let n = sym.n;
         match sym.split {
-            Some([a, b]) if (parallel() || super::partner::partner().is_some()) && SPLIT_SOLVE => {
+            Some([a, b]) if (parallel() || super::partner::active()) && SPLIT_SOLVE => {
                 let (work, work2) = (&mut self.work[..], &mut self.work2[..]);
                 // SAFETY: one thread, then a part's steps write only its own blocks of
                 // `rhs` and read its own and the separator's, which no thread writes
@@ -1264,9 +1264,10 @@ fn pjoin<A: FnOnce() -> RA + Send, RA: Send, B: FnOnce() -> RB + Send, RB: Send>
     a: A,
     b: B,
 ) -> (RA, RB) {
-    match super::partner::partner() {
-        Some(p) => p.join(a, b),
-        None => rayon::join(a, b),
+    if super::partner::active() {
+        super::partner::join2(a, b)
+    } else {
+        rayon::join(a, b)
     }
 }
 

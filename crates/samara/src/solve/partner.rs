@@ -2,11 +2,16 @@
 //! `b` on the partner and `a` on the caller, the partner spinning between jobs (a hand-over
 //! costs a cache-line round trip, not a thread wake-up) and parking after a while idle.
 //! Part 1's work always goes to the same thread, so its blocks stay in that core's caches.
+//!
+//! A run owns its partner ([`Partner::spawn`]; dropped, the thread ends) and makes it the
+//! current one of its thread for a step ([`within`]); [`join2`] then hands part 1 to it,
+//! and without one runs both parts here, one after the other (the same operations in the
+//! same order: the results do not depend on whether there is a partner).
 
-use std::cell::UnsafeCell;
+use std::cell::{Cell, UnsafeCell};
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::{Arc, OnceLock};
-use std::thread::{self, Thread};
+use std::thread::{self, JoinHandle, Thread};
 use std::time::{Duration, Instant};
 
 const IDLE: u32 = 0;
@@ -16,75 +21,111 @@ const DONE: u32 = 2;
 /// How long the partner spins for the next job before it parks.
 const SPIN: Duration = Duration::from_millis(2);
 
+type Job = *const (dyn Fn() + 'static);
+
 struct Slot {
     state: AtomicU32,
     parked: AtomicBool,
     panicked: AtomicBool,
+    stop: AtomicBool,
     /// The posted job: a lifetime-erased pointer to a closure on the caller's stack, valid
     /// until `state` reads `DONE` (the caller waits for it).
-    job: UnsafeCell<Option<*const (dyn Fn() + Sync)>>,
+    job: UnsafeCell<Option<Job>>,
     thread: OnceLock<Thread>,
 }
 
 // SAFETY: `job` is written by the caller before the release store of POSTED and read by
 // the partner after the acquire load of it; the caller does not touch it until DONE.
 unsafe impl Sync for Slot {}
+// SAFETY: as above.
 unsafe impl Send for Slot {}
 
+/// The partner thread of a run.
 pub struct Partner {
     slot: Arc<Slot>,
+    handle: Option<JoinHandle<()>>,
 }
 
 impl Partner {
-    fn spawn() -> Self {
+    /// Starts the thread (pinned to `SAMARA_PARTNER_CPU` when set: prototype).
+    pub fn spawn() -> std::io::Result<Self> {
         let slot = Arc::new(Slot {
             state: AtomicU32::new(IDLE),
             parked: AtomicBool::new(false),
             panicked: AtomicBool::new(false),
+            stop: AtomicBool::new(false),
             job: UnsafeCell::new(None),
             thread: OnceLock::new(),
         });
         let s = slot.clone();
         let handle = thread::Builder::new()
             .name("samara-partner".into())
-            .spawn(move || run(&s))
-            .expect("spawn the partner thread");
+            .spawn(move || run(&s))?;
         let _ = slot.thread.set(handle.thread().clone());
-        Self { slot }
+        Ok(Self {
+            slot,
+            handle: Some(handle),
+        })
     }
 
-    /// Runs `a` here and `b` on the partner; returns when both are done.
+    fn wake(&self) {
+        if self.slot.parked.load(Ordering::Acquire)
+            && let Some(t) = self.slot.thread.get()
+        {
+            t.unpark();
+        }
+    }
+
+    /// Runs `a` here and `b` on the partner; returns when both are done. A panic of `b` is
+    /// raised here.
     pub fn join<A: FnOnce() -> RA, RA, B: FnOnce() -> RB + Send, RB: Send>(
         &self,
         a: A,
         b: B,
     ) -> (RA, RB) {
-        let b = std::sync::Mutex::new(Some(b));
-        let out: std::sync::Mutex<Option<RB>> = std::sync::Mutex::new(None);
+        let b = UnsafeCell::new(Some(b));
+        let out: UnsafeCell<Option<RB>> = UnsafeCell::new(None);
         let job = || {
-            let f = b.lock().unwrap().take().unwrap();
-            *out.lock().unwrap() = Some(f());
+            // SAFETY: the partner is the only one touching `b` and `out` until DONE.
+            unsafe {
+                let f = (*b.get()).take().expect("a job runs once");
+                *out.get() = Some(f());
+            }
         };
-        let job: &(dyn Fn() + Sync) = &job;
+        let job: *const (dyn Fn() + '_) = &job;
         // SAFETY: the pointer is used by the partner only until it stores DONE, and this
-        // function does not return before it reads DONE.
-        let job: *const (dyn Fn() + Sync) = unsafe { std::mem::transmute(job) };
+        // function does not return (nor unwind) before it reads DONE.
+        let job: Job = unsafe { std::mem::transmute::<*const (dyn Fn() + '_), Job>(job) };
         let s = &*self.slot;
+        // SAFETY: IDLE: the partner does not read `job`.
         unsafe { *s.job.get() = Some(job) };
         s.state.store(POSTED, Ordering::Release);
-        if s.parked.load(Ordering::Acquire) {
-            s.thread.get().unwrap().unpark();
-        }
-        let ra = a();
+        self.wake();
+        let ra = std::panic::catch_unwind(std::panic::AssertUnwindSafe(a));
         while s.state.load(Ordering::Acquire) != DONE {
-            spin_pause();
+            std::hint::spin_loop();
         }
         s.state.store(IDLE, Ordering::Relaxed);
+        let ra = match ra {
+            Ok(r) => r,
+            Err(e) => std::panic::resume_unwind(e),
+        };
         if s.panicked.swap(false, Ordering::Relaxed) {
-            panic!("the partner thread's job panicked");
+            panic!("the partner thread's part of the step panicked");
         }
-        let rb = out.into_inner().unwrap().unwrap();
-        (ra, rb)
+        (ra, out.into_inner().expect("the job ran"))
+    }
+}
+
+impl Drop for Partner {
+    fn drop(&mut self) {
+        self.slot.stop.store(true, Ordering::Release);
+        if let Some(t) = self.slot.thread.get() {
+            t.unpark();
+        }
+        if let Some(h) = self.handle.take() {
+            let _ = h.join();
+        }
     }
 }
 
@@ -95,16 +136,6 @@ pub fn pin(cpu: usize) {
         let mut set: libc::cpu_set_t = std::mem::zeroed();
         libc::CPU_SET(cpu, &mut set);
         libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set);
-    }
-}
-
-/// The pause of a spin-wait: `SAMARA_SPIN_PAUSE=0` spins without the PAUSE instruction
-/// (a guest's PAUSE loops may exit to the hypervisor).
-#[inline(always)]
-fn spin_pause() {
-    static PAUSE: OnceLock<bool> = OnceLock::new();
-    if *PAUSE.get_or_init(|| std::env::var("SAMARA_SPIN_PAUSE").as_deref() != Ok("0")) {
-        std::hint::spin_loop();
     }
 }
 
@@ -119,11 +150,14 @@ fn run(s: &Slot) {
         let mut since = Instant::now();
         let mut spins = 0u32;
         while s.state.load(Ordering::Acquire) != POSTED {
-            spin_pause();
-            spins += 1;
+            if s.stop.load(Ordering::Acquire) {
+                return;
+            }
+            std::hint::spin_loop();
+            spins = spins.wrapping_add(1);
             if spins & 1023 == 0 && since.elapsed() > SPIN {
                 s.parked.store(true, Ordering::Release);
-                if s.state.load(Ordering::Acquire) != POSTED {
+                if s.state.load(Ordering::Acquire) != POSTED && !s.stop.load(Ordering::Acquire) {
                     thread::park_timeout(Duration::from_millis(50));
                 }
                 s.parked.store(false, Ordering::Release);
@@ -131,41 +165,51 @@ fn run(s: &Slot) {
             }
         }
         // SAFETY: posted before the release store of POSTED.
-        let job = unsafe { (*s.job.get()).take().unwrap() };
-        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| unsafe { (*job)() }));
-        if r.is_err() {
-            s.panicked.store(true, Ordering::Relaxed);
+        let job = unsafe { (*s.job.get()).take() };
+        if let Some(job) = job {
+            // SAFETY: the caller keeps the closure alive until DONE.
+            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| unsafe { (*job)() }));
+            if r.is_err() {
+                s.panicked.store(true, Ordering::Relaxed);
+            }
         }
         s.state.store(DONE, Ordering::Release);
     }
 }
 
-/// The process's partner thread, when `SAMARA_PARTNER=1` (the prototype's switch).
-pub fn partner() -> Option<&'static Partner> {
-    static P: OnceLock<Option<Partner>> = OnceLock::new();
-    P.get_or_init(|| {
-        (std::env::var("SAMARA_PARTNER").as_deref() == Ok("1")).then(|| {
-            let p = Partner::spawn();
-            if let Some(c) = std::env::var("SAMARA_MAIN_CPU")
-                .ok()
-                .and_then(|v| v.parse().ok())
-            {
-                pin(c);
-            }
-            p
-        })
-    })
-    .as_ref()
+thread_local! {
+    /// The partner of the step running on this thread ([`within`]).
+    static CURRENT: Cell<*const Partner> = const { Cell::new(std::ptr::null()) };
 }
 
-/// Runs `a` and `b`: on the partner when there is one, else one after the other.
+/// Runs `f` with `p` as this thread's partner (none: both parts here).
+pub fn within<R>(p: Option<&Partner>, f: impl FnOnce() -> R) -> R {
+    struct Restore(*const Partner);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            CURRENT.with(|c| c.set(self.0));
+        }
+    }
+    let new = p.map_or(std::ptr::null(), |p| p as *const Partner);
+    let _restore = Restore(CURRENT.with(|c| c.replace(new)));
+    f()
+}
+
+/// Whether this thread has a partner for its step.
+pub fn active() -> bool {
+    CURRENT.with(|c| !c.get().is_null())
+}
+
+/// Runs `a` and `b`: `b` on this thread's partner when it has one, else one after the
+/// other here.
 #[inline]
 pub fn join2<A: FnOnce() -> RA, RA, B: FnOnce() -> RB + Send, RB: Send>(a: A, b: B) -> (RA, RB) {
-    match partner() {
-        Some(p) => p.join(a, b),
-        None => {
-            let ra = a();
-            (ra, b())
-        }
+    let p = CURRENT.with(|c| c.get());
+    if p.is_null() {
+        let ra = a();
+        (ra, b())
+    } else {
+        // SAFETY: set by `within`, whose borrow of the partner outlives this call.
+        unsafe { &*p }.join(a, b)
     }
 }
