@@ -127,6 +127,11 @@ fn main() {
                     {
                         s.t_end = t;
                     }
+                    if let samara::model::AnalysisKind::Dynamic(s) = &mut d.kind
+                        && filters.iter().any(|f| f.as_str() == "two_parts")
+                    {
+                        s.partition = samara::model::Partition::TwoParts;
+                    }
                     let mut m = d.clone();
                     if let samara::model::AnalysisKind::Dynamic(s) = &mut m.kind {
                         s.jacobian = samara::model::JacobianUpdate::Modified;

@@ -995,23 +995,17 @@ fn start<'a>(
     let mut asm = Assembler::new(sys, formulation);
     let mut partner = None;
     let n = asm.n_unknowns();
-    let lin = LinearSolver::new(asm.structure(), settings.solver.linear_solver);
-    if std::env::var("SAMARA_TWOPART").as_deref() == Ok("1")
+    let two_parts = settings.partition == crate::model::Partition::TwoParts;
+    let lin = LinearSolver::with_parts(asm.structure(), settings.solver.linear_solver, two_parts);
+    // Two parts: planned from the block LU's separator order; the partner thread started
+    // when rayon may use a second thread (`RAYON_NUM_THREADS=1` keeps one; the results
+    // are the same).
+    if two_parts
         && let Some(parts) = lin.block_parts()
+        && asm.plan_split(sys, &parts)
+        && rayon::current_num_threads() > 1
     {
-        let planned = asm.plan_split(sys, &parts);
-        if planned && std::env::var("SAMARA_PARTNER").as_deref() == Ok("1") {
-            partner = crate::solve::partner::Partner::spawn().ok();
-            if let Some(c) = std::env::var("SAMARA_MAIN_CPU")
-                .ok()
-                .and_then(|v| v.parse().ok())
-            {
-                crate::solve::partner::pin(c);
-            }
-        }
-        if std::env::var("SAMARA_SPLIT_DEBUG").is_ok() {
-            eprintln!("two-part assembly planned: {planned}");
-        }
+        partner = crate::solve::partner::Partner::spawn().ok();
     }
     let matrix = iteration_matrix(&lin, asm.structure(), settings);
     let mut it = Integrator {

@@ -198,14 +198,31 @@ pub struct BlockLuSymbolic {
 impl BlockLuSymbolic {
     /// Ordering + symbolic factorization of the block pattern of `s`.
     pub fn new(s: &BlockStructure) -> Result<Self, StructureError> {
-        Self::with_split_from(s, env_usize("SAMARA_SPLIT_MIN").unwrap_or(SPLIT_MIN_BLOCKS))
+        Self::with_rule(s, SplitRule::default())
+    }
+
+    /// [`Self::new`] with a separator order whenever one level of nested dissection finds
+    /// two parts ([`SplitRule::two_parts`]), whatever it costs.
+    pub fn two_parts(s: &BlockStructure) -> Result<Self, StructureError> {
+        Self::with_rule(s, SplitRule::two_parts())
     }
 
     /// [`Self::new`], a separator order tried from `split_min_blocks` blocks on.
+    #[cfg(test)]
     fn with_split_from(
         s: &BlockStructure,
         split_min_blocks: usize,
     ) -> Result<Self, StructureError> {
+        Self::with_rule(
+            s,
+            SplitRule {
+                min_blocks: split_min_blocks,
+                ..SplitRule::default()
+            },
+        )
+    }
+
+    fn with_rule(s: &BlockStructure, rule: SplitRule) -> Result<Self, StructureError> {
         let n = s.n_blocks();
         // ---- block adjacency (original numbering, no diagonal) ----
         let adj: Vec<Vec<usize>> = (0..n)
@@ -221,7 +238,7 @@ impl BlockLuSymbolic {
             }
         }
 
-        let (order, srows, split) = Self::constrained_order(s, &adj, split_min_blocks)?;
+        let (order, srows, split) = Self::constrained_order(s, &adj, rule)?;
         let mut pos = vec![0usize; n];
         for (k, &b) in order.iter().enumerate() {
             pos[b] = k;
@@ -502,7 +519,7 @@ impl BlockLuSymbolic {
     fn constrained_order(
         s: &BlockStructure,
         adj: &[Vec<usize>],
-        split_min_blocks: usize,
+        rule: SplitRule,
     ) -> Result<(Vec<usize>, Vec<Vec<usize>>, Option<[usize; 2]>), StructureError> {
         let amd = Self::defer_multipliers(s, adj, &Self::amd_order(adj)?);
         let amd_rows = fill_rows(adj, &amd);
@@ -516,10 +533,7 @@ impl BlockLuSymbolic {
                 .sum()
         };
         let amd_cost = cost(&amd, &amd_rows);
-        let slack = std::env::var("SAMARA_SPLIT_SLACK")
-            .ok()
-            .and_then(|v| v.parse::<f64>().ok())
-            .unwrap_or(SPLIT_COST_SLACK);
+        let slack = rule.slack;
         // The minimum-fill elimination graph costs about 100 adjacency operations per block
         // update of the factorization on a granular column: give up on it past 256 (about
         // the flops of one numeric factorization, 216 per 6 × 6 update).
@@ -553,7 +567,7 @@ impl BlockLuSymbolic {
                 (best, best_rows, best_cost) = (mf, mf_rows, mf_cost);
             }
         }
-        if adj.len() >= split_min_blocks
+        if adj.len() >= rule.min_blocks
             && let Some(part) = dissect(adj, &|b| s.block_size(b), &is_mult)
             // The separator's elimination alone, a dense front of its size w (≈ w³/3 in
             // the measure of `cost`), within the slack: else (a granular column's layer) the
@@ -567,11 +581,7 @@ impl BlockLuSymbolic {
             if let Some(mf) = super::min_fill::min_fill_order(
                 adj,
                 &gates,
-                if std::env::var("SAMARA_SPLIT_ANYGATE").is_ok() {
-                    &any_gate
-                } else {
-                    &[]
-                },
+                if rule.released { &any_gate } else { &[] },
                 &[],
                 &held,
                 budget,
@@ -583,14 +593,6 @@ impl BlockLuSymbolic {
                     nd.extend(mf.iter().copied().filter(|&b| part[b] == p));
                 }
                 let nd_rows = fill_rows(adj, &nd);
-                if std::env::var("SAMARA_SPLIT_DEBUG").is_ok() {
-                    eprintln!(
-                        "split: nd cost {} best {} ({})",
-                        cost(&nd, &nd_rows),
-                        best_cost,
-                        nd.len()
-                    );
-                }
                 if cost(&nd, &nd_rows) <= (1.0 + slack) * best_cost {
                     let a_end = part.iter().filter(|&&p| p == 0).count();
                     let b_end = a_end + part.iter().filter(|&&p| p == 1).count();
@@ -764,6 +766,40 @@ fn fill_rows(adj: &[Vec<usize>], order: &[usize]) -> Vec<Vec<usize>> {
 /// step) loses (docs/integrators.md, the chain's tenth round).
 pub const SPLIT_MIN_BLOCKS: usize = 1000;
 
+/// When the symbolic factorization takes a separator order.
+#[derive(Clone, Copy, Debug)]
+struct SplitRule {
+    /// Blocks from which one is tried.
+    min_blocks: usize,
+    /// Relative Schur-update cost it may add over the cheapest order.
+    slack: f64,
+    /// A relative joint's multiplier eliminated once either of its primaries is (as in
+    /// the minimum-fill order); otherwise after both.
+    released: bool,
+}
+
+impl Default for SplitRule {
+    fn default() -> Self {
+        Self {
+            min_blocks: SPLIT_MIN_BLOCKS,
+            slack: SPLIT_COST_SLACK,
+            released: false,
+        }
+    }
+}
+
+impl SplitRule {
+    /// Two parts asked for (`partition = "two_parts"`): any model with two parts, at any
+    /// cost (on the 100-link chain the root side costs 2.4× per link, docs/integrators.md).
+    fn two_parts() -> Self {
+        Self {
+            min_blocks: 3,
+            slack: f64::INFINITY,
+            released: true,
+        }
+    }
+}
+
 /// The separator order's threshold in the tests (chains of a few hundred blocks).
 #[cfg(test)]
 const TEST_SPLIT_MIN_BLOCKS: usize = 128;
@@ -823,11 +859,7 @@ fn dissect(
         }
         below += w;
     }
-    let shift: isize = std::env::var("SAMARA_SPLIT_SHIFT")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(0);
-    let sep = (sep? as isize + shift).clamp(1, depth as isize - 2) as usize;
+    let sep = sep?;
     let mut part: Vec<u8> = level
         .iter()
         .map(|&l| match l.cmp(&sep) {
@@ -1256,10 +1288,6 @@ unsafe impl<T> Sync for Shared<T> {}
 /// rayon's threads, when it has more than one (`RAYON_NUM_THREADS=1` keeps one; the results
 /// are the same). From outside the pool a `join` is handed over to it and waited for, two
 /// thread wake-ups per call, more than the half of a factorization it would save.
-fn env_usize(name: &str) -> Option<usize> {
-    std::env::var(name).ok().and_then(|v| v.parse().ok())
-}
-
 fn pjoin<A: FnOnce() -> RA + Send, RA: Send, B: FnOnce() -> RB + Send, RB: Send>(
     a: A,
     b: B,

@@ -70,9 +70,18 @@ pub struct LinearSolver {
 impl LinearSolver {
     /// Performs the symbolic analysis of `structure` (once per topology).
     pub fn new(structure: &BlockStructure, kind: LinearSolverType) -> Self {
-        let symbolic = Arc::new(
-            BlockLuSymbolic::new(structure).expect("structure built by the system is valid"),
-        );
+        Self::with_parts(structure, kind, false)
+    }
+
+    /// [`Self::new`]; with `two_parts`, the block LU takes a separator order whenever the
+    /// pattern has two parts ([`BlockLuSymbolic::two_parts`]).
+    pub fn with_parts(structure: &BlockStructure, kind: LinearSolverType, two_parts: bool) -> Self {
+        let symbolic = if two_parts {
+            BlockLuSymbolic::two_parts(structure)
+        } else {
+            BlockLuSymbolic::new(structure)
+        };
+        let symbolic = Arc::new(symbolic.expect("structure built by the system is valid"));
         Self {
             kind,
             block: BlockLu::new(symbolic),

@@ -47,7 +47,7 @@ pub struct Partner {
 }
 
 impl Partner {
-    /// Starts the thread (pinned to `SAMARA_PARTNER_CPU` when set: prototype).
+    /// Starts the thread.
     pub fn spawn() -> std::io::Result<Self> {
         let slot = Arc::new(Slot {
             state: AtomicU32::new(IDLE),
@@ -129,23 +129,7 @@ impl Drop for Partner {
     }
 }
 
-/// Pins the calling thread to `cpu` (prototype: `SAMARA_PARTNER_CPU`, `SAMARA_MAIN_CPU`).
-pub fn pin(cpu: usize) {
-    // SAFETY: a zeroed cpu_set_t is valid; the call reads it.
-    unsafe {
-        let mut set: libc::cpu_set_t = std::mem::zeroed();
-        libc::CPU_SET(cpu, &mut set);
-        libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set);
-    }
-}
-
 fn run(s: &Slot) {
-    if let Some(c) = std::env::var("SAMARA_PARTNER_CPU")
-        .ok()
-        .and_then(|v| v.parse().ok())
-    {
-        pin(c);
-    }
     loop {
         let mut since = Instant::now();
         let mut spins = 0u32;

@@ -764,13 +764,6 @@ impl Assembler {
             let p = of(&mut nodes.chain(w.place.block).chain(w.place.projection));
             cons[p].push(k);
         }
-        if std::env::var("SAMARA_SPLIT_DEBUG").is_ok() {
-            eprintln!(
-                "parts: batches {:?}, constraints {:?}",
-                starts.iter().map(Vec::len).collect::<Vec<_>>(),
-                cons.iter().map(Vec::len).collect::<Vec<_>>()
-            );
-        }
         let partner = Assembler::new(sys, self.formulation);
         let mut nodes: [Vec<usize>; 2] = Default::default();
         for i in 0..sys.n_nodes() {
