@@ -89,9 +89,7 @@ fn partition_is_read_and_checked() {
     };
     assert_eq!(d.partition, Partition::TwoParts);
     let bad = chain(4, "partition = \"three\"\n");
-    let e = Model::from_toml_str(&bad, "bad.toml")
-        .err()
-        .expect("an unknown partition");
+    let e = Model::from_toml_str(&bad, "bad.toml").expect_err("an unknown partition");
     assert!(
         format!("{e}").contains("expected one of: none, two_parts"),
         "{e}"
@@ -100,9 +98,7 @@ fn partition_is_read_and_checked() {
         "type = \"dynamic\"\nt_end = 0.05\nstep = 1e-3\nrho_inf = 0.9\n",
         "type = \"static\"\npartition = \"two_parts\"\n",
     );
-    let e = Model::from_toml_str(&stat, "static.toml")
-        .err()
-        .expect("a static analysis");
+    let e = Model::from_toml_str(&stat, "static.toml").expect_err("a static analysis");
     assert!(format!("{e}").contains("partition"), "{e}");
 }
 

@@ -1186,7 +1186,6 @@ impl Assembler {
             tgt.as_mut(),
             None,
         );
-        drop(tgt);
         if let Some(mat) = matrix
             && stabilized
         {
