@@ -10,7 +10,8 @@
 //! repetitions (for profiling and instruction counts); `digest=1` also prints a digest of
 //! the bits of every recorded frame's state (positions, rotations, velocities,
 //! accelerations, coordinates, multipliers) and of the iteration counts, to check that an
-//! optimization leaves the results identical to the bit.
+//! optimization leaves the results identical to the bit. The word `two_parts` runs the
+//! analyses with `partition = "two_parts"` (two threads when `RAYON_NUM_THREADS` allows).
 //!
 //! Issue #17's targets, N = 100 revolute, ρ∞ = 0.9: 0.3 s with full Newton, 0.15 s with
 //! modified Newton. On the 2-core VM of 2026-11-27 (1.43× slower than the earlier
@@ -126,6 +127,11 @@ fn main() {
                     if let (samara::model::AnalysisKind::Dynamic(s), Some(t)) = (&mut d.kind, t_end)
                     {
                         s.t_end = t;
+                    }
+                    if let samara::model::AnalysisKind::Dynamic(s) = &mut d.kind
+                        && filters.iter().any(|f| f.as_str() == "two_parts")
+                    {
+                        s.partition = samara::model::Partition::TwoParts;
                     }
                     let mut m = d.clone();
                     if let samara::model::AnalysisKind::Dynamic(s) = &mut m.kind {

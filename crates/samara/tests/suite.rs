@@ -80,4 +80,5 @@ mod terrain;
 mod tire;
 mod turbsim_files;
 mod turbulent_wind;
+mod two_parts;
 mod unsteady_aero;

@@ -134,7 +134,28 @@ impl StepProblem<'_> {
 
 impl NewtonSystem for StepProblem<'_> {
     fn evaluate(&mut self, residual: &mut [f64], matrix: Option<&mut BlockMatrix>) {
-        if matrix.is_some() {
+        if matrix.is_some()
+            && let Some(plan) = self.asm.split_plan()
+        {
+            // Each part's nodes on its thread (the plan's two lists partition the nodes).
+            let tp = SendPtr(self.t_ops.as_mut_ptr());
+            let hdq = &*self.hdq;
+            let one = move |i: usize| {
+                // SAFETY: each node's operator is written by one thread.
+                unsafe {
+                    *tp.get().add(i) = tangent_operator(&Vector3::new(
+                        hdq[6 * i + 3],
+                        hdq[6 * i + 4],
+                        hdq[6 * i + 5],
+                    ))
+                };
+            };
+            let [l0, l1] = &plan.nodes;
+            crate::solve::partner::join2(
+                || l0.iter().for_each(|&i| one(i)),
+                || l1.iter().for_each(|&i| one(i)),
+            );
+        } else if matrix.is_some() {
             for (i, t) in self.t_ops.iter_mut().enumerate() {
                 *t = tangent_operator(&Vector3::new(
                     self.hdq[6 * i + 3],
@@ -185,8 +206,44 @@ impl StepProblem<'_> {
         // increment and its value (a state has a natural zero — inflow, a stall fraction, a
         // pressure — so its own size sets the relative tolerance, as in ODE codes).
         let mut worst: f64 = 0.0;
+        if let Some(plan) = self.asm.split_plan() {
+            // Part 1's nodes on the partner thread, the others here (the plan's two lists
+            // partition the nodes, so no node is updated twice).
+            let np = SendPtr(self.cur.nodes.as_mut_ptr());
+            let qp = SendPtr(self.hdq.as_mut_ptr());
+            let prev = &self.prev.nodes;
+            let dcfg = &*self.dcfg;
+            let update = move |i: usize| -> f64 {
+                // SAFETY: each node is updated by one thread.
+                let n = unsafe { &mut *np.get().add(i) };
+                let q = unsafe { std::slice::from_raw_parts_mut(qp.get().add(6 * i), 6) };
+                let p = &prev[i];
+                let d = &dcfg[6 * i..6 * i + 6];
+                let dx = Vector3::new(d[0], d[1], d[2]);
+                let dth = Vector3::new(d[3], d[4], d[5]);
+                n.v += dx * gp;
+                n.w += dth * gp;
+                n.a += dx * bp;
+                n.wd += dth * bp;
+                let mut w: f64 = 0.0;
+                for (q, c) in q.iter_mut().zip(&change[6 * i..6 * i + 6]) {
+                    *q += c;
+                    w = w.max(c.abs() / (atol + rtol * q.abs()));
+                }
+                n.x = p.x + Vector3::new(q[0], q[1], q[2]);
+                n.rot = p.rot.compose_exp(&Vector3::new(q[3], q[4], q[5]));
+                w
+            };
+            let [l0, l1] = &plan.nodes;
+            let (w0, w1) = crate::solve::partner::join2(
+                || l0.iter().fold(0.0f64, |m, &i| m.max(update(i))),
+                || l1.iter().fold(0.0f64, |m, &i| m.max(update(i))),
+            );
+            worst = w0.max(w1);
+        }
         let nodes = self.cur.nodes.iter_mut().zip(&self.prev.nodes);
-        for (i, (n, p)) in nodes.enumerate() {
+        let all = self.asm.split_plan().is_none();
+        for (i, (n, p)) in nodes.enumerate().take_while(|_| all) {
             let d = &self.dcfg[6 * i..6 * i + 6];
             let dx = Vector3::new(d[0], d[1], d[2]);
             let dth = Vector3::new(d[3], d[4], d[5]);
@@ -230,6 +287,24 @@ impl StepProblem<'_> {
             *l += *d;
         }
         Correction::new(worst, self.dlam, &self.cur.lambda, rtol)
+    }
+}
+
+/// A pointer handed to the partner thread: each thread dereferences it only at the nodes
+/// of its part ([`crate::system::SplitPlan::nodes`], a partition of the nodes).
+struct SendPtr<T>(*mut T);
+impl<T> Clone for SendPtr<T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for SendPtr<T> {}
+// SAFETY: each thread touches its own nodes.
+unsafe impl<T> Send for SendPtr<T> {}
+unsafe impl<T> Sync for SendPtr<T> {}
+impl<T> SendPtr<T> {
+    fn get(self) -> *mut T {
+        self.0
     }
 }
 
@@ -283,6 +358,8 @@ struct Integrator<'a> {
     contacts: ContactPairs,
     /// The size of the step solved into `trial`.
     trial_step: f64,
+    /// The partner thread of a two-part model (`partition = "two_parts"`).
+    partner: Option<crate::solve::partner::Partner>,
 }
 
 /// Candidate pairs of the granular sets (a Verlet list, [`crate::elements::GranularSet`]):
@@ -572,11 +649,14 @@ impl Integrator<'_> {
         };
         problem.update_configuration();
         let (lin, matrix, work) = (&mut self.lin, &mut self.matrix, &mut self.work);
+        let partner = self.partner.as_ref();
         let mut solve = || newton(&mut problem, lin, matrix, work, &settings);
         // A block LU with two parts factors them on two threads from within rayon's pool:
         // the iterations then run on one of its threads (`scope`), once per step rather
         // than a hand-over from outside the pool per factorization.
-        let result = if lin_splits && rayon::current_thread_index().is_none() {
+        let result = if partner.is_some() {
+            crate::solve::partner::within(partner, solve)
+        } else if lin_splits && rayon::current_thread_index().is_none() {
             rayon::scope(|_| solve())
         } else {
             solve()
@@ -914,9 +994,21 @@ fn start<'a>(
         FormulationType::Index3 => Formulation::Index3,
         FormulationType::StabilizedIndex2 => Formulation::StabilizedIndex2,
     };
-    let asm = Assembler::new(sys, formulation);
+    let mut asm = Assembler::new(sys, formulation);
+    let mut partner = None;
     let n = asm.n_unknowns();
-    let lin = LinearSolver::new(asm.structure(), settings.solver.linear_solver);
+    let two_parts = settings.partition == crate::model::Partition::TwoParts;
+    let lin = LinearSolver::with_parts(asm.structure(), settings.solver.linear_solver, two_parts);
+    // Two parts: planned from the block LU's separator order; the partner thread started
+    // when rayon may use a second thread (`RAYON_NUM_THREADS=1` keeps one; the results
+    // are the same).
+    if two_parts
+        && let Some(parts) = lin.block_parts()
+        && asm.plan_split(sys, &parts)
+        && rayon::current_num_threads() > 1
+    {
+        partner = crate::solve::partner::Partner::spawn().ok();
+    }
     let matrix = iteration_matrix(&lin, asm.structure(), settings);
     let mut it = Integrator {
         sys,
@@ -951,6 +1043,7 @@ fn start<'a>(
         breakpoints: sys.breakpoints(),
         contacts: ContactPairs::default(),
         trial_step: 0.0,
+        partner,
     };
     // Granular sets: the candidate pairs at the start, in the pattern from the first
     // assembly on.

@@ -182,6 +182,19 @@ pub enum JacobianUpdate {
     Modified,
 }
 
+/// How a dynamic analysis's Newton iteration is shared out.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Partition {
+    /// One part (default).
+    #[default]
+    None,
+    /// Two parts and a separator (one level of nested dissection of the iteration
+    /// matrix): each part's rows, assembly, elimination, substitutions and corrections on
+    /// a thread of its own when the machine has two cores; the same results with one.
+    TwoParts,
+}
+
 /// How constraints enter the dynamic equations.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
@@ -289,6 +302,9 @@ pub struct AnalysisInput {
     /// dynamic: `full` (default) or `modified` Newton.
     #[serde(default)]
     pub jacobian: Option<JacobianUpdate>,
+    /// dynamic: `none` (default) or `two_parts`.
+    #[serde(default)]
+    pub partition: Option<Partition>,
     /// dynamic: `index3` or `stabilized_index2`; default `index3` for ρ∞ < 1 and
     /// `stabilized_index2` for ρ∞ = 1 (index 3 without dissipation is unstable for
     /// constrained systems; Cardona & Géradin 1989).

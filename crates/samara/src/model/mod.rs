@@ -27,7 +27,7 @@ pub use components::spring::SpringDef;
 pub use components::{Model, ModelInput};
 pub use input::{
     EigensolverType, FormulationType, IntegratorType, JacobianUpdate, JointType, LinearSolverType,
-    LoadFrame, StepControlType,
+    LoadFrame, Partition, StepControlType,
 };
 pub use section_files::LoadOptions;
 pub use validate::{Checker, Entry, validate};
@@ -108,6 +108,8 @@ pub struct DynamicSettings {
     pub adaptive: Option<AdaptiveSettings>,
     /// The time integrator (generalized-α unless chosen).
     pub integrator: IntegratorType,
+    /// How the Newton iteration is shared out (generalized-α).
+    pub partition: Partition,
 }
 
 /// Error control of adaptive steps: the local error estimate e of every unknown is kept
@@ -138,6 +140,7 @@ impl DynamicSettings {
                 FormulationType::Index3
             },
             solver: SolverSettings::default(),
+            partition: Partition::None,
             adaptive: None,
             integrator: IntegratorType::GeneralizedAlpha,
         }

@@ -801,7 +801,8 @@ impl<'a> Checker<'a> {
         // Named as written (`min_step` or its alias `step_min`).
         let min_key = self.spelling(&e, super::input::MIN_STEP_SPELLINGS);
         // `scaling` multiplies rows and multipliers by βh²: there is no step in statics.
-        let dynamic_keys: [(&str, bool); 15] = [
+        let dynamic_keys: [(&str, bool); 16] = [
+            ("partition", ai.partition.is_some()),
             ("output_interval", ai.output_interval.is_some()),
             ("step_control", ai.step_control.is_some()),
             ("event_location", ai.event_location.is_some()),
@@ -1249,6 +1250,7 @@ impl<'a> Checker<'a> {
                         ("formulation", ai.formulation.is_some()),
                         ("penalty", ai.penalty.is_some()),
                         ("jacobian", ai.jacobian.is_some()),
+                        ("partition", ai.partition.is_some()),
                         ("scaling", ai.scaling.is_some()),
                         ("linear_solver", ai.linear_solver.is_some()),
                         ("diagnostics", ai.diagnostics.is_some()),
@@ -1315,6 +1317,7 @@ impl<'a> Checker<'a> {
                     solver,
                     adaptive,
                     integrator,
+                    partition: ai.partition.unwrap_or_default(),
                 })
             }
             AnalysisType::Static => {

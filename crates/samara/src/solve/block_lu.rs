@@ -198,14 +198,31 @@ pub struct BlockLuSymbolic {
 impl BlockLuSymbolic {
     /// Ordering + symbolic factorization of the block pattern of `s`.
     pub fn new(s: &BlockStructure) -> Result<Self, StructureError> {
-        Self::with_split_from(s, SPLIT_MIN_BLOCKS)
+        Self::with_rule(s, SplitRule::default())
+    }
+
+    /// [`Self::new`] with a separator order whenever one level of nested dissection finds
+    /// two parts ([`SplitRule::two_parts`]), whatever it costs.
+    pub fn two_parts(s: &BlockStructure) -> Result<Self, StructureError> {
+        Self::with_rule(s, SplitRule::two_parts())
     }
 
     /// [`Self::new`], a separator order tried from `split_min_blocks` blocks on.
+    #[cfg(test)]
     fn with_split_from(
         s: &BlockStructure,
         split_min_blocks: usize,
     ) -> Result<Self, StructureError> {
+        Self::with_rule(
+            s,
+            SplitRule {
+                min_blocks: split_min_blocks,
+                ..SplitRule::default()
+            },
+        )
+    }
+
+    fn with_rule(s: &BlockStructure, rule: SplitRule) -> Result<Self, StructureError> {
         let n = s.n_blocks();
         // ---- block adjacency (original numbering, no diagonal) ----
         let adj: Vec<Vec<usize>> = (0..n)
@@ -221,7 +238,7 @@ impl BlockLuSymbolic {
             }
         }
 
-        let (order, srows, split) = Self::constrained_order(s, &adj, split_min_blocks)?;
+        let (order, srows, split) = Self::constrained_order(s, &adj, rule)?;
         let mut pos = vec![0usize; n];
         for (k, &b) in order.iter().enumerate() {
             pos[b] = k;
@@ -502,7 +519,7 @@ impl BlockLuSymbolic {
     fn constrained_order(
         s: &BlockStructure,
         adj: &[Vec<usize>],
-        split_min_blocks: usize,
+        rule: SplitRule,
     ) -> Result<(Vec<usize>, Vec<Vec<usize>>, Option<[usize; 2]>), StructureError> {
         let amd = Self::defer_multipliers(s, adj, &Self::amd_order(adj)?);
         let amd_rows = fill_rows(adj, &amd);
@@ -516,6 +533,7 @@ impl BlockLuSymbolic {
                 .sum()
         };
         let amd_cost = cost(&amd, &amd_rows);
+        let slack = rule.slack;
         // The minimum-fill elimination graph costs about 100 adjacency operations per block
         // update of the factorization on a granular column: give up on it past 256 (about
         // the flops of one numeric factorization, 216 per 6 × 6 update).
@@ -549,19 +567,25 @@ impl BlockLuSymbolic {
                 (best, best_rows, best_cost) = (mf, mf_rows, mf_cost);
             }
         }
-        if adj.len() >= split_min_blocks
+        if adj.len() >= rule.min_blocks
             && let Some(part) = dissect(adj, &|b| s.block_size(b), &is_mult)
             // The separator's elimination alone, a dense front of its size w (≈ w³/3 in
             // the measure of `cost`), within the slack: else (a granular column's layer) the
             // order is not worth the second minimum-fill pass.
             && {
                 let w: usize = (0..adj.len()).filter(|&b| part[b] == 2).map(|b| s.block_size(b)).sum();
-                (w * w * w) as f64 / 3.0 <= SPLIT_COST_SLACK * best_cost
+                (w * w * w) as f64 / 3.0 <= slack * best_cost
             }
         {
             let held: Vec<bool> = part.iter().map(|&p| p == 2).collect();
-            if let Some(mf) = super::min_fill::min_fill_order(adj, &gates, &[], &[], &held, budget)
-            {
+            if let Some(mf) = super::min_fill::min_fill_order(
+                adj,
+                &gates,
+                if rule.released { &any_gate } else { &[] },
+                &[],
+                &held,
+                budget,
+            ) {
                 // The parts are not coupled and the separator goes last: eliminating one
                 // part after the other makes the same fill as the interleaved order.
                 let mut nd = Vec::with_capacity(mf.len());
@@ -569,7 +593,7 @@ impl BlockLuSymbolic {
                     nd.extend(mf.iter().copied().filter(|&b| part[b] == p));
                 }
                 let nd_rows = fill_rows(adj, &nd);
-                if cost(&nd, &nd_rows) <= (1.0 + SPLIT_COST_SLACK) * best_cost {
+                if cost(&nd, &nd_rows) <= (1.0 + slack) * best_cost {
                     let a_end = part.iter().filter(|&&p| p == 0).count();
                     let b_end = a_end + part.iter().filter(|&&p| p == 1).count();
                     return Ok((nd, nd_rows, Some([a_end, b_end])));
@@ -741,6 +765,40 @@ fn fill_rows(adj: &[Vec<usize>], order: &[usize]) -> Vec<Vec<usize>> {
 /// the 1,000-element beam (1,002 blocks) gains, the 100-link chain (200 blocks, 0.19 ms a
 /// step) loses (docs/integrators.md, the chain's tenth round).
 pub const SPLIT_MIN_BLOCKS: usize = 1000;
+
+/// When the symbolic factorization takes a separator order.
+#[derive(Clone, Copy, Debug)]
+struct SplitRule {
+    /// Blocks from which one is tried.
+    min_blocks: usize,
+    /// Relative Schur-update cost it may add over the cheapest order.
+    slack: f64,
+    /// A relative joint's multiplier eliminated once either of its primaries is (as in
+    /// the minimum-fill order); otherwise after both.
+    released: bool,
+}
+
+impl Default for SplitRule {
+    fn default() -> Self {
+        Self {
+            min_blocks: SPLIT_MIN_BLOCKS,
+            slack: SPLIT_COST_SLACK,
+            released: false,
+        }
+    }
+}
+
+impl SplitRule {
+    /// Two parts asked for (`partition = "two_parts"`): any model with two parts, at any
+    /// cost (on the 100-link chain the root side costs 2.4× per link, docs/integrators.md).
+    fn two_parts() -> Self {
+        Self {
+            min_blocks: 3,
+            slack: f64::INFINITY,
+            released: true,
+        }
+    }
+}
 
 /// The separator order's threshold in the tests (chains of a few hundred blocks).
 #[cfg(test)]
@@ -981,12 +1039,12 @@ impl BlockLu {
         let pp = Shared(perm.as_mut_ptr());
         let cp = Shared(colmax.as_mut_ptr());
         match sym.split {
-            Some([a, b]) if parallel() => {
+            Some([a, b]) if parallel() || super::partner::active() => {
                 // The two parts on two threads, their updates into the separator's blocks
                 // held back and applied after them in step order: the same operations on
                 // every block in the same order as one thread's, so the same bits.
                 let (piv2, work2) = (&mut self.piv2[..], &mut self.work2[..]);
-                let (ra, rb) = rayon::join(
+                let (ra, rb) = pjoin(
                     // SAFETY: a part's steps read and write only its own blocks (pivots,
                     // multipliers, Schur updates within the part), its blocks'
                     // permutation entries, its columns' maxima and its rows of `rhs`;
@@ -1036,12 +1094,12 @@ impl BlockLu {
         let x = Shared(rhs.as_mut_ptr());
         let n = sym.n;
         match sym.split {
-            Some([a, b]) if parallel() && SPLIT_SOLVE => {
+            Some([a, b]) if (parallel() || super::partner::active()) && SPLIT_SOLVE => {
                 // The parts' substitutions on two threads, their updates of the
                 // separator's rows held back and applied after them in step order (the
                 // same operations in the same order as one thread's).
                 // SAFETY: a part's steps write only its own blocks of `rhs`.
-                rayon::join(
+                pjoin(
                     || unsafe { forward_part(isa, sym, vals, 0..a, true, x) },
                     || unsafe { forward_part(isa, sym, vals, a..b, true, x) },
                 );
@@ -1068,13 +1126,13 @@ impl BlockLu {
         let x = Shared(rhs.as_mut_ptr());
         let n = sym.n;
         match sym.split {
-            Some([a, b]) if parallel() && SPLIT_SOLVE => {
+            Some([a, b]) if (parallel() || super::partner::active()) && SPLIT_SOLVE => {
                 let (work, work2) = (&mut self.work[..], &mut self.work2[..]);
                 // SAFETY: one thread, then a part's steps write only its own blocks of
                 // `rhs` and read its own and the separator's, which no thread writes
                 // meanwhile.
                 unsafe { backward_steps::<F>(sym, vals, perm, b..n, x, work) };
-                rayon::join(
+                pjoin(
                     || unsafe { backward_part(isa, sym, vals, perm, 0..a, x, work) },
                     || unsafe { backward_part(isa, sym, vals, perm, a..b, x, work2) },
                 );
@@ -1230,6 +1288,17 @@ unsafe impl<T> Sync for Shared<T> {}
 /// rayon's threads, when it has more than one (`RAYON_NUM_THREADS=1` keeps one; the results
 /// are the same). From outside the pool a `join` is handed over to it and waited for, two
 /// thread wake-ups per call, more than the half of a factorization it would save.
+fn pjoin<A: FnOnce() -> RA + Send, RA: Send, B: FnOnce() -> RB + Send, RB: Send>(
+    a: A,
+    b: B,
+) -> (RA, RB) {
+    if super::partner::active() {
+        super::partner::join2(a, b)
+    } else {
+        rayon::join(a, b)
+    }
+}
+
 fn parallel() -> bool {
     rayon::current_num_threads() > 1 && rayon::current_thread_index().is_some()
 }

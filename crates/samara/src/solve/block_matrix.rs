@@ -318,6 +318,102 @@ pub struct BlockMatrix {
     gaps: Vec<std::ops::Range<usize>>,
 }
 
+/// A handle for adding into the blocks of a [`BlockMatrix`]: the whole matrix
+/// ([`BlockMatrix::target`]) or the blocks one part owns ([`BlockMatrix::part_targets`]),
+/// which may be filled on two threads at once. Borrows the matrix mutably.
+pub struct BlockTarget<'a> {
+    values: *mut f64,
+    n_values: usize,
+    slots: &'a [BlockSlot],
+    stamp: *mut u32,
+    epoch: u32,
+    lazy: bool,
+    /// Owner of each stored block and this handle's part: [`Self::view`] of a block
+    /// another part owns panics.
+    owner: Option<(&'a [u8], u8)>,
+    _matrix: std::marker::PhantomData<&'a mut BlockMatrix>,
+}
+
+// SAFETY: the handles of one matrix made together ([`BlockMatrix::part_targets`]) reach
+// disjoint blocks (checked in `view`), whose values and stamps do not overlap.
+unsafe impl Send for BlockTarget<'_> {}
+
+impl BlockTarget<'_> {
+    /// Stored block `e` ([`BlockStructure::entry_index`]) with its strides; zeroed first
+    /// when the matrix was lazily cleared ([`BlockMatrix::fill_zero`]).
+    #[inline(always)]
+    pub fn view(&mut self, e: usize) -> BlockView<'_> {
+        if let Some((owner, part)) = self.owner {
+            assert_eq!(
+                owner[e], part,
+                "a part's assembly reached another part's block"
+            );
+        }
+        let s = self.slots[e];
+        assert!(s.offset + s.len <= self.n_values);
+        // SAFETY: in bounds (above); `&mut self` keeps one view of this handle alive at a
+        // time, and the other handles of the same matrix own other blocks.
+        let values = unsafe { std::slice::from_raw_parts_mut(self.values.add(s.offset), s.len) };
+        if self.lazy {
+            // SAFETY: `e` is one of this handle's blocks; the stamps are one per block.
+            let st = unsafe { &mut *self.stamp.add(e) };
+            if *st != self.epoch {
+                *st = self.epoch;
+                values.fill(0.0);
+            }
+        }
+        BlockView {
+            values,
+            row_stride: s.row_stride,
+            col_stride: s.col_stride,
+        }
+    }
+}
+
+impl BlockMatrix {
+    /// A handle for adding into every block.
+    pub fn target(&mut self) -> BlockTarget<'_> {
+        self.target_of(None)
+    }
+
+    /// Two handles, for the blocks `owner` gives to part 0 and to part 1 (one entry per
+    /// stored block; other values belong to neither).
+    pub fn part_targets<'a>(&'a mut self, owner: &'a [u8]) -> [BlockTarget<'a>; 2] {
+        assert_eq!(
+            owner.len(),
+            self.structure.n_entries(),
+            "one owner per stored block"
+        );
+        let t = self.target_of(None);
+        let a = BlockTarget {
+            owner: Some((owner, 0)),
+            ..t
+        };
+        let b = BlockTarget {
+            owner: Some((owner, 1)),
+            ..t
+        };
+        [a, b]
+    }
+
+    fn target_of<'a>(&'a mut self, owner: Option<(&'a [u8], u8)>) -> BlockTarget<'a> {
+        let slots: &[BlockSlot] = match &self.placement {
+            Some(p) => p,
+            None => &self.structure.slots,
+        };
+        BlockTarget {
+            values: self.values.as_mut_ptr(),
+            n_values: self.values.len(),
+            slots,
+            stamp: self.stamp.as_mut_ptr(),
+            epoch: self.epoch,
+            lazy: self.lazy,
+            owner,
+            _matrix: std::marker::PhantomData,
+        }
+    }
+}
+
 impl BlockMatrix {
     /// All-zero matrix with the given structure.
     pub fn zeros(s: Arc<BlockStructure>) -> Self {

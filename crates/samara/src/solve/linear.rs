@@ -70,9 +70,18 @@ pub struct LinearSolver {
 impl LinearSolver {
     /// Performs the symbolic analysis of `structure` (once per topology).
     pub fn new(structure: &BlockStructure, kind: LinearSolverType) -> Self {
-        let symbolic = Arc::new(
-            BlockLuSymbolic::new(structure).expect("structure built by the system is valid"),
-        );
+        Self::with_parts(structure, kind, false)
+    }
+
+    /// [`Self::new`]; with `two_parts`, the block LU takes a separator order whenever the
+    /// pattern has two parts ([`BlockLuSymbolic::two_parts`]).
+    pub fn with_parts(structure: &BlockStructure, kind: LinearSolverType, two_parts: bool) -> Self {
+        let symbolic = if two_parts {
+            BlockLuSymbolic::two_parts(structure)
+        } else {
+            BlockLuSymbolic::new(structure)
+        };
+        let symbolic = Arc::new(symbolic.expect("structure built by the system is valid"));
         Self {
             kind,
             block: BlockLu::new(symbolic),
@@ -88,6 +97,28 @@ impl LinearSolver {
     /// and more than one rayon thread; only from within rayon's pool).
     pub fn splits(&self) -> bool {
         self.block.symbolic().split().is_some() && rayon::current_num_threads() > 1
+    }
+
+    /// Per block, 0 or 1 for the parts of a separator order, 2 for the
+    /// separator.
+    pub fn block_parts(&self) -> Option<Vec<u8>> {
+        let sym = self.block.symbolic();
+        let [a, b] = sym.split()?;
+        let n = sym.elimination_order().len();
+        Some(
+            (0..n)
+                .map(|blk| {
+                    let p = sym.position(blk);
+                    if p < a {
+                        0
+                    } else if p < b {
+                        1
+                    } else {
+                        2
+                    }
+                })
+                .collect(),
+        )
     }
 
     pub fn is_factored(&self) -> bool {

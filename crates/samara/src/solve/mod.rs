@@ -14,11 +14,12 @@ pub mod condition;
 mod linear;
 mod min_fill;
 pub mod newton;
+pub mod partner;
 mod sparse_lu;
 
 pub use block_lu::{BlockLu, BlockLuSymbolic, SPLIT_MIN_BLOCKS, SingularBlock};
 pub use block_matrix::{
-    BlockKind, BlockMatrix, BlockSlot, BlockStructure, BlockView, StructureError,
+    BlockKind, BlockMatrix, BlockSlot, BlockStructure, BlockTarget, BlockView, StructureError,
 };
 pub use linear::{LinearError, LinearSolver, LinearSolverType, LinearStats};
 pub use newton::{Correction, NewtonFailure, NewtonReport, NewtonSettings, NewtonSystem, newton};

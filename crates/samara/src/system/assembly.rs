@@ -42,7 +42,7 @@ use crate::elements::{Element, EvalContext, LocalTerms, Need, SpherePair};
 use crate::joints::CoordinateTangents;
 use crate::math::isa;
 use crate::math::prefetch::prefetch;
-use crate::solve::{BlockKind, BlockMatrix, BlockStructure, BlockView};
+use crate::solve::{BlockKind, BlockMatrix, BlockStructure, BlockTarget, BlockView};
 use nalgebra::{DMatrix, Matrix3};
 use std::ops::Range;
 use std::sync::Arc;
@@ -277,6 +277,24 @@ pub struct Assembler {
     pairs: Vec<SpherePair>,
     pair_slots: Vec<[usize; 4]>,
     pair_terms: LocalTerms,
+    /// `partition = "two_parts"`: the items of part 0, part 1 and the separator.
+    split: Option<Box<SplitPlan>>,
+}
+
+/// The batches (their first elements) and constraints of each part of a
+/// separator order (0, 1) and of the interface (2), and the second part's assembler.
+pub struct SplitPlan {
+    /// The nodes of part 0 and the separator (`nodes[0]`) and of part 1 (`nodes[1]`): a
+    /// partition of the nodes, each in exactly one list.
+    pub nodes: [Vec<usize>; 2],
+    /// Owner of each stored block (0, 1; 2 for the blocks on the separator).
+    entry_part: Vec<u8>,
+    /// Part 1's residual (its rows only are written) and the ranges of those rows.
+    residual1: Vec<f64>,
+    rows1: Vec<Range<usize>>,
+    starts: [Vec<usize>; 3],
+    cons: [Vec<usize>; 3],
+    partner: Assembler,
 }
 
 /// How a node's rates follow its configuration in a steadily spinning state:
@@ -706,7 +724,85 @@ impl Assembler {
             constraints,
             nu_pairs,
             rate_maps: Vec::new(),
+            split: None,
         }
+    }
+
+    /// Plans the two-part assembly from the part of each block (0, 1, else the
+    /// separator); `false` (no plan) where the model has what the plan does not cover.
+    pub fn plan_split(&mut self, sys: &System, part: &[u8]) -> bool {
+        self.split = None;
+        if !sys.signals.names.is_empty()
+            || !self.pairs.is_empty()
+            || !self.window.is_empty()
+            || self.formulation != Formulation::Index3
+        {
+            return false;
+        }
+        let of = |blocks: &mut dyn Iterator<Item = usize>| -> usize {
+            let mut p: Option<u8> = None;
+            for b in blocks {
+                let q = part[b];
+                if q > 1 || p.is_some_and(|p| p != q) {
+                    return 2;
+                }
+                p = Some(q);
+            }
+            p.map_or(2, |p| p as usize)
+        };
+        let mut starts: [Vec<usize>; 3] = Default::default();
+        let mut k = 0;
+        while k < sys.elements.len() {
+            let end = self.batch_end[k];
+            let p = of(&mut (k..end).flat_map(|j| self.element_blocks[j].iter().map(|b| b.block)));
+            starts[p].push(k);
+            k = end;
+        }
+        let mut cons: [Vec<usize>; 3] = Default::default();
+        for (k, c) in sys.constraints.iter().enumerate() {
+            let w = &self.constraints[k];
+            let nodes = c.nodes().iter().map(|&n| self.config_place[6 * n].0);
+            let p = of(&mut nodes.chain(w.place.block).chain(w.place.projection));
+            cons[p].push(k);
+        }
+        let partner = Assembler::new(sys, self.formulation);
+        let mut nodes: [Vec<usize>; 2] = Default::default();
+        for i in 0..sys.n_nodes() {
+            let p = (part[self.config_place[6 * i].0] == 1) as usize;
+            nodes[p].push(i);
+        }
+        let st = &*self.structure;
+        let mut entry_part = vec![2u8; st.n_entries()];
+        for i in 0..st.n_blocks() {
+            for j in 0..st.n_blocks() {
+                if let Some(e) = st.entry_index(i, j)
+                    && part[i] == part[j]
+                    && part[i] < 2
+                {
+                    entry_part[e] = part[i];
+                }
+            }
+        }
+        let rows1: Vec<Range<usize>> = (0..st.n_blocks())
+            .filter(|&b| part[b] == 1)
+            .map(|b| st.block_offset(b)..st.block_offset(b) + st.block_size(b))
+            .collect();
+        let residual1 = vec![0.0; st.dim()];
+        self.split = Some(Box::new(SplitPlan {
+            entry_part,
+            residual1,
+            rows1,
+            nodes,
+            starts,
+            cons,
+            partner,
+        }));
+        true
+    }
+
+    /// The two-part plan, if any.
+    pub fn split_plan(&self) -> Option<&SplitPlan> {
+        self.split.as_deref()
     }
 
     /// Block of the iteration matrix and column in it of configuration unknown `i`.
@@ -913,32 +1009,70 @@ impl Assembler {
                 self.combine_signal_gradients(sys, coef, tangent_ops);
             }
         }
-        let tangents = matrix.is_some().then_some(TangentInputs {
-            coef,
-            tangent_ops,
-            rate_maps: &self.rate_maps,
-        });
-        if self.window.is_empty() {
-            // Evaluate and scatter batch by batch (mostly one element) through the shared
-            // scratch.
-            let mut k = 0;
-            while k < sys.elements.len() {
-                let end = self.batch_end[k];
-                let t = &mut self.terms[self.term_of[k]];
-                element_terms::<M>(
-                    sys,
-                    k..end,
-                    state,
-                    ctx,
-                    &self.signal_values.values,
-                    tangents.as_ref(),
-                    t,
-                    &mut self.inputs,
+        if let Some(mut plan) = self.split.take() {
+            // Part 0 here, part 1 on the partner thread (into its own residual rows and
+            // the blocks it owns), then the items on the separator.
+            let SplitPlan {
+                partner,
+                residual1,
+                rows1,
+                entry_part,
+                starts,
+                cons,
+                ..
+            } = &mut *plan;
+            {
+                let [mut t0, mut t1] = match matrix.as_deref_mut() {
+                    Some(m) => m.part_targets(entry_part).map(Some),
+                    None => [None, None],
+                };
+                let this = &mut *self;
+                let r0 = &mut *residual;
+                let (s0, c0, s1, c1) = (&starts[0], &cons[0], &starts[1], &cons[1]);
+                crate::solve::partner::join2(
+                    move || {
+                        let m = t0.as_mut();
+                        this.assemble_items(sys, state, ctx, coef, tangent_ops, r0, m, s0, c0);
+                    },
+                    || {
+                        for r in rows1.iter() {
+                            residual1[r.clone()].fill(0.0);
+                        }
+                        let (r1, m) = (&mut residual1[..], t1.as_mut());
+                        partner.assemble_items(sys, state, ctx, coef, tangent_ops, r1, m, s1, c1);
+                    },
                 );
-                let t = &self.terms[self.term_of[k]];
-                self.scatter_element::<M>(sys, k..end, t, coef, residual, matrix.as_deref_mut());
-                k = end;
             }
+            for r in rows1.iter() {
+                residual[r.clone()].copy_from_slice(&residual1[r.clone()]);
+            }
+            let mut whole = matrix.as_deref_mut().map(|m| m.target());
+            self.assemble_items(
+                sys,
+                state,
+                ctx,
+                coef,
+                tangent_ops,
+                residual,
+                whole.as_mut(),
+                &starts[2],
+                &cons[2],
+            );
+            self.split = Some(plan);
+            return;
+        }
+        let mut tgt = matrix.as_deref_mut().map(|m| m.target());
+        if self.window.is_empty() {
+            self.element_loop::<M>(
+                sys,
+                state,
+                ctx,
+                coef,
+                tangent_ops,
+                residual,
+                tgt.as_mut(),
+                None,
+            );
         } else {
             // Large models, a window of elements at a time: each element of the window into
             // its own slot in parallel, then the same scatter in element order, so the sums
@@ -951,8 +1085,12 @@ impl Assembler {
             // take `Separate` multiply–adds: the windowed models' results are the same in
             // every copy.
             use rayon::prelude::*;
+            let tangents = tgt.is_some().then_some(TangentInputs {
+                coef,
+                tangent_ops,
+                rate_maps: &self.rate_maps,
+            });
             let tangents = tangents.as_ref();
-            let mut matrix = matrix.as_deref_mut();
             // Taken out for the loop (a move, no allocation) and put back after it.
             let mut window = std::mem::take(&mut self.window);
             let this = &*self;
@@ -990,7 +1128,7 @@ impl Assembler {
                             t,
                             coef,
                             residual,
-                            matrix.as_deref_mut(),
+                            tgt.as_mut(),
                         );
                     }
                     start += len;
@@ -998,6 +1136,11 @@ impl Assembler {
             });
             self.window = window;
         }
+        let tangents = tgt.is_some().then_some(TangentInputs {
+            coef,
+            tangent_ops,
+            rate_maps: &self.rate_maps,
+        });
         // Granular candidate pairs: node blocks only; their bristles (history) from the
         // state, aligned with the pairs.
         debug_assert!(
@@ -1023,7 +1166,7 @@ impl Assembler {
                     residual[6 * na + i] += sr * t.r[6 * a + i];
                 }
             }
-            let (Some(tg), Some(mat)) = (tangents.as_ref(), matrix.as_deref_mut()) else {
+            let (Some(tg), Some(mat)) = (tangents.as_ref(), tgt.as_mut()) else {
                 continue;
             };
             combine_node_terms::<M>(t, en, tg);
@@ -1034,7 +1177,145 @@ impl Assembler {
             }
         }
 
-        for (k, c) in sys.constraints.iter().enumerate() {
+        self.constraint_loop::<M>(
+            sys,
+            state,
+            ctx,
+            coef,
+            tangent_ops,
+            residual,
+            tgt.as_mut(),
+            None,
+        );
+        if let Some(mat) = matrix
+            && stabilized
+        {
+            self.add_projection_couplings(mat);
+        }
+    }
+
+    isa::copies! {
+        /// The listed batches and constraints only (one part of a split).
+        #[allow(clippy::too_many_arguments)]
+        pub(crate) fn assemble_items(
+            &mut self: Assembler,
+            sys: &System,
+            state: &State,
+            ctx: &EvalContext,
+            coef: &Coefficients,
+            tangent_ops: &[Matrix3<f64>],
+            residual: &mut [f64],
+            matrix: Option<&mut BlockTarget<'_>>,
+            starts: &[usize],
+            cons: &[usize],
+        ) {
+            Base | Avx => assemble_items_impl::<Separate>,
+            Fma => assemble_items_impl::<Fused>,
+        }
+    }
+
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn assemble_items_impl<M: MulAdd>(
+        &mut self,
+        sys: &System,
+        state: &State,
+        ctx: &EvalContext,
+        coef: &Coefficients,
+        tangent_ops: &[Matrix3<f64>],
+        residual: &mut [f64],
+        mut matrix: Option<&mut BlockTarget<'_>>,
+        starts: &[usize],
+        cons: &[usize],
+    ) {
+        self.element_loop::<M>(
+            sys,
+            state,
+            ctx,
+            coef,
+            tangent_ops,
+            residual,
+            matrix.as_deref_mut(),
+            Some(starts),
+        );
+        self.constraint_loop::<M>(
+            sys,
+            state,
+            ctx,
+            coef,
+            tangent_ops,
+            residual,
+            matrix,
+            Some(cons),
+        );
+    }
+
+    /// The batches (all, or those starting at `starts`), evaluated and scattered through
+    /// the shared scratch.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn element_loop<M: MulAdd>(
+        &mut self,
+        sys: &System,
+        state: &State,
+        ctx: &EvalContext,
+        coef: &Coefficients,
+        tangent_ops: &[Matrix3<f64>],
+        residual: &mut [f64],
+        mut matrix: Option<&mut BlockTarget<'_>>,
+        starts: Option<&[usize]>,
+    ) {
+        let tangents = matrix.is_some().then_some(TangentInputs {
+            coef,
+            tangent_ops,
+            rate_maps: &self.rate_maps,
+        });
+        let count = starts.map_or(sys.elements.len(), |l| l.len());
+        let mut i = 0;
+        let mut k = 0;
+        while i < count && k < sys.elements.len() {
+            if let Some(l) = starts {
+                k = l[i];
+            }
+            let end = self.batch_end[k];
+            let t = &mut self.terms[self.term_of[k]];
+            element_terms::<M>(
+                sys,
+                k..end,
+                state,
+                ctx,
+                &self.signal_values.values,
+                tangents.as_ref(),
+                t,
+                &mut self.inputs,
+            );
+            let t = &self.terms[self.term_of[k]];
+            self.scatter_element::<M>(sys, k..end, t, coef, residual, matrix.as_deref_mut());
+            k = end;
+            i += 1;
+        }
+    }
+
+    /// The constraints' rows (all, or those in `list`) into the residual and the matrix.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn constraint_loop<M: MulAdd>(
+        &mut self,
+        sys: &System,
+        state: &State,
+        ctx: &EvalContext,
+        coef: &Coefficients,
+        tangent_ops: &[Matrix3<f64>],
+        residual: &mut [f64],
+        mut matrix: Option<&mut BlockTarget<'_>>,
+        list: Option<&[usize]>,
+    ) {
+        let stabilized = self.formulation == Formulation::StabilizedIndex2;
+        let sr = coef.row_scale;
+        let count = list.map_or(sys.constraints.len(), |l| l.len());
+        for i in 0..count {
+            let k = list.map_or(i, |l| l[i]);
+            let c = &sys.constraints[k];
             let w = &mut self.constraints[k];
             let (m, nc) = (w.m, w.nc);
             let off = sys.multiplier_offsets[k];
@@ -1260,7 +1541,7 @@ impl Assembler {
             #[inline(always)]
             #[allow(clippy::too_many_arguments)]
             fn lam_rows<M: MulAdd>(
-                mat: &mut BlockMatrix,
+                mat: &mut BlockTarget<'_>,
                 (lam_row, diag): (&[usize], usize),
                 (m, nc): (usize, usize),
                 (cn, ops): (&[usize], &[Matrix3<f64>]),
@@ -1330,11 +1611,6 @@ impl Assembler {
                 }
             }
         }
-        if let Some(mat) = matrix
-            && stabilized
-        {
-            self.add_projection_couplings(mat);
-        }
     }
 
     /// Adds the terms of the elements `ks` (one element, or a batch from [`batches`];
@@ -1348,7 +1624,7 @@ impl Assembler {
         t: &LocalTerms,
         coef: &Coefficients,
         residual: &mut [f64],
-        matrix: Option<&mut BlockMatrix>,
+        matrix: Option<&mut BlockTarget<'_>>,
     ) {
         let k = ks.start;
         let e = &sys.elements[k];
@@ -1440,7 +1716,7 @@ impl Assembler {
         sys: &System,
         ks: Range<usize>,
         t: &LocalTerms,
-        mat: &mut BlockMatrix,
+        mat: &mut BlockTarget<'_>,
     ) {
         let k = ks.start;
         let n = sys.elements[k].nodes().len();
