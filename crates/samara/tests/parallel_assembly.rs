@@ -6,13 +6,10 @@
 
 use crate::common;
 
-use common::model;
-use samara::analysis::{History, run_analysis};
-use samara::model::{AnalysisKind, JacobianUpdate, Model};
+use common::{model, run_with_threads, state_bits};
+use samara::model::{AnalysisKind, JacobianUpdate};
 use samara::solve::{BlockLuSymbolic, SPLIT_MIN_BLOCKS};
-use samara::system::{
-    Assembler, Formulation, PARALLEL_MIN_ELEMENTS, PARALLEL_WINDOW, State, System,
-};
+use samara::system::{Assembler, Formulation, PARALLEL_MIN_ELEMENTS, PARALLEL_WINDOW, System};
 
 /// Steel cantilever (L = 1 m, 10 mm square) in 300 two-node elements, a 0.5 N tip load
 /// and a small tip mass (a second element size in the same model).
@@ -62,46 +59,6 @@ step = 1e-3
 rho_inf = 0.9
 "#;
 
-fn run_with_threads(m: &Model, sys: &System, k: usize, threads: usize) -> State {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("thread pool");
-    pool.install(|| {
-        let mut h = History::default();
-        let s = run_analysis(
-            sys,
-            &m.analyses[k],
-            sys.initial_state(),
-            &mut h,
-            &mut |_| {},
-        )
-        .expect("recording to memory cannot fail");
-        assert!(s.failure.is_none(), "analysis failed: {:?}", s.failure);
-        s.final_state
-    })
-}
-
-/// Every number of the state, as bits.
-fn bits(s: &State) -> Vec<u64> {
-    let mut out = Vec::new();
-    for n in &s.nodes {
-        let r = n.r();
-        for v in [&n.x, &n.v, &n.w, &n.a, &n.wd] {
-            out.extend(v.iter().map(|x| x.to_bits()));
-        }
-        out.extend(r.iter().map(|x| x.to_bits()));
-    }
-    for c in &s.coords {
-        out.extend([c.q, c.v, c.a].map(f64::to_bits));
-    }
-    for z in &s.states {
-        out.extend([z.z, z.zd].map(f64::to_bits));
-    }
-    out.extend(s.lambda.iter().map(|x| x.to_bits()));
-    out
-}
-
 #[test]
 fn model_is_large_enough_for_the_parallel_path() {
     let m = model(CANTILEVER);
@@ -124,14 +81,23 @@ fn one_and_two_threads_give_identical_results() {
     for k in 0..m.analyses.len() {
         let one = run_with_threads(&m, &sys, k, 1);
         let two = run_with_threads(&m, &sys, k, 2);
-        assert_eq!(bits(&one), bits(&two), "analysis {}", m.analyses[k].name);
+        assert_eq!(
+            state_bits(&one),
+            state_bits(&two),
+            "analysis {}",
+            m.analyses[k].name
+        );
     }
     if let AnalysisKind::Dynamic(d) = &mut m.analyses[1].kind {
         d.jacobian = JacobianUpdate::Modified;
     }
     let one = run_with_threads(&m, &sys, 1, 1);
     let two = run_with_threads(&m, &sys, 1, 2);
-    assert_eq!(bits(&one), bits(&two), "dynamic, modified Newton");
+    assert_eq!(
+        state_bits(&one),
+        state_bits(&two),
+        "dynamic, modified Newton"
+    );
 }
 
 /// Tip deflection of the statically loaded cantilever through the parallel path against
@@ -195,12 +161,12 @@ fn aeroelastic_rotor_is_deterministic_across_threads() {
     let one = run_with_threads(&m, &sys, 0, 1);
     let two = run_with_threads(&m, &sys, 0, 2);
     assert!(
-        bits(&one) == bits(&two),
+        state_bits(&one) == state_bits(&two),
         "full Newton: 1 and 2 threads differ"
     );
     let fresh = run_with_threads(&m, &System::new(&m), 0, 2);
     assert!(
-        bits(&one) == bits(&fresh),
+        state_bits(&one) == state_bits(&fresh),
         "a fresh system differs from a reused one"
     );
     if let AnalysisKind::Dynamic(d) = &mut m.analyses[0].kind {
@@ -209,7 +175,7 @@ fn aeroelastic_rotor_is_deterministic_across_threads() {
     let one = run_with_threads(&m, &sys, 0, 1);
     let two = run_with_threads(&m, &sys, 0, 2);
     assert!(
-        bits(&one) == bits(&two),
+        state_bits(&one) == state_bits(&two),
         "modified Newton: 1 and 2 threads differ"
     );
 }
@@ -239,7 +205,11 @@ fn split_factorization_is_deterministic_end_to_end() {
     for k in 0..m.analyses.len() {
         let one = run_with_threads(&m, &sys, k, 1);
         let two = run_with_threads(&m, &sys, k, 2);
-        assert!(bits(&one) == bits(&two), "analysis {}", m.analyses[k].name);
+        assert!(
+            state_bits(&one) == state_bits(&two),
+            "analysis {}",
+            m.analyses[k].name
+        );
         if k == 0 {
             let tip = m.node_index("tip").expect("tip node");
             let w = -two.nodes[tip].x.z;
@@ -256,5 +226,8 @@ fn split_factorization_is_deterministic_end_to_end() {
     }
     let one = run_with_threads(&m, &sys, 1, 1);
     let two = run_with_threads(&m, &sys, 1, 2);
-    assert!(bits(&one) == bits(&two), "dynamic, modified Newton");
+    assert!(
+        state_bits(&one) == state_bits(&two),
+        "dynamic, modified Newton"
+    );
 }

@@ -5,9 +5,9 @@
 
 use crate::common;
 
-use samara::analysis::{History, run_analysis};
+use common::{run_with_threads, state_bits};
 use samara::model::{AnalysisKind, JacobianUpdate, Model, Partition};
-use samara::system::{State, System};
+use samara::system::System;
 
 /// An `n`-link chain of steel bars on revolute joints released from rest (the chain
 /// benchmark's links, examples/bench/make_chains.py), 50 steps of 1 ms.
@@ -39,38 +39,6 @@ fn chain(n: usize, partition: &str) -> String {
          rho_inf = 0.9\n{partition}"
     );
     s
-}
-
-fn run(m: &Model, sys: &System, threads: usize) -> State {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("thread pool");
-    pool.install(|| {
-        let mut h = History::default();
-        let s = run_analysis(
-            sys,
-            &m.analyses[0],
-            sys.initial_state(),
-            &mut h,
-            &mut |_| {},
-        )
-        .expect("recording to memory cannot fail");
-        assert!(s.failure.is_none(), "analysis failed: {:?}", s.failure);
-        s.final_state
-    })
-}
-
-fn bits(s: &State) -> Vec<u64> {
-    let mut out: Vec<u64> = Vec::new();
-    for n in &s.nodes {
-        for v in [&n.x, &n.v, &n.w, &n.a, &n.wd] {
-            out.extend(v.iter().map(|x| x.to_bits()));
-        }
-        out.extend(n.r().iter().map(|x| x.to_bits()));
-    }
-    out.extend(s.lambda.iter().map(|x| x.to_bits()));
-    out
 }
 
 fn with_jacobian(mut m: Model, j: JacobianUpdate) -> Model {
@@ -115,17 +83,17 @@ fn two_parts_match_one_thread_to_the_bit_and_one_part_to_the_tolerance() {
         let one = with_jacobian(common::model(&chain(40, "")), jacobian);
         let sys2 = System::new(&two);
         let sys1 = System::new(&one);
-        let a = run(&two, &sys2, 1);
-        let b = run(&two, &sys2, 2);
+        let a = run_with_threads(&two, &sys2, 0, 1);
+        let b = run_with_threads(&two, &sys2, 0, 2);
         assert_eq!(
-            bits(&a),
-            bits(&b),
+            state_bits(&a),
+            state_bits(&b),
             "{jacobian:?}: one and two threads differ"
         );
-        let c = run(&one, &sys1, 1);
+        let c = run_with_threads(&one, &sys1, 0, 1);
         assert_ne!(
-            bits(&a),
-            bits(&c),
+            state_bits(&a),
+            state_bits(&c),
             "{jacobian:?}: the two-part order was not taken"
         );
         let dx = a

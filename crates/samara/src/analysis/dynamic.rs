@@ -214,25 +214,20 @@ impl StepProblem<'_> {
             let prev = &self.prev.nodes;
             let dcfg = &*self.dcfg;
             let update = move |i: usize| -> f64 {
-                // SAFETY: each node is updated by one thread.
+                // SAFETY: each node is updated by one thread (its part's), once.
                 let n = unsafe { &mut *np.get().add(i) };
+                // SAFETY: as above, the node's six entries of hΔq.
                 let q = unsafe { std::slice::from_raw_parts_mut(qp.get().add(6 * i), 6) };
-                let p = &prev[i];
-                let d = &dcfg[6 * i..6 * i + 6];
-                let dx = Vector3::new(d[0], d[1], d[2]);
-                let dth = Vector3::new(d[3], d[4], d[5]);
-                n.v += dx * gp;
-                n.w += dth * gp;
-                n.a += dx * bp;
-                n.wd += dth * bp;
-                let mut w: f64 = 0.0;
-                for (q, c) in q.iter_mut().zip(&change[6 * i..6 * i + 6]) {
-                    *q += c;
-                    w = w.max(c.abs() / (atol + rtol * q.abs()));
-                }
-                n.x = p.x + Vector3::new(q[0], q[1], q[2]);
-                n.rot = p.rot.compose_exp(&Vector3::new(q[3], q[4], q[5]));
-                w
+                let r = 6 * i..6 * i + 6;
+                correct_node(
+                    n,
+                    &prev[i],
+                    &dcfg[r.clone()],
+                    &change[r],
+                    q,
+                    (gp, bp),
+                    (atol, rtol),
+                )
             };
             let [l0, l1] = &plan.nodes;
             let (w0, w1) = crate::solve::partner::join2(
@@ -244,20 +239,10 @@ impl StepProblem<'_> {
         let nodes = self.cur.nodes.iter_mut().zip(&self.prev.nodes);
         let all = self.asm.split_plan().is_none();
         for (i, (n, p)) in nodes.enumerate().take_while(|_| all) {
-            let d = &self.dcfg[6 * i..6 * i + 6];
-            let dx = Vector3::new(d[0], d[1], d[2]);
-            let dth = Vector3::new(d[3], d[4], d[5]);
-            n.v += dx * gp;
-            n.w += dth * gp;
-            n.a += dx * bp;
-            n.wd += dth * bp;
-            let q = &mut self.hdq[6 * i..6 * i + 6];
-            for (q, c) in q.iter_mut().zip(&change[6 * i..6 * i + 6]) {
-                *q += c;
-                worst = worst.max(c.abs() / (atol + rtol * q.abs()));
-            }
-            n.x = p.x + Vector3::new(q[0], q[1], q[2]);
-            n.rot = p.rot.compose_exp(&Vector3::new(q[3], q[4], q[5]));
+            let r = 6 * i..6 * i + 6;
+            let (d, c) = (&self.dcfg[r.clone()], &change[r.clone()]);
+            let w = correct_node(n, p, d, c, &mut self.hdq[r], (gp, bp), (atol, rtol));
+            worst = worst.max(w);
         }
         let n6 = 6 * self.cur.nodes.len();
         let nc = self.sys.n_coordinates;
@@ -306,6 +291,35 @@ impl<T> SendPtr<T> {
     fn get(self) -> *mut T {
         self.0
     }
+}
+
+/// One node's share of a Newton correction `d` (configuration part) and `change` (its
+/// configuration change): `v += γ' Δx`, `v̇ += β' Δx` (and Ω, Ω̇), `hΔq += change`,
+/// `x = x_n + hΔx`, `R = R_n exp(hΔψ̃)`; returns the largest `|change| / (atol + rtol |hΔq|)`.
+#[inline(always)]
+fn correct_node(
+    n: &mut crate::core::NodeState,
+    p: &crate::core::NodeState,
+    d: &[f64],
+    change: &[f64],
+    q: &mut [f64],
+    (gp, bp): (f64, f64),
+    (atol, rtol): (f64, f64),
+) -> f64 {
+    let dx = Vector3::new(d[0], d[1], d[2]);
+    let dth = Vector3::new(d[3], d[4], d[5]);
+    n.v += dx * gp;
+    n.w += dth * gp;
+    n.a += dx * bp;
+    n.wd += dth * bp;
+    let mut worst: f64 = 0.0;
+    for (q, c) in q.iter_mut().zip(change) {
+        *q += c;
+        worst = worst.max(c.abs() / (atol + rtol * q.abs()));
+    }
+    n.x = p.x + Vector3::new(q[0], q[1], q[2]);
+    n.rot = p.rot.compose_exp(&Vector3::new(q[3], q[4], q[5]));
+    worst
 }
 
 /// Mutable integrator state carried between steps.

@@ -7,7 +7,7 @@ pub mod nrel5mw;
 
 use samara::analysis::{AnalysisSummary, History, run_analysis};
 use samara::model::{AnalysisKind, Model};
-use samara::system::System;
+use samara::system::{State, System};
 
 /// Parses and validates a model from TOML text (panics with the diagnostics otherwise).
 pub fn model(toml: &str) -> Model {
@@ -249,4 +249,45 @@ pub fn first_error(text: &str) -> (usize, String, String) {
 /// The 1-based line of the first occurrence of `needle` in `text`.
 pub fn line_of(text: &str, needle: &str) -> usize {
     text[..text.find(needle).unwrap()].matches('\n').count() + 1
+}
+
+/// Analysis `k` of `m` run on a rayon pool of `threads` threads; its final state.
+pub fn run_with_threads(m: &Model, sys: &System, k: usize, threads: usize) -> State {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool");
+    pool.install(|| {
+        let mut h = History::default();
+        let s = run_analysis(
+            sys,
+            &m.analyses[k],
+            sys.initial_state(),
+            &mut h,
+            &mut |_| {},
+        )
+        .expect("recording to memory cannot fail");
+        assert!(s.failure.is_none(), "analysis failed: {:?}", s.failure);
+        s.final_state
+    })
+}
+
+/// Every number of the state, as bits.
+pub fn state_bits(s: &State) -> Vec<u64> {
+    let mut out = Vec::new();
+    for n in &s.nodes {
+        let r = n.r();
+        for v in [&n.x, &n.v, &n.w, &n.a, &n.wd] {
+            out.extend(v.iter().map(|x| x.to_bits()));
+        }
+        out.extend(r.iter().map(|x| x.to_bits()));
+    }
+    for c in &s.coords {
+        out.extend([c.q, c.v, c.a].map(f64::to_bits));
+    }
+    for z in &s.states {
+        out.extend([z.z, z.zd].map(f64::to_bits));
+    }
+    out.extend(s.lambda.iter().map(|x| x.to_bits()));
+    out
 }
