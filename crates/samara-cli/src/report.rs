@@ -152,6 +152,18 @@ pub fn summary(model: &str, rows: &[Row], total: Duration) {
                 "", s.fallbacks, s.factorizations
             );
         }
+        if let Some(p) = &s.parts {
+            let [a, b, sep] = p.blocks;
+            let on = if p.partner_thread {
+                "part 1 on a partner thread"
+            } else {
+                "one thread"
+            };
+            println!(
+                "  {:<14} two parts: {a} + {b} blocks, separator {sep}; {on}",
+                ""
+            );
+        }
         let _ = r.end_time;
     }
     println!("  total wall time {:.3} s", total.as_secs_f64());

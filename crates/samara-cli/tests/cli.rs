@@ -839,3 +839,48 @@ fn landing_gear_drop_runs_from_the_command_line() {
     assert!(p_max > 1.2 * pressure.values[0], "{p_max}");
     assert_eq!(brake.values.len(), pressure.values.len());
 }
+
+/// `partition = "two_parts"` from the command line: the summary says how the run shared
+/// out its iteration; where no plan can be made (a granular set), a warning says why and
+/// the run keeps one part.
+#[test]
+fn run_reports_two_parts_or_why_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let chain = std::fs::read_to_string(root().join("examples/bench/chain_revolute_100.toml"))
+        .unwrap()
+        .replace("t_end = 1.0", "t_end = 0.005")
+        .replace(
+            "rho_inf = 0.9\n",
+            "rho_inf = 0.9\npartition = \"two_parts\"\n",
+        );
+    let granular =
+        std::fs::read_to_string(root().join("examples/contact/granular_column.toml")).unwrap();
+    let at = granular
+        .find("type = \"dynamic\"\n")
+        .expect("a dynamic analysis");
+    let mut granular = granular.replace("t_end = 3.0", "t_end = 0.002");
+    granular.insert_str(at, "partition = \"two_parts\"\n");
+    for (name, text) in [("chain", chain), ("granular", granular)] {
+        let model = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&model, text).unwrap();
+        let out = dir.path().join(name);
+        let o = samara(&[
+            "run",
+            model.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let (stdout, err) = (String::from_utf8_lossy(&o.stdout), stderr(&o));
+        assert!(o.status.success(), "{name}: {err}");
+        if name == "chain" {
+            assert_eq!(stdout.matches("two parts: ").count(), 1, "{stdout}");
+            assert!(stdout.contains("blocks, separator"), "{stdout}");
+        } else {
+            assert!(!stdout.contains("two parts: "), "{stdout}");
+            assert!(
+                err.contains("warning") && err.contains("granular") && err.contains("one part"),
+                "{err}"
+            );
+        }
+    }
+}

@@ -155,7 +155,7 @@ fn granular_runs_are_deterministic() {
 
 /// Two spheres closing at 6 m/s with a 4 mm gap and a 1 mm margin: with h = 1 ms they
 /// overlap by 2 mm after the first step, from outside the candidate set.
-fn fast_pair(granular: bool) -> String {
+pub fn fast_pair(granular: bool) -> String {
     let contact = if granular {
         r#"
 [[granular]]

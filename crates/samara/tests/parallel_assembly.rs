@@ -13,7 +13,7 @@ use samara::system::{Assembler, Formulation, PARALLEL_MIN_ELEMENTS, PARALLEL_WIN
 
 /// Steel cantilever (L = 1 m, 10 mm square) in 300 two-node elements, a 0.5 N tip load
 /// and a small tip mass (a second element size in the same model).
-const CANTILEVER: &str = r#"
+pub const CANTILEVER: &str = r#"
 [model]
 name = "cantilever_300"
 

@@ -2,8 +2,8 @@
 //! Newton matrix's pattern, the sparse LU's factors), a step makes no heap allocation —
 //! of the energy schemes (residual, grouped differences, refactoring, solve) and of
 //! generalized-α (the trial state, assembly, the block LU) on models with every family of
-//! elements. Counted with a counting global allocator, per thread (the test harness
-//! runs tests in parallel).
+//! elements; and of a two-part iteration (`partition = "two_parts"`). Counted with a
+//! counting global allocator, per thread (the test harness runs tests in parallel).
 
 mod common;
 use common::{energy_stepper, example_model_text};
@@ -155,5 +155,67 @@ fn generalized_alpha_steps_without_allocating() {
         let n = generalized_alpha_allocations(&m, 3, 20);
         println!("{rel}, generalized-α: {n} allocations in 20 steps");
         assert_eq!(n, 0, "{rel}: {n} allocations in 20 steps");
+    }
+}
+
+/// A two-part iteration (`partition = "two_parts"`) on a 40-link chain, full and modified
+/// Newton: part 1's assembly with the partner's scratch, its residual rows copied in, the
+/// node updates through owner-checked handles. With one rayon thread both parts run here,
+/// every allocation counted; with two, part 1 runs on the partner thread (the same code,
+/// counted in the one-thread run) and the count covers the hand-over on this side.
+#[test]
+fn two_part_steps_allocate_nothing() {
+    use samara::analysis::Simulation;
+    use samara::model::{AnalysisKind, JacobianUpdate};
+    let mut text = String::from("[model]\nname = \"chain\"\ngravity = [0.0, 0.0, -9.81]\n");
+    for i in 0..40 {
+        let a = if i == 0 {
+            "ground".to_string()
+        } else {
+            format!("link{}", i - 1)
+        };
+        text += &format!(
+            "[[nodes]]\nname = \"link{i}\"\nposition = [{x}, 0.0, 0.0]\n\
+             [[bodies]]\nname = \"link{i}\"\nnode = \"link{i}\"\nmass = 0.0785\n\
+             inertia = [[1.3e-06, 0.0, 0.0], [0.0, 6.6e-05, 0.0], [0.0, 0.0, 6.6e-05]]\n\
+             [[joints]]\nname = \"pin{i}\"\ntype = \"revolute\"\nnode_a = \"{a}\"\n\
+             node_b = \"link{i}\"\nposition = [{p}, 0.0, 0.0]\naxis = [0.0, 1.0, 0.0]\n",
+            x = 0.05 + 0.1 * i as f64,
+            p = 0.1 * i as f64
+        );
+    }
+    text += "[[analyses]]\nname = \"a\"\ntype = \"dynamic\"\nt_end = 1.0\nstep = 1e-3\n\
+             rho_inf = 0.9\npartition = \"two_parts\"\n";
+    for jacobian in [JacobianUpdate::Full, JacobianUpdate::Modified] {
+        let mut m = samara::model::Model::from_toml_str(&text, "chain.toml")
+            .unwrap_or_else(|e| panic!("{e}"))
+            .model;
+        let AnalysisKind::Dynamic(d) = &mut m.analyses[0].kind else {
+            panic!("not dynamic")
+        };
+        d.jacobian = jacobian;
+        let d = d.clone();
+        let sys = System::new(&m);
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("thread pool");
+            let n = pool.install(|| {
+                let mut sim = Simulation::new(&sys, &d, sys.initial_state()).unwrap();
+                let parts = sim.parts().expect("two parts planned");
+                assert_eq!(parts.partner_thread, threads == 2);
+                for _ in 0..3 {
+                    sim.step(d.step).unwrap();
+                }
+                let before = allocations();
+                for _ in 0..20 {
+                    sim.step(d.step).unwrap();
+                }
+                allocations() - before
+            });
+            println!("two parts, {jacobian:?}, {threads} thread(s): {n} allocations in 20 steps");
+            assert_eq!(n, 0, "{jacobian:?}, {threads} thread(s): {n} allocations");
+        }
     }
 }

@@ -1,13 +1,15 @@
-//! Issue #17: `partition = "two_parts"`. The Newton iteration of a chain is shared out in
-//! two parts and a separator (one level of nested dissection): results bit-identical with
-//! one thread and with two (the partner thread), and the same solution as one part to the
-//! Newton tolerance (another elimination order and summation order: round-off only).
+//! Issue #17: `partition = "two_parts"`. The Newton iteration is shared out in two parts
+//! and a separator (one level of nested dissection): results bit-identical with one thread
+//! and with two (the partner thread), and the same solution as one part to the Newton
+//! tolerance (another elimination order and summation order: round-off only). Covered: a
+//! chain (full and modified Newton), the chain with signals between its parts, the chain in
+//! the stabilized index-2 form, and a beam large enough for the windowed element loop.
 
 use crate::common;
 
-use common::{run_with_threads, state_bits};
+use common::{run_with_threads, state_bits, summary_with_threads};
 use samara::model::{AnalysisKind, JacobianUpdate, Model, Partition};
-use samara::system::System;
+use samara::system::{State, System};
 
 /// An `n`-link chain of steel bars on revolute joints released from rest (the chain
 /// benchmark's links, examples/bench/make_chains.py), 50 steps of 1 ms.
@@ -68,6 +70,17 @@ fn partition_is_read_and_checked() {
     );
     let e = Model::from_toml_str(&stat, "static.toml").expect_err("a static analysis");
     assert!(format!("{e}").contains("partition"), "{e}");
+    for other in [
+        "type = \"modal\"\nn_modes = 4\n",
+        "type = \"dynamic\"\nt_end = 0.05\nstep = 1e-3\nintegrator = \"energy_preserving\"\n",
+    ] {
+        let text = chain(4, "").replace(
+            "type = \"dynamic\"\nt_end = 0.05\nstep = 1e-3\nrho_inf = 0.9\n",
+            &format!("{other}partition = \"two_parts\"\n"),
+        );
+        let e = Model::from_toml_str(&text, "other.toml").expect_err(other);
+        assert!(format!("{e}").contains("partition"), "{other}: {e}");
+    }
 }
 
 /// Two threads give the bits of one, full and modified Newton; the solution is that of one
@@ -81,38 +94,130 @@ fn two_parts_match_one_thread_to_the_bit_and_one_part_to_the_tolerance() {
             jacobian,
         );
         let one = with_jacobian(common::model(&chain(40, "")), jacobian);
-        let sys2 = System::new(&two);
-        let sys1 = System::new(&one);
-        let a = run_with_threads(&two, &sys2, 0, 1);
-        let b = run_with_threads(&two, &sys2, 0, 2);
-        assert_eq!(
-            state_bits(&a),
-            state_bits(&b),
-            "{jacobian:?}: one and two threads differ"
-        );
-        let c = run_with_threads(&one, &sys1, 0, 1);
-        assert_ne!(
-            state_bits(&a),
-            state_bits(&c),
-            "{jacobian:?}: the two-part order was not taken"
-        );
-        let dx = a
-            .nodes
-            .iter()
-            .zip(&c.nodes)
-            .map(|(p, q)| (p.x - q.x).norm())
-            .fold(0.0, f64::max);
-        assert!(dx < 1e-9, "{jacobian:?}: positions differ by {dx:e} m");
-        let lmax = c.lambda.iter().fold(0.0f64, |m, l| m.max(l.abs()));
-        let dl = a
-            .lambda
-            .iter()
-            .zip(&c.lambda)
-            .map(|(p, q)| (p - q).abs())
-            .fold(0.0, f64::max);
+        compare(&format!("{jacobian:?}"), &two, &one, 0, 1e-9);
+    }
+}
+
+/// Runs analysis `k` of `two` (two parts) with one and two threads and `one` (one part):
+/// the two-part runs agree to the bit, report their parts and partner thread, and agree
+/// with the one-part run to `dx` in the positions and 1e-6 of the largest multiplier.
+fn compare(label: &str, two: &Model, one: &Model, k: usize, dx: f64) -> State {
+    let sys2 = System::new(two);
+    let sys1 = System::new(one);
+    let a = summary_with_threads(two, &sys2, k, 1);
+    let b = summary_with_threads(two, &sys2, k, 2);
+    for (s, threads) in [(&a, 1), (&b, 2)] {
+        let p = s
+            .parts
+            .unwrap_or_else(|| panic!("{label}: no two parts: {:?}", s.warnings));
         assert!(
-            dl < 1e-6 * lmax,
-            "{jacobian:?}: multipliers differ by {dl:e} of {lmax:e}"
+            p.blocks[0] > 0 && p.blocks[1] > 0 && p.blocks[2] > 0,
+            "{p:?}"
+        );
+        assert_eq!(p.partner_thread, threads == 2, "{label}: {threads} threads");
+        assert!(s.warnings.is_empty(), "{label}: {:?}", s.warnings);
+    }
+    let (a, b) = (a.final_state, b.final_state);
+    assert_eq!(
+        state_bits(&a),
+        state_bits(&b),
+        "{label}: one and two threads differ"
+    );
+    let c = run_with_threads(one, &sys1, k, 1);
+    assert_ne!(
+        state_bits(&a),
+        state_bits(&c),
+        "{label}: the two-part order was not taken"
+    );
+    let d = a
+        .nodes
+        .iter()
+        .zip(&c.nodes)
+        .map(|(p, q)| (p.x - q.x).norm())
+        .fold(0.0, f64::max);
+    assert!(d < dx, "{label}: positions differ by {d:e} m");
+    let lmax = c.lambda.iter().fold(0.0f64, |m, l| m.max(l.abs()));
+    let dl = a
+        .lambda
+        .iter()
+        .zip(&c.lambda)
+        .map(|(p, q)| (p - q).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        dl < 1e-6 * lmax,
+        "{label}: multipliers differ by {dl:e} of {lmax:e}"
+    );
+    a
+}
+
+/// Sensors (filtered, with a state, and unfiltered) on the chain's links driving joint
+/// torques: signals read in their own part, and from one part into the other (link 2's
+/// velocity drives joint 37: that item goes to the separator).
+#[test]
+fn two_parts_carry_signals_between_elements() {
+    let mut extra = String::new();
+    for (sensor, link, tau) in [("s5", 5, true), ("s2", 2, true), ("s30", 30, false)] {
+        let filter = if tau { "time_constant = 0.01\n" } else { "" };
+        extra += &format!(
+            "[[sensors]]\nname = \"{sensor}\"\nnode = \"link{link}\"\nquantity = \"velocity\"\n\
+             component = \"z\"\ngain = -0.02\n{filter}"
         );
     }
+    let with = |partition: &str| {
+        let mut s = chain(40, partition);
+        for (sensor, joint) in [("s5", 5), ("s2", 37), ("s30", 30)] {
+            let head = format!("name = \"pin{joint}\"\ntype = \"revolute\"\n");
+            let end = s.find(&head).expect("the joint") + head.len();
+            let next = s[end..].find("[[").map_or(s.len(), |i| end + i);
+            s.insert_str(next, &format!("[joints.theta3]\ninput = \"{sensor}\"\n"));
+        }
+        s.insert_str(s.find("[[analyses]]").expect("an analysis"), &extra);
+        s
+    };
+    let two = common::model(&with("partition = \"two_parts\"\n"));
+    let one = common::model(&with(""));
+    let a = compare("signals", &two, &one, 0, 1e-9);
+    assert_eq!(a.states.len(), 2, "the two filtered sensors' states");
+}
+
+/// The stabilized index-2 form (its projection rows and their couplings) in two parts.
+#[test]
+fn two_parts_take_the_stabilized_index2_form() {
+    let form = "formulation = \"stabilized_index2\"\n";
+    let two = common::model(&chain(40, &format!("partition = \"two_parts\"\n{form}")));
+    let one = common::model(&chain(40, form));
+    compare("index-2", &two, &one, 0, 1e-9);
+}
+
+/// A beam of `PARALLEL_MIN_ELEMENTS` elements or more: two parts replace the windowed
+/// parallel element loop (the 300-element cantilever of the parallel-assembly tests, 10
+/// steps; its tip moves ~1e-4 m, round-off ~1e-15 m).
+#[test]
+fn two_parts_take_a_windowed_beam() {
+    let text = crate::parallel_assembly::CANTILEVER;
+    let at = text.rfind("rho_inf = 0.9\n").expect("the dynamic analysis") + 14;
+    let mut two = text.to_string();
+    two.insert_str(at, "partition = \"two_parts\"\n");
+    compare("beam", &common::model(&two), &common::model(text), 1, 1e-12);
+}
+
+/// Where the plan cannot be made the run keeps one part and says why: granular contact
+/// sets (their candidate pairs change the pattern during the run).
+#[test]
+fn two_parts_refused_with_a_warning_for_granular_sets() {
+    let mut m = common::model(&crate::granular::fast_pair(true));
+    let AnalysisKind::Dynamic(d) = &mut m.analyses[0].kind else {
+        panic!("a dynamic analysis");
+    };
+    d.partition = Partition::TwoParts;
+    let sys = System::new(&m);
+    let s = summary_with_threads(&m, &sys, 0, 2);
+    assert!(s.parts.is_none());
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("granular") && w.contains("one part")),
+        "{:?}",
+        s.warnings
+    );
 }

@@ -16,7 +16,7 @@ use crate::solve::condition::condition_number;
 use crate::solve::newton::{Correction, NewtonWork, newton};
 use crate::solve::{
     BlockMatrix, LinearError, LinearSolver, NewtonFailure, NewtonReport, NewtonSettings,
-    NewtonSystem,
+    NewtonSystem, PartSlice,
 };
 use crate::system::{Assembler, Coefficients, Formulation, State, System};
 use nalgebra::{Matrix3, Vector3};
@@ -137,23 +137,20 @@ impl NewtonSystem for StepProblem<'_> {
         if matrix.is_some()
             && let Some(plan) = self.asm.split_plan()
         {
-            // Each part's nodes on its thread (the plan's two lists partition the nodes).
-            let tp = SendPtr(self.t_ops.as_mut_ptr());
+            // Each part's nodes on its thread, through owner-checked handles.
             let hdq = &*self.hdq;
-            let one = move |i: usize| {
-                // SAFETY: each node's operator is written by one thread.
-                unsafe {
-                    *tp.get().add(i) = tangent_operator(&Vector3::new(
-                        hdq[6 * i + 3],
-                        hdq[6 * i + 4],
-                        hdq[6 * i + 5],
-                    ))
-                };
+            let one = |i: usize| {
+                tangent_operator(&Vector3::new(
+                    hdq[6 * i + 3],
+                    hdq[6 * i + 4],
+                    hdq[6 * i + 5],
+                ))
             };
+            let [mut t0, mut t1] = PartSlice::split(self.t_ops, &plan.node_part);
             let [l0, l1] = &plan.nodes;
             crate::solve::partner::join2(
-                || l0.iter().for_each(|&i| one(i)),
-                || l1.iter().for_each(|&i| one(i)),
+                || l0.iter().for_each(|&i| *t0.get(i) = one(i)),
+                || l1.iter().for_each(|&i| *t1.get(i) = one(i)),
             );
         } else if matrix.is_some() {
             for (i, t) in self.t_ops.iter_mut().enumerate() {
@@ -207,32 +204,37 @@ impl StepProblem<'_> {
         // pressure — so its own size sets the relative tolerance, as in ODE codes).
         let mut worst: f64 = 0.0;
         if let Some(plan) = self.asm.split_plan() {
-            // Part 1's nodes on the partner thread, the others here (the plan's two lists
-            // partition the nodes, so no node is updated twice).
-            let np = SendPtr(self.cur.nodes.as_mut_ptr());
-            let qp = SendPtr(self.hdq.as_mut_ptr());
+            // Part 1's nodes on the partner thread, the others here, through
+            // owner-checked handles (on the nodes and on their six entries of hΔq).
+            let n = self.cur.nodes.len();
+            let [mut n0, mut n1] = PartSlice::split(&mut self.cur.nodes, &plan.node_part);
+            let q6 = self.hdq[..6 * n].as_chunks_mut::<6>().0;
+            let [mut q0, mut q1] = PartSlice::split(q6, &plan.node_part);
             let prev = &self.prev.nodes;
             let dcfg = &*self.dcfg;
-            let update = move |i: usize| -> f64 {
-                // SAFETY: each node is updated by one thread (its part's), once.
-                let n = unsafe { &mut *np.get().add(i) };
-                // SAFETY: as above, the node's six entries of hΔq.
-                let q = unsafe { std::slice::from_raw_parts_mut(qp.get().add(6 * i), 6) };
+            let update = |i: usize, n: &mut crate::core::NodeState, q: &mut [f64; 6]| -> f64 {
                 let r = 6 * i..6 * i + 6;
+                let k = (gp, bp);
                 correct_node(
                     n,
                     &prev[i],
                     &dcfg[r.clone()],
                     &change[r],
                     q,
-                    (gp, bp),
+                    k,
                     (atol, rtol),
                 )
             };
             let [l0, l1] = &plan.nodes;
             let (w0, w1) = crate::solve::partner::join2(
-                || l0.iter().fold(0.0f64, |m, &i| m.max(update(i))),
-                || l1.iter().fold(0.0f64, |m, &i| m.max(update(i))),
+                || {
+                    let w = |m: f64, &i: &usize| m.max(update(i, n0.get(i), q0.get(i)));
+                    l0.iter().fold(0.0, w)
+                },
+                || {
+                    let w = |m: f64, &i: &usize| m.max(update(i, n1.get(i), q1.get(i)));
+                    l1.iter().fold(0.0, w)
+                },
             );
             worst = w0.max(w1);
         }
@@ -272,24 +274,6 @@ impl StepProblem<'_> {
             *l += *d;
         }
         Correction::new(worst, self.dlam, &self.cur.lambda, rtol)
-    }
-}
-
-/// A pointer handed to the partner thread: each thread dereferences it only at the nodes
-/// of its part ([`crate::system::SplitPlan::nodes`], a partition of the nodes).
-struct SendPtr<T>(*mut T);
-impl<T> Clone for SendPtr<T> {
-    fn clone(&self) -> Self {
-        *self
-    }
-}
-impl<T> Copy for SendPtr<T> {}
-// SAFETY: each thread touches its own nodes.
-unsafe impl<T> Send for SendPtr<T> {}
-unsafe impl<T> Sync for SendPtr<T> {}
-impl<T> SendPtr<T> {
-    fn get(self) -> *mut T {
-        self.0
     }
 }
 
@@ -1015,13 +999,26 @@ fn start<'a>(
     let lin = LinearSolver::with_parts(asm.structure(), settings.solver.linear_solver, two_parts);
     // Two parts: planned from the block LU's separator order; the partner thread started
     // when rayon may use a second thread (`RAYON_NUM_THREADS=1` keeps one; the results
-    // are the same).
-    if two_parts
-        && let Some(parts) = lin.block_parts()
-        && asm.plan_split(sys, &parts)
-        && rayon::current_num_threads() > 1
-    {
-        partner = crate::solve::partner::Partner::spawn().ok();
+    // are the same). Where no plan is made, the run keeps one part and says why.
+    if two_parts {
+        match asm.plan_split(sys, lin.block_parts().as_deref()) {
+            Err(why) => summary.warnings.push(format!(
+                "partition = \"two_parts\" not taken ({why}): the run keeps one part"
+            )),
+            Ok(()) => {
+                if rayon::current_num_threads() > 1 {
+                    partner = crate::solve::partner::Partner::spawn().ok();
+                }
+                let mut blocks = [0; 3];
+                for &p in lin.block_parts().iter().flatten() {
+                    blocks[p as usize] += 1;
+                }
+                summary.parts = Some(super::PartsReport {
+                    blocks,
+                    partner_thread: partner.is_some(),
+                });
+            }
+        }
     }
     let matrix = iteration_matrix(&lin, asm.structure(), settings);
     let mut it = Integrator {
@@ -1616,6 +1613,8 @@ pub struct StepReport {
 pub struct Simulation<'a> {
     it: Integrator<'a>,
     name: String,
+    parts: Option<super::PartsReport>,
+    warnings: Vec<String>,
 }
 
 impl<'a> Simulation<'a> {
@@ -1631,6 +1630,8 @@ impl<'a> Simulation<'a> {
             Ok((it, _)) => Ok(Self {
                 it,
                 name: summary.name,
+                parts: summary.parts,
+                warnings: summary.warnings,
             }),
             Err(_) => Err(summary.failure.unwrap_or_else(|| SolverFailure {
                 analysis: "simulation".into(),
@@ -1643,6 +1644,16 @@ impl<'a> Simulation<'a> {
 
     pub fn time(&self) -> f64 {
         self.it.state.time
+    }
+
+    /// How a two-part run shares out its iteration (`partition = "two_parts"`, planned).
+    pub fn parts(&self) -> Option<super::PartsReport> {
+        self.parts
+    }
+
+    /// What the start noted (e.g. why `partition = "two_parts"` was not taken).
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     /// The state at [`Self::time`].

@@ -143,6 +143,17 @@ pub struct AnalysisSummary {
     pub max_candidate_pairs: usize,
     /// Newton corrections halved by the line search, over the accepted steps.
     pub line_search_backtracks: usize,
+    /// `partition = "two_parts"` taken: the blocks of each part and of the separator.
+    pub parts: Option<PartsReport>,
+}
+
+/// How a two-part run shared out its iteration ([`crate::model::Partition::TwoParts`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PartsReport {
+    /// Blocks of part 0, of part 1 and of the separator.
+    pub blocks: [usize; 3],
+    /// Whether part 1 ran on a partner thread (rayon had a second thread).
+    pub partner_thread: bool,
 }
 
 impl AnalysisSummary {
@@ -166,6 +177,7 @@ impl AnalysisSummary {
             pattern_rebuilds: 0,
             max_candidate_pairs: 0,
             line_search_backtracks: 0,
+            parts: None,
         }
     }
 }

@@ -6,7 +6,9 @@
 //! - `sparse_lu`: faer's general sparse LU with partial pivoting, the fallback;
 //! - `linear`: the facade the analyses use;
 //! - `condition`: condition-number estimates of the factorized matrix;
-//! - `newton`: the Newton–Raphson driver with convergence control.
+//! - `newton`: the Newton–Raphson driver with convergence control;
+//! - `partner`, `part_slice`: the second thread of a two-part iteration and the
+//!   owner-checked handles through which the parts write shared slices.
 
 mod block_lu;
 mod block_matrix;
@@ -14,6 +16,7 @@ pub mod condition;
 mod linear;
 mod min_fill;
 pub mod newton;
+mod part_slice;
 pub mod partner;
 mod sparse_lu;
 
@@ -23,3 +26,4 @@ pub use block_matrix::{
 };
 pub use linear::{LinearError, LinearSolver, LinearSolverType, LinearStats};
 pub use newton::{Correction, NewtonFailure, NewtonReport, NewtonSettings, NewtonSystem, newton};
+pub use part_slice::PartSlice;

@@ -197,3 +197,85 @@ pub fn join2<A: FnOnce() -> RA, RA, B: FnOnce() -> RB + Send, RB: Send>(a: A, b:
         unsafe { &*p }.join(a, b)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::AtomicUsize;
+
+    #[test]
+    fn join_runs_the_second_part_on_the_partner_and_returns_both() {
+        let p = Partner::spawn().unwrap();
+        let here = thread::current().id();
+        for k in 0..100 {
+            let (a, (b, id)) = p.join(|| k + 1, || (2 * k, thread::current().id()));
+            assert_eq!((a, b), (k + 1, 2 * k));
+            assert_ne!(id, here);
+        }
+    }
+
+    #[test]
+    fn a_parked_partner_wakes_for_the_next_job() {
+        let p = Partner::spawn().unwrap();
+        p.join(|| (), || ());
+        // Idle longer than SPIN, it parks (waited for up to 5 s on a loaded machine).
+        let t = Instant::now();
+        while !p.slot.parked.load(Ordering::Acquire) && t.elapsed() < Duration::from_secs(5) {
+            thread::sleep(SPIN);
+        }
+        assert!(p.slot.parked.load(Ordering::Acquire), "parked when idle");
+        let n = AtomicUsize::new(0);
+        p.join(
+            || n.fetch_add(1, Ordering::Relaxed),
+            || n.fetch_add(1, Ordering::Relaxed),
+        );
+        assert_eq!(n.load(Ordering::Relaxed), 2);
+    }
+
+    #[test]
+    fn a_panic_in_either_part_is_raised_here_once_both_are_done() {
+        let p = Partner::spawn().unwrap();
+        let done = AtomicBool::new(false);
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            p.join(
+                || done.store(true, Ordering::Relaxed),
+                || panic!("part 1 failed"),
+            )
+        }));
+        let e = r.expect_err("part 1's panic raised on the caller");
+        let msg = e.downcast_ref::<&str>().copied().unwrap_or_default();
+        assert!(msg.contains("partner thread"), "{msg}");
+        assert!(done.load(Ordering::Relaxed), "part 0 ran to its end");
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            p.join(
+                || panic!("part 0 failed"),
+                || {
+                    thread::sleep(Duration::from_millis(5));
+                    done.store(false, Ordering::Relaxed)
+                },
+            )
+        }));
+        assert!(r.is_err(), "part 0's panic raised");
+        assert!(
+            !done.load(Ordering::Relaxed),
+            "part 1 finished before the unwind"
+        );
+        // The partner still serves jobs after both panics.
+        assert_eq!(p.join(|| 1, || 2), (1, 2));
+    }
+
+    #[test]
+    fn join2_uses_the_current_partner_only_within() {
+        let here = thread::current().id();
+        let (_, id) = join2(|| (), || thread::current().id());
+        assert_eq!(id, here, "no partner: both parts here");
+        assert!(!active());
+        let p = Partner::spawn().unwrap();
+        within(Some(&p), || {
+            assert!(active());
+            let (_, id) = join2(|| (), || thread::current().id());
+            assert_ne!(id, here, "part 1 on the partner");
+        });
+        assert!(!active(), "restored after `within`");
+    }
+}

@@ -287,6 +287,8 @@ pub struct SplitPlan {
     /// The nodes of part 0 and the separator (`nodes[0]`) and of part 1 (`nodes[1]`): a
     /// partition of the nodes, each in exactly one list.
     pub nodes: [Vec<usize>; 2],
+    /// The part (0, 1) each node belongs to, for [`crate::solve::PartSlice`].
+    pub node_part: Vec<u8>,
     /// Owner of each stored block (0, 1; 2 for the blocks on the separator).
     entry_part: Vec<u8>,
     /// Part 1's residual (its rows only are written) and the ranges of those rows.
@@ -729,16 +731,15 @@ impl Assembler {
     }
 
     /// Plans the two-part assembly from the part of each block (0, 1, else the
-    /// separator); `false` (no plan) where the model has what the plan does not cover.
-    pub fn plan_split(&mut self, sys: &System, part: &[u8]) -> bool {
+    /// separator; none: the order has no separator). Refused (with the reason) for
+    /// granular contact sets, whose candidate pairs change the pattern (and the order)
+    /// during the run.
+    pub fn plan_split(&mut self, sys: &System, part: Option<&[u8]>) -> Result<(), &'static str> {
         self.split = None;
-        if !sys.signals.names.is_empty()
-            || !self.pairs.is_empty()
-            || !self.window.is_empty()
-            || self.formulation != Formulation::Index3
-        {
-            return false;
+        if !sys.granular.is_empty() || !self.pairs.is_empty() {
+            return Err("granular contact sets change the pattern during the run");
         }
+        let part = part.ok_or("nested dissection found no separator in the pattern")?;
         let of = |blocks: &mut dyn Iterator<Item = usize>| -> usize {
             let mut p: Option<u8> = None;
             for b in blocks {
@@ -750,26 +751,45 @@ impl Assembler {
             }
             p.map_or(2, |p| p as usize)
         };
+        // The blocks an item writes: its rows' blocks and, through its input signals,
+        // the blocks of the signals' supports (columns).
+        fn support<'a>(
+            sys: &'a System,
+            place: &'a [(usize, usize)],
+            inputs: &'a [usize],
+        ) -> impl Iterator<Item = usize> + 'a {
+            inputs
+                .iter()
+                .flat_map(|&j| sys.signals.support[j].iter())
+                .map(|&c| place[c].0)
+        }
+        let place = &self.config_place[..];
         let mut starts: [Vec<usize>; 3] = Default::default();
         let mut k = 0;
         while k < sys.elements.len() {
             let end = self.batch_end[k];
-            let p = of(&mut (k..end).flat_map(|j| self.element_blocks[j].iter().map(|b| b.block)));
-            starts[p].push(k);
+            let rows = (k..end).flat_map(|j| self.element_blocks[j].iter().map(|b| b.block));
+            let cols = (k..end).flat_map(|j| support(sys, place, &sys.signals.element_inputs[j]));
+            starts[of(&mut rows.chain(cols))].push(k);
             k = end;
         }
         let mut cons: [Vec<usize>; 3] = Default::default();
         for (k, c) in sys.constraints.iter().enumerate() {
             let w = &self.constraints[k];
             let nodes = c.nodes().iter().map(|&n| self.config_place[6 * n].0);
-            let p = of(&mut nodes.chain(w.place.block).chain(w.place.projection));
+            let cols = support(sys, place, &sys.signals.constraint_inputs[k]);
+            let p = of(&mut nodes
+                .chain(w.place.block)
+                .chain(w.place.projection)
+                .chain(cols));
             cons[p].push(k);
         }
         let partner = Assembler::new(sys, self.formulation);
         let mut nodes: [Vec<usize>; 2] = Default::default();
-        for i in 0..sys.n_nodes() {
-            let p = (part[self.config_place[6 * i].0] == 1) as usize;
-            nodes[p].push(i);
+        let mut node_part = vec![0; sys.n_nodes()];
+        for (i, np) in node_part.iter_mut().enumerate() {
+            *np = (part[self.config_place[6 * i].0] == 1) as u8;
+            nodes[*np as usize].push(i);
         }
         let st = &*self.structure;
         let mut entry_part = vec![2u8; st.n_entries()];
@@ -793,11 +813,12 @@ impl Assembler {
             residual1,
             rows1,
             nodes,
+            node_part,
             starts,
             cons,
             partner,
         }));
-        true
+        Ok(())
     }
 
     /// The two-part plan, if any.
@@ -1021,6 +1042,9 @@ impl Assembler {
                 cons,
                 ..
             } = &mut *plan;
+            if has_signals {
+                self.share_signals(partner, matrix.is_some());
+            }
             {
                 let [mut t0, mut t1] = match matrix.as_deref_mut() {
                     Some(m) => m.part_targets(entry_part).map(Some),
@@ -1046,6 +1070,15 @@ impl Assembler {
             for r in rows1.iter() {
                 residual[r.clone()].copy_from_slice(&residual1[r.clone()]);
             }
+            // The projection (its couplings below, `add_projection` after the solve) reads
+            // every constraint's B and B T: part 1's from the partner's workspaces.
+            if stabilized {
+                for &k in &cons[1] {
+                    let (from, into) = (&partner.constraints[k], &mut self.constraints[k]);
+                    into.b.copy_from(&from.b);
+                    into.bt.copy_from(&from.bt);
+                }
+            }
             let mut whole = matrix.as_deref_mut().map(|m| m.target());
             self.assemble_items(
                 sys,
@@ -1059,6 +1092,11 @@ impl Assembler {
                 &cons[2],
             );
             self.split = Some(plan);
+            if let Some(mat) = matrix
+                && stabilized
+            {
+                self.add_projection_couplings(mat);
+            }
             return;
         }
         let mut tgt = matrix.as_deref_mut().map(|m| m.target());
@@ -1784,6 +1822,21 @@ impl Assembler {
                 tangent_ops,
                 &mut self.signal_combined[s],
             );
+        }
+    }
+
+    /// The signals' values (and, for a matrix, their gradients and combined columns)
+    /// copied into the partner's assembler: the same numbers each part reads.
+    fn share_signals(&self, to: &mut Assembler, tangents: bool) {
+        let (from, into) = (&self.signal_values, &mut to.signal_values);
+        into.values.copy_from_slice(&from.values);
+        if tangents {
+            for (a, b) in into.gradients.iter_mut().zip(&from.gradients) {
+                a.copy_from_slice(b);
+            }
+            for (a, b) in to.signal_combined.iter_mut().zip(&self.signal_combined) {
+                a.copy_from_slice(b);
+            }
         }
     }
 

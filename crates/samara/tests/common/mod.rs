@@ -253,6 +253,11 @@ pub fn line_of(text: &str, needle: &str) -> usize {
 
 /// Analysis `k` of `m` run on a rayon pool of `threads` threads; its final state.
 pub fn run_with_threads(m: &Model, sys: &System, k: usize, threads: usize) -> State {
+    summary_with_threads(m, sys, k, threads).final_state
+}
+
+/// Analysis `k` of `m` run on a rayon pool of `threads` threads; its summary.
+pub fn summary_with_threads(m: &Model, sys: &System, k: usize, threads: usize) -> AnalysisSummary {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -268,7 +273,7 @@ pub fn run_with_threads(m: &Model, sys: &System, k: usize, threads: usize) -> St
         )
         .expect("recording to memory cannot fail");
         assert!(s.failure.is_none(), "analysis failed: {:?}", s.failure);
-        s.final_state
+        s
     })
 }
 
