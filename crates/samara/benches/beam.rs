@@ -6,7 +6,8 @@
 //! wall time, Newton iterations, ms per step and the tip displacement at the end of each
 //! analysis, then the fitted growth exponent of the dynamic wall time with N. `t_end`
 //! shortens the dynamic runs (for the large models and for profiling), `newton=full` or
-//! `newton=modified` runs one variant only (`modified`: the dynamics alone); the elements are
+//! `newton=modified` runs one variant only (`modified`: the dynamics alone),
+//! `partition=two_parts` runs the dynamics in two parts (a partner thread); the elements are
 //! evaluated on rayon's threads (`RAYON_NUM_THREADS`) from `PARALLEL_MIN_ELEMENTS` on.
 //! Sizes without a model file are skipped: `python3 examples/bench/make_cantilevers.py N…`
 //! writes `cantilever_N.toml` for a growth scan (to 100,000 elements in docs/integrators.md,
@@ -49,7 +50,7 @@
 
 use samara::analysis::History;
 use samara::analysis::run_all;
-use samara::model::{AnalysisKind, JacobianUpdate, Model};
+use samara::model::{AnalysisKind, JacobianUpdate, Model, Partition};
 use samara::system::System;
 use std::path::Path;
 use std::time::Instant;
@@ -65,6 +66,7 @@ fn main() {
     let only_newton: Option<String> = all
         .iter()
         .find_map(|a| a.strip_prefix("newton=").map(String::from));
+    let two_parts = all.iter().any(|a| a == "partition=two_parts");
     let args: Vec<String> = all.into_iter().filter(|a| !a.contains('=')).collect();
     let cases: Vec<String> = if args.is_empty() {
         vec!["10".into(), "100".into(), "1000".into(), "p8x4".into()]
@@ -92,6 +94,9 @@ fn main() {
                 if let AnalysisKind::Dynamic(d) = &mut a.kind {
                     if let Some(t) = t_end {
                         d.t_end = t;
+                    }
+                    if two_parts {
+                        d.partition = Partition::TwoParts;
                     }
                     d.jacobian = if newton == "full" {
                         JacobianUpdate::Full
