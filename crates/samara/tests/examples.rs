@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 /// Steps of each dynamic analysis.
 const STEPS: usize = 10;
 
-fn model_files(dir: &Path, out: &mut Vec<PathBuf>) {
+pub fn model_files(dir: &Path, out: &mut Vec<PathBuf>) {
     for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
         if path.is_dir() {

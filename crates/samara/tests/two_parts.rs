@@ -221,3 +221,91 @@ fn two_parts_refused_with_a_warning_for_granular_sets() {
         s.warnings
     );
 }
+
+/// Every example with a generalized-α dynamic analysis (20 steps of it) in two parts: the
+/// rotors (a hovering rotor with dynamic inflow, the flexible NREL 5-MW rotor), the landing
+/// gear (tire, hydraulics, contact), the wing, mechanisms, control loops. Where a plan is
+/// made, one and two threads give the same bits, and the positions agree with one part to
+/// round-off (1e-10 of the model's size: its largest |x|, at least 1 m) and the element
+/// states to 1e-9 relative; where none is made (no separator, a granular set), a warning
+/// says why.
+#[test]
+fn every_example_runs_in_two_parts() {
+    use samara::model::IntegratorType;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    let mut files = Vec::new();
+    crate::examples::model_files(&root, &mut files);
+    files.retain(|f| !f.starts_with(root.join("bench")));
+    files.sort();
+    let mut planned = Vec::new();
+    for f in &files {
+        let one = {
+            let Ok(l) = Model::from_file(f) else {
+                continue; // a model for another command (checked in tests/examples.rs)
+            };
+            l.model
+        };
+        let Some(k) = one.analyses.iter().position(|a| {
+            matches!(&a.kind, AnalysisKind::Dynamic(d)
+                if d.integrator == IntegratorType::GeneralizedAlpha)
+        }) else {
+            continue;
+        };
+        let name = f.strip_prefix(&root).unwrap().display().to_string();
+        let mut one = one;
+        if let AnalysisKind::Dynamic(d) = &mut one.analyses[k].kind {
+            d.t_end = d.t_start + 20.0 * d.step;
+        }
+        let mut two = one.clone();
+        if let AnalysisKind::Dynamic(d) = &mut two.analyses[k].kind {
+            d.partition = Partition::TwoParts;
+        }
+        let sys = System::new(&one);
+        let a = summary_with_threads(&two, &sys, k, 2);
+        let Some(parts) = a.parts else {
+            assert!(
+                a.warnings.iter().any(|w| w.contains("not taken")),
+                "{name}: neither two parts nor a warning: {:?}",
+                a.warnings
+            );
+            continue;
+        };
+        assert!(parts.partner_thread, "{name}");
+        let b = run_with_threads(&two, &sys, k, 1);
+        let c = run_with_threads(&one, &sys, k, 1);
+        let a = a.final_state;
+        assert_eq!(
+            state_bits(&a),
+            state_bits(&b),
+            "{name}: one and two threads differ"
+        );
+        let size = c.nodes.iter().fold(1.0f64, |m, n| m.max(n.x.amax()));
+        let dx = a
+            .nodes
+            .iter()
+            .zip(&c.nodes)
+            .map(|(p, q)| (p.x - q.x).norm())
+            .fold(0.0, f64::max);
+        assert!(dx < 1e-10 * size, "{name}: positions differ by {dx:e} m");
+        let dz = a
+            .states
+            .iter()
+            .zip(&c.states)
+            .map(|(p, q)| (p.z - q.z).abs() / (1.0 + q.z.abs()))
+            .fold(0.0, f64::max);
+        assert!(dz < 1e-9, "{name}: element states differ by {dz:e}");
+        planned.push(name);
+    }
+    for must in [
+        "rotor/hover_rotor.toml",
+        "rotor/nrel5mw_flexible.toml",
+        "landing_gear_drop.toml",
+        "aero/wing.toml",
+        "control/servo_follower.toml",
+    ] {
+        assert!(
+            planned.iter().any(|p| p == must),
+            "{must} not in two parts: {planned:?}"
+        );
+    }
+}
