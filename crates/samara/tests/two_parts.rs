@@ -227,8 +227,8 @@ fn two_parts_refused_with_a_warning_for_granular_sets() {
 /// gear (tire, hydraulics, contact), the wing, mechanisms, control loops. Where a plan is
 /// made, one and two threads give the same bits, and the positions agree with one part to
 /// round-off (1e-10 of the model's size: its largest |x|, at least 1 m) and the element
-/// states to 1e-9 relative; where none is made (no separator, a granular set), a warning
-/// says why.
+/// states to 1e-9 relative; a separator not small against the parts (the rotors') is
+/// warned about; where no plan is made (no separator, a granular set), a warning says why.
 #[test]
 fn every_example_runs_in_two_parts() {
     use samara::model::IntegratorType;
@@ -271,6 +271,15 @@ fn every_example_runs_in_two_parts() {
             continue;
         };
         assert!(parts.partner_thread, "{name}");
+        let [p0, p1, sep] = parts.blocks;
+        assert_eq!(
+            a.warnings
+                .iter()
+                .any(|w| w.contains("not small against the parts")),
+            4 * sep > p0.min(p1),
+            "{name}: {parts:?} {:?}",
+            a.warnings
+        );
         let b = run_with_threads(&two, &sys, k, 1);
         let c = run_with_threads(&one, &sys, k, 1);
         let a = a.final_state;
