@@ -214,16 +214,8 @@ impl StepProblem<'_> {
             let dcfg = &*self.dcfg;
             let update = |i: usize, n: &mut crate::core::NodeState, q: &mut [f64; 6]| -> f64 {
                 let r = 6 * i..6 * i + 6;
-                let k = (gp, bp);
-                correct_node(
-                    n,
-                    &prev[i],
-                    &dcfg[r.clone()],
-                    &change[r],
-                    q,
-                    k,
-                    (atol, rtol),
-                )
+                let (d, c) = (&dcfg[r.clone()], &change[r]);
+                correct_node(n, &prev[i], d, c, q, (gp, bp), (atol, rtol))
             };
             let [l0, l1] = &plan.nodes;
             let (w0, w1) = crate::solve::partner::join2(
@@ -1007,7 +999,13 @@ fn start<'a>(
             )),
             Ok(()) => {
                 if rayon::current_num_threads() > 1 {
-                    partner = crate::solve::partner::Partner::spawn().ok();
+                    match crate::solve::partner::Partner::spawn() {
+                        Ok(p) => partner = Some(p),
+                        Err(e) => summary.warnings.push(format!(
+                            "partition = \"two_parts\": no partner thread ({e}); both parts \
+                             run on one thread (the same results)"
+                        )),
+                    }
                 }
                 let mut blocks = [0; 3];
                 for &p in lin.block_parts().iter().flatten() {
