@@ -129,12 +129,7 @@ fn compare(label: &str, two: &Model, one: &Model, k: usize, dx: f64) -> State {
         state_bits(&c),
         "{label}: the two-part order was not taken"
     );
-    let d = a
-        .nodes
-        .iter()
-        .zip(&c.nodes)
-        .map(|(p, q)| (p.x - q.x).norm())
-        .fold(0.0, f64::max);
+    let d = position_difference(&a, &c);
     assert!(d < dx, "{label}: positions differ by {d:e} m");
     let lmax = c.lambda.iter().fold(0.0f64, |m, l| m.max(l.abs()));
     let dl = a
@@ -148,6 +143,12 @@ fn compare(label: &str, two: &Model, one: &Model, k: usize, dx: f64) -> State {
         "{label}: multipliers differ by {dl:e} of {lmax:e}"
     );
     a
+}
+
+/// The largest distance between the nodes' positions of two states.
+fn position_difference(a: &State, c: &State) -> f64 {
+    let pairs = a.nodes.iter().zip(&c.nodes);
+    pairs.map(|(p, q)| (p.x - q.x).norm()).fold(0.0, f64::max)
 }
 
 /// Sensors (filtered, with a state, and unfiltered) on the chain's links driving joint
@@ -289,12 +290,7 @@ fn every_example_runs_in_two_parts() {
             "{name}: one and two threads differ"
         );
         let size = c.nodes.iter().fold(1.0f64, |m, n| m.max(n.x.amax()));
-        let dx = a
-            .nodes
-            .iter()
-            .zip(&c.nodes)
-            .map(|(p, q)| (p.x - q.x).norm())
-            .fold(0.0, f64::max);
+        let dx = position_difference(&a, &c);
         assert!(dx < 1e-10 * size, "{name}: positions differ by {dx:e} m");
         let dz = a
             .states
