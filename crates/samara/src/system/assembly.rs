@@ -299,6 +299,33 @@ pub struct SplitPlan {
     partner: Assembler,
 }
 
+/// What every item of an assembly reads: the system, the state, the time context, the
+/// coefficients of the iteration matrix and the nodes' tangent operators T(hΔψ).
+#[derive(Clone, Copy)]
+pub(crate) struct Inputs<'a> {
+    sys: &'a System,
+    state: &'a State,
+    ctx: &'a EvalContext,
+    coef: &'a Coefficients,
+    tangent_ops: &'a [Matrix3<f64>],
+}
+
+type InputRefs<'a> = (
+    &'a System,
+    &'a State,
+    &'a EvalContext,
+    &'a Coefficients,
+    &'a [Matrix3<f64>],
+);
+
+impl<'a> Inputs<'a> {
+    /// The five inputs, in the order of their fields.
+    #[inline(always)]
+    fn all(self) -> InputRefs<'a> {
+        (self.sys, self.state, self.ctx, self.coef, self.tangent_ops)
+    }
+}
+
 /// How a node's rates follow its configuration in a steadily spinning state:
 /// `δv = A_v δq` and `δv̇ = A₀ δq` on its translation (index 0) and material rotation
 /// (index 1) blocks. With them the iteration matrix gets `C A_v + M A₀` added to K (the
@@ -1008,6 +1035,13 @@ impl Assembler {
         mut matrix: Option<&mut BlockMatrix>,
     ) {
         let stabilized = self.formulation == Formulation::StabilizedIndex2;
+        let inputs = Inputs {
+            sys,
+            state,
+            ctx,
+            coef,
+            tangent_ops,
+        };
         residual.fill(0.0);
         if let Some(m) = matrix.as_deref_mut() {
             m.fill_zero();
@@ -1056,14 +1090,14 @@ impl Assembler {
                 crate::solve::partner::join2(
                     move || {
                         let m = t0.as_mut();
-                        this.assemble_items(sys, state, ctx, coef, tangent_ops, r0, m, s0, c0);
+                        this.assemble_items(inputs, r0, m, s0, c0);
                     },
                     || {
                         for r in rows1.iter() {
                             residual1[r.clone()].fill(0.0);
                         }
                         let (r1, m) = (&mut residual1[..], t1.as_mut());
-                        partner.assemble_items(sys, state, ctx, coef, tangent_ops, r1, m, s1, c1);
+                        partner.assemble_items(inputs, r1, m, s1, c1);
                     },
                 );
             }
@@ -1080,17 +1114,7 @@ impl Assembler {
                 }
             }
             let mut whole = matrix.as_deref_mut().map(|m| m.target());
-            self.assemble_items(
-                sys,
-                state,
-                ctx,
-                coef,
-                tangent_ops,
-                residual,
-                whole.as_mut(),
-                &starts[2],
-                &cons[2],
-            );
+            self.assemble_items(inputs, residual, whole.as_mut(), &starts[2], &cons[2]);
             self.split = Some(plan);
             if let Some(mat) = matrix
                 && stabilized
@@ -1101,16 +1125,7 @@ impl Assembler {
         }
         let mut tgt = matrix.as_deref_mut().map(|m| m.target());
         if self.window.is_empty() {
-            self.element_loop::<M>(
-                sys,
-                state,
-                ctx,
-                coef,
-                tangent_ops,
-                residual,
-                tgt.as_mut(),
-                None,
-            );
+            self.element_loop::<M>(inputs, residual, tgt.as_mut(), None);
         } else {
             // Large models, a window of elements at a time: each element of the window into
             // its own slot in parallel, then the same scatter in element order, so the sums
@@ -1215,16 +1230,7 @@ impl Assembler {
             }
         }
 
-        self.constraint_loop::<M>(
-            sys,
-            state,
-            ctx,
-            coef,
-            tangent_ops,
-            residual,
-            tgt.as_mut(),
-            None,
-        );
+        self.constraint_loop::<M>(inputs, residual, tgt.as_mut(), None);
         if let Some(mat) = matrix
             && stabilized
         {
@@ -1234,14 +1240,9 @@ impl Assembler {
 
     isa::copies! {
         /// The listed batches and constraints only (one part of a split).
-        #[allow(clippy::too_many_arguments)]
-        pub(crate) fn assemble_items(
+                pub(crate) fn assemble_items(
             &mut self: Assembler,
-            sys: &System,
-            state: &State,
-            ctx: &EvalContext,
-            coef: &Coefficients,
-            tangent_ops: &[Matrix3<f64>],
+            inputs: Inputs<'_>,
             residual: &mut [f64],
             matrix: Option<&mut BlockTarget<'_>>,
             starts: &[usize],
@@ -1253,56 +1254,29 @@ impl Assembler {
     }
 
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
     fn assemble_items_impl<M: MulAdd>(
         &mut self,
-        sys: &System,
-        state: &State,
-        ctx: &EvalContext,
-        coef: &Coefficients,
-        tangent_ops: &[Matrix3<f64>],
+        inputs: Inputs<'_>,
         residual: &mut [f64],
         mut matrix: Option<&mut BlockTarget<'_>>,
         starts: &[usize],
         cons: &[usize],
     ) {
-        self.element_loop::<M>(
-            sys,
-            state,
-            ctx,
-            coef,
-            tangent_ops,
-            residual,
-            matrix.as_deref_mut(),
-            Some(starts),
-        );
-        self.constraint_loop::<M>(
-            sys,
-            state,
-            ctx,
-            coef,
-            tangent_ops,
-            residual,
-            matrix,
-            Some(cons),
-        );
+        self.element_loop::<M>(inputs, residual, matrix.as_deref_mut(), Some(starts));
+        self.constraint_loop::<M>(inputs, residual, matrix, Some(cons));
     }
 
     /// The batches (all, or those starting at `starts`), evaluated and scattered through
     /// the shared scratch.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
     fn element_loop<M: MulAdd>(
         &mut self,
-        sys: &System,
-        state: &State,
-        ctx: &EvalContext,
-        coef: &Coefficients,
-        tangent_ops: &[Matrix3<f64>],
+        inputs: Inputs<'_>,
         residual: &mut [f64],
         mut matrix: Option<&mut BlockTarget<'_>>,
         starts: Option<&[usize]>,
     ) {
+        let (sys, state, ctx, coef, tangent_ops) = inputs.all();
         let tangents = matrix.is_some().then_some(TangentInputs {
             coef,
             tangent_ops,
@@ -1336,18 +1310,14 @@ impl Assembler {
 
     /// The constraints' rows (all, or those in `list`) into the residual and the matrix.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
     fn constraint_loop<M: MulAdd>(
         &mut self,
-        sys: &System,
-        state: &State,
-        ctx: &EvalContext,
-        coef: &Coefficients,
-        tangent_ops: &[Matrix3<f64>],
+        inputs: Inputs<'_>,
         residual: &mut [f64],
         mut matrix: Option<&mut BlockTarget<'_>>,
         list: Option<&[usize]>,
     ) {
+        let (sys, state, ctx, coef, tangent_ops) = inputs.all();
         let stabilized = self.formulation == Formulation::StabilizedIndex2;
         let sr = coef.row_scale;
         let count = list.map_or(sys.constraints.len(), |l| l.len());
