@@ -8,7 +8,7 @@ use super::{
     AnalysisSummary, Energy, OutputFrame, Progress, Recorder, SolverFailure, StepDiagnostics,
     singular_hint,
 };
-use crate::core::EvalContext;
+use crate::core::{EvalContext, NodeState};
 use crate::math::isa;
 use crate::math::tangent_operator;
 use crate::model::{DynamicSettings, FormulationType, IntegratorType, JacobianUpdate};
@@ -436,7 +436,8 @@ impl Integrator<'_> {
         let ga = self.ga;
         let t1 = self.state.time + h;
         self.trial_step = h;
-        self.trial.clone_from(&self.state);
+        // The nodes are copied as they are predicted, below.
+        self.trial.clone_from_but_nodes(&self.state);
         self.trial.time = t1;
         let trend_ok = self.trend_ok && self.last_h > 0.0;
         let predictor = match predictor {
@@ -450,76 +451,109 @@ impl Integrator<'_> {
         } else {
             0.0
         };
-        // Predicts one unknown: returns (hΔq, v_{n+1}, v̇_{n+1}) from v_n, v̇_n, a_n (and
-        // records the `Extrapolate` and `Trend` predictions of hΔq).
+        // Predicts one unknown: returns (hΔq, v_{n+1}, v̇_{n+1}) from v_n, v̇_n, a_n, and
+        // the `Extrapolate` and `Trend` predictions of hΔq.
         let last_vdot = &self.last_vdot;
+        let last_hdq = &self.last_hdq;
         // The misses are fed back only between steps of one size (module trend_feedback).
         let feedback =
             (predictor == Predictor::Trend && same_step(h, self.last_h)).then_some(&self.feedback);
         // The feedback for unknown k, if any (applied after the plain prediction).
         let trend_feedback = |k: usize| feedback.map(|f| f.correction(k)).filter(|&c| c != 0.0);
-        let predict =
-            |k: usize, v: f64, vd: f64, an: f64, extrapolated: &mut [f64], trended: &mut [f64]| {
-                let increment = |vd1: f64| {
-                    let a1 = ga.algorithmic_acceleration(an, vd, vd1);
-                    (h * (v + h * (0.5 - ga.beta) * an + h * ga.beta * a1), a1)
-                };
-                let (hdq, a1) = increment(vd);
-                extrapolated[k] = hdq;
-                let vd_trend = vd + ratio * (vd - last_vdot[k]);
-                let (hdq_trend, a1_trend) = if trend_ok {
-                    increment(vd_trend)
-                } else {
-                    (hdq, a1)
-                };
-                trended[k] = hdq_trend;
-                let rate = |a1: f64| v + h * (1.0 - ga.gamma) * an + h * ga.gamma * a1;
-                match predictor {
-                    Predictor::Extrapolate => (hdq, rate(a1), vd),
-                    Predictor::Trend => (hdq_trend, rate(a1_trend), vd_trend),
-                    Predictor::Repeat | Predictor::Hold => {
-                        let hdq = if predictor == Predictor::Repeat {
-                            self.last_hdq[k] * ratio
-                        } else {
-                            0.0
-                        };
-                        let (v1, vd1) = ga.rates_of_increment(h, v, vd, an, hdq);
-                        (hdq, v1, vd1)
-                    }
+        let predict = |k: usize, v: f64, vd: f64, an: f64| {
+            let increment = |vd1: f64| {
+                let a1 = ga.algorithmic_acceleration(an, vd, vd1);
+                (h * (v + h * (0.5 - ga.beta) * an + h * ga.beta * a1), a1)
+            };
+            let (hdq, a1) = increment(vd);
+            let vd_trend = vd + ratio * (vd - last_vdot[k]);
+            let (hdq_trend, a1_trend) = if trend_ok {
+                increment(vd_trend)
+            } else {
+                (hdq, a1)
+            };
+            let rate = |a1: f64| v + h * (1.0 - ga.gamma) * an + h * ga.gamma * a1;
+            let (q, v1, vd1) = match predictor {
+                Predictor::Extrapolate => (hdq, rate(a1), vd),
+                Predictor::Trend => (hdq_trend, rate(a1_trend), vd_trend),
+                Predictor::Repeat | Predictor::Hold => {
+                    let q = if predictor == Predictor::Repeat {
+                        last_hdq[k] * ratio
+                    } else {
+                        0.0
+                    };
+                    let (v1, vd1) = ga.rates_of_increment(h, v, vd, an, q);
+                    (q, v1, vd1)
                 }
             };
-        for (i, (n, p)) in self
-            .trial
-            .nodes
-            .iter_mut()
-            .zip(&self.state.nodes)
-            .enumerate()
-        {
+            (q, v1, vd1, hdq, hdq_trend)
+        };
+        // Node i: copied from the step's start and predicted, with its six entries of hΔq
+        // and of the two recorded predictions.
+        let acc = &self.acc;
+        let predict_node = |i: usize,
+                            p: &NodeState,
+                            n: &mut NodeState,
+                            q: &mut [f64; 6],
+                            ex: &mut [f64; 6],
+                            tr: &mut [f64; 6]| {
             let vd = [p.a.x, p.a.y, p.a.z, p.wd.x, p.wd.y, p.wd.z];
             let v = [p.v.x, p.v.y, p.v.z, p.w.x, p.w.y, p.w.z];
             let (mut v1, mut vd1) = ([0.0; 6], [0.0; 6]);
             for k in 0..6 {
                 let j = 6 * i + k;
-                let an = self.acc[j];
-                (self.hdq[j], v1[k], vd1[k]) = predict(
-                    j,
-                    v[k],
-                    vd[k],
-                    an,
-                    &mut self.extrapolated,
-                    &mut self.trended,
-                );
+                let an = acc[j];
+                (q[k], v1[k], vd1[k], ex[k], tr[k]) = predict(j, v[k], vd[k], an);
                 if let Some(c) = trend_feedback(j) {
-                    self.hdq[j] += c;
-                    (v1[k], vd1[k]) = ga.rates_of_increment(h, v[k], vd[k], an, self.hdq[j]);
+                    q[k] += c;
+                    (v1[k], vd1[k]) = ga.rates_of_increment(h, v[k], vd[k], an, q[k]);
                 }
             }
+            n.clone_from(p);
             n.v = Vector3::new(v1[0], v1[1], v1[2]);
             n.w = Vector3::new(v1[3], v1[4], v1[5]);
             n.a = Vector3::new(vd1[0], vd1[1], vd1[2]);
             n.wd = Vector3::new(vd1[3], vd1[4], vd1[5]);
-        }
+        };
         let n6 = 6 * self.state.nodes.len();
+        let prev = &self.state.nodes;
+        let hdq6 = self.hdq[..n6].as_chunks_mut::<6>().0;
+        let ex6 = self.extrapolated[..n6].as_chunks_mut::<6>().0;
+        let tr6 = self.trended[..n6].as_chunks_mut::<6>().0;
+        if let Some(plan) = self.asm.split_plan() {
+            // Each part's nodes on its thread (their data stay on its core).
+            let owner = &plan.node_part;
+            let [mut n0, mut n1] = PartSlice::split(&mut self.trial.nodes, owner);
+            let [mut q0, mut q1] = PartSlice::split(hdq6, owner);
+            let [mut e0, mut e1] = PartSlice::split(ex6, owner);
+            let [mut t0, mut t1] = PartSlice::split(tr6, owner);
+            let [l0, l1] = &plan.nodes;
+            let partner = self.partner.as_ref();
+            crate::solve::partner::within(partner, || {
+                crate::solve::partner::join2(
+                    || {
+                        for &i in l0 {
+                            predict_node(i, &prev[i], n0.get(i), q0.get(i), e0.get(i), t0.get(i));
+                        }
+                    },
+                    || {
+                        for &i in l1 {
+                            predict_node(i, &prev[i], n1.get(i), q1.get(i), e1.get(i), t1.get(i));
+                        }
+                    },
+                )
+            });
+        } else {
+            let nodes = self
+                .trial
+                .nodes
+                .iter_mut()
+                .zip(prev)
+                .zip(hdq6.iter_mut().zip(ex6).zip(tr6));
+            for (i, ((n, p), ((q, ex), tr))) in nodes.enumerate() {
+                predict_node(i, p, n, q, ex, tr);
+            }
+        }
         for (j, (c, p)) in self
             .trial
             .coords
@@ -528,15 +562,10 @@ impl Integrator<'_> {
             .take(self.sys.n_coordinates)
             .enumerate()
         {
-            let an = self.acc[n6 + j];
-            (self.hdq[n6 + j], c.v, c.a) = predict(
-                n6 + j,
-                p.v,
-                p.a,
-                an,
-                &mut self.extrapolated,
-                &mut self.trended,
-            );
+            let k = n6 + j;
+            let an = self.acc[k];
+            (self.hdq[k], c.v, c.a, self.extrapolated[k], self.trended[k]) =
+                predict(k, p.v, p.a, an);
             if let Some(f) = trend_feedback(n6 + j) {
                 self.hdq[n6 + j] += f;
                 (c.v, c.a) = ga.rates_of_increment(h, p.v, p.a, an, self.hdq[n6 + j]);
@@ -873,18 +902,83 @@ impl Integrator<'_> {
         } else {
             0.0
         };
-        let (mut repeated, mut extrapolated, mut trended) = (0.0f64, 0.0f64, 0.0f64);
-        for (((q, e), t), l) in self
-            .hdq
-            .iter()
-            .zip(&self.extrapolated)
-            .zip(&self.trended)
-            .zip(&self.last_hdq)
-        {
-            repeated = repeated.max((q - l * ratio).abs());
-            extrapolated = extrapolated.max((q - e).abs());
-            trended = trended.max((q - t).abs());
+        // Node i: the largest misses of the three predictions of its hΔq (against the
+        // `last_hdq` of the step before), then `last_hdq`, v̇_n into `last_vdot` and its
+        // algorithmic accelerations a_{n+1}. Returns (repeated, extrapolated, trended).
+        let (hdq, ext, tre) = (&self.hdq, &self.extrapolated, &self.trended);
+        let misses = |range: std::ops::Range<usize>, last: &[f64], m: [f64; 3]| {
+            let each = hdq[range.clone()]
+                .iter()
+                .zip(&ext[range.clone()])
+                .zip(&tre[range]);
+            each.zip(last).fold(m, |[r, e, t], (((q, x), y), l)| {
+                [
+                    r.max((q - l * ratio).abs()),
+                    e.max((q - x).abs()),
+                    t.max((q - y).abs()),
+                ]
+            })
+        };
+        let accept_node = |i: usize,
+                           (p, n): (&NodeState, &NodeState),
+                           last: &mut [f64; 6],
+                           last_vd: &mut [f64; 6],
+                           acc: &mut [f64; 6],
+                           m: [f64; 3]| {
+            let m = misses(6 * i..6 * i + 6, last, m);
+            last.copy_from_slice(&hdq[6 * i..6 * i + 6]);
+            let vd0 = [p.a.x, p.a.y, p.a.z, p.wd.x, p.wd.y, p.wd.z];
+            let vd1 = [n.a.x, n.a.y, n.a.z, n.wd.x, n.wd.y, n.wd.z];
+            *last_vd = vd0;
+            for k in 0..6 {
+                acc[k] = ga.algorithmic_acceleration(acc[k], vd0[k], vd1[k]);
+            }
+            m
+        };
+        let n6 = 6 * self.state.nodes.len();
+        let (prev, next) = (&self.state.nodes, &self.trial.nodes);
+        let last6 = self.last_hdq[..n6].as_chunks_mut::<6>().0;
+        let last_vd6 = self.last_vdot[..n6].as_chunks_mut::<6>().0;
+        let acc6 = self.acc[..n6].as_chunks_mut::<6>().0;
+        let sys = self.sys;
+        let mut m = [0.0f64; 3];
+        if let Some(plan) = self.asm.split_plan() {
+            // Each part's nodes and passive joint coordinates on its thread.
+            let owner = &plan.node_part;
+            let [mut l0, mut l1] = PartSlice::split(last6, owner);
+            let [mut v0, mut v1] = PartSlice::split(last_vd6, owner);
+            let [mut a0, mut a1] = PartSlice::split(acc6, owner);
+            let [mut c0, mut c1] = PartSlice::split(&mut self.trial.coords, &plan.coord_part);
+            let ([nodes0, nodes1], [passive0, passive1]) = (&plan.nodes, &plan.passive);
+            let partner = self.partner.as_ref();
+            let (m0, m1) = crate::solve::partner::within(partner, || {
+                crate::solve::partner::join2(
+                    || {
+                        sys.update_passive_coordinates_of(passive0, next, &mut c0);
+                        nodes0.iter().fold([0.0; 3], |m, &i| {
+                            accept_node(i, (&prev[i], &next[i]), l0.get(i), v0.get(i), a0.get(i), m)
+                        })
+                    },
+                    || {
+                        sys.update_passive_coordinates_of(passive1, next, &mut c1);
+                        nodes1.iter().fold([0.0; 3], |m, &i| {
+                            accept_node(i, (&prev[i], &next[i]), l1.get(i), v1.get(i), a1.get(i), m)
+                        })
+                    },
+                )
+            });
+            m = [m0[0].max(m1[0]), m0[1].max(m1[1]), m0[2].max(m1[2])];
+        } else {
+            let each = prev
+                .iter()
+                .zip(next)
+                .zip(last6.iter_mut().zip(last_vd6).zip(acc6));
+            for (i, (pn, ((last, last_vd), acc))) in each.enumerate() {
+                m = accept_node(i, pn, last, last_vd, acc, m);
+            }
         }
+        // The other unknowns (joint coordinates, element states).
+        let [repeated, extrapolated, trended] = misses(n6..hdq.len(), &self.last_hdq[n6..], m);
         self.predictor = if self.trended_valid && trended < extrapolated && trended <= repeated {
             Predictor::Trend
         } else if extrapolated <= repeated {
@@ -897,14 +991,8 @@ impl Integrator<'_> {
         } else {
             self.feedback.reset();
         }
-        self.last_hdq.copy_from_slice(&self.hdq);
+        self.last_hdq[n6..].copy_from_slice(&self.hdq[n6..]);
         self.last_h = h;
-        // v̇_n becomes the previous step's for the next `Trend` prediction.
-        for (i, p) in self.state.nodes.iter().enumerate() {
-            let vd = [p.a.x, p.a.y, p.a.z, p.wd.x, p.wd.y, p.wd.z];
-            self.last_vdot[6 * i..6 * i + 6].copy_from_slice(&vd);
-        }
-        let n6 = 6 * self.state.nodes.len();
         for (j, c) in self
             .state
             .coords
@@ -919,15 +1007,6 @@ impl Integrator<'_> {
             self.last_vdot[z0 + j] = z.zd;
         }
         self.trend_ok = true;
-        for (i, (n, p)) in self.trial.nodes.iter().zip(&self.state.nodes).enumerate() {
-            let vd1 = [n.a.x, n.a.y, n.a.z, n.wd.x, n.wd.y, n.wd.z];
-            let vd0 = [p.a.x, p.a.y, p.a.z, p.wd.x, p.wd.y, p.wd.z];
-            for k in 0..6 {
-                let an = self.acc[6 * i + k];
-                self.acc[6 * i + k] = ga.algorithmic_acceleration(an, vd0[k], vd1[k]);
-            }
-        }
-        let n6 = 6 * self.state.nodes.len();
         for (j, (c, p)) in self
             .trial
             .coords
@@ -939,7 +1018,6 @@ impl Integrator<'_> {
             let an = self.acc[n6 + j];
             self.acc[n6 + j] = ga.algorithmic_acceleration(an, p.a, c.a);
         }
-        let z0 = n6 + self.sys.n_coordinates;
         for (j, (z, p)) in self.trial.states.iter().zip(&self.state.states).enumerate() {
             let wn = self.acc[z0 + j];
             self.acc[z0 + j] = self.fo.algorithmic_rate(wn, p.zd, z.zd);
@@ -949,7 +1027,9 @@ impl Integrator<'_> {
         for (b, p) in self.trial.pair_bristles.iter_mut().zip(self.asm.pairs()) {
             b.z = p.bristle_end(&self.trial.nodes, b.z, self.trial_step);
         }
-        self.sys.update_passive_coordinates(&mut self.trial, false);
+        if self.asm.split_plan().is_none() {
+            self.sys.update_passive_coordinates(&mut self.trial, false);
+        }
         std::mem::swap(&mut self.state, &mut self.trial);
     }
 }

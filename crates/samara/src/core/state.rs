@@ -86,8 +86,20 @@ impl Clone for State {
     /// Field by field, reusing the vectors' storage (a step's trial state is copied from
     /// the last one without allocating).
     fn clone_from(&mut self, source: &Self) {
-        self.time = source.time;
         self.nodes.clone_from(&source.nodes);
+        self.clone_from_but_nodes(source);
+    }
+}
+
+impl State {
+    /// [`Clone::clone_from`] of every field but the nodes, which the caller copies (a
+    /// step's predictor copies each node as it predicts it, on the thread of its part);
+    /// the nodes too if their count differs.
+    pub fn clone_from_but_nodes(&mut self, source: &Self) {
+        if self.nodes.len() != source.nodes.len() {
+            self.nodes.clone_from(&source.nodes);
+        }
+        self.time = source.time;
         self.coords.clone_from(&source.coords);
         self.states.clone_from(&source.states);
         self.lambda.clone_from(&source.lambda);

@@ -41,6 +41,19 @@ impl<'a, T> PartSlice<'a, T> {
         // reference of this handle alive at a time.
         unsafe { &mut *self.ptr.add(i) }
     }
+
+    /// Entries `range`, all of which this part must own.
+    #[inline]
+    pub fn get_range(&mut self, range: std::ops::Range<usize>) -> &mut [T] {
+        assert!(
+            self.owner[range.clone()].iter().all(|&o| o == self.part),
+            "a part reached another part's entry"
+        );
+        // SAFETY: the range is in bounds (`owner` has the slice's length, checked by the
+        // indexing above); the other handle cannot reach these entries (not its part's),
+        // and `&mut self` keeps one reference of this handle alive at a time.
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(range.start), range.len()) }
+    }
 }
 
 #[cfg(test)]
@@ -67,6 +80,20 @@ mod tests {
         let owner = [0, 1, 0, 1];
         let [mut a, _] = PartSlice::split(&mut v, &owner);
         *a.get(1) = 1.0;
+    }
+
+    #[test]
+    fn a_range_of_own_entries_is_reached_and_one_of_another_part_is_not() {
+        let mut v = [0u8; 6];
+        let owner = [0, 0, 1, 1, 1, 0];
+        let [mut a, mut b] = PartSlice::split(&mut v, &owner);
+        b.get_range(2..5).fill(7);
+        a.get_range(0..2).fill(1);
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| a.get_range(1..3).len()));
+        assert!(r.is_err(), "entry 2 is part 1's");
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| a.get_range(5..7).len()));
+        assert!(r.is_err(), "out of bounds");
+        assert_eq!(v, [1, 1, 7, 7, 7, 0]);
     }
 
     #[test]

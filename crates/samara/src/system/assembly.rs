@@ -289,6 +289,12 @@ pub struct SplitPlan {
     pub nodes: [Vec<usize>; 2],
     /// The part (0, 1) each node belongs to, for [`crate::solve::PartSlice`].
     pub node_part: Vec<u8>,
+    /// The constraints with passive coordinates of part 0 and the separator
+    /// (`passive[0]`) and of part 1 (`passive[1]`).
+    pub passive: [Vec<usize>; 2],
+    /// The part (0, 1) each joint coordinate (active, then passive) belongs to: its
+    /// constraint's.
+    pub coord_part: Vec<u8>,
     /// Owner of each stored block (0, 1; 2 for the blocks on the separator).
     entry_part: Vec<u8>,
     /// Part 1's residual (its rows only are written) and the ranges of those rows.
@@ -818,6 +824,22 @@ impl Assembler {
             *np = (part[self.config_place[6 * i].0] == 1) as u8;
             nodes[*np as usize].push(i);
         }
+        // Joint coordinates go with their constraint; the separator's with part 0.
+        let mut passive: [Vec<usize>; 2] = Default::default();
+        let mut coord_part = vec![0u8; sys.n_coordinates + sys.n_passive];
+        for (p, list) in [&cons[0], &cons[2], &cons[1]].into_iter().enumerate() {
+            let p = usize::from(p == 2);
+            for &k in list {
+                let c = &sys.constraints[k];
+                let (a, np) = (sys.coordinate_offsets[k], c.n_passive_coordinates());
+                let q = sys.n_coordinates + sys.passive_offsets[k];
+                coord_part[a..a + c.n_coordinates()].fill(p as u8);
+                coord_part[q..q + np].fill(p as u8);
+                if np > 0 {
+                    passive[p].push(k);
+                }
+            }
+        }
         let st = &*self.structure;
         let mut entry_part = vec![2u8; st.n_entries()];
         for i in 0..st.n_blocks() {
@@ -841,6 +863,8 @@ impl Assembler {
             rows1,
             nodes,
             node_part,
+            passive,
+            coord_part,
             starts,
             cons,
             partner,

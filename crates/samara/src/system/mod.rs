@@ -589,6 +589,22 @@ impl System {
         }
     }
 
+    /// [`Self::update_passive_coordinates`] of the constraints `of` (positions only),
+    /// writing their passive coordinates through one part's handle on `coords`.
+    pub fn update_passive_coordinates_of(
+        &self,
+        of: &[usize],
+        nodes: &[crate::core::NodeState],
+        coords: &mut crate::solve::PartSlice<'_, crate::core::Coordinate>,
+    ) {
+        for &k in of {
+            let c = &self.constraints[k];
+            let p = self.n_coordinates + self.passive_offsets[k];
+            let np = c.n_passive_coordinates();
+            c.update_passive_coordinates(nodes, coords.get_range(p..p + np), false);
+        }
+    }
+
     /// Sets every joint coordinate's rate to the value implied by the node velocities.
     pub fn measure_coordinate_rates(&self, s: &mut State) {
         let mut values = Vec::new();
