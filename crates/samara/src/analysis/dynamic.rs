@@ -99,15 +99,11 @@ struct StepProblem<'a> {
 }
 
 impl StepProblem<'_> {
-    /// The configuration at `hdq`: `x = x_n + hΔx`, `R = R_n exp(hΔψ̃)` (per node, the
-    /// quaternion product and its renormalized matrix), `ν = ν_n + hΔν`, `z = z_n + hΔz`.
+    /// The joint coordinates and element states at `hdq`: `ν = ν_n + hΔν`, `z = z_n + hΔz`
+    /// (the nodes' `x = x_n + hΔx`, `R = R_n exp(hΔψ̃)` are set as they are predicted,
+    /// each part's on its thread).
     #[inline(always)]
     fn update_configuration(&mut self) {
-        for (i, (n, p)) in self.cur.nodes.iter_mut().zip(&self.prev.nodes).enumerate() {
-            let d = &self.hdq[6 * i..6 * i + 6];
-            n.x = p.x + Vector3::new(d[0], d[1], d[2]);
-            n.rot = p.rot.compose_exp(&Vector3::new(d[3], d[4], d[5]));
-        }
         let n6 = 6 * self.cur.nodes.len();
         for (j, (c, p)) in self
             .cur
@@ -488,8 +484,8 @@ impl Integrator<'_> {
             };
             (q, v1, vd1, hdq, hdq_trend)
         };
-        // Node i: copied from the step's start and predicted, with its six entries of hΔq
-        // and of the two recorded predictions.
+        // Node i predicted from the step's start — rates and configuration x_n + hΔx,
+        // R_n exp(hΔψ̃) — with its six entries of hΔq and of the two recorded predictions.
         let acc = &self.acc;
         let predict_node = |i: usize,
                             p: &NodeState,
@@ -509,7 +505,8 @@ impl Integrator<'_> {
                     (v1[k], vd1[k]) = ga.rates_of_increment(h, v[k], vd[k], an, q[k]);
                 }
             }
-            n.clone_from(p);
+            n.x = p.x + Vector3::new(q[0], q[1], q[2]);
+            n.rot = p.rot.compose_exp(&Vector3::new(q[3], q[4], q[5]));
             n.v = Vector3::new(v1[0], v1[1], v1[2]);
             n.w = Vector3::new(v1[3], v1[4], v1[5]);
             n.a = Vector3::new(vd1[0], vd1[1], vd1[2]);
