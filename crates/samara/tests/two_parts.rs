@@ -16,13 +16,26 @@ use samara::system::{State, System};
 /// benchmark's links, examples/bench/make_chains.py), 50 steps of 1 ms.
 fn chain(n: usize, partition: &str) -> String {
     let mut s = String::from("[model]\nname = \"chain\"\ngravity = [0.0, 0.0, -9.81]\n");
+    s += &bars(n, "[0.0, 1.0, 0.0]", |_| String::new());
+    s += &format!(
+        "[[analyses]]\nname = \"drop\"\ntype = \"dynamic\"\nt_end = 0.05\nstep = 1e-3\n\
+         rho_inf = 0.9\n{partition}"
+    );
+    s
+}
+
+/// The chain's `n` bars (0.1 m, 78.5 g) along x, each pinned to the one before (the first
+/// to the ground) by a revolute joint about `axis`; `node(i)` adds lines to node i.
+fn bars(n: usize, axis: &str, node: impl Fn(usize) -> String) -> String {
+    let mut s = String::new();
     for i in 0..n {
         s += &format!(
-            "[[nodes]]\nname = \"link{i}\"\nposition = [{x}, 0.0, 0.0]\n\
+            "[[nodes]]\nname = \"link{i}\"\nposition = [{x}, 0.0, 0.0]\n{extra}\
              [[bodies]]\nname = \"link{i}\"\nnode = \"link{i}\"\nmass = 0.0785\n\
              inertia = [[1.3083333333333334e-06, 0.0, 0.0], [0.0, 6.607083333333335e-05, 0.0], \
              [0.0, 0.0, 6.607083333333335e-05]]\n",
-            x = 0.05 + 0.1 * i as f64
+            x = 0.05 + 0.1 * i as f64,
+            extra = node(i)
         );
     }
     for i in 0..n {
@@ -33,14 +46,10 @@ fn chain(n: usize, partition: &str) -> String {
         };
         s += &format!(
             "[[joints]]\nname = \"pin{i}\"\ntype = \"revolute\"\nnode_a = \"{a}\"\n\
-             node_b = \"link{i}\"\nposition = [{x}, 0.0, 0.0]\naxis = [0.0, 1.0, 0.0]\n",
+             node_b = \"link{i}\"\nposition = [{x}, 0.0, 0.0]\naxis = {axis}\n",
             x = 0.1 * i as f64
         );
     }
-    s += &format!(
-        "[[analyses]]\nname = \"drop\"\ntype = \"dynamic\"\nt_end = 0.05\nstep = 1e-3\n\
-         rho_inf = 0.9\n{partition}"
-    );
     s
 }
 
@@ -338,26 +347,9 @@ fn two_parts_count_the_passive_angles_turns_in_both_parts() {
     let n = 24;
     let omega = |i: usize| if i.is_multiple_of(2) { 10.0 } else { -10.0 };
     let mut s = String::from("[model]\nname = \"axle\"\ngravity = [0.0, 0.0, 0.0]\n");
-    for i in 0..n {
-        s += &format!(
-            "[[nodes]]\nname = \"w{i}\"\nposition = [{x}, 0.0, 0.0]\n\
-             angular_velocity = [{w}, 0.0, 0.0]\n\
-             [[bodies]]\nname = \"w{i}\"\nnode = \"w{i}\"\nmass = 0.0785\n\
-             inertia = [[1.3e-05, 0.0, 0.0], [0.0, 6.6e-05, 0.0], [0.0, 0.0, 6.6e-05]]\n",
-            x = 0.1 * i as f64,
-            w = omega(i)
-        );
-        let a = if i == 0 {
-            "ground".into()
-        } else {
-            format!("w{}", i - 1)
-        };
-        s += &format!(
-            "[[joints]]\nname = \"pin{i}\"\ntype = \"revolute\"\nnode_a = \"{a}\"\n\
-             node_b = \"w{i}\"\nposition = [{x}, 0.0, 0.0]\naxis = [1.0, 0.0, 0.0]\n",
-            x = 0.1 * i as f64
-        );
-    }
+    s += &bars(n, "[1.0, 0.0, 0.0]", |i| {
+        format!("angular_velocity = [{}, 0.0, 0.0]\n", omega(i))
+    });
     s += "[[analyses]]\nname = \"spin\"\ntype = \"dynamic\"\nt_end = 0.5\nstep = 1e-3\n\
           rho_inf = 0.9\noutput_every = 1000\npartition = \"two_parts\"\n";
     let m = Model::from_toml_str(&s, "axle.toml").unwrap().model;
