@@ -161,3 +161,39 @@ fn a_stage_writes_arrays_that_are_not_time_records() {
             .is_err()
     );
 }
+
+/// A state that does not fit the model (a node, a joint coordinate or a multiplier too
+/// many or too few) is refused with a failure that names what differs, by
+/// `Simulation::new` and by `set_state`, and the simulation keeps its state.
+#[test]
+fn a_state_of_another_shape_is_refused() {
+    let m = model(PENDULUM);
+    let sys = System::new(&m);
+    let AnalysisKind::Dynamic(settings) = &m.analyses[0].kind else {
+        unreachable!()
+    };
+    let mut wrong = sys.initial_state();
+    wrong.nodes.push(wrong.nodes[0].clone());
+    let e = Simulation::new(&sys, settings, wrong)
+        .err()
+        .expect("refused");
+    assert!(
+        e.reason.contains("2 nodes") && e.reason.contains("1"),
+        "{}",
+        e.reason
+    );
+    let mut sim = Simulation::new(&sys, settings, sys.initial_state()).unwrap();
+    sim.step(1e-3).unwrap();
+    let before = sim.state().clone();
+    for cut in ["coords", "lambda", "states"] {
+        let mut s = sim.state().clone();
+        match cut {
+            "coords" => s.coords.push(Default::default()),
+            "lambda" => s.lambda.clear(),
+            _ => s.states.push(Default::default()),
+        }
+        let e = sim.set_state(s).expect_err(cut);
+        assert!(e.reason.contains("does not fit"), "{cut}: {}", e.reason);
+        assert_eq!(sim.state(), &before, "{cut}: the state is kept");
+    }
+}

@@ -294,6 +294,23 @@ fn correct_node(
     worst
 }
 
+/// Why a state given from outside does not fit the model (its counts of nodes, joint
+/// coordinates, element states and multipliers), if it does not. The held values are
+/// not compared: a count other than the model's is sampled afresh at the start.
+fn shape_mismatch(sys: &System, s: &State) -> Option<String> {
+    let want = sys.initial_state();
+    let counts = [
+        ("nodes", s.nodes.len(), want.nodes.len()),
+        ("joint coordinates", s.coords.len(), want.coords.len()),
+        ("element states", s.states.len(), want.states.len()),
+        ("multipliers", s.lambda.len(), want.lambda.len()),
+    ];
+    let (what, got, n) = counts.into_iter().find(|&(_, got, n)| got != n)?;
+    Some(format!(
+        "the state does not fit the model: {got} {what}, the model has {n}"
+    ))
+}
+
 /// Mutable integrator state carried between steps.
 struct Integrator<'a> {
     sys: &'a System,
@@ -1710,6 +1727,14 @@ impl<'a> Simulation<'a> {
         settings: &'a DynamicSettings,
         initial: State,
     ) -> Result<Self, SolverFailure> {
+        if let Some(why) = shape_mismatch(sys, &initial) {
+            return Err(SolverFailure {
+                analysis: "simulation".into(),
+                time: settings.t_start,
+                reason: why,
+                hint: Some("start from `System::initial_state` or a state of this model".into()),
+            });
+        }
         let mut summary = AnalysisSummary::new("simulation", "dynamic");
         match start(sys, settings, initial, settings.t_start, &mut summary) {
             Ok((it, _)) => Ok(Self {
@@ -1829,6 +1854,11 @@ impl<'a> Simulation<'a> {
     /// consistent again from its time on, like a new start.
     pub fn set_state(&mut self, state: State) -> Result<(), SolverFailure> {
         let (settings, sys, t) = (self.it.settings, self.it.sys, state.time);
+        if let Some(why) = shape_mismatch(sys, &state) {
+            let mut f = self.failure(t, why);
+            f.hint = Some("set a state of this model, e.g. a changed copy of `state()`".into());
+            return Err(f);
+        }
         let mut summary = AnalysisSummary::new(&self.name, "dynamic");
         match start(sys, settings, state, t, &mut summary) {
             Ok((it, _)) => {
