@@ -3,8 +3,9 @@
 //! and with two (the partner thread), and the same solution as one part to the Newton
 //! tolerance (another elimination order and summation order: round-off only). Covered: a
 //! chain (full and modified Newton), the chain with signals between its parts, the chain in
-//! the stabilized index-2 form, a beam large enough for the windowed element loop, and the
-//! passive joint angles each part updates as the steps are accepted.
+//! the stabilized index-2 form, a beam large enough for the windowed element loop, the
+//! passive joint angles each part updates as the steps are accepted, and each part's check
+//! of its own constraints at the end of an iteration.
 
 use crate::common;
 
@@ -369,5 +370,41 @@ fn two_parts_count_the_passive_angles_turns_in_both_parts() {
                 c.q
             );
         }
+    }
+}
+
+/// Each part evaluates its own constraints in the constraint check that ends a Newton
+/// iteration (on the part's thread, into its rows of Φ). With steps of 10 ms and a loose
+/// relative tolerance on the corrections (5e-2) it is that check (`max |Φ| ≤ tolerance`,
+/// 1e-11 m) which ends many iterations: the two-part run must take the one-part run's
+/// iterations (116; with part 1's constraints left out of the check, 99) and report its
+/// largest violation to 1e-15 m (round-off of the 4 m chain's coordinates), with one
+/// thread and with two.
+#[test]
+fn two_parts_check_the_constraints_of_both_parts() {
+    let run = |partition: &str, threads: usize| {
+        let settings = format!("{partition}tolerance = 1e-11\nrelative_tolerance = 5e-2\n");
+        let s =
+            chain(40, &settings).replace("t_end = 0.05\nstep = 1e-3", "t_end = 0.4\nstep = 1e-2");
+        let m = common::model(&s);
+        summary_with_threads(&m, &System::new(&m), 0, threads)
+    };
+    let one = run("", 1);
+    assert!(
+        one.max_constraint_violation > 1e-12,
+        "the check must matter"
+    );
+    for threads in [1, 2] {
+        let two = run("partition = \"two_parts\"\n", threads);
+        assert!(two.parts.is_some(), "two parts");
+        assert_eq!(
+            two.newton_iterations, one.newton_iterations,
+            "{threads} threads"
+        );
+        let (a, b) = (two.max_constraint_violation, one.max_constraint_violation);
+        assert!(
+            (a - b).abs() <= 1e-15,
+            "{threads} threads: {a:e} m, one part {b:e} m"
+        );
     }
 }

@@ -173,6 +173,17 @@ impl NewtonSystem for StepProblem<'_> {
     }
 
     fn constraint_violation(&mut self) -> f64 {
+        if let Some(checks) = self.asm.split_plan().and_then(|p| p.checks.as_ref()) {
+            // Each part's constraints on its thread (they read the nodes it just moved).
+            let [mut p0, mut p1] = PartSlice::split(self.phi, &checks.row_part);
+            let (sys, ctx, cur) = (self.sys, &self.ctx, &*self.cur);
+            let [k0, k1] = &checks.constraints;
+            let (w0, w1) = crate::solve::partner::join2(
+                || sys.constraint_values_of(ctx, cur, k0, &mut p0),
+                || sys.constraint_values_of(ctx, cur, k1, &mut p1),
+            );
+            return w0.max(w1);
+        }
         self.sys.constraint_values(&self.ctx, self.cur, self.phi);
         self.phi.iter().fold(0.0, |m, x| m.max(x.abs()))
     }

@@ -295,6 +295,10 @@ pub struct SplitPlan {
     /// The part (0, 1) each joint coordinate (active, then passive) belongs to: its
     /// constraint's.
     pub coord_part: Vec<u8>,
+    /// Each part's share of the constraint check (`max |Φ|` at a converged iterate);
+    /// `None` when a constraint has servo rows (their targets are signals, evaluated
+    /// once for all: the check then runs on one thread).
+    pub checks: Option<PartChecks>,
     /// Owner of each stored block (0, 1; 2 for the blocks on the separator).
     entry_part: Vec<u8>,
     /// Part 1's residual (its rows only are written) and the ranges of those rows.
@@ -303,6 +307,14 @@ pub struct SplitPlan {
     starts: [Vec<usize>; 3],
     cons: [Vec<usize>; 3],
     partner: Assembler,
+}
+
+/// The constraints whose values Φ each part evaluates in the constraint check (part 0
+/// with the separator's) and the part (0, 1) each multiplier row belongs to: its
+/// constraint's, for [`crate::solve::PartSlice`].
+pub struct PartChecks {
+    pub constraints: [Vec<usize>; 2],
+    pub row_part: Vec<u8>,
 }
 
 /// What every item of an assembly reads: the system, the state, the time context, the
@@ -840,6 +852,19 @@ impl Assembler {
                 }
             }
         }
+        let servos = sys.constraints.iter().any(|c| !c.servo_rows().is_empty());
+        let checks = (!servos).then(|| {
+            let mut row_part = vec![0u8; sys.n_multipliers];
+            for &k in &cons[1] {
+                let off = sys.multiplier_offsets[k];
+                row_part[off..off + sys.constraints[k].n_equations()].fill(1);
+            }
+            let part0 = cons[0].iter().chain(&cons[2]).copied().collect();
+            PartChecks {
+                constraints: [part0, cons[1].clone()],
+                row_part,
+            }
+        });
         let st = &*self.structure;
         let mut entry_part = vec![2u8; st.n_entries()];
         for i in 0..st.n_blocks() {
@@ -865,6 +890,7 @@ impl Assembler {
             node_part,
             passive,
             coord_part,
+            checks,
             starts,
             cons,
             partner,

@@ -16,7 +16,7 @@ pub mod signals;
 pub use crate::core::{Coordinate, NodeState, State};
 pub use assembly::{
     Assembler, BlockOwner, Coefficients, Formulation, PARALLEL_MIN_ELEMENTS, PARALLEL_WINDOW,
-    RateMaps, SplitPlan,
+    PartChecks, RateMaps, SplitPlan,
 };
 pub use matrices::SystemMatrices;
 pub use redundancy::ConstraintLoop;
@@ -1014,6 +1014,27 @@ impl System {
             c.evaluate(ctx, &s.nodes, self.coords_of(k, s), phi, None);
             self.subtract_servo_targets(k, signals, phi);
         }
+    }
+
+    /// [`Self::constraint_values`] of the constraints `of` (none with servo rows), each
+    /// into its rows through one part's handle on `out`; returns their largest `|Φ|`
+    /// (a NaN passed over, as by the check of all of them).
+    pub fn constraint_values_of(
+        &self,
+        ctx: &EvalContext,
+        s: &State,
+        of: &[usize],
+        out: &mut crate::solve::PartSlice<'_, f64>,
+    ) -> f64 {
+        let mut worst: f64 = 0.0;
+        for &k in of {
+            let c = &self.constraints[k];
+            let off = self.multiplier_offsets[k];
+            let phi = out.get_range(off..off + c.n_equations());
+            c.evaluate(ctx, &s.nodes, self.coords_of(k, s), phi, None);
+            worst = phi.iter().fold(worst, |m, x| m.max(x.abs()));
+        }
+        worst
     }
 
     /// `Φ_i −= s` on the servo rows of constraint `k` (`phi` its enforced equations,
