@@ -7,7 +7,7 @@ use common::model;
 use samara::analysis::{
     Analysis, AnalysisSummary, ArraySpec, History, Progress, Recorder, Simulation, run_analysis,
 };
-use samara::model::AnalysisKind;
+use samara::model::{AnalysisKind, DynamicSettings, Model};
 use samara::output::{ResultsFile, ResultsReader};
 use samara::system::{State, System};
 
@@ -37,6 +37,14 @@ step = 1e-3
 rho_inf = 0.8
 "#;
 
+/// The settings of the model's first analysis, a dynamic one.
+fn dynamic_settings(m: &Model) -> &DynamicSettings {
+    match &m.analyses[0].kind {
+        AnalysisKind::Dynamic(settings) => settings,
+        _ => panic!("the first analysis is dynamic"),
+    }
+}
+
 /// Stepping with `Simulation::step(h)` gives the analysis's trajectory: the same scheme,
 /// steps and Newton iterations, so the same numbers up to the round-off of the step times
 /// (t + h accumulated here, t₀ + k h in the analysis): 1e-12 m.
@@ -53,9 +61,7 @@ fn stepping_reproduces_the_dynamic_analysis() {
         &mut |_| {},
     )
     .unwrap();
-    let AnalysisKind::Dynamic(settings) = &m.analyses[0].kind else {
-        unreachable!()
-    };
+    let settings = dynamic_settings(&m);
     let mut sim = Simulation::new(&sys, settings, sys.initial_state()).unwrap();
     for f in h.frames.iter().skip(1) {
         let r = sim.step(f.time - sim.time()).unwrap();
@@ -73,9 +79,7 @@ fn stepping_reproduces_the_dynamic_analysis() {
 fn a_state_set_from_outside_continues_consistently() {
     let m = model(PENDULUM);
     let sys = System::new(&m);
-    let AnalysisKind::Dynamic(settings) = &m.analyses[0].kind else {
-        unreachable!()
-    };
+    let settings = dynamic_settings(&m);
     let mut sim = Simulation::new(&sys, settings, sys.initial_state()).unwrap();
     for _ in 0..100 {
         sim.step(1e-3).unwrap();
@@ -169,9 +173,7 @@ fn a_stage_writes_arrays_that_are_not_time_records() {
 fn a_state_of_another_shape_is_refused() {
     let m = model(PENDULUM);
     let sys = System::new(&m);
-    let AnalysisKind::Dynamic(settings) = &m.analyses[0].kind else {
-        unreachable!()
-    };
+    let settings = dynamic_settings(&m);
     let mut wrong = sys.initial_state();
     wrong.nodes.push(wrong.nodes[0].clone());
     let e = Simulation::new(&sys, settings, wrong)
