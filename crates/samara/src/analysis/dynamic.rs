@@ -173,11 +173,11 @@ impl NewtonSystem for StepProblem<'_> {
     }
 
     fn constraint_violation(&mut self) -> f64 {
-        if let Some(plan) = self.asm.split_plan().filter(|p| !p.servo_rows) {
+        if let Some(checks) = self.asm.split_plan().and_then(|p| p.checks.as_ref()) {
             // Each part's constraints on its thread (they read the nodes it just moved).
-            let [mut p0, mut p1] = PartSlice::split(self.phi, &plan.multiplier_part);
+            let [mut p0, mut p1] = PartSlice::split(self.phi, &checks.row_part);
             let (sys, ctx, cur) = (self.sys, &self.ctx, &*self.cur);
-            let [k0, k1] = &plan.constraints;
+            let [k0, k1] = &checks.constraints;
             let (w0, w1) = crate::solve::partner::join2(
                 || sys.constraint_values_of(ctx, cur, k0, &mut p0),
                 || sys.constraint_values_of(ctx, cur, k1, &mut p1),
@@ -198,72 +198,8 @@ impl StepProblem<'_> {
     fn apply_impl(&mut self, delta: &[f64]) -> Correction {
         let (bp, gp) = (self.beta_p, self.gamma_p);
         let (atol, rtol) = (self.atol, self.rtol);
-        let projected = self.asm.formulation() == Formulation::StabilizedIndex2;
-        let s = 1.0 / self.coef.multiplier_scale;
-        if !projected && let Some(plan) = self.asm.split_plan() {
-            // Each part on its thread (the entries of Δ it solved for): its nodes'
-            // corrections (read from Δ, copied into the configuration part) and its
-            // constraints' multipliers; the joint coordinates and element states here.
-            self.asm
-                .configuration_beyond_nodes_of(self.sys, delta, self.dcfg);
-            let n = self.cur.nodes.len();
-            let owner = &plan.node_part;
-            let [mut n0, mut n1] = PartSlice::split(&mut self.cur.nodes, owner);
-            let [mut q0, mut q1] =
-                PartSlice::split(self.hdq[..6 * n].as_chunks_mut::<6>().0, owner);
-            let [mut d0, mut d1] =
-                PartSlice::split(self.dcfg[..6 * n].as_chunks_mut::<6>().0, owner);
-            let rows = &plan.multiplier_part;
-            let [mut dl0, mut dl1] = PartSlice::split(&mut *self.dlam, rows);
-            let [mut l0, mut l1] = PartSlice::split(&mut self.cur.lambda, rows);
-            let (prev, asm) = (&self.prev.nodes, &*self.asm);
-            let offsets = &self.sys.multiplier_offsets;
-            let part = |nodes: &[usize],
-                        cons: &[usize],
-                        n: &mut PartSlice<crate::core::NodeState>,
-                        q: &mut PartSlice<[f64; 6]>,
-                        d: &mut PartSlice<[f64; 6]>,
-                        dl: &mut PartSlice<f64>,
-                        l: &mut PartSlice<f64>|
-             -> [f64; 3] {
-                let mut worst: f64 = 0.0;
-                for &i in nodes {
-                    let di: [f64; 6] = delta[6 * i..6 * i + 6].try_into().expect("6 entries");
-                    *d.get(i) = di;
-                    let c = correct_node(
-                        n.get(i),
-                        &prev[i],
-                        &di,
-                        &di,
-                        q.get(i),
-                        (gp, bp),
-                        (atol, rtol),
-                    );
-                    worst = worst.max(c);
-                }
-                let (mut dmax, mut lmax): (f64, f64) = (0.0, 0.0);
-                for &k in cons {
-                    let r = asm.multiplier_range(k);
-                    let rows = offsets[k]..offsets[k] + r.len();
-                    let (dl, l) = (dl.get_range(rows.clone()), l.get_range(rows));
-                    for ((dl, l), v) in dl.iter_mut().zip(l).zip(&delta[r]) {
-                        *dl = v * s;
-                        *l += *dl;
-                        dmax = dmax.max(dl.abs());
-                        lmax = lmax.max(l.abs());
-                    }
-                }
-                [worst, dmax, lmax]
-            };
-            let ([nodes0, nodes1], [cons0, cons1]) = (&plan.nodes, &plan.constraints);
-            let (a, b) = crate::solve::partner::join2(
-                || part(nodes0, cons0, &mut n0, &mut q0, &mut d0, &mut dl0, &mut l0),
-                || part(nodes1, cons1, &mut n1, &mut q1, &mut d1, &mut dl1, &mut l1),
-            );
-            let worst = a[0].max(b[0]).max(self.correct_beyond_nodes(false));
-            return Correction::of_largest(worst, a[1].max(b[1]), a[2].max(b[2]), rtol);
-        }
         self.asm.configuration_of(self.sys, delta, self.dcfg);
+        let projected = self.asm.formulation() == Formulation::StabilizedIndex2;
         if projected {
             self.change.copy_from_slice(self.dcfg);
             self.asm.add_projection(self.sys, delta, self.change);
@@ -309,24 +245,6 @@ impl StepProblem<'_> {
             let w = correct_node(n, p, d, c, &mut self.hdq[r], (gp, bp), (atol, rtol));
             worst = worst.max(w);
         }
-        let worst = worst.max(self.correct_beyond_nodes(projected));
-        self.asm.multipliers_of(self.sys, delta, self.dlam);
-        for (l, d) in self.cur.lambda.iter_mut().zip(self.dlam.iter_mut()) {
-            *d *= s;
-            *l += *d;
-        }
-        Correction::new(worst, self.dlam, &self.cur.lambda, rtol)
-    }
-
-    /// The joint coordinates' and element states' share of a correction (configuration
-    /// part in `self.dcfg`; configuration change the same, or `self.change` if
-    /// `projected`): rates, `hΔq`, values; returns the largest weighted change.
-    #[inline(always)]
-    fn correct_beyond_nodes(&mut self, projected: bool) -> f64 {
-        let change: &[f64] = if projected { self.change } else { self.dcfg };
-        let (bp, gp) = (self.beta_p, self.gamma_p);
-        let (atol, rtol) = (self.atol, self.rtol);
-        let mut worst: f64 = 0.0;
         let n6 = 6 * self.cur.nodes.len();
         let nc = self.sys.n_coordinates;
         let coords = self.cur.coords.iter_mut().zip(&self.prev.coords).take(nc);
@@ -348,7 +266,13 @@ impl StepProblem<'_> {
             worst = worst.max(change[k].abs() / (atol + rtol * scale));
             z.z = p.z + self.hdq[k];
         }
-        worst
+        let s = 1.0 / self.coef.multiplier_scale;
+        self.asm.multipliers_of(self.sys, delta, self.dlam);
+        for (l, d) in self.cur.lambda.iter_mut().zip(self.dlam.iter_mut()) {
+            *d *= s;
+            *l += *d;
+        }
+        Correction::new(worst, self.dlam, &self.cur.lambda, rtol)
     }
 }
 

@@ -83,15 +83,11 @@ impl Correction {
     /// `configuration` and the multipliers by `dlambda` to `lambda`.
     pub fn new(configuration: f64, dlambda: &[f64], lambda: &[f64], rtol: f64) -> Self {
         let largest = |v: &[f64]| v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-        Self::of_largest(configuration, largest(dlambda), largest(lambda), rtol)
-    }
-
-    /// [`Self::new`] from `max |Δλ|` and `max |λ|`.
-    pub fn of_largest(configuration: f64, dlambda: f64, lambda: f64, rtol: f64) -> Self {
+        let multipliers = largest(dlambda);
         Self {
             configuration,
-            multipliers: dlambda,
-            multipliers_settled: dlambda <= rtol * lambda,
+            multipliers,
+            multipliers_settled: multipliers <= rtol * largest(lambda),
         }
     }
 }

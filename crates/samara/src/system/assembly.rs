@@ -295,16 +295,10 @@ pub struct SplitPlan {
     /// The part (0, 1) each joint coordinate (active, then passive) belongs to: its
     /// constraint's.
     pub coord_part: Vec<u8>,
-    /// The constraints of part 0 and the separator (`constraints[0]`) and of part 1
-    /// (`constraints[1]`): each part's multipliers updated, and its constraint values
-    /// checked, on its thread.
-    pub constraints: [Vec<usize>; 2],
-    /// The part (0, 1) each multiplier row (`sys.multiplier_offsets` order) belongs to:
-    /// its constraint's.
-    pub multiplier_part: Vec<u8>,
-    /// A constraint has servo rows: their targets are signals, evaluated once for all, so
-    /// the constraint check runs on one thread.
-    pub servo_rows: bool,
+    /// Each part's share of the constraint check (`max |Φ|` at a converged iterate);
+    /// `None` when a constraint has servo rows (their targets are signals, evaluated
+    /// once for all: the check then runs on one thread).
+    pub checks: Option<PartChecks>,
     /// Owner of each stored block (0, 1; 2 for the blocks on the separator).
     entry_part: Vec<u8>,
     /// Part 1's residual (its rows only are written) and the ranges of those rows.
@@ -313,6 +307,14 @@ pub struct SplitPlan {
     starts: [Vec<usize>; 3],
     cons: [Vec<usize>; 3],
     partner: Assembler,
+}
+
+/// The constraints whose values Φ each part evaluates in the constraint check (part 0
+/// with the separator's) and the part (0, 1) each multiplier row belongs to: its
+/// constraint's, for [`crate::solve::PartSlice`].
+pub struct PartChecks {
+    pub constraints: [Vec<usize>; 2],
+    pub row_part: Vec<u8>,
 }
 
 /// What every item of an assembly reads: the system, the state, the time context, the
@@ -850,16 +852,19 @@ impl Assembler {
                 }
             }
         }
-        let servo_rows = sys.constraints.iter().any(|c| !c.servo_rows().is_empty());
-        let mut multiplier_part = vec![0u8; sys.n_multipliers];
-        for &k in &cons[1] {
-            let off = sys.multiplier_offsets[k];
-            multiplier_part[off..off + sys.constraints[k].n_equations()].fill(1);
-        }
-        let constraints = [
-            cons[0].iter().chain(&cons[2]).copied().collect(),
-            cons[1].clone(),
-        ];
+        let servos = sys.constraints.iter().any(|c| !c.servo_rows().is_empty());
+        let checks = (!servos).then(|| {
+            let mut row_part = vec![0u8; sys.n_multipliers];
+            for &k in &cons[1] {
+                let off = sys.multiplier_offsets[k];
+                row_part[off..off + sys.constraints[k].n_equations()].fill(1);
+            }
+            let part0 = cons[0].iter().chain(&cons[2]).copied().collect();
+            PartChecks {
+                constraints: [part0, cons[1].clone()],
+                row_part,
+            }
+        });
         let st = &*self.structure;
         let mut entry_part = vec![2u8; st.n_entries()];
         for i in 0..st.n_blocks() {
@@ -885,9 +890,7 @@ impl Assembler {
             node_part,
             passive,
             coord_part,
-            constraints,
-            multiplier_part,
-            servo_rows,
+            checks,
             starts,
             cons,
             partner,
@@ -977,13 +980,6 @@ impl Assembler {
     pub fn configuration_of(&self, sys: &System, v: &[f64], cfg: &mut [f64]) {
         let n6 = 6 * sys.n_nodes();
         cfg[..n6].copy_from_slice(&v[..n6]);
-        self.configuration_beyond_nodes_of(sys, v, cfg);
-    }
-
-    /// [`Self::configuration_of`] but the nodes' entries: the joint coordinates' and the
-    /// element states'.
-    pub fn configuration_beyond_nodes_of(&self, sys: &System, v: &[f64], cfg: &mut [f64]) {
-        let n6 = 6 * sys.n_nodes();
         for (k, off) in sys.coordinate_offsets.iter().enumerate() {
             let r = self.coordinate_range(k);
             cfg[n6 + off..n6 + off + r.len()].copy_from_slice(&v[r]);

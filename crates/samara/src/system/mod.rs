@@ -16,7 +16,7 @@ pub mod signals;
 pub use crate::core::{Coordinate, NodeState, State};
 pub use assembly::{
     Assembler, BlockOwner, Coefficients, Formulation, PARALLEL_MIN_ELEMENTS, PARALLEL_WINDOW,
-    RateMaps, SplitPlan,
+    PartChecks, RateMaps, SplitPlan,
 };
 pub use matrices::SystemMatrices;
 pub use redundancy::ConstraintLoop;
