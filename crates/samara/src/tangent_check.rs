@@ -365,7 +365,7 @@ pub struct ConstraintReport {
     pub servo: f64,
     /// Largest difference, relative to each term's largest entry, between the one
     /// evaluation of [`Constraint::evaluate_rows`] (with the tangent, and residual only)
-    /// and the separate `evaluate`, `reaction_tangent` and `Bᵀμ`, and between
+    /// and the separate `evaluate` (with B, and Φ alone), `reaction_tangent` and `Bᵀμ`, and between
     /// `velocity_tangent` and `vᵀ` times `reaction_tangent` at each μ = e_r (round-off).
     pub combined: f64,
 }
@@ -438,6 +438,9 @@ pub fn check_constraint(
     let mut phi_s = vec![0.0; m];
     let mut b_s = DMatrix::zeros(m, n);
     c.evaluate(ctx, nodes, coords, &mut phi_s, Some(&mut b_s));
+    // Φ alone (the constraint check's evaluation) against Φ with B.
+    let mut phi_only = vec![0.0; m];
+    c.evaluate(ctx, nodes, coords, &mut phi_only, None);
     // The servo contract: Φ = ν_c (− s in evaluate_rows), B = e_ν, zero rate terms,
     // and ∂Φ/∂s = −1 against a difference in the target.
     let mut servo: f64 = 0.0;
@@ -538,6 +541,7 @@ pub fn check_constraint(
         .max(rel(b.as_slice(), b_s.as_slice()))
         .max(rel(k.as_slice(), k_s.as_slice()))
         .max(rel(&phi_r, &phi_targeted))
+        .max(rel(&phi_only, &phi_s))
         .max(rel(&mu_r, mu))
         .max(rel(&force_r, force_s.as_slice()))
         .max(rel(dbv.as_slice(), dbv_k.as_slice()));

@@ -380,7 +380,7 @@ impl AngleRow {
 
     /// A plain direction cosine `R_pq` (no coordinate): the fast path of the locked rows.
     #[inline]
-    fn plain(&self) -> Option<(usize, usize)> {
+    pub fn plain(&self) -> Option<(usize, usize)> {
         match (self.terms, self.constant) {
             ([(Trig::One(1.0), p, q), (Trig::Zero, _, _)], Trig::Zero) => Some((p, q)),
             _ => None,

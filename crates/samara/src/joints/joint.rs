@@ -53,6 +53,27 @@ impl Side {
     }
 }
 
+/// An active row in closed form: `e_iᴬ·d` or `e_pᴬ·e_qᴮ`, with no coordinate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum PlainRow {
+    Displacement(usize),
+    Cosine(usize, usize),
+}
+
+/// The active rows as [`PlainRow`]s when every one of them is plain (the locked rows of a
+/// joint without coordinates, drives or servos: revolute, spherical, fixed, ...); `None`
+/// otherwise.
+fn plain_rows(rows: &[Row], active: &[usize]) -> Option<Vec<PlainRow>> {
+    active
+        .iter()
+        .map(|&r| match &rows[r] {
+            Row::Displacement { axis, coord: None } => Some(PlainRow::Displacement(*axis)),
+            Row::Angle { row, coord: None } => row.plain().map(|(p, q)| PlainRow::Cosine(p, q)),
+            _ => None,
+        })
+        .collect()
+}
+
 /// A row evaluated in spatial components.
 struct RowValue {
     phi: f64,
@@ -70,6 +91,8 @@ pub struct Joint {
     rows: Vec<Row>,
     /// Indices of the enforced rows (all but those dropped as redundant).
     active: Vec<usize>,
+    /// The enforced rows in closed form, if they all are plain ([`plain_rows`]).
+    plain: Option<Vec<PlainRow>>,
     /// Component (0..6) of each coordinate, the active ones first.
     components: Vec<usize>,
     /// Number of active coordinates (unknowns of the Newton system).
@@ -234,12 +257,14 @@ impl Joint {
                 _ => None,
             })
             .collect();
+        let active: Vec<usize> = (0..rows.len()).collect();
         Self {
             name: def.name.clone(),
             kind: def.kind,
             sides: [sa, sb],
             nodes,
-            active: (0..rows.len()).collect(),
+            plain: plain_rows(&rows, &active),
+            active,
             rows,
             components,
             n_active,
@@ -506,7 +531,44 @@ impl Joint {
         let lump = bs.is_none();
         let d = f.d();
         let mut m_disp = Vector3::zeros();
-        for (i, &r) in self.active.iter().enumerate() {
+        if lump && let Some(plain) = &self.plain {
+            // Plain rows: the direction cosines' b_r = [0, n, 0, −n] (n = e_pᴬ × e_qᴮ) added
+            // into the moment parts only, in the same order and with the same values as
+            // `axpy12` over the full rows.
+            for (i, &row) in plain.iter().enumerate() {
+                match row {
+                    PlainRow::Displacement(axis) => {
+                        let e = f.axes[0].column(axis);
+                        let value = e.dot(&d);
+                        phi[i] = value;
+                        let mu_r = lambda[i] + penalty * value;
+                        mu[i] = mu_r;
+                        m_disp += e * mu_r;
+                    }
+                    PlainRow::Cosine(p, q) => {
+                        let (e, g) = (f.axes[0].column(p), f.axes[1].column(q));
+                        let value = e.dot(&g);
+                        phi[i] = value;
+                        let mu_r = lambda[i] + penalty * value;
+                        mu[i] = mu_r;
+                        if mu_r != 0.0 {
+                            let n = e.cross(&g);
+                            for j in 0..3 {
+                                let t = n[j] * mu_r;
+                                g12[3 + j] += t;
+                                g12[9 + j] -= t;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let rest = if lump && self.plain.is_some() {
+            &[][..]
+        } else {
+            &self.active[..]
+        };
+        for (i, &r) in rest.iter().enumerate() {
             let row = &self.rows[r];
             if lump && let Row::Displacement { axis, coord } = row {
                 let e = f.axes[0].column(*axis);
@@ -700,6 +762,20 @@ impl Constraint for Joint {
         phi: &mut [f64],
         b: Option<&mut DMatrix<f64>>,
     ) {
+        if b.is_none()
+            && let Some(plain) = &self.plain
+        {
+            // Φ alone of plain rows: the values of `row_phi`, without its dispatch.
+            let f = self.frames(nodes);
+            let d = f.d();
+            for (p, &row) in phi.iter_mut().zip(plain) {
+                *p = match row {
+                    PlainRow::Displacement(axis) => f.axes[0].column(axis).dot(&d),
+                    PlainRow::Cosine(i, j) => f.axes[0].column(i).dot(&f.axes[1].column(j)),
+                };
+            }
+            return;
+        }
         self.fill(ctx, nodes, coords, &self.active, phi, b);
     }
 
@@ -965,6 +1041,7 @@ impl Constraint for Joint {
                 .all(|&r| self.rows[r].role() == RowRole::Constraint)
         );
         self.active.retain(|r| !rows.contains(r));
+        self.plain = plain_rows(&self.rows, &self.active);
     }
 
     fn active_rows(&self) -> &[usize] {
