@@ -26,6 +26,9 @@ use crate::math::isa;
 use crate::math::skew;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
+/// The ground's rotation.
+static IDENTITY: Matrix3<f64> = Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+
 /// One side of a joint: a frame fixed to a node, or to the ground.
 #[derive(Clone, Debug)]
 struct Side {
@@ -361,17 +364,18 @@ impl Joint {
         }
     }
 
+    /// The rotation of a side's node (the identity for the ground), by reference.
     #[inline(always)]
-    fn rotation_of(&self, side: usize, nodes: &[NodeState]) -> Matrix3<f64> {
+    fn rotation_of<'n>(&self, side: usize, nodes: &'n [NodeState]) -> &'n Matrix3<f64> {
         match self.sides[side].node {
-            Some(i) => *nodes[i].r(),
-            None => Matrix3::identity(),
+            Some(i) => nodes[i].r(),
+            None => &IDENTITY,
         }
     }
 
     /// Writes a spatial 12-row into the material local row `out` (length 6·nodes + nc).
     #[inline(always)]
-    fn to_local(&self, b12: &Row12, rots: &[Matrix3<f64>; 2], mut put: impl FnMut(usize, f64)) {
+    fn to_local(&self, b12: &Row12, rots: &[&Matrix3<f64>; 2], mut put: impl FnMut(usize, f64)) {
         for (x, s) in self.sides.iter().enumerate() {
             if s.node.is_none() {
                 continue;
@@ -628,7 +632,7 @@ impl Joint {
     fn add_reaction_tangent(
         &self,
         f: &FramePair,
-        rots: &[Matrix3<f64>; 2],
+        rots: &[&Matrix3<f64>; 2],
         coords: &[Coordinate],
         mu: &[f64],
         g12: &Row12,
@@ -793,10 +797,10 @@ impl Constraint for Joint {
         let m = b.nrows();
         let bs = b.as_mut_slice();
         bs.fill(0.0);
-        let mut rots = [Matrix3::identity(); 2];
+        let mut rots = [&IDENTITY; 2];
         for (x, s) in self.sides.iter().enumerate() {
             if s.node.is_some() {
-                rots[x] = column_maps[s.local];
+                rots[x] = &column_maps[s.local];
             }
         }
         for (i, &r) in self.active.iter().enumerate() {
