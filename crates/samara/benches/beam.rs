@@ -26,7 +26,7 @@
 //! 39.5 ms (1.12); before the parallel path's 128-element window (run inside
 //! `rayon::scope`) 6.53 → 85.5 and 3.27 → 52.4 ms (1.12 / 1.21). Instructions grow exactly
 //! with N; the excess is the working set (element data, matrix, factors) leaving the
-//! shared cache (README, "Where the growth … comes from").
+//! shared cache (docs/benchmarks.md, "Where the growth … comes from").
 //!
 //! After the compact beam element (sections interpolated from the beam's shared table, not
 //! stored per point; 3 alternating runs each, wall, quiet machine, 2026-11-27): full Newton

@@ -47,7 +47,7 @@
 //! flexible rotor 58 % more iterations and 44 % more factorizations respectively; the
 //! unchanged code ran 0.178 s modified, 0.426 s full (one run each, load average ≈ 2),
 //! callgrind `-- 100 revolute rho0.9 modified repeats=1` 2160.9M.
-//! README "Benchmarks", docs/integrators.md.
+//! README "Benchmarks", docs/benchmarks.md, docs/integrators.md.
 
 use samara::analysis::{History, run_analysis};
 use samara::model::Model;
